@@ -1,0 +1,46 @@
+/* Private helpers of librrr (not installed). */
+#ifndef RRR_INTERNAL_H
+#define RRR_INTERNAL_H
+
+#include <math.h>
+#include <stddef.h>
+#include "rrr/rrr.h"
+
+/** pi (M_PI is not part of strict C11). */
+#define RRR_PI 3.14159265358979323846
+
+/* Default torque constants, N m / V: calibrated to the paper's eq 16 (tools/calibrate_kt.py). */
+#define RRR_DEFAULT_KT1 6.0
+#define RRR_DEFAULT_KT2 12.0
+#define RRR_DEFAULT_KT3 5.0
+
+/** 1 when every one of the n values is finite. */
+static inline int rrr_finite_n(const double *v, size_t n)
+{
+    for (size_t i = 0; i < n; ++i) {
+        if (!isfinite(v[i])) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/** sin/cos of q2, q3 and q2 + q3, the only trigonometric inputs of the dynamics. */
+typedef struct rrr_trig {
+    double s2, c2, s3, c3, s23, c23;
+} rrr_trig;
+
+static inline rrr_trig rrr_trig_of(const double q[3])
+{
+    rrr_trig t;
+    t.s2 = sin(q[1]);
+    t.c2 = cos(q[1]);
+    t.s3 = sin(q[2]);
+    t.c3 = cos(q[2]);
+    /* angle-sum identities: two products instead of two more libm calls */
+    t.s23 = t.s2 * t.c3 + t.c2 * t.s3;
+    t.c23 = t.c2 * t.c3 - t.s2 * t.s3;
+    return t;
+}
+
+#endif /* RRR_INTERNAL_H */

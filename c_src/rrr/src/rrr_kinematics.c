@@ -1,0 +1,344 @@
+/* Closed-form kinematics (paper eqs 3-6), IK valid in the whole workspace (NOTES.md). */
+#include <string.h>
+
+#include "rrr_internal.h"
+
+/* Relative tolerance under which a target on the workspace boundary is snapped onto it. */
+#define RRR_IK_BOUNDARY_TOL 1e-12
+
+static int kin_ok(const rrr_model *m)
+{
+    const double k[4] = {m->d1, m->a2, m->a3, m->d2 + m->d3};
+    return rrr_finite_n(k, 4) && m->a2 > 0.0 && m->a3 > 0.0;
+}
+
+rrr_status rrr_fk(const rrr_model *m, const double q[3], double x[3], double R[3][3])
+{
+    if (m == NULL || q == NULL || x == NULL || !rrr_finite_n(q, 3) || !kin_ok(m)) {
+        return RRR_BAD_INPUT;
+    }
+    const double s1 = sin(q[0]), c1 = cos(q[0]);
+    const rrr_trig t = rrr_trig_of(q);
+    const double e = m->d2 + m->d3;
+    const double r = m->a2 * t.c2 + m->a3 * t.c23; /* planar reach */
+    x[0] = c1 * r + e * s1;
+    x[1] = s1 * r - e * c1;
+    x[2] = m->a2 * t.s2 + m->a3 * t.s23 + m->d1;
+    if (R != NULL) {
+        R[0][0] = c1 * t.c23;
+        R[0][1] = -c1 * t.s23;
+        R[0][2] = s1;
+        R[1][0] = s1 * t.c23;
+        R[1][1] = -s1 * t.s23;
+        R[1][2] = -c1;
+        R[2][0] = t.s23;
+        R[2][1] = t.c23;
+        R[2][2] = 0.0;
+    }
+    return RRR_OK;
+}
+
+rrr_status rrr_jacobian(const rrr_model *m, const double q[3], double J[3][3])
+{
+    if (m == NULL || q == NULL || J == NULL || !rrr_finite_n(q, 3) || !kin_ok(m)) {
+        return RRR_BAD_INPUT;
+    }
+    const double s1 = sin(q[0]), c1 = cos(q[0]);
+    const rrr_trig t = rrr_trig_of(q);
+    const double e = m->d2 + m->d3;
+    const double r = m->a2 * t.c2 + m->a3 * t.c23;
+    const double dr2 = -(m->a2 * t.s2 + m->a3 * t.s23); /* d r / d q2 */
+    const double dr3 = -m->a3 * t.s23;                  /* d r / d q3 */
+    J[0][0] = -s1 * r + e * c1;
+    J[1][0] = c1 * r + e * s1;
+    J[2][0] = 0.0;
+    J[0][1] = c1 * dr2;
+    J[1][1] = s1 * dr2;
+    J[2][1] = r;
+    J[0][2] = c1 * dr3;
+    J[1][2] = s1 * dr3;
+    J[2][2] = m->a3 * t.c23;
+    return RRR_OK;
+}
+
+/* Tip velocity and acceleration by differentiating eq 5 twice (qdd may be zero for Jd qd). */
+static void tip_motion(const rrr_model *m, const double q[3], const double qd[3],
+                       const double qdd[3], double xd[3], double xdd[3])
+{
+    const double s1 = sin(q[0]), c1 = cos(q[0]);
+    const rrr_trig t = rrr_trig_of(q);
+    const double a2 = m->a2, a3 = m->a3, e = m->d2 + m->d3;
+    const double qd23 = qd[1] + qd[2], qdd23 = qdd[1] + qdd[2];
+    const double r = a2 * t.c2 + a3 * t.c23;
+    const double rd = -(a2 * t.s2 * qd[1] + a3 * t.s23 * qd23);
+    const double zd = a2 * t.c2 * qd[1] + a3 * t.c23 * qd23;
+    const double rdd = -(a2 * t.c2 * qd[1] * qd[1] + a3 * t.c23 * qd23 * qd23) -
+                       (a2 * t.s2 * qdd[1] + a3 * t.s23 * qdd23);
+    const double zdd = -(a2 * t.s2 * qd[1] * qd[1] + a3 * t.s23 * qd23 * qd23) +
+                       (a2 * t.c2 * qdd[1] + a3 * t.c23 * qdd23);
+    const double w = qd[0], wd = qdd[0];
+    xd[0] = -s1 * w * r + c1 * rd + e * c1 * w;
+    xd[1] = c1 * w * r + s1 * rd + e * s1 * w;
+    xd[2] = zd;
+    xdd[0] = -c1 * w * w * r - s1 * wd * r - 2.0 * s1 * w * rd + c1 * rdd - e * s1 * w * w +
+             e * c1 * wd;
+    xdd[1] = -s1 * w * w * r + c1 * wd * r + 2.0 * c1 * w * rd + s1 * rdd + e * c1 * w * w +
+             e * s1 * wd;
+    xdd[2] = zdd;
+}
+
+rrr_status rrr_tip_motion(const rrr_model *m, const double q[3], const double qd[3],
+                          const double qdd[3], double xd[3], double xdd[3])
+{
+    if (m == NULL || q == NULL || qd == NULL || qdd == NULL || !kin_ok(m) ||
+        !rrr_finite_n(q, 3) || !rrr_finite_n(qd, 3) || !rrr_finite_n(qdd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    double v[3], a[3];
+    tip_motion(m, q, qd, qdd, v, a);
+    if (!rrr_finite_n(v, 3) || !rrr_finite_n(a, 3)) {
+        return RRR_NUMERIC;
+    }
+    if (xd != NULL) {
+        memcpy(xd, v, sizeof v);
+    }
+    if (xdd != NULL) {
+        memcpy(xdd, a, sizeof a);
+    }
+    return RRR_OK;
+}
+
+/* Solve J y = b by the adjugate; returns 0 when |det J| is below the singularity threshold. */
+static int solve3(const double J[3][3], const double b[3], double thresh, double y[3])
+{
+    const double c00 = J[1][1] * J[2][2] - J[1][2] * J[2][1];
+    const double c01 = J[1][2] * J[2][0] - J[1][0] * J[2][2];
+    const double c02 = J[1][0] * J[2][1] - J[1][1] * J[2][0];
+    const double det = J[0][0] * c00 + J[0][1] * c01 + J[0][2] * c02;
+    if (!(fabs(det) > thresh)) {
+        return 0;
+    }
+    const double inv[3][3] = {
+        {c00, J[0][2] * J[2][1] - J[0][1] * J[2][2], J[0][1] * J[1][2] - J[0][2] * J[1][1]},
+        {c01, J[0][0] * J[2][2] - J[0][2] * J[2][0], J[0][2] * J[1][0] - J[0][0] * J[1][2]},
+        {c02, J[0][1] * J[2][0] - J[0][0] * J[2][1], J[0][0] * J[1][1] - J[0][1] * J[1][0]},
+    };
+    for (int i = 0; i < 3; ++i) {
+        y[i] = (inv[i][0] * b[0] + inv[i][1] * b[1] + inv[i][2] * b[2]) / det;
+    }
+    return 1;
+}
+
+rrr_status rrr_joint_motion(const rrr_model *m, const double q[3], const double xd[3],
+                            const double xdd[3], double qd[3], double qdd[3])
+{
+    if (m == NULL || q == NULL || xd == NULL || xdd == NULL || qd == NULL || qdd == NULL ||
+        !kin_ok(m) || !rrr_finite_n(q, 3) || !rrr_finite_n(xd, 3) || !rrr_finite_n(xdd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    double J[3][3];
+    (void)rrr_jacobian(m, q, J);
+    const double L = m->a2 + m->a3;
+    const double thresh = 1e-12 * L * L * L;
+    double v[3], a[3], bias[3], unused[3];
+    const double zero[3] = {0.0, 0.0, 0.0};
+    if (!solve3((const double(*)[3])J, xd, thresh, v)) {
+        return RRR_SINGULAR;
+    }
+    tip_motion(m, q, v, zero, unused, bias); /* bias = Jd qd */
+    const double rhs[3] = {xdd[0] - bias[0], xdd[1] - bias[1], xdd[2] - bias[2]};
+    (void)solve3((const double(*)[3])J, rhs, thresh, a);
+    if (!rrr_finite_n(v, 3) || !rrr_finite_n(a, 3)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(qd, v, sizeof v);
+    memcpy(qdd, a, sizeof a);
+    return RRR_OK;
+}
+
+/* atan2 mapped to (-pi, pi]. */
+static double angle(double y, double x)
+{
+    const double a = atan2(y, x);
+    return a <= -RRR_PI ? RRR_PI : a;
+}
+
+/* Geometry of one target shared by its branches. */
+typedef struct ik_geom {
+    double rabs;   /* |r| = sqrt(x^2 + y^2 - e^2) */
+    double pwv;    /* z - d1 */
+    double c3;     /* cos q3 */
+    double s3abs;  /* |sin q3| */
+} ik_geom;
+
+static rrr_status ik_geometry(const rrr_model *m, const double x[3], ik_geom *g)
+{
+    if (m == NULL || x == NULL || !kin_ok(m) || !rrr_finite_n(x, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const double a2 = m->a2, a3 = m->a3, e = m->d2 + m->d3;
+    const double L = a2 + a3 + fabs(e);
+    double rho2 = x[0] * x[0] + x[1] * x[1] - e * e;
+    if (rho2 < 0.0) {
+        if (rho2 < -RRR_IK_BOUNDARY_TOL * L * L) {
+            return RRR_UNREACHABLE; /* inside the shoulder cylinder */
+        }
+        rho2 = 0.0;
+    }
+    g->rabs = sqrt(rho2);
+    g->pwv = x[2] - m->d1;
+    double c3 = (rho2 + g->pwv * g->pwv - a2 * a2 - a3 * a3) / (2.0 * a2 * a3);
+    if (fabs(c3) > 1.0) {
+        if (fabs(c3) > 1.0 + RRR_IK_BOUNDARY_TOL) {
+            return RRR_UNREACHABLE; /* beyond the outer or inside the inner sphere */
+        }
+        c3 = c3 > 0.0 ? 1.0 : -1.0;
+    }
+    g->c3 = c3;
+    g->s3abs = sqrt(fmax(0.0, 1.0 - c3 * c3));
+    return RRR_OK;
+}
+
+static void ik_solve_branch(const rrr_model *m, const double x[3], const ik_geom *g,
+                            rrr_shoulder shoulder, rrr_elbow elbow, double q[3])
+{
+    const double a2 = m->a2, a3 = m->a3, e = m->d2 + m->d3;
+    const double r = shoulder == RRR_SHOULDER_FRONT ? g->rabs : -g->rabs;
+    const double s3 = elbow == RRR_ELBOW_UP ? -g->s3abs : g->s3abs;
+    /* q1: x e + y r = s1 (r^2 + e^2), x r - y e = c1 (r^2 + e^2); 0 when undetermined */
+    const double sy = x[0] * e + x[1] * r, sx = x[0] * r - x[1] * e;
+    q[0] = (sy == 0.0 && sx == 0.0) ? 0.0 : angle(sy, sx);
+    q[2] = angle(s3, g->c3);
+    const double A = a2 + a3 * g->c3, B = a3 * s3;
+    const double ny = A * g->pwv - B * r, nx = A * r + B * g->pwv;
+    q[1] = (ny == 0.0 && nx == 0.0) ? 0.0 : angle(ny, nx);
+}
+
+rrr_status rrr_ik_branch(const rrr_model *m, const double x[3], rrr_shoulder shoulder,
+                         rrr_elbow elbow, double q[3])
+{
+    if (q == NULL || (shoulder != RRR_SHOULDER_FRONT && shoulder != RRR_SHOULDER_BACK) ||
+        (elbow != RRR_ELBOW_UP && elbow != RRR_ELBOW_DOWN)) {
+        return RRR_BAD_INPUT;
+    }
+    ik_geom g;
+    const rrr_status st = ik_geometry(m, x, &g);
+    if (st != RRR_OK) {
+        return st;
+    }
+    ik_solve_branch(m, x, &g, shoulder, elbow, q);
+    return RRR_OK;
+}
+
+rrr_status rrr_ik(const rrr_model *m, const double x[3], rrr_ik_set *sol)
+{
+    if (sol == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    ik_geom g;
+    const rrr_status st = ik_geometry(m, x, &g);
+    if (st != RRR_OK) {
+        return st;
+    }
+    rrr_ik_set out;
+    memset(&out, 0, sizeof out);
+    /* branches that coincide (r = 0 or sin q3 = 0) are returned once */
+    const int n_sh = g.rabs > 0.0 ? 2 : 1;
+    const int n_el = g.s3abs > 0.0 ? 2 : 1;
+    for (int s = 0; s < n_sh; ++s) {
+        for (int k = 0; k < n_el; ++k) {
+            ik_solve_branch(m, x, &g, (rrr_shoulder)s, (rrr_elbow)k, out.q[out.n]);
+            out.branch[out.n] = s * 2 + k;
+            out.n++;
+        }
+    }
+    *sol = out;
+    return RRR_OK;
+}
+
+rrr_status rrr_ik_nearest(const rrr_model *m, const double x[3], const double q_prev[3],
+                          double q[3], int *branch)
+{
+    if (q_prev == NULL || q == NULL || !rrr_finite_n(q_prev, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_ik_set set;
+    const rrr_status st = rrr_ik(m, x, &set);
+    if (st != RRR_OK) {
+        return st;
+    }
+    double best[3] = {0.0, 0.0, 0.0};
+    double best_d = INFINITY;
+    int best_b = 0;
+    for (int i = 0; i < set.n; ++i) {
+        double cand[3], d = 0.0;
+        for (int j = 0; j < 3; ++j) {
+            /* unwrap by whole turns towards q_prev (joints turn without limit) */
+            const double turns = nearbyint((q_prev[j] - set.q[i][j]) / (2.0 * RRR_PI));
+            cand[j] = set.q[i][j] + 2.0 * RRR_PI * turns;
+            d += (cand[j] - q_prev[j]) * (cand[j] - q_prev[j]);
+        }
+        if (d < best_d) {
+            best_d = d;
+            memcpy(best, cand, sizeof best);
+            best_b = set.branch[i];
+        }
+    }
+    /* a joint left undetermined at a singular target keeps its previous value */
+    const double e = m->d2 + m->d3;
+    if (x[0] == 0.0 && x[1] == 0.0 && e == 0.0) {
+        best[0] = q_prev[0];
+    }
+    if (!rrr_finite_n(best, 3)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(q, best, sizeof best);
+    if (branch != NULL) {
+        *branch = best_b;
+    }
+    return RRR_OK;
+}
+
+rrr_status rrr_singularity_classify(const rrr_model *m, const double q[3], double tol,
+                                    rrr_singularity *s)
+{
+    if (m == NULL || q == NULL || s == NULL || !kin_ok(m) || !rrr_finite_n(q, 3) ||
+        !isfinite(tol) || tol < 0.0) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    const double r = m->a2 * t.c2 + m->a3 * t.c23;
+    rrr_singularity out;
+    out.flags = 0u;
+    out.elbow_margin = fabs(t.s3);
+    out.shoulder_margin = fabs(r);
+    out.det_jacobian = -m->a2 * m->a3 * t.s3 * r;
+    if (out.elbow_margin <= tol) {
+        out.flags |= t.c3 > 0.0 ? RRR_SING_ELBOW_STRETCHED : RRR_SING_ELBOW_FOLDED;
+    }
+    if (out.shoulder_margin <= tol * (m->a2 + m->a3)) {
+        out.flags |= RRR_SING_SHOULDER;
+    }
+    *s = out;
+    return RRR_OK;
+}
+
+rrr_status rrr_workspace_margin(const rrr_model *m, const double x[3], double *margin,
+                                unsigned *flags)
+{
+    if (m == NULL || x == NULL || margin == NULL || !kin_ok(m) || !rrr_finite_n(x, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const double e = m->d2 + m->d3;
+    const double rxy = hypot(x[0], x[1]);
+    const double r = sqrt(fmax(0.0, rxy * rxy - e * e));
+    const double dist = hypot(r, x[2] - m->d1); /* wrist distance from the shoulder joint */
+    double mg = m->a2 + m->a3 - dist;
+    mg = fmin(mg, dist - fabs(m->a2 - m->a3));
+    mg = fmin(mg, rxy - fabs(e));
+    *margin = mg;
+    if (flags != NULL) {
+        *flags = mg < 0.0 ? RRR_SING_OUT_OF_REACH : 0u;
+    }
+    return RRR_OK;
+}

@@ -1,0 +1,265 @@
+/* Model parameters: defaults, validation, base parameters from inertial parameters (eq 12). */
+#include <string.h>
+
+#include "rrr_internal.h"
+
+/*
+ * The default robot: a direct-drive arm like the paper's. The paper prints no numbers, so each
+ * value is a proposal (slender-bar and sizing estimates); python/rrr_robot/data/default_robot.toml
+ * carries the same numbers with their reasoning, and a test checks the two agree.
+ * k_t is calibrated so that the writing task's RMS feedforward voltages land near the paper's
+ * eq 16 (see tools/calibrate_kt.py and the README).
+ */
+rrr_status rrr_inertial_default(rrr_inertial *in)
+{
+    if (in == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    memset(in, 0, sizeof *in);
+    /* link 1: only its inertia about the vertical (joint-1) axis, which is y1, matters */
+    in->link[0].mass = 8.0;
+    in->link[0].com[1] = -0.15;
+    in->link[0].inertia_com[0][0] = 0.05;
+    in->link[0].inertia_com[1][1] = 0.20;
+    in->link[0].inertia_com[2][2] = 0.05;
+    /* link 2: upper arm, COM behind the distal frame origin (x2 < 0) */
+    in->link[1].mass = 6.0;
+    in->link[1].com[0] = -0.20;
+    in->link[1].com[2] = 0.05;
+    in->link[1].inertia_com[0][0] = 0.02;
+    in->link[1].inertia_com[1][1] = 0.10;
+    in->link[1].inertia_com[2][2] = 0.10;
+    /* link 3: forearm */
+    in->link[2].mass = 2.5;
+    in->link[2].com[0] = -0.15;
+    in->link[2].com[2] = 0.02;
+    in->link[2].inertia_com[0][0] = 0.005;
+    in->link[2].inertia_com[1][1] = 0.03;
+    in->link[2].inertia_com[2][2] = 0.03;
+    /* rotor + encoder + slip rings */
+    in->rotor_inertia[0] = 0.02;
+    in->rotor_inertia[1] = 0.02;
+    in->rotor_inertia[2] = 0.01;
+    return RRR_OK;
+}
+
+rrr_status rrr_model_default(rrr_model *m)
+{
+    if (m == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_model d;
+    memset(&d, 0, sizeof d);
+    d.d1 = 0.50;
+    d.a2 = 0.40;
+    d.a3 = 0.35;
+    d.d2 = 0.15;
+    d.d3 = -0.05;
+    d.g = 9.81;
+    d.kt[0] = RRR_DEFAULT_KT1;
+    d.kt[1] = RRR_DEFAULT_KT2;
+    d.kt[2] = RRR_DEFAULT_KT3;
+    static const double f_row[RRR_NF] = {0.08, 0.04, -0.02};
+    static const double w_row[RRR_NF] = {100.0, 10.0, 1.0};
+    for (int i = 0; i < RRR_NJ; ++i) {
+        for (int k = 0; k < RRR_NF; ++k) {
+            d.f[i][k] = f_row[k];
+            d.w[i][k] = w_row[k];
+        }
+        d.b[i] = 0.02;
+    }
+    d.u_max = 10.0;
+    rrr_inertial in;
+    (void)rrr_inertial_default(&in);
+    rrr_status st = rrr_bps_from_inertia(&d, &in, d.p);
+    if (st != RRR_OK) {
+        return st;
+    }
+    *m = d;
+    return RRR_OK;
+}
+
+/* Inertia about the frame origin, with products as integrals (I_xy = int x y dm). */
+typedef struct origin_inertia {
+    double xx, yy, zz, xy, xz, yz;
+} origin_inertia;
+
+static origin_inertia to_origin(const rrr_link_inertia *l)
+{
+    const double *c = l->com;
+    const double m = l->mass;
+    const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    double io[3][3];
+    for (int r = 0; r < 3; ++r) {
+        for (int k = 0; k < 3; ++k) {
+            /* parallel-axis theorem: I_O = I_c + m (|c|^2 E - c c^T) */
+            io[r][k] = l->inertia_com[r][k] + m * ((r == k ? cc : 0.0) - c[r] * c[k]);
+        }
+    }
+    origin_inertia o;
+    o.xx = io[0][0];
+    o.yy = io[1][1];
+    o.zz = io[2][2];
+    o.xy = -io[0][1];
+    o.xz = -io[0][2];
+    o.yz = -io[1][2];
+    return o;
+}
+
+static int link_ok(const rrr_link_inertia *l)
+{
+    if (!isfinite(l->mass) || l->mass < 0.0 || !rrr_finite_n(l->com, 3)) {
+        return 0;
+    }
+    for (int r = 0; r < 3; ++r) {
+        if (!rrr_finite_n(l->inertia_com[r], 3)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+rrr_status rrr_bps_from_inertia(const rrr_model *m, const rrr_inertial *in, double p[RRR_NP])
+{
+    if (m == NULL || in == NULL || p == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    const double kin[4] = {m->a2, m->a3, m->d2, m->d3};
+    if (!rrr_finite_n(kin, 4) || !rrr_finite_n(in->rotor_inertia, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    for (int i = 0; i < RRR_NJ; ++i) {
+        if (!link_ok(&in->link[i]) || in->rotor_inertia[i] < 0.0) {
+            return RRR_BAD_INPUT;
+        }
+    }
+    const double a2 = m->a2, a3 = m->a3, d2 = m->d2, e = m->d2 + m->d3;
+    const origin_inertia i1 = to_origin(&in->link[0]);
+    const origin_inertia i2 = to_origin(&in->link[1]);
+    const origin_inertia i3 = to_origin(&in->link[2]);
+    const double m2 = in->link[1].mass, m3 = in->link[2].mass;
+    const double x2 = in->link[1].com[0], y2 = in->link[1].com[1], z2 = in->link[1].com[2];
+    const double x3 = in->link[2].com[0], y3 = in->link[2].com[1], z3 = in->link[2].com[2];
+    const double *jm = in->rotor_inertia;
+    double r[RRR_NP];
+    /* eq 12 with the corrections of NOTES.md (p9: z3, p12: I_zz, p13: I_zz) */
+    r[0] = a2 * a2 * m3 + a2 * m2 * (a2 + 2.0 * x2) - i2.xx + i2.yy;
+    r[1] = -2.0 * (a2 * m2 * y2 + i2.xy);
+    r[2] = m3 * (a3 + x3);
+    r[3] = m3 * y3;
+    r[4] = a3 * m3 * (a3 + 2.0 * x3) - i3.xx + i3.yy;
+    r[5] = 2.0 * (a3 * m3 * y3 + i3.xy);
+    r[6] = 2.0 * d2 * m2 * z2 + d2 * d2 * m2 + 2.0 * e * m3 * z3 + e * e * m3 + i1.yy + i2.xx +
+           i3.xx + jm[0];
+    r[7] = -e * m3 * y3 - i3.yz;
+    r[8] = -a3 * m3 * (z3 + e) - e * m3 * x3 - i3.xz;
+    r[9] = -d2 * m2 * y2 - i2.yz;
+    r[10] = -a2 * (m3 * (z3 + e) + m2 * (d2 + z2)) - d2 * m2 * x2 - i2.xz;
+    r[11] = (a2 * a2 + a3 * a3 + 2.0 * a3 * x3) * m3 + a2 * m2 * (a2 + 2.0 * x2) + i2.zz + i3.zz +
+            jm[1];
+    r[12] = a3 * m3 * (a3 + 2.0 * x3) + i3.zz;
+    r[13] = r[12] + jm[2];
+    r[14] = m2 * (x2 + a2) + m3 * a2;
+    r[15] = m2 * y2;
+    if (!rrr_finite_n(r, RRR_NP)) {
+        return RRR_BAD_INPUT;
+    }
+    memcpy(p, r, sizeof r);
+    return RRR_OK;
+}
+
+/* Names of model fields, for the validation report (static strings: reentrant). */
+static const char *const kt_names[RRR_NJ] = {"kt[1]", "kt[2]", "kt[3]"};
+static const char *const b_names[RRR_NJ] = {"b[1]", "b[2]", "b[3]"};
+static const char *const f_names[RRR_NJ][RRR_NF] = {
+    {"f[1,1]", "f[1,2]", "f[1,3]"}, {"f[2,1]", "f[2,2]", "f[2,3]"}, {"f[3,1]", "f[3,2]", "f[3,3]"}};
+static const char *const w_names[RRR_NJ][RRR_NF] = {
+    {"w[1,1]", "w[1,2]", "w[1,3]"}, {"w[2,1]", "w[2,2]", "w[2,3]"}, {"w[3,1]", "w[3,2]", "w[3,3]"}};
+static const char *const p_names[RRR_NP] = {"p[1]",  "p[2]",  "p[3]",  "p[4]",  "p[5]",  "p[6]",
+                                            "p[7]",  "p[8]",  "p[9]",  "p[10]", "p[11]", "p[12]",
+                                            "p[13]", "p[14]", "p[15]", "p[16]"};
+
+static rrr_status fail(const char **field, const char *name, rrr_status st)
+{
+    if (field != NULL) {
+        *field = name;
+    }
+    return st;
+}
+
+/* 1 when the symmetric 3x3 matrix is positive definite (leading minors by Cholesky). */
+static int spd3(const double D[3][3])
+{
+    const double l00 = D[0][0];
+    if (!(l00 > 0.0)) {
+        return 0;
+    }
+    const double a = sqrt(l00);
+    const double l10 = D[1][0] / a, l20 = D[2][0] / a;
+    const double d11 = D[1][1] - l10 * l10;
+    if (!(d11 > 0.0)) {
+        return 0;
+    }
+    const double l11 = sqrt(d11);
+    const double l21 = (D[2][1] - l20 * l10) / l11;
+    const double d22 = D[2][2] - l20 * l20 - l21 * l21;
+    return d22 > 0.0;
+}
+
+rrr_status rrr_model_validate(const rrr_model *m, const char **field)
+{
+    if (m == NULL) {
+        return fail(field, "model", RRR_BAD_INPUT);
+    }
+    const struct {
+        const char *name;
+        double v;
+        double lo; /* value must be > lo (strict) or >= lo; see strict */
+        int strict;
+    } scalars[] = {
+        {"d1", m->d1, -INFINITY, 0}, {"a2", m->a2, 0.0, 1}, {"a3", m->a3, 0.0, 1},
+        {"d2", m->d2, -INFINITY, 0}, {"d3", m->d3, -INFINITY, 0}, {"g", m->g, 0.0, 0},
+        {"u_max", m->u_max, 0.0, 1},
+    };
+    for (size_t i = 0; i < sizeof scalars / sizeof scalars[0]; ++i) {
+        const double v = scalars[i].v;
+        const int ok = isfinite(v) && (scalars[i].strict ? v > scalars[i].lo : v >= scalars[i].lo);
+        if (!ok) {
+            return fail(field, scalars[i].name, RRR_BAD_MODEL);
+        }
+    }
+    for (int i = 0; i < RRR_NP; ++i) {
+        if (!isfinite(m->p[i])) {
+            return fail(field, p_names[i], RRR_BAD_MODEL);
+        }
+    }
+    for (int i = 0; i < RRR_NJ; ++i) {
+        if (!(isfinite(m->kt[i]) && m->kt[i] > 0.0)) {
+            return fail(field, kt_names[i], RRR_BAD_MODEL);
+        }
+        if (!(isfinite(m->b[i]) && m->b[i] >= 0.0)) {
+            return fail(field, b_names[i], RRR_BAD_MODEL);
+        }
+        for (int k = 0; k < RRR_NF; ++k) {
+            if (!isfinite(m->f[i][k])) {
+                return fail(field, f_names[i][k], RRR_BAD_MODEL);
+            }
+            if (!(isfinite(m->w[i][k]) && m->w[i][k] >= 0.0)) {
+                return fail(field, w_names[i][k], RRR_BAD_MODEL);
+            }
+        }
+    }
+    /* D depends on q2 and q3 only; check positive definiteness on a grid over a full turn. */
+    enum { N = 64 };
+    const double step = 2.0 * RRR_PI / N;
+    for (int i = 0; i < N; ++i) {
+        for (int k = 0; k < N; ++k) {
+            const double q[3] = {0.0, -RRR_PI + i * step, -RRR_PI + k * step};
+            double D[3][3];
+            if (rrr_mass_matrix(m, q, D) != RRR_OK || !spd3((const double(*)[3])D)) {
+                return fail(field, "p", RRR_NOT_POSITIVE_DEFINITE);
+            }
+        }
+    }
+    return fail(field, "", RRR_OK);
+}

@@ -1,0 +1,63 @@
+/* Minimal test support shared by the C tests: CHECK macros and a seeded RNG. */
+#ifndef RRR_TEST_H
+#define RRR_TEST_H
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+
+static int rrr_test_failures = 0;
+
+#define CHECK(cond)                                                                          \
+    do {                                                                                     \
+        if (!(cond)) {                                                                       \
+            fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);         \
+            rrr_test_failures++;                                                             \
+        }                                                                                    \
+    } while (0)
+
+#define CHECK_CLOSE(a, b, tol)                                                               \
+    do {                                                                                     \
+        const double ca_ = (a), cb_ = (b);                                                   \
+        if (!(fabs(ca_ - cb_) <= (tol))) {                                                   \
+            fprintf(stderr, "%s:%d: CHECK_CLOSE failed: %s = %.17g, %s = %.17g, tol %g\n",  \
+                    __FILE__, __LINE__, #a, ca_, #b, cb_, (double)(tol));                    \
+            rrr_test_failures++;                                                             \
+        }                                                                                    \
+    } while (0)
+
+#define CHECK_STATUS(expr, expected)                                                         \
+    do {                                                                                     \
+        const rrr_status cs_ = (expr);                                                       \
+        if (cs_ != (expected)) {                                                             \
+            fprintf(stderr, "%s:%d: %s returned %s, expected %s\n", __FILE__, __LINE__,      \
+                    #expr, rrr_status_str(cs_), rrr_status_str(expected));                   \
+            rrr_test_failures++;                                                             \
+        }                                                                                    \
+    } while (0)
+
+/* xorshift64*: deterministic across platforms. */
+typedef struct rrr_rng {
+    uint64_t s;
+} rrr_rng;
+
+static inline double rrr_rng_uniform(rrr_rng *r, double lo, double hi)
+{
+    r->s ^= r->s >> 12;
+    r->s ^= r->s << 25;
+    r->s ^= r->s >> 27;
+    const uint64_t v = r->s * 2685821657736338717ULL;
+    return lo + (hi - lo) * ((double)(v >> 11) * (1.0 / 9007199254740992.0));
+}
+
+static inline int rrr_test_report(const char *name)
+{
+    if (rrr_test_failures == 0) {
+        printf("%s: all checks passed\n", name);
+        return 0;
+    }
+    printf("%s: %d check(s) failed\n", name, rrr_test_failures);
+    return 1;
+}
+
+#endif
