@@ -1,0 +1,237 @@
+/**
+ * @file rrr_dynamics.c
+ * @brief Public dynamics API (rrr_dynamics.h): argument checks around the generated closed form
+ *        of rrr_dynamics_gen.c, and forward dynamics by a 3 x 3 Cholesky factorisation.
+ *
+ * Every function checks its pointers and the finiteness of its inputs (including the model fields
+ * it uses), computes into locals, checks that the results are finite, and only then writes the
+ * outputs: on any error the outputs are untouched.
+ */
+#include "rrr/rrr_dynamics.h"
+
+#include <math.h>
+
+#include "rrr_dynamics_gen.h"
+#include "rrr_internal.h"
+
+/** Model fields a function reads. */
+enum { USES_A2 = 1, USES_G = 2, USES_P = 4 };
+
+/** 1 when the model fields named in @p uses are finite. */
+static int model_finite(const rrr_model *m, int uses)
+{
+    if ((uses & USES_A2) && !isfinite(m->a2)) {
+        return 0;
+    }
+    if ((uses & USES_G) && !isfinite(m->g)) {
+        return 0;
+    }
+    if ((uses & USES_P) && !rrr_finite_n(m->p, RRR_NP)) {
+        return 0;
+    }
+    return 1;
+}
+
+rrr_status rrr_regressor(const rrr_model *m, const double q[3], const double qd[3],
+                         const double qdd[3], double Y[3][RRR_NP])
+{
+    if (m == NULL || q == NULL || qd == NULL || qdd == NULL || Y == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    if (!model_finite(m, USES_A2 | USES_G) || !rrr_finite_n(q, 3) || !rrr_finite_n(qd, 3)
+        || !rrr_finite_n(qdd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    double y[3][RRR_NP];
+    rrr_gen_regressor(m, &t, qd, qdd, y);
+    if (!rrr_finite_n(&y[0][0], 3 * RRR_NP)) {
+        return RRR_NUMERIC;
+    }
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < RRR_NP; ++j) {
+            Y[i][j] = y[i][j];
+        }
+    }
+    return RRR_OK;
+}
+
+rrr_status rrr_inverse_dynamics(const rrr_model *m, const double q[3], const double qd[3],
+                                const double qdd[3], double tau[3])
+{
+    if (m == NULL || q == NULL || qd == NULL || qdd == NULL || tau == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    if (!model_finite(m, USES_A2 | USES_G | USES_P) || !rrr_finite_n(q, 3)
+        || !rrr_finite_n(qd, 3) || !rrr_finite_n(qdd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    double out[3];
+    rrr_gen_inverse_dynamics(m, &t, qd, qdd, out);
+    if (!rrr_finite_n(out, 3)) {
+        return RRR_NUMERIC;
+    }
+    tau[0] = out[0];
+    tau[1] = out[1];
+    tau[2] = out[2];
+    return RRR_OK;
+}
+
+rrr_status rrr_mass_matrix(const rrr_model *m, const double q[3], double D[3][3])
+{
+    if (m == NULL || q == NULL || D == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    if (!model_finite(m, USES_A2 | USES_P) || !rrr_finite_n(q, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    double d[3][3];
+    rrr_gen_mass_matrix(m, &t, d);
+    if (!rrr_finite_n(&d[0][0], 9)) {
+        return RRR_NUMERIC;
+    }
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            D[i][j] = d[i][j];
+        }
+    }
+    return RRR_OK;
+}
+
+rrr_status rrr_coriolis(const rrr_model *m, const double q[3], const double qd[3], double c[3])
+{
+    if (m == NULL || q == NULL || qd == NULL || c == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    if (!model_finite(m, USES_A2 | USES_P) || !rrr_finite_n(q, 3) || !rrr_finite_n(qd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    double out[3];
+    rrr_gen_coriolis(m, &t, qd, out);
+    if (!rrr_finite_n(out, 3)) {
+        return RRR_NUMERIC;
+    }
+    c[0] = out[0];
+    c[1] = out[1];
+    c[2] = out[2];
+    return RRR_OK;
+}
+
+rrr_status rrr_gravity(const rrr_model *m, const double q[3], double h[3])
+{
+    if (m == NULL || q == NULL || h == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    if (!model_finite(m, USES_G | USES_P) || !rrr_finite_n(q, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    double out[3];
+    rrr_gen_gravity(m, &t, out);
+    if (!rrr_finite_n(out, 3)) {
+        return RRR_NUMERIC;
+    }
+    h[0] = out[0];
+    h[1] = out[1];
+    h[2] = out[2];
+    return RRR_OK;
+}
+
+/** 1 when a Cholesky pivot is usable (strictly positive and finite). */
+static int pivot_ok(double v)
+{
+    return v > 0.0 && isfinite(v);
+}
+
+rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], const double qd[3],
+                                const double tau[3], double qdd[3])
+{
+    if (m == NULL || q == NULL || qd == NULL || tau == NULL || qdd == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    if (!model_finite(m, USES_A2 | USES_G | USES_P) || !rrr_finite_n(q, 3)
+        || !rrr_finite_n(qd, 3) || !rrr_finite_n(tau, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    double D[3][3];
+    rrr_gen_mass_matrix(m, &t, D);
+    /* bias c(q, qd) + h(q) = tau(q, qd, 0): one fused call */
+    const double zero[3] = {0.0, 0.0, 0.0};
+    double bias[3];
+    rrr_gen_inverse_dynamics(m, &t, qd, zero, bias);
+    if (!rrr_finite_n(bias, 3)) {
+        return RRR_NUMERIC;
+    }
+
+    /* D = L L^T */
+    const double d00 = D[0][0];
+    if (!pivot_ok(d00)) {
+        return RRR_NOT_POSITIVE_DEFINITE;
+    }
+    const double l00 = sqrt(d00);
+    const double l10 = D[1][0] / l00;
+    const double l20 = D[2][0] / l00;
+    const double d11 = D[1][1] - l10 * l10;
+    if (!pivot_ok(d11)) {
+        return RRR_NOT_POSITIVE_DEFINITE;
+    }
+    const double l11 = sqrt(d11);
+    const double l21 = (D[2][1] - l20 * l10) / l11;
+    const double d22 = D[2][2] - l20 * l20 - l21 * l21;
+    if (!pivot_ok(d22)) {
+        return RRR_NOT_POSITIVE_DEFINITE;
+    }
+    const double l22 = sqrt(d22);
+
+    /* L y = tau - bias, then L^T x = y */
+    const double r0 = tau[0] - bias[0];
+    const double r1 = tau[1] - bias[1];
+    const double r2 = tau[2] - bias[2];
+    const double y0 = r0 / l00;
+    const double y1 = (r1 - l10 * y0) / l11;
+    const double y2 = (r2 - l20 * y0 - l21 * y1) / l22;
+    double x[3];
+    x[2] = y2 / l22;
+    x[1] = (y1 - l21 * x[2]) / l11;
+    x[0] = (y0 - l10 * x[1] - l20 * x[2]) / l00;
+    if (!rrr_finite_n(x, 3)) {
+        return RRR_NUMERIC;
+    }
+    qdd[0] = x[0];
+    qdd[1] = x[1];
+    qdd[2] = x[2];
+    return RRR_OK;
+}
+
+rrr_status rrr_energy(const rrr_model *m, const double q[3], const double qd[3],
+                      double *kinetic, double *potential)
+{
+    if (m == NULL || q == NULL || qd == NULL || kinetic == NULL || potential == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    if (!model_finite(m, USES_A2 | USES_G | USES_P) || !rrr_finite_n(q, 3)
+        || !rrr_finite_n(qd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_trig t = rrr_trig_of(q);
+    double D[3][3];
+    rrr_gen_mass_matrix(m, &t, D);
+    double ke = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            ke += qd[i] * D[i][j] * qd[j];
+        }
+    }
+    ke *= 0.5;
+    const double pe = rrr_gen_potential(m, &t);
+    if (!isfinite(ke) || !isfinite(pe)) {
+        return RRR_NUMERIC;
+    }
+    *kinetic = ke;
+    *potential = pe;
+    return RRR_OK;
+}

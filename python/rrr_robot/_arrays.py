@@ -1,0 +1,41 @@
+"""Shape handling shared by the Pythonic layer: one vector (3,) or a batch (n, 3)."""
+
+from __future__ import annotations
+
+import ctypes as ct
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .errors import BadInputError
+
+DPTR = ct.POINTER(ct.c_double)
+FloatArray = NDArray[np.float64]
+
+
+def as_rows(value: ArrayLike, name: str, width: int = 3) -> tuple[FloatArray, bool]:
+    """Return (array of shape (n, width), was_batch); raise BadInputError on a wrong shape."""
+    arr = np.ascontiguousarray(value, dtype=np.float64)
+    if arr.ndim == 1 and arr.shape[0] == width:
+        return arr.reshape(1, width), False
+    if arr.ndim == 2 and arr.shape[1] == width:
+        return arr, True
+    raise BadInputError(f"{name} must have shape ({width},) or (n, {width}), got {arr.shape}")
+
+
+def broadcast_rows(*pairs: tuple[ArrayLike, str]) -> tuple[list[FloatArray], bool]:
+    """Convert several (value, name) pairs to (n, 3) arrays of a common n."""
+    rows = [as_rows(v, name) for v, name in pairs]
+    batch = any(b for _, b in rows)
+    n = max(a.shape[0] for a, _ in rows)
+    out = []
+    for (a, _), (_, name) in zip(rows, pairs, strict=True):
+        if a.shape[0] not in (1, n):
+            raise BadInputError(f"{name} has {a.shape[0]} rows, expected {n}")
+        out.append(np.ascontiguousarray(np.broadcast_to(a, (n, a.shape[1]))))
+    return out, batch
+
+
+def ptr(a: FloatArray) -> ct._Pointer:  # type: ignore[name-defined]
+    """Pointer to the data of a C-contiguous float64 array."""
+    return a.ctypes.data_as(DPTR)

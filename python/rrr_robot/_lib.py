@@ -1,0 +1,195 @@
+"""Raw ctypes layer over librrr: structures and signatures declared once, one status check.
+
+Everything model-related is computed in C; this module only moves arrays across.
+"""
+
+from __future__ import annotations
+
+import ctypes as ct
+import os
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from .errors import (
+    BadInputError,
+    ModelError,
+    NumericError,
+    RrrError,
+    SingularError,
+    UnreachableError,
+)
+
+NP = 16
+D3 = ct.c_double * 3
+D33 = (ct.c_double * 3) * 3
+DP = ct.c_double * NP
+D3P = (ct.c_double * NP) * 3
+
+
+class RawModel(ct.Structure):
+    """Mirror of ``rrr_model`` (c_src/rrr/include/rrr/rrr_model.h)."""
+
+    _fields_ = [
+        ("d1", ct.c_double),
+        ("a2", ct.c_double),
+        ("a3", ct.c_double),
+        ("d2", ct.c_double),
+        ("d3", ct.c_double),
+        ("g", ct.c_double),
+        ("p", DP),
+        ("kt", D3),
+        ("f", D33),
+        ("w", D33),
+        ("b", D3),
+        ("u_max", ct.c_double),
+    ]
+
+
+class RawLink(ct.Structure):
+    """Mirror of ``rrr_link_inertia``."""
+
+    _fields_ = [("mass", ct.c_double), ("com", D3), ("inertia_com", D33)]
+
+
+class RawInertial(ct.Structure):
+    """Mirror of ``rrr_inertial``."""
+
+    _fields_ = [("link", RawLink * 3), ("rotor_inertia", D3)]
+
+
+class RawIkSet(ct.Structure):
+    """Mirror of ``rrr_ik_set``."""
+
+    _fields_ = [("n", ct.c_int), ("q", (ct.c_double * 3) * 4), ("branch", ct.c_int * 4)]
+
+
+class RawSingularity(ct.Structure):
+    """Mirror of ``rrr_singularity``."""
+
+    _fields_ = [
+        ("flags", ct.c_uint),
+        ("elbow_margin", ct.c_double),
+        ("shoulder_margin", ct.c_double),
+        ("det_jacobian", ct.c_double),
+    ]
+
+
+class RawGains(ct.Structure):
+    """Mirror of ``rrr_ctc_gains``."""
+
+    _fields_ = [("kp", D3), ("kd", D3), ("feedforward", ct.c_int)]
+
+
+class RawCtcOutput(ct.Structure):
+    """Mirror of ``rrr_ctc_output``."""
+
+    _fields_ = [("u", D3), ("u_n", D3), ("u_c", D3), ("saturated", ct.c_uint)]
+
+
+class RawPlantState(ct.Structure):
+    """Mirror of ``rrr_plant_state``."""
+
+    _fields_ = [("q", D3), ("qd", D3)]
+
+
+_P = ct.POINTER
+_M = _P(RawModel)
+_D = _P(ct.c_double)
+
+# name -> argument types; every function returns rrr_status (int)
+_SIGNATURES: dict[str, list[Any]] = {
+    "rrr_model_default": [_M],
+    "rrr_inertial_default": [_P(RawInertial)],
+    "rrr_model_validate": [_M, _P(ct.c_char_p)],
+    "rrr_bps_from_inertia": [_M, _P(RawInertial), _D],
+    "rrr_fk": [_M, _D, _D, _D],
+    "rrr_jacobian": [_M, _D, _D],
+    "rrr_tip_motion": [_M, _D, _D, _D, _D, _D],
+    "rrr_joint_motion": [_M, _D, _D, _D, _D, _D],
+    "rrr_ik_branch": [_M, _D, ct.c_int, ct.c_int, _D],
+    "rrr_ik": [_M, _D, _P(RawIkSet)],
+    "rrr_ik_nearest": [_M, _D, _D, _D, _P(ct.c_int)],
+    "rrr_singularity_classify": [_M, _D, ct.c_double, _P(RawSingularity)],
+    "rrr_workspace_margin": [_M, _D, _D, _P(ct.c_uint)],
+    "rrr_regressor": [_M, _D, _D, _D, _D],
+    "rrr_inverse_dynamics": [_M, _D, _D, _D, _D],
+    "rrr_mass_matrix": [_M, _D, _D],
+    "rrr_coriolis": [_M, _D, _D, _D],
+    "rrr_gravity": [_M, _D, _D],
+    "rrr_forward_dynamics": [_M, _D, _D, _D, _D],
+    "rrr_energy": [_M, _D, _D, _D, _D],
+    "rrr_friction": [_M, _D, _D],
+    "rrr_voltage_from_torque": [_M, _D, _D, _D],
+    "rrr_torque_from_voltage": [_M, _D, _D, _D],
+    "rrr_saturate": [_M, _D, _D, _P(ct.c_uint)],
+    "rrr_ctc_gains_default": [_P(RawGains)],
+    "rrr_ctc": [_M, _P(RawGains), _D, _D, _D, _D, _D, _P(RawCtcOutput)],
+    "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
+    "rrr_plant_step": [_M, ct.c_double, _D, ct.c_double, _P(RawPlantState), _D],
+}
+
+STATUS_NAMES = [
+    "RRR_OK",
+    "RRR_BAD_INPUT",
+    "RRR_BAD_MODEL",
+    "RRR_NOT_POSITIVE_DEFINITE",
+    "RRR_UNREACHABLE",
+    "RRR_SINGULAR",
+    "RRR_NUMERIC",
+]
+
+_ERRORS: dict[int, type[RrrError]] = {
+    1: BadInputError,
+    2: ModelError,
+    3: ModelError,
+    4: UnreachableError,
+    5: SingularError,
+    6: NumericError,
+}
+
+_MEANING = {
+    1: "bad input (NULL, NaN/Inf or out-of-range argument)",
+    2: "invalid model parameter",
+    3: "inertia matrix D(q) is not positive definite",
+    4: "target is outside the workspace",
+    5: "singular configuration",
+    6: "result would be non-finite",
+}
+
+
+def library_path() -> Path:
+    """Path of librrr: $RRR_LIBRARY if set, else the copy installed beside this package."""
+    env = os.environ.get("RRR_LIBRARY")
+    if env:
+        return Path(env)
+    return Path(__file__).with_name("librrr.so")
+
+
+def _load() -> ct.CDLL:
+    path = library_path()
+    if not path.exists():
+        raise RrrError(
+            f"librrr not found at {path}: install the package with 'pip install .' "
+            "or point RRR_LIBRARY at a built librrr.so"
+        )
+    lib = ct.CDLL(str(path))
+    for name, argtypes in _SIGNATURES.items():
+        fn = getattr(lib, name)
+        fn.argtypes = argtypes
+        fn.restype = ct.c_int
+    return lib
+
+
+LIB = _load()
+
+
+def call(name: str, *args: Any, context: str = "") -> None:
+    """Call a librrr function and raise the typed error matching a non-OK status."""
+    fn: Callable[..., int] = getattr(LIB, name)
+    status = fn(*args)
+    if status != 0:
+        cls = _ERRORS.get(status, RrrError)
+        sname = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
+        detail = f": {context}" if context else ""
+        raise cls(f"{name} failed with {sname} ({_MEANING.get(status, '?')}){detail}", name, sname)

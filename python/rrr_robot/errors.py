@@ -1,0 +1,49 @@
+"""Exceptions of rrr_robot: one root, split by what went wrong."""
+
+from __future__ import annotations
+
+__all__ = [
+    "BadInputError",
+    "CosimError",
+    "ModelError",
+    "NumericError",
+    "RrrError",
+    "SingularError",
+    "UnreachableError",
+]
+
+
+class RrrError(Exception):
+    """Root of every error raised by rrr_robot.
+
+    ``function`` names the C function (or FMU call) that failed, ``status`` its status name.
+    """
+
+    def __init__(self, message: str, function: str = "", status: str = "") -> None:
+        super().__init__(message)
+        self.function = function
+        self.status = status
+
+
+class BadInputError(RrrError, ValueError):
+    """An argument is NaN/Inf, has the wrong shape or is out of range."""
+
+
+class ModelError(RrrError, ValueError):
+    """Model parameters are invalid (non-finite, k_t <= 0, D(q) not positive definite...)."""
+
+
+class UnreachableError(RrrError, ValueError):
+    """An inverse kinematics target lies outside the workspace."""
+
+
+class SingularError(RrrError, ValueError):
+    """A singular configuration where the requested quantity does not exist."""
+
+
+class NumericError(RrrError, ArithmeticError):
+    """A result would be non-finite (e.g. the integration diverged)."""
+
+
+class CosimError(RrrError):
+    """An FMU call failed during co-simulation (names the FMU and the time)."""

@@ -1,0 +1,26 @@
+# Proves the core library does no allocation, no I/O and keeps no writable global state:
+# no undefined reference to allocation or I/O functions, and (in plain builds) no symbol in a
+# writable data section. Run as: cmake -DNM=<nm> -DLIB=<librrr.a> -DSANITIZED=<ON|OFF> -P <this>
+execute_process(COMMAND ${NM} -u ${LIB} OUTPUT_VARIABLE undefined RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "nm -u failed on ${LIB}")
+endif()
+set(forbidden malloc calloc realloc free aligned_alloc posix_memalign printf fprintf puts fputs
+    fopen fwrite fread write read open exit abort getenv time clock_gettime rand srand)
+set(bad "")
+foreach(sym IN LISTS forbidden)
+  if(undefined MATCHES "(^|\n)[ \t]*U ${sym}(@[^\n]*)?(\n|$)")
+    list(APPEND bad ${sym})
+  endif()
+endforeach()
+if(bad)
+  message(FATAL_ERROR "librrr references forbidden functions: ${bad}")
+endif()
+if(NOT SANITIZED)
+  execute_process(COMMAND ${NM} ${LIB} OUTPUT_VARIABLE all RESULT_VARIABLE rc)
+  string(REGEX MATCHALL "\n[0-9a-f]+ [DdBb] [^\n]+" writable "\n${all}")
+  if(writable)
+    message(FATAL_ERROR "librrr has writable global or static data: ${writable}")
+  endif()
+endif()
+message(STATUS "librrr: no allocation, no I/O, no writable globals (${LIB})")

@@ -1,0 +1,135 @@
+/* Model: defaults validate, eq 12 from inertial parameters, validation names the bad field. */
+#include <string.h>
+
+#include "rrr/rrr.h"
+#include "rrr_test.h"
+
+static void test_default(void)
+{
+    rrr_model m;
+    CHECK_STATUS(rrr_model_default(&m), RRR_OK);
+    const char *field = NULL;
+    CHECK_STATUS(rrr_model_validate(&m, &field), RRR_OK);
+    CHECK(field != NULL && field[0] == '\0');
+    CHECK_CLOSE(m.a2, 0.40, 0.0);
+    CHECK_CLOSE(m.d2 + m.d3, 0.10, 1e-15);
+    CHECK(m.kt[0] > 0.0 && m.kt[1] > 0.0 && m.kt[2] > 0.0);
+    CHECK_STATUS(rrr_model_default(NULL), RRR_BAD_INPUT);
+}
+
+/* A point mass on link 3 only: p13 is its inertia about the joint-3 axis, p3 and p4 its
+ * first moments about that axis, p14 - p13 the rotor inertia. */
+static void test_bps_point_mass(void)
+{
+    rrr_model m;
+    rrr_model_default(&m);
+    rrr_inertial in;
+    memset(&in, 0, sizeof in);
+    const double m3 = 1.7, x3 = -0.12, y3 = 0.03, z3 = 0.04;
+    in.link[2].mass = m3;
+    in.link[2].com[0] = x3;
+    in.link[2].com[1] = y3;
+    in.link[2].com[2] = z3;
+    in.rotor_inertia[2] = 0.013;
+    double p[RRR_NP];
+    CHECK_STATUS(rrr_bps_from_inertia(&m, &in, p), RRR_OK);
+    const double a3 = m.a3, a2 = m.a2, e = m.d2 + m.d3;
+    CHECK_CLOSE(p[12], m3 * ((a3 + x3) * (a3 + x3) + y3 * y3), 1e-15);
+    CHECK_CLOSE(p[13] - p[12], 0.013, 1e-15);
+    CHECK_CLOSE(p[2], m3 * (a3 + x3), 1e-15);
+    CHECK_CLOSE(p[3], m3 * y3, 1e-15);
+    CHECK_CLOSE(p[14], m3 * a2, 1e-15);
+    CHECK_CLOSE(p[15], 0.0, 0.0);
+    /* p7: inertia about the vertical axis at q = 0 of the point at (a2 + a3 + x3, e + z3) in
+     * the horizontal plane, minus the parts that vary with q2, q3 (p1, p5, p12 terms) */
+    const double izz_o = m3 * (x3 * x3 + y3 * y3);
+    CHECK_CLOSE(p[6], 2.0 * e * m3 * z3 + e * e * m3 + m3 * (y3 * y3 + z3 * z3), 1e-15);
+    CHECK_CLOSE(p[11], (a2 * a2 + a3 * a3 + 2.0 * a3 * x3) * m3 + izz_o, 1e-15);
+}
+
+static void test_bps_bad(void)
+{
+    rrr_model m;
+    rrr_model_default(&m);
+    rrr_inertial in;
+    rrr_inertial_default(&in);
+    double p[RRR_NP];
+    for (int i = 0; i < RRR_NP; ++i) {
+        p[i] = 42.0;
+    }
+    rrr_inertial bad = in;
+    bad.link[1].mass = -1.0;
+    CHECK_STATUS(rrr_bps_from_inertia(&m, &bad, p), RRR_BAD_INPUT);
+    bad = in;
+    bad.link[2].inertia_com[0][1] = NAN;
+    CHECK_STATUS(rrr_bps_from_inertia(&m, &bad, p), RRR_BAD_INPUT);
+    bad = in;
+    bad.rotor_inertia[0] = INFINITY;
+    CHECK_STATUS(rrr_bps_from_inertia(&m, &bad, p), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_bps_from_inertia(NULL, &in, p), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_bps_from_inertia(&m, NULL, p), RRR_BAD_INPUT);
+    for (int i = 0; i < RRR_NP; ++i) {
+        CHECK(p[i] == 42.0);
+    }
+}
+
+static void expect_invalid(const rrr_model *m, rrr_status st, const char *name)
+{
+    const char *field = NULL;
+    CHECK_STATUS(rrr_model_validate(m, &field), st);
+    CHECK(field != NULL && strcmp(field, name) == 0);
+    if (field != NULL && strcmp(field, name) != 0) {
+        fprintf(stderr, "  field was %s, expected %s\n", field, name);
+    }
+}
+
+static void test_validate(void)
+{
+    rrr_model ok;
+    rrr_model_default(&ok);
+    rrr_model m = ok;
+    m.kt[1] = 0.0;
+    expect_invalid(&m, RRR_BAD_MODEL, "kt[2]");
+    m = ok;
+    m.kt[2] = -3.0;
+    expect_invalid(&m, RRR_BAD_MODEL, "kt[3]");
+    m = ok;
+    m.p[4] = NAN;
+    expect_invalid(&m, RRR_BAD_MODEL, "p[5]");
+    m = ok;
+    m.a3 = 0.0;
+    expect_invalid(&m, RRR_BAD_MODEL, "a3");
+    m = ok;
+    m.d1 = INFINITY;
+    expect_invalid(&m, RRR_BAD_MODEL, "d1");
+    m = ok;
+    m.u_max = 0.0;
+    expect_invalid(&m, RRR_BAD_MODEL, "u_max");
+    m = ok;
+    m.f[2][1] = NAN;
+    expect_invalid(&m, RRR_BAD_MODEL, "f[3,2]");
+    m = ok;
+    m.w[0][0] = -1.0;
+    expect_invalid(&m, RRR_BAD_MODEL, "w[1,1]");
+    m = ok;
+    m.b[0] = -0.1;
+    expect_invalid(&m, RRR_BAD_MODEL, "b[1]");
+    m = ok;
+    memset(m.p, 0, sizeof m.p);
+    expect_invalid(&m, RRR_NOT_POSITIVE_DEFINITE, "p");
+    m = ok;
+    m.p[13] = -1.0; /* D33 = p14 < 0 */
+    expect_invalid(&m, RRR_NOT_POSITIVE_DEFINITE, "p");
+    CHECK_STATUS(rrr_model_validate(NULL, NULL), RRR_BAD_INPUT);
+    CHECK(strcmp(rrr_status_str(RRR_UNREACHABLE), "RRR_UNREACHABLE") == 0);
+    CHECK(strcmp(rrr_status_str((rrr_status)99), "RRR_UNKNOWN_STATUS") == 0);
+}
+
+int main(void)
+{
+    test_default();
+    test_bps_point_mass();
+    test_bps_bad();
+    test_validate();
+    return rrr_test_report("test_model");
+}

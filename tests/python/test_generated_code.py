@@ -1,0 +1,18 @@
+"""Generated code is reproducible: regenerating the dynamics from the SymPy derivation gives the
+committed C files byte for byte."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_regenerating_dynamics_gives_committed_files() -> None:
+    script = ROOT / "c_src" / "rrr" / "gen" / "derive_dynamics.py"
+    result = subprocess.run(
+        [sys.executable, str(script), "--check"], capture_output=True, text=True, timeout=600
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
