@@ -1,0 +1,78 @@
+"""Independent numeric references for the paper's Figs 5 and 6: Pinocchio's recursive
+Newton-Euler inverse dynamics on the same robot (the numeric IK is trajectory.numeric_ik_path).
+
+Optional dependency: ``pip install pin`` (the ``verify`` extra).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ._arrays import FloatArray
+
+
+@dataclass(frozen=True)
+class Inertial:
+    """Full inertial data of a robot file: masses (3,), COMs in DH frame i (3, 3), inertia
+    tensors about the COM (3, 3, 3), rotor inertias (3,)."""
+
+    masses: FloatArray
+    coms: FloatArray
+    inertias_com: FloatArray
+    rotor: FloatArray
+
+
+def inertial_from_robot_dict(data: Mapping[str, Any]) -> Inertial | None:
+    """The link tables of a robot file, or None when it only gives base parameters."""
+    if "base_parameters" in data or any(f"link{i}" not in data for i in (1, 2, 3)):
+        return None
+    links = [data[f"link{i}"] for i in (1, 2, 3)]
+    return Inertial(
+        masses=np.array([float(lk["mass"]) for lk in links]),
+        coms=np.array([lk["com"] for lk in links], dtype=float),
+        inertias_com=np.array([np.diag(lk["inertia_com"]) for lk in links], dtype=float),
+        rotor=np.asarray(data["motors"]["rotor_inertia"], dtype=float),
+    )
+
+
+def _dh_transform(d: float, a: float, alpha: float) -> tuple[FloatArray, FloatArray]:
+    """Rotation and translation of Tz(d) Tx(a) Rx(alpha)."""
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    rot = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
+    return rot, np.array([a, 0.0, d])
+
+
+def pinocchio_model(dh: Mapping[str, float], g: float, inertial: Inertial) -> Any:
+    """A Pinocchio model of the arm: revolute-z joints placed by the DH transforms, link inertias
+    moved from DH frame i into joint i's frame, rotor inertias as armature."""
+    import pinocchio as pin
+
+    model = pin.Model()
+    model.gravity.linear = np.array([0.0, 0.0, -g])
+    params = [(dh["d1"], 0.0, math.pi / 2), (dh["d2"], dh["a2"], 0.0), (dh["d3"], dh["a3"], 0.0)]
+    parent, placement = 0, pin.SE3.Identity()
+    for i, (d, a, alpha) in enumerate(params):
+        joint = model.addJoint(parent, pin.JointModelRZ(), placement, f"joint{i + 1}")
+        rot, pos = _dh_transform(d, a, alpha)
+        com = pos + rot @ inertial.coms[i]
+        inertia = rot @ inertial.inertias_com[i] @ rot.T
+        model.appendBodyToJoint(joint, pin.Inertia(inertial.masses[i], com, inertia),
+                                pin.SE3.Identity())
+        parent, placement = joint, pin.SE3(rot, pos)
+    model.armature = np.asarray(inertial.rotor, dtype=float)
+    return model
+
+
+def pinocchio_inverse_dynamics(dh: Mapping[str, float], g: float, inertial: Inertial,
+                               q: FloatArray, qd: FloatArray, qdd: FloatArray) -> FloatArray:
+    """Motor torque (rigid body + rotor inertia) by Pinocchio's rnea, one row per sample."""
+    import pinocchio as pin
+
+    model = pinocchio_model(dh, g, inertial)
+    data = model.createData()
+    return np.array([pin.rnea(model, data, q[k], qd[k], qdd[k]) for k in range(q.shape[0])])
