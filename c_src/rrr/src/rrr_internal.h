@@ -10,9 +10,9 @@
 #define RRR_PI 3.14159265358979323846
 
 /* Default torque constants, N m / V: calibrated to the paper's eq 16 (tools/calibrate_kt.py). */
-#define RRR_DEFAULT_KT1 6.0
-#define RRR_DEFAULT_KT2 12.0
-#define RRR_DEFAULT_KT3 5.0
+#define RRR_DEFAULT_KT1 12.0
+#define RRR_DEFAULT_KT2 11.0
+#define RRR_DEFAULT_KT3 4.7
 
 /** 1 when every one of the n values is finite. */
 static inline int rrr_finite_n(const double *v, size_t n)

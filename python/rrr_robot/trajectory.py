@@ -1,0 +1,391 @@
+"""The writing task (paper section V): reference tip and joint motion while the arm writes text.
+
+The tip writes a text in the vertical plane y = ``plane_y`` (x to the right, z up; the text reads
+left to right along +x as plotted in the x-z plane) and lifts the pen by ``lift`` in y between
+strokes, towards the robot (the paper lies on the far side of the plane). The path is the C2
+curve of :mod:`rrr_robot.writing_path` through the strokes of :mod:`rrr_robot.letters`; the
+timing law s(t) along it is built in four steps:
+
+1. a limit of s_dot along the path: the tip speed target is ``peak_speed`` on straight parts and
+   sqrt(``lateral_acc`` / curvature) in curves, never below ``min_speed``; on top of it the
+   geometric parts of the tip acceleration and jerk are bounded, |C''| s_dot^2 <= ``max_acc``
+   and |C'''| s_dot^3 <= ``max_jerk`` (these slow the tip at sharp corners and stop it at the
+   cusps of 'm' and omega, where the pen reverses), and the pen lift's y acceleration by
+   ``lift_acc``;
+2. forward and backward passes limit the tangential acceleration to ``tangential_acc`` and bring
+   the tip to rest at both ends;
+3. integrated in time, this gives s0(t), which is smoothed by a Hann window of half-width
+   ``smoothing`` and interpolated by a quintic spline on a 0.5 ms grid: s(t) is C3 and starts
+   and ends with exactly zero velocity and acceleration, after ``rest`` seconds at rest;
+4. x(t) = C(s(t)), xd = C' s_dot, xdd = C'' s_dot^2 + C' s_ddot exactly (x is C2 in time).
+
+Joint motion: q = closed-form IK (``Model.ik_nearest``, continuous, one posture branch), qd and
+qdd through the Jacobian (``Model.joint_motion``). Before the timing law and the IK run, the text
+is checked: it must fit the writing area and every point of the path (pen lifts included) must
+keep ``min_workspace_margin`` from the workspace boundary; a violation raises BadInputError. The
+joint path must then keep |sin q3| >= ``min_elbow_margin`` on one posture branch.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.interpolate import BSpline, make_interp_spline
+
+from ._arrays import FloatArray
+from .errors import BadInputError, NumericError
+from .letters import text_strokes
+from .model import Model
+from .writing_path import PathOptions, WritingPath, build_path
+
+__all__ = [
+    "DEFAULT_TEXT",
+    "Reference",
+    "TimingLaw",
+    "WritingSpec",
+    "make_reference",
+    "numeric_ik_path",
+    "writing_path",
+]
+
+logger = logging.getLogger(__name__)
+
+#: Omega, m and gamma of the paper (where its PD corrections peak) between cursive latin letters.
+DEFAULT_TEXT = "a\u03c9m\u03b3"  # "a omega m gamma"
+_TIME_GRID = 5e-4            # s, grid of the timing law's quintic spline
+_PATH_GRID = 1e-4            # m, grid of s for the speed limit
+_TOML_IGNORED = ("duration_hint",)
+
+
+@dataclass(frozen=True)
+class WritingSpec:
+    """What to write and how fast. Lengths in m, speeds in m/s, accelerations in m/s^2."""
+
+    text: str = DEFAULT_TEXT
+    plane_y: float = -0.25
+    x_range: tuple[float, float] = (0.35, 0.65)
+    z_range: tuple[float, float] = (0.35, 0.60)
+    letter_height: float = 0.07            # capital letter, base line to cap line
+    peak_speed: float = 0.4
+    min_speed: float = 0.05
+    lateral_acc: float = 3.0               # sets the speed in curves: v = sqrt(a / curvature)
+    max_acc: float = 10.0                  # bound on the centripetal part |C''| s_dot^2
+    lift_acc: float = 2.0                  # bound on the y acceleration of a pen lift
+    max_jerk: float = 200.0                # m/s^3, bound on the geometric part |C'''| s_dot^3
+    tangential_acc: float = 3.0
+    dt: float = 1e-3
+    lift: float = 0.02                     # pen lift in y, towards the robot (away from paper)
+    corner_radius: float = 0.002           # blend half-width at sharp corners
+    lift_radius: float = 0.01              # blend length at the ends of a pen-up move
+    corner_angle_deg: float = 60.0         # a stroke vertex turning more is a sharp corner
+    smoothing: float = 0.02                # s, half-width of the Hann window on s0(t)
+    rest: float = 0.05                     # s at rest before and after writing
+    line_spacing: float = 1.6              # in letter heights
+    latin_font: str = "scripts"
+    greek_font: str = "greek"
+    min_workspace_margin: float = 0.02     # m from the workspace boundary, everywhere
+    min_elbow_margin: float = 0.05         # |sin q3| along the joint path
+    shoulder: str = "front"
+    elbow: str = "up"
+
+    def __post_init__(self) -> None:
+        for name in ("x_range", "z_range"):
+            lo, hi = (float(v) for v in getattr(self, name))
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                raise BadInputError(f"WritingSpec.{name} must be [low, high], got {(lo, hi)}")
+            object.__setattr__(self, name, (lo, hi))
+        positive = (
+            "letter_height", "peak_speed", "min_speed", "lateral_acc", "max_acc", "lift_acc",
+            "max_jerk", "tangential_acc", "dt", "corner_radius", "lift_radius",
+            "corner_angle_deg", "smoothing", "line_spacing",
+        )
+        for name in positive:
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0.0):
+                raise BadInputError(f"WritingSpec.{name} must be > 0, got {value}")
+        for name in ("plane_y", "lift", "rest", "min_workspace_margin", "min_elbow_margin"):
+            if not math.isfinite(getattr(self, name)):
+                raise BadInputError(f"WritingSpec.{name} must be finite")
+        if self.min_speed >= self.peak_speed:
+            raise BadInputError("WritingSpec.min_speed must be below peak_speed")
+        if self.rest < 0.0 or self.dt > 0.01:
+            raise BadInputError("WritingSpec.rest must be >= 0 and dt at most 10 ms")
+        if not isinstance(self.text, str) or not self.text.strip():
+            raise BadInputError(f"WritingSpec.text must be a non-empty string, got {self.text!r}")
+        if self.shoulder not in ("front", "back") or self.elbow not in ("up", "down"):
+            raise BadInputError(
+                f"WritingSpec posture must be front|back and up|down, got {self.shoulder}, "
+                f"{self.elbow}"
+            )
+
+    @classmethod
+    def from_toml_table(cls, table: Mapping[str, Any], **overrides: Any) -> WritingSpec:
+        """Spec from the [writing] table of a robot file (unknown keys raise BadInputError)."""
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(table) - names - set(_TOML_IGNORED))
+        if unknown:
+            raise BadInputError(f"unknown keys in the [writing] table: {', '.join(unknown)}")
+        values = {k: v for k, v in table.items() if k in names}
+        for key in ("x_range", "z_range"):
+            if key in values:
+                values[key] = tuple(values[key])
+        values.update(overrides)
+        return cls(**values)
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """Reference motion of the writing task on a uniform time grid (SI units, rad)."""
+
+    t: FloatArray
+    x: FloatArray
+    xd: FloatArray
+    xdd: FloatArray
+    q: FloatArray
+    qd: FloatArray
+    qdd: FloatArray
+    pen_down: np.ndarray
+    speed: FloatArray                  # in-plane tip speed sqrt(xd^2 + zd^2), paper eq 14
+    s: FloatArray                      # path parameter (about the arc length), m
+    min_margin_m: float                # least workspace margin along the path
+    min_elbow_margin: float            # least |sin q3|
+    min_shoulder_margin_m: float       # least |a2 cos q2 + a3 cos(q2 + q3)|
+    spec: WritingSpec = field(repr=False)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1])
+
+
+def writing_path(spec: WritingSpec) -> WritingPath:
+    """The geometric path of a spec, placed in the middle of the writing area; raises
+    BadInputError if the text does not fit the area."""
+    strokes = text_strokes(
+        spec.text, spec.letter_height, spec.latin_font, spec.greek_font, spec.line_spacing
+    )
+    pts = np.vstack(strokes)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    area_lo = np.array([spec.x_range[0], spec.z_range[0]])
+    area_hi = np.array([spec.x_range[1], spec.z_range[1]])
+    size, room = hi - lo, area_hi - area_lo
+    for k, axis in enumerate(("wide", "high")):
+        if size[k] > room[k]:
+            raise BadInputError(
+                f"text {spec.text!r} is {size[k]:.3f} m {axis} at letter_height "
+                f"{spec.letter_height} m, but the writing area is only {room[k]:.3f} m {axis} "
+                f"(x_range {spec.x_range}, z_range {spec.z_range}): shorten the text or make "
+                "the letters smaller"
+            )
+    shift = 0.5 * (area_lo + area_hi) - 0.5 * (lo + hi)
+    options = PathOptions(
+        plane_y=spec.plane_y,
+        lift=-spec.lift if spec.plane_y > 0.0 else spec.lift,     # towards the base
+        corner_radius=spec.corner_radius,
+        lift_radius=spec.lift_radius,
+        corner_angle=math.radians(spec.corner_angle_deg),
+        noise=0.3 * spec.letter_height / 21.0,
+    )
+    return build_path([p + shift for p in strokes], options)
+
+
+def check_workspace(model: Model, path: WritingPath, spec: WritingSpec) -> float:
+    """Least workspace margin along the path (pen lifts included), m; raises BadInputError if
+    it is below ``spec.min_workspace_margin``."""
+    s = np.linspace(0.0, path.length, max(2, int(path.length / 2e-4) + 1))
+    x = path.evaluate(s)[0]
+    margin = np.asarray(model.workspace_margin(x))
+    k = int(np.argmin(margin))
+    if margin[k] < spec.min_workspace_margin:
+        where = "outside the workspace" if margin[k] < 0 else "too close to its boundary"
+        raise BadInputError(
+            f"text {spec.text!r}: the tip would pass {where} at x = {np.round(x[k], 4).tolist()} "
+            f"(margin {margin[k]:.4f} m, required {spec.min_workspace_margin} m); move the "
+            "writing area (plane_y, x_range, z_range) or make the letters smaller"
+        )
+    return float(margin[k])
+
+
+def _speed_limit(path: WritingPath, s: FloatArray, spec: WritingSpec) -> FloatArray:
+    """Upper bound of s_dot along the path (step 1 of the module doc)."""
+    _, d1, d2 = path.evaluate(s)
+    norm1 = np.linalg.norm(d1, axis=1)
+    norm2 = np.linalg.norm(d2, axis=1)
+    curvature = np.linalg.norm(np.cross(d1, d2), axis=1) / np.maximum(norm1, 1e-12) ** 3
+    v_tip = np.sqrt(spec.lateral_acc / np.maximum(curvature, 1e-12))
+    v_tip = np.clip(v_tip, spec.min_speed, spec.peak_speed)
+    limit = v_tip / np.maximum(norm1, 1e-12)
+    limit = np.minimum(limit, np.sqrt(spec.lift_acc / np.maximum(np.abs(d2[:, 1]), 1e-12)))
+    limit = np.minimum(limit, np.sqrt(spec.max_acc / np.maximum(norm2, 1e-12)))
+    norm3 = np.linalg.norm(np.gradient(d2, s, axis=0), axis=1)
+    return np.minimum(limit, np.cbrt(spec.max_jerk / np.maximum(norm3, 1e-12)))
+
+
+def _rest_to_rest(limit: FloatArray, ds: float, acc: FloatArray) -> FloatArray:
+    """Largest s_dot(s) under ``limit`` with |s_ddot| <= acc, zero at both ends."""
+    v = np.minimum(limit, np.inf)
+    v[0] = v[-1] = 0.0
+    step = 2.0 * acc * ds
+    for k in range(1, v.size):
+        v[k] = min(v[k], math.sqrt(v[k - 1] ** 2 + step[k]))
+    for k in range(v.size - 2, -1, -1):
+        v[k] = min(v[k], math.sqrt(v[k + 1] ** 2 + step[k]))
+    return v
+
+
+def _hann_smooth(values: FloatArray, half_width: int) -> FloatArray:
+    k = np.arange(-half_width, half_width + 1)
+    window = 1.0 + np.cos(np.pi * k / (half_width + 1))
+    window /= window.sum()
+    padded = np.concatenate(
+        [np.full(half_width, values[0]), values, np.full(half_width, values[-1])]
+    )
+    return np.convolve(padded, window, mode="valid")
+
+
+@dataclass(frozen=True)
+class TimingLaw:
+    """s(t) on [0, duration]: at rest (s = 0, then s = length) outside [t_start, t_stop], a
+    quintic spline in between (exactly zero velocity and acceleration while at rest)."""
+
+    spline: BSpline
+    t_start: float
+    t_stop: float
+    duration: float
+    length: float
+
+    def evaluate(self, t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """s, s_dot, s_ddot at the times t."""
+        t = np.asarray(t, dtype=float)
+        moving = (t > self.t_start) & (t < self.t_stop)
+        out = [np.zeros(t.shape) for _ in range(3)]
+        out[0][t >= self.t_stop] = self.length
+        for d in range(3):
+            out[d][moving] = self.spline(t[moving], nu=d)
+        out[0] = np.clip(out[0], 0.0, self.length)
+        return out[0], out[1], out[2]
+
+
+def timing_law(path: WritingPath, spec: WritingSpec) -> TimingLaw:
+    """The timing law along a path (steps 1-3 of the module doc)."""
+    n = max(3, math.ceil(path.length / _PATH_GRID) + 1)
+    s = np.linspace(0.0, path.length, n)
+    ds = float(s[1] - s[0])
+    norm1 = np.linalg.norm(path.evaluate(s)[1], axis=1)
+    acc = spec.tangential_acc / np.maximum(norm1, 1e-3)
+    v = _rest_to_rest(_speed_limit(path, s, spec), ds, acc)
+    t = np.concatenate([[0.0], np.cumsum(2.0 * ds / (v[1:] + v[:-1]))])
+    half = math.ceil(spec.smoothing / _TIME_GRID)
+    pad = half + math.ceil(spec.rest / _TIME_GRID) + 8
+    tau = np.arange(-pad, math.ceil(t[-1] / _TIME_GRID) + pad + 1) * _TIME_GRID
+    s_smooth = _hann_smooth(np.interp(tau, t, s), half)
+    still_before = tau <= -half * _TIME_GRID           # the window sees s0 = 0 only
+    still_after = tau >= t[-1] + half * _TIME_GRID     # ... s0 = length only
+    s_smooth[still_before] = 0.0
+    s_smooth[still_after] = path.length
+    t_out = tau - tau[0]
+    return TimingLaw(
+        spline=make_interp_spline(t_out, s_smooth, k=5),
+        t_start=float(t_out[still_before][-1]),
+        t_stop=float(t_out[still_after][0]),
+        duration=float(t_out[-1]),
+        length=path.length,
+    )
+
+
+def _joint_path(model: Model, x: FloatArray, spec: WritingSpec) -> FloatArray:
+    q0 = model.ik_branch(x[0], spec.shoulder, spec.elbow)
+    return model.ik_nearest(x, q0)
+
+
+def _singular_margins(model: Model, q: FloatArray, spec: WritingSpec) -> tuple[float, float]:
+    sing = [model.singularity(qi) for qi in q]
+    elbow = np.array([si.elbow_margin for si in sing])
+    shoulder = np.array([si.shoulder_margin for si in sing])
+    det_sign = np.sign([si.det_jacobian for si in sing])
+    if np.any(det_sign != det_sign[0]):
+        raise BadInputError(
+            f"text {spec.text!r}: the joint path changes posture branch at t = "
+            f"{np.argmax(det_sign != det_sign[0]) * spec.dt:.3f} s (passes a singularity)"
+        )
+    if elbow.min() < spec.min_elbow_margin:
+        raise BadInputError(
+            f"text {spec.text!r}: the elbow comes within |sin q3| = {elbow.min():.3f} of a "
+            f"singular configuration (required {spec.min_elbow_margin})"
+        )
+    return float(elbow.min()), float(shoulder.min())
+
+
+def make_reference(model: Model, spec: WritingSpec | None = None) -> Reference:
+    """Build the reference motion of the writing task (see the module doc)."""
+    spec = WritingSpec() if spec is None else spec
+    start = time.perf_counter()
+    path = writing_path(spec)
+    margin = check_workspace(model, path, spec)
+    law = timing_law(path, spec)
+    t = np.arange(math.floor(law.duration / spec.dt + 1e-9) + 1) * spec.dt
+    s, sd, sdd = law.evaluate(t)
+    c, c1, c2 = path.evaluate(s)
+    x = c
+    xd = c1 * sd[:, None]
+    xdd = c2 * sd[:, None] ** 2 + c1 * sdd[:, None]
+    q = _joint_path(model, x, spec)
+    elbow, shoulder = _singular_margins(model, q, spec)
+    qd, qdd = model.joint_motion(q, xd, xdd)
+    ref = Reference(
+        t=t, x=x, xd=xd, xdd=xdd, q=q, qd=qd, qdd=qdd, pen_down=path.pen_down(s),
+        speed=np.hypot(xd[:, 0], xd[:, 2]), s=s, min_margin_m=margin,
+        min_elbow_margin=elbow, min_shoulder_margin_m=shoulder, spec=spec,
+    )
+    logger.info(
+        "writing %r: %.2f s, path %.3f m, peak speed %.3f m/s, margins %.3f m / %.3f / %.3f m, "
+        "built in %.2f s", spec.text, ref.duration, path.length, ref.speed.max(), margin,
+        elbow, shoulder, time.perf_counter() - start,
+    )
+    return ref
+
+
+def numeric_ik_path(
+    model: Model, x: ArrayLike, q_seed: ArrayLike, tol: float = 1e-28
+) -> FloatArray:
+    """Numeric IK of every row of x (n, 3) with the Robotics Toolbox (Levenberg-Marquardt on
+    the DH chain of the model, position only), each seeded with the previous solution; the
+    comparison of the paper's Fig 5. Needs ``roboticstoolbox-python``.
+
+    ``tol`` bounds RTB's error measure E = 1/2 |x_err|^2, so 1e-28 means |x_err| < 1.4e-14 m
+    (about 1e-14 rad here); much below 1e-30 LM stalls at round-off and fails. A row that does
+    not converge raises NumericError."""
+    import roboticstoolbox as rtb
+
+    dh = model.dh
+    robot = rtb.DHRobot(
+        [
+            rtb.RevoluteDH(d=dh["d1"], a=0.0, alpha=math.pi / 2),
+            rtb.RevoluteDH(d=dh["d2"], a=dh["a2"], alpha=0.0),
+            rtb.RevoluteDH(d=dh["d3"], a=dh["a3"], alpha=0.0),
+        ],
+        name="rrr",
+    )
+    ets = robot.ets()
+    targets = np.atleast_2d(np.asarray(x, dtype=float))
+    mask = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+    pose = np.eye(4)
+    q = np.asarray(q_seed, dtype=float).copy()
+    out = np.empty_like(targets)
+    for i, target in enumerate(targets):
+        pose[:3, 3] = target
+        sol = ets.ik_LM(pose, q0=q, mask=mask, tol=tol, ilimit=100, slimit=1, joint_limits=False)
+        if not sol.success:
+            raise NumericError(
+                f"Robotics Toolbox ik_LM did not converge at row {i}, x = {target.tolist()}",
+                "ik_LM",
+            )
+        q = np.asarray(sol.q, dtype=float)
+        out[i] = q
+    return out

@@ -1,0 +1,116 @@
+"""The writing task end to end through the FMUs and the CLI (paper section V)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import rrr_robot as rr
+from rrr_robot.cosim import CosimOptions, run_cosim
+from rrr_robot.writing import PAPER_RMS_U_N, WritingJob, run_writing
+
+FIGURES = [
+    "fig2_reference.png", "fig3_joint_positions.png", "fig4_joint_velocities.png",
+    "fig5_ik_difference.png", "fig6_torque_difference.png", "fig_letters_pd.png",
+    "fig_letters_ctc.png", "fig_letters_mismatch.png", "fig9_u2_ctc.png", "fig_tip_error.png",
+]
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
+    out = tmp_path_factory.mktemp("writing")
+    result = subprocess.run(
+        [sys.executable, "-m", "rrr_robot", "writing", "--out", str(out), "--quiet"],
+        capture_output=True, text=True, timeout=900,
+    )
+    assert result.returncode == 0, result.stderr
+    return out, json.loads((out / "summary.json").read_text())
+
+
+def test_outputs_and_summary_shape(run: tuple[Path, dict]) -> None:
+    out, summary = run
+    assert set(summary["scenarios"]) == {"pd", "ctc", "mismatch"}
+    for s in summary["scenarios"].values():
+        assert len(s["rms_u_n"]) == 3 and len(s["rms_u_c"]) == 3
+        for key in ("tip_error_max", "tip_error_rms", "wall_time", "realtime_factor"):
+            assert isinstance(s[key], float) and np.isfinite(s[key]) and s[key] > 0
+    for name in FIGURES:
+        assert (out / name).stat().st_size > 10_000, name
+    header = (out / "ctc.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["t", "q_ref[1]", "q_ref[2]", "q_ref[3]"] and "tip.z" in header
+
+
+def test_feedforward_beats_pd_as_in_the_paper(run: tuple[Path, dict]) -> None:
+    s = run[1]["scenarios"]
+    assert s["ctc"]["tip_error_max"] * 5 <= s["pd"]["tip_error_max"]
+    assert s["mismatch"]["tip_error_max"] < s["pd"]["tip_error_max"]
+    for i in range(3):  # every joint carries inertia (and joints 2, 3 gravity)
+        assert s["ctc"]["rms_u_n"][i] > s["ctc"]["rms_u_c"][i]
+        assert s["mismatch"]["rms_u_n"][i] > s["mismatch"]["rms_u_c"][i]
+    assert s["pd"]["rms_u_n"] == [0.0, 0.0, 0.0]
+
+
+def test_default_robot_is_calibrated_to_eq16(run: tuple[Path, dict]) -> None:
+    """Calibration, not validation: tools/calibrate_kt.py set k_t so RMS u_n matches eq 16."""
+    rms = run[1]["scenarios"]["ctc"]["rms_u_n"]
+    for got, paper in zip(rms, PAPER_RMS_U_N, strict=True):
+        assert abs(got / paper - 1.0) < 0.25
+
+
+def test_csv_matches_summary(run: tuple[Path, dict]) -> None:
+    out, summary = run
+    data = np.genfromtxt(out / "ctc.csv", delimiter=",", names=True)
+    err = np.sqrt((data["tipx"] - data["x_refx"]) ** 2 + (data["tipy"] - data["x_refy"]) ** 2
+                  + (data["tipz"] - data["x_refz"]) ** 2)
+    assert err.max() == pytest.approx(summary["scenarios"]["ctc"]["tip_error_max"], rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--scenario", "nonsense"], "unknown scenario 'nonsense'"),
+        (["--scale", "6"], "writing area"),
+        (["--text", "\u263a"], "\u263a"),
+    ],
+)
+def test_bad_inputs_fail_before_simulating(tmp_path: Path, args: list[str], message: str) -> None:
+    out = tmp_path / "out"
+    result = subprocess.run(
+        [sys.executable, "-m", "rrr_robot", "writing", "--out", str(out), "--quiet", *args],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode != 0
+    assert message in result.stderr
+    assert not out.exists()  # nothing ran, nothing written
+
+
+def test_malformed_scenario_file(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    for text, message in [
+        ("[scenario]\nname = 'x'\n", "needs a [scenario] table"),
+        ("[scenario]\nname = 'x'\nfeedforward = true\n[gains]\nkp = [1, 2]\n", "kp must be"),
+        ("[scenario]\nname = 'x'\nfeedforward = true\ncolor = 1\n", "unknown key"),
+        ("[scenario\n", "malformed scenario file"),
+    ]:
+        bad.write_text(text)
+        with pytest.raises(rr.BadInputError, match=message.replace("[", r"\[")):
+            run_writing(WritingJob(out=tmp_path / "o", scenarios=[str(bad)]))
+        assert not (tmp_path / "o").exists()
+
+
+def test_fmu_error_is_a_clear_exception() -> None:
+    """A rejected parameter surfaces as CosimError naming the FMU, the call and the time."""
+    t = np.arange(0.0, 0.01, 1e-3)
+    q = np.tile([0.3, 0.4, 1.0], (t.size, 1))
+    zero = np.zeros_like(q)
+    with pytest.raises(rr.CosimError, match=r"plant: fmi2ExitInitializationMode .* t = 0") as e:
+        run_cosim(t, q, zero, zero, zero, CosimOptions(plant_values={"kt[2]": -1.0}))
+    assert "kt[2]" in str(e.value)
+    with pytest.raises(rr.BadInputError, match="no variable named 'kp'"):
+        run_cosim(t, q, zero, zero, zero, CosimOptions(controller_values={"kp": 1.0}))
+    with pytest.raises(rr.BadInputError, match="NaN"):
+        run_cosim(t, q + np.nan, zero, zero, zero)
