@@ -9,7 +9,7 @@ export RRR_PIP_TARGET=".[test]"
 . scripts/setup_env.sh
 JOBS="$(nproc 2>/dev/null || echo 2)"
 echo "== C tests under ASan + UBSan =="
-cmake -S . -B build-asan -DRRR_SANITIZE=ON -DCMAKE_BUILD_TYPE=Debug -DPython_EXECUTABLE="$(command -v python)"
+cmake -S . -B build-asan -DRRR_SANITIZE=ON -DCMAKE_BUILD_TYPE=Debug -DPython3_EXECUTABLE="$(command -v python)"
 cmake --build build-asan -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$JOBS"

@@ -153,7 +153,6 @@ def test_workspace_report(model: rr.Model, ref: tr.Reference) -> None:
 
 def test_numeric_ik_matches_closed_form(model: rr.Model, ref: tr.Reference) -> None:
     """The paper's Fig 5: Robotics Toolbox numeric IK along the path, every 20th sample."""
-    pytest.importorskip("roboticstoolbox")
     idx = np.arange(0, ref.t.size, 20)
     q_num = tr.numeric_ik_path(model, ref.x[idx], ref.q[0] + 0.01)
     assert np.abs(wrap(q_num - ref.q[idx])).max() < 1e-9

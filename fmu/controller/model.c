@@ -1,0 +1,158 @@
+/*
+ * The computed-torque controller FMU: its variable table and the call into librrr (rrr_ctc,
+ * eq 15). No control law here.
+ */
+#include <string.h>
+
+#include "config.h"
+
+#define T controller_data
+
+#define JOINT_INPUTS(VR, N, WHAT, UNIT, M)                                                     \
+    FMU_ROW((VR) + 0, FMU_REAL, FMU_INPUT, FMU_CONTINUOUS, N "[1]", WHAT " of joint 1", UNIT, T, \
+            M[0]),                                                                             \
+    FMU_ROW((VR) + 1, FMU_REAL, FMU_INPUT, FMU_CONTINUOUS, N "[2]", WHAT " of joint 2", UNIT, T, \
+            M[1]),                                                                             \
+    FMU_ROW((VR) + 2, FMU_REAL, FMU_INPUT, FMU_CONTINUOUS, N "[3]", WHAT " of joint 3", UNIT, T, \
+            M[2])
+#define JOINT_OUTPUTS(VR, N, WHAT, M)                                                          \
+    FMU_ROW((VR) + 0, FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, N "[1]", WHAT " of joint 1", "V",  \
+            T, M[0]),                                                                          \
+    FMU_ROW((VR) + 1, FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, N "[2]", WHAT " of joint 2", "V",  \
+            T, M[1]),                                                                          \
+    FMU_ROW((VR) + 2, FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, N "[3]", WHAT " of joint 3", "V",  \
+            T, M[2])
+#define JOINT_PARAMS(VR, N, WHAT, UNIT, M)                                                     \
+    FMU_PARAM((VR) + 0, N "[1]", WHAT " of joint 1", UNIT, T, M[0]),                           \
+    FMU_PARAM((VR) + 1, N "[2]", WHAT " of joint 2", UNIT, T, M[1]),                           \
+    FMU_PARAM((VR) + 2, N "[3]", WHAT " of joint 3", UNIT, T, M[2])
+
+static const fmu_variable controller_vars[] = {
+    JOINT_INPUTS(vr_q_ref, "q_ref", "reference position", "rad", q_ref),
+    JOINT_INPUTS(vr_qd_ref, "qd_ref", "reference velocity", "rad/s", qd_ref),
+    JOINT_INPUTS(vr_qdd_ref, "qdd_ref", "reference acceleration", "rad/s2", qdd_ref),
+    JOINT_INPUTS(vr_q, "q", "measured position", "rad", q),
+    JOINT_INPUTS(vr_qd, "qd", "measured velocity", "rad/s", qd),
+    JOINT_OUTPUTS(vr_u, "u", "applied voltage sat(u_n + u_c)", out.u),
+    JOINT_OUTPUTS(vr_u_n, "u_n",
+                  "feedforward voltage (eq 10 along the reference; 0 if feedforward is off)",
+                  out.u_n),
+    JOINT_OUTPUTS(vr_u_c, "u_c", "PD voltage kp (q_ref - q) + kd (qd_ref - qd)", out.u_c),
+    JOINT_PARAMS(vr_kp, "kp", "proportional gain", "V/rad", gains.kp),
+    JOINT_PARAMS(vr_kd, "kd", "derivative gain", "V.s/rad", gains.kd),
+    FMU_ROW(vr_feedforward, FMU_BOOLEAN, FMU_PARAMETER, FMU_FIXED, "feedforward",
+            "add the model feedforward u_n (computed-torque); false: PD only", NULL, T,
+            gains.feedforward),
+    RRR_MODEL_VARS(T, model, vr_model),
+};
+
+_Static_assert(sizeof controller_vars / sizeof controller_vars[0] == vr_count,
+               "one table row per value reference");
+
+static controller_data *data_of(fmu_instance *inst)
+{
+    return (controller_data *)inst->data;
+}
+
+static fmu_status set_defaults(void *d)
+{
+    controller_data *c = d;
+    memset(c, 0, sizeof *c);
+    if (rrr_model_default(&c->model) != RRR_OK || rrr_ctc_gains_default(&c->gains) != RRR_OK) {
+        return FMU_ERROR;
+    }
+    return FMU_OK;
+}
+
+/* Names the first negative gain (rrr_ctc only says RRR_BAD_INPUT). */
+static fmu_status check_gains(fmu_instance *inst, const char *fn)
+{
+    const controller_data *c = data_of(inst);
+    for (int i = 0; i < RRR_NJ; ++i) {
+        if (!(c->gains.kp[i] >= 0.0) || !(c->gains.kd[i] >= 0.0)) {
+            const int bad_kp = !(c->gains.kp[i] >= 0.0);
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR, "%s: parameter %s[%d] must be >= 0, got %.17g",
+                    fn, bad_kp ? "kp" : "kd", i + 1, bad_kp ? c->gains.kp[i] : c->gains.kd[i]);
+            return FMU_ERROR;
+        }
+    }
+    return FMU_OK;
+}
+
+static fmu_status initialize(fmu_instance *inst)
+{
+    const controller_data *c = data_of(inst);
+    const char *field = "";
+    const rrr_status st = rrr_model_validate(&c->model, &field);
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "fmi2ExitInitializationMode: parameter %s is invalid (%s)%s", field,
+                rrr_status_str(st),
+                st == RRR_NOT_POSITIVE_DEFINITE
+                    ? ": p[1]..p[16] give an inertia matrix D(q) that is not positive definite"
+                    : "");
+        return FMU_ERROR;
+    }
+    return check_gains(inst, "fmi2ExitInitializationMode");
+}
+
+static fmu_status calculate(fmu_instance *inst)
+{
+    controller_data *c = data_of(inst);
+    if (check_gains(inst, MODEL_IDENTIFIER) != FMU_OK) {
+        return FMU_ERROR;
+    }
+    rrr_ctc_output out;
+    const rrr_status st =
+        rrr_ctc(&c->model, &c->gains, c->q_ref, c->qd_ref, c->qdd_ref, c->q, c->qd, &out);
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: rrr_ctc failed at t = %.17g: %s (q_ref = [%.17g, %.17g, %.17g], q = [%.17g, "
+                "%.17g, %.17g])",
+                MODEL_IDENTIFIER, inst->time, rrr_status_str(st), c->q_ref[0], c->q_ref[1],
+                c->q_ref[2], c->q[0], c->q[1], c->q[2]);
+        return FMU_ERROR;
+    }
+    c->out = out;
+    return FMU_OK;
+}
+
+/* Stateless: a step only has to leave the outputs consistent with the inputs. */
+static fmu_status do_step(fmu_instance *inst, double h)
+{
+    (void)h;
+    return inst->dirty ? calculate(inst) : FMU_OK;
+}
+
+/* u_n(i) depends on the whole reference (D(q_ref) couples the joints); u_c(i) on joint i's
+ * q_ref, qd_ref, q, qd; u = sat(u_n + u_c) on both sets. Unsigned wrap-around:
+ * vr - first < n  <=>  first <= vr < first + n. */
+static int depends(fmi2ValueReference out_vr, fmi2ValueReference in_vr)
+{
+    const int ref = in_vr - vr_q_ref < 3 * RRR_NJ;                  /* q_ref, qd_ref, qdd_ref */
+    const int same_joint = in_vr % RRR_NJ == out_vr % RRR_NJ;
+    const int pd = same_joint && (in_vr - vr_q_ref < 2 * RRR_NJ || in_vr - vr_q < 2 * RRR_NJ);
+    if (out_vr - vr_u_n < RRR_NJ) {
+        return ref;
+    }
+    if (out_vr - vr_u_c < RRR_NJ) {
+        return pd;
+    }
+    return ref || pd; /* u */
+}
+
+const fmu_model FMU_MODEL = {
+    .identifier = MODEL_IDENTIFIER,
+    .description = "Computed-torque controller of the RRR arm (eq 15): model feedforward plus PD, "
+                   "saturated; direct feedthrough",
+    .vars = controller_vars,
+    .n_vars = sizeof controller_vars / sizeof controller_vars[0],
+    .data_size = sizeof(controller_data),
+    .default_stop_time = 1.0,
+    .default_step_size = 1e-3,
+    .set_defaults = set_defaults,
+    .initialize = initialize,
+    .calculate = calculate,
+    .do_step = do_step,
+    .depends = depends,
+};

@@ -1,0 +1,43 @@
+/**
+ * @file config.h
+ * @brief The plant FMU (rrr_plant): identifier, value references, model data.
+ *
+ * Inputs: motor voltages u. Outputs: joint motion q, qd, qdd and the tip position.
+ * Parameters: the rrr_model (same names as the controller's), the initial state q0, qd0 and the
+ * internal integration step h_int. doStep calls rrr_plant_step (RK4, input held over the step).
+ */
+#ifndef RRR_FMU_PLANT_CONFIG_H
+#define RRR_FMU_PLANT_CONFIG_H
+
+#include "rrr/rrr.h"
+#include "rrr_model_vars.h"
+
+#define MODEL_IDENTIFIER "rrr_plant"
+
+/** Value references (= rows of the variable table in model.c). */
+typedef enum plant_vr {
+    vr_u = 0,                                  ///< u[1..3], input, V
+    vr_q = vr_u + RRR_NJ,                      ///< q[1..3], output, rad
+    vr_qd = vr_q + RRR_NJ,                     ///< qd[1..3], output, rad/s
+    vr_qdd = vr_qd + RRR_NJ,                   ///< qdd[1..3], output, rad/s2
+    vr_tip = vr_qdd + RRR_NJ,                  ///< tip.x, tip.y, tip.z, output, m
+    vr_model = vr_tip + 3,                     ///< first of the RRR_MV_COUNT model parameters
+    vr_q0 = vr_model + RRR_MV_COUNT,           ///< q0[1..3], parameter, rad
+    vr_qd0 = vr_q0 + RRR_NJ,                   ///< qd0[1..3], parameter, rad/s
+    vr_h_int = vr_qd0 + RRR_NJ,                ///< h_int, parameter, s
+    vr_count
+} plant_vr;
+
+/** Model data of one plant instance (plain old data: copied into FMU state snapshots). */
+typedef struct plant_data {
+    rrr_model model;                           ///< parameters
+    double h_int;                              ///< internal RK4 step upper bound, s
+    double q0[RRR_NJ];                         ///< initial joint positions, rad
+    double qd0[RRR_NJ];                        ///< initial joint velocities, rad/s
+    double u[RRR_NJ];                          ///< input voltages, V (saturated inside the core)
+    rrr_plant_state x;                         ///< state: q (output), qd (output)
+    double qdd[RRR_NJ];                        ///< acceleration at x under the current u, rad/s2
+    double tip[3];                             ///< tip position in frame 0, m
+} plant_data;
+
+#endif /* RRR_FMU_PLANT_CONFIG_H */

@@ -1,0 +1,161 @@
+/*
+ * The plant FMU: its variable table and the calls into librrr. No physics here: the dynamics,
+ * the integrator and the kinematics are rrr_plant_step, rrr_plant_accel and rrr_fk.
+ */
+#include <string.h>
+
+#include "config.h"
+
+#define T plant_data
+
+#define INPUT(VR, NAME, JOINT, MEMBER)                                                         \
+    FMU_ROW(VR, FMU_REAL, FMU_INPUT, FMU_CONTINUOUS, NAME,                                     \
+            "motor voltage of joint " JOINT ", held over the step, saturated to u_max", "V", T,  \
+            MEMBER)
+#define OUTPUT(VR, NAME, DESC, UNIT, MEMBER)                                                   \
+    FMU_ROW(VR, FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, NAME, DESC, UNIT, T, MEMBER)
+#define JOINT_OUTPUTS(VR, N, WHAT, UNIT, M)                                                    \
+    OUTPUT((VR) + 0, N "[1]", WHAT " of joint 1", UNIT, M[0]),                                 \
+    OUTPUT((VR) + 1, N "[2]", WHAT " of joint 2", UNIT, M[1]),                                 \
+    OUTPUT((VR) + 2, N "[3]", WHAT " of joint 3", UNIT, M[2])
+#define JOINT_PARAMS(VR, N, WHAT, UNIT, M)                                                     \
+    FMU_PARAM((VR) + 0, N "[1]", WHAT " of joint 1", UNIT, T, M[0]),                           \
+    FMU_PARAM((VR) + 1, N "[2]", WHAT " of joint 2", UNIT, T, M[1]),                           \
+    FMU_PARAM((VR) + 2, N "[3]", WHAT " of joint 3", UNIT, T, M[2])
+
+static const fmu_variable plant_vars[] = {
+    INPUT(vr_u + 0, "u[1]", "1", u[0]),
+    INPUT(vr_u + 1, "u[2]", "2", u[1]),
+    INPUT(vr_u + 2, "u[3]", "3", u[2]),
+    JOINT_OUTPUTS(vr_q, "q", "position", "rad", x.q),
+    JOINT_OUTPUTS(vr_qd, "qd", "velocity", "rad/s", x.qd),
+    JOINT_OUTPUTS(vr_qdd, "qdd", "acceleration under the current input", "rad/s2", qdd),
+    OUTPUT(vr_tip + 0, "tip.x", "tip position x in the base frame", "m", tip[0]),
+    OUTPUT(vr_tip + 1, "tip.y", "tip position y in the base frame", "m", tip[1]),
+    OUTPUT(vr_tip + 2, "tip.z", "tip position z in the base frame (z0 up)", "m", tip[2]),
+    RRR_MODEL_VARS(T, model, vr_model),
+    JOINT_PARAMS(vr_q0, "q0", "initial position", "rad", q0),
+    JOINT_PARAMS(vr_qd0, "qd0", "initial velocity", "rad/s", qd0),
+    FMU_PARAM(vr_h_int, "h_int",
+              "internal RK4 step upper bound, > 0 (a step of h takes ceil(h/h_int) substeps)", "s",
+              T, h_int),
+};
+
+_Static_assert(sizeof plant_vars / sizeof plant_vars[0] == vr_count,
+               "one table row per value reference");
+
+static plant_data *data_of(fmu_instance *inst)
+{
+    return (plant_data *)inst->data;
+}
+
+static fmu_status set_defaults(void *d)
+{
+    plant_data *p = d;
+    memset(p, 0, sizeof *p);
+    if (rrr_model_default(&p->model) != RRR_OK) {
+        return FMU_ERROR;
+    }
+    p->h_int = RRR_PLANT_H_INT_DEFAULT;
+    return FMU_OK;
+}
+
+static fmu_status initialize(fmu_instance *inst)
+{
+    plant_data *p = data_of(inst);
+    const char *field = "";
+    const rrr_status st = rrr_model_validate(&p->model, &field);
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "fmi2ExitInitializationMode: parameter %s is invalid (%s)%s", field,
+                rrr_status_str(st),
+                st == RRR_NOT_POSITIVE_DEFINITE
+                    ? ": p[1]..p[16] give an inertia matrix D(q) that is not positive definite"
+                    : "");
+        return FMU_ERROR;
+    }
+    if (!(p->h_int > 0.0)) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "fmi2ExitInitializationMode: parameter h_int must be > 0, got %.17g", p->h_int);
+        return FMU_ERROR;
+    }
+    memcpy(p->x.q, p->q0, sizeof p->x.q);
+    memcpy(p->x.qd, p->qd0, sizeof p->x.qd);
+    return FMU_OK;
+}
+
+/* qdd and tip from the state and the current input; before initialization the state is
+ * (q0, qd0). */
+static fmu_status calculate(fmu_instance *inst)
+{
+    plant_data *p = data_of(inst);
+    if (inst->state == FMU_INSTANTIATED || inst->state == FMU_INIT_MODE) {
+        memcpy(p->x.q, p->q0, sizeof p->x.q);
+        memcpy(p->x.qd, p->qd0, sizeof p->x.qd);
+    }
+    double qdd[RRR_NJ];
+    double tip[3];
+    rrr_status st = rrr_plant_accel(&p->model, &p->x, p->u, qdd);
+    if (st == RRR_OK) {
+        st = rrr_fk(&p->model, p->x.q, tip, NULL);
+    }
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: cannot compute qdd and tip at q = [%.17g, %.17g, %.17g], qd = [%.17g, "
+                "%.17g, %.17g]: %s (check the parameters)",
+                MODEL_IDENTIFIER, p->x.q[0], p->x.q[1], p->x.q[2], p->x.qd[0], p->x.qd[1],
+                p->x.qd[2], rrr_status_str(st));
+        return FMU_ERROR;
+    }
+    memcpy(p->qdd, qdd, sizeof qdd);
+    memcpy(p->tip, tip, sizeof tip);
+    return FMU_OK;
+}
+
+static fmu_status do_step(fmu_instance *inst, double h)
+{
+    plant_data *p = data_of(inst);
+    rrr_plant_state x = p->x;
+    double qdd[RRR_NJ];
+    double tip[3];
+    rrr_status st = rrr_plant_step(&p->model, p->h_int, p->u, h, &x, qdd);
+    if (st == RRR_OK) {
+        st = rrr_fk(&p->model, x.q, tip, NULL);
+    }
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_DISCARD, FMU_LOG_DISCARD,
+                "fmi2DoStep: rrr_plant_step from t = %.17g over h = %.17g failed: %s; the state "
+                "stays at t (q = [%.17g, %.17g, %.17g], qd = [%.17g, %.17g, %.17g])",
+                inst->time, h, rrr_status_str(st), p->x.q[0], p->x.q[1], p->x.q[2], p->x.qd[0],
+                p->x.qd[1], p->x.qd[2]);
+        return FMU_DISCARD;
+    }
+    p->x = x;
+    memcpy(p->qdd, qdd, sizeof qdd);
+    memcpy(p->tip, tip, sizeof tip);
+    return FMU_OK;
+}
+
+/* qdd = D(q)^-1 (tau(u) - c - h) couples every input into every acceleration; q, qd and the tip
+ * are states: no direct feedthrough. */
+static int depends(fmi2ValueReference out_vr, fmi2ValueReference in_vr)
+{
+    /* unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n */
+    return out_vr - vr_qdd < RRR_NJ && in_vr - vr_u < RRR_NJ;
+}
+
+const fmu_model FMU_MODEL = {
+    .identifier = MODEL_IDENTIFIER,
+    .description = "RRR robot arm plant: motor voltages in, joint motion and tip position out "
+                   "(closed-form dynamics of librrr, RK4)",
+    .vars = plant_vars,
+    .n_vars = sizeof plant_vars / sizeof plant_vars[0],
+    .data_size = sizeof(plant_data),
+    .default_stop_time = 1.0,
+    .default_step_size = 1e-3,
+    .set_defaults = set_defaults,
+    .initialize = initialize,
+    .calculate = calculate,
+    .do_step = do_step,
+    .depends = depends,
+};

@@ -1,0 +1,190 @@
+"""The two FMUs as files: fmpy validate, fmpy simulate, the model description (names, units,
+causality, structure, GUID) and the one source of truth for value references: the committed
+modelDescription.xml files equal the ones the build generated from the C variable tables, and
+every start value in them is what the binary reports (and what librrr's defaults are).
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+from fmpy import simulate_fmu
+from fmpy.validation import validate_fmu
+from fmu_support import COMMITTED_XML, FMU_NAMES, STEP, Slave, fmu_file, joint
+
+MODEL_PARAMS = (
+    [("d1", "m"), ("a2", "m"), ("a3", "m"), ("d2", "m"), ("d3", "m"), ("g", "m/s2")]
+    + [(f"p[{i}]", None) for i in range(1, 17)]
+    + [(n, "N.m/V") for n in joint("kt")]
+    + [(f"f[{i},{k}]", "V") for i in (1, 2, 3) for k in (1, 2, 3)]
+    + [(f"w[{i},{k}]", "s/rad") for i in (1, 2, 3) for k in (1, 2, 3)]
+    + [(n, "V.s/rad") for n in joint("b")]
+    + [("u_max", "V")]
+)
+
+# name -> (causality, unit) as the issue specifies them
+EXPECTED: dict[str, dict[str, tuple[str, str | None]]] = {
+    "plant": {
+        **{n: ("input", "V") for n in joint("u")},
+        **{n: ("output", "rad") for n in joint("q")},
+        **{n: ("output", "rad/s") for n in joint("qd")},
+        **{n: ("output", "rad/s2") for n in joint("qdd")},
+        **{f"tip.{c}": ("output", "m") for c in "xyz"},
+        **{n: ("parameter", u) for n, u in MODEL_PARAMS},
+        **{n: ("parameter", "rad") for n in joint("q0")},
+        **{n: ("parameter", "rad/s") for n in joint("qd0")},
+        "h_int": ("parameter", "s"),
+    },
+    "controller": {
+        **{n: ("input", "rad") for n in joint("q_ref") + joint("q")},
+        **{n: ("input", "rad/s") for n in joint("qd_ref") + joint("qd")},
+        **{n: ("input", "rad/s2") for n in joint("qdd_ref")},
+        **{n: ("output", "V") for n in joint("u") + joint("u_n") + joint("u_c")},
+        **{n: ("parameter", "V/rad") for n in joint("kp")},
+        **{n: ("parameter", "V.s/rad") for n in joint("kd")},
+        "feedforward": ("parameter", None),
+        **{n: ("parameter", u) for n, u in MODEL_PARAMS},
+    },
+}
+
+
+@pytest.mark.parametrize("which", FMU_NAMES)
+def test_fmpy_validate_finds_no_problems(which: str) -> None:
+    path = fmu_file(which)
+    assert validate_fmu(str(path)) == []
+    cli = subprocess.run(
+        [sys.executable, "-m", "fmpy", "validate", str(path)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert cli.returncode == 0, cli.stdout + cli.stderr
+    assert "No problems found." in cli.stdout
+
+
+@pytest.mark.parametrize("which", FMU_NAMES)
+def test_fmpy_simulate_runs_the_default_experiment(which: str) -> None:
+    result = simulate_fmu(str(fmu_file(which)), validate=True)
+    assert len(result) == 1001
+    np.testing.assert_allclose(result["time"][[0, 1, -1]], [0.0, STEP, 1.0], atol=1e-12)
+    for name in result.dtype.names:
+        assert np.all(np.isfinite(result[name])), name
+
+
+def test_fmpy_simulate_cli(tmp_path: object) -> None:
+    fmpy_exe = shutil.which("fmpy")
+    assert fmpy_exe is not None, "the fmpy command (installed with FMPy) is not on PATH"
+    for which in FMU_NAMES:
+        out = f"{tmp_path}/{which}.csv"
+        cli = subprocess.run(
+            [fmpy_exe, "simulate", str(fmu_file(which)), "--output-file", out],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        assert cli.returncode == 0, cli.stdout + cli.stderr
+        rows = np.genfromtxt(out, delimiter=",", names=True)
+        assert len(rows) == 1001 and np.all(np.isfinite(rows.view((float, len(rows.dtype)))))
+
+
+@pytest.mark.parametrize("which", FMU_NAMES)
+def test_committed_xml_equals_the_generated_one(which: str) -> None:
+    """The FMU ships the XML the build printed from the C variable table."""
+    with zipfile.ZipFile(fmu_file(which)) as zf:
+        shipped = zf.read("modelDescription.xml")
+        names = zf.namelist()
+    committed = COMMITTED_XML[which].read_bytes()
+    assert shipped == committed, (
+        f"{COMMITTED_XML[which]} is out of date: build the CMake target rrr_fmu_update_xml"
+    )
+    assert f"binaries/linux64/rrr_{which}.so" in names
+
+
+@pytest.mark.parametrize("which", FMU_NAMES)
+def test_model_description(which: str) -> None:
+    with Slave(which) as s:
+        md = s.md
+    assert md.fmiVersion == "2.0"
+    assert md.coSimulation is not None and md.modelExchange is None
+    assert md.coSimulation.modelIdentifier == f"rrr_{which}"
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    assert md.coSimulation.canHandleVariableCommunicationStepSize
+    assert float(md.defaultExperiment.stepSize) == STEP
+    assert {c.name for c in md.logCategories} >= {"logStatusError", "logCalls"}
+    variables = {v.name: v for v in md.modelVariables}
+    assert {k: (v.causality, v.unit) for k, v in variables.items()} == EXPECTED[which]
+    for v in md.modelVariables:
+        assert v.description, v.name
+        if v.causality == "parameter":
+            assert v.variability == "fixed" and v.initial == "exact", v.name
+        else:
+            assert v.variability == "continuous", v.name
+    assert variables.get("feedforward") is None or variables["feedforward"].type == "Boolean"
+    vrs = sorted(v.valueReference for v in md.modelVariables)
+    assert vrs == list(range(len(vrs)))
+
+
+def test_model_structure() -> None:
+    with Slave("plant") as p, Slave("controller") as c:
+        plant = {o.variable.name: {d.name for d in o.dependencies} for o in p.md.outputs}
+        ctrl = {o.variable.name: {d.name for d in o.dependencies} for o in c.md.outputs}
+    u = set(joint("u"))
+    for name in joint("q") + joint("qd") + ["tip.x", "tip.y", "tip.z"]:
+        assert plant[name] == set(), name  # states: no direct feedthrough
+    for name in joint("qdd"):
+        assert plant[name] == u
+    ref = set(joint("q_ref") + joint("qd_ref") + joint("qdd_ref"))
+    for i in (1, 2, 3):
+        pd = {f"q_ref[{i}]", f"qd_ref[{i}]", f"q[{i}]", f"qd[{i}]"}
+        assert ctrl[f"u_n[{i}]"] == ref
+        assert ctrl[f"u_c[{i}]"] == pd
+        assert ctrl[f"u[{i}]"] == ref | pd
+
+
+@pytest.mark.parametrize("which", FMU_NAMES)
+def test_guid_is_checked(which: str) -> None:
+    s = Slave(which, guid="{00000000-0000-0000-0000-000000000000}")
+    with pytest.raises(Exception, match="Failed to instantiate"):
+        s.instantiate()
+    assert any("wrong GUID" in m for m in s.errors())
+
+
+@pytest.mark.parametrize("which", FMU_NAMES)
+def test_xml_start_values_are_the_binary_defaults(which: str) -> None:
+    with Slave(which).instantiate() as s:
+        s.fmu.enterInitializationMode()
+        for v in s.md.modelVariables:
+            if v.causality == "output":
+                assert v.start is None and v.initial == "calculated", v.name
+                continue
+            if v.type == "Boolean":
+                got = s.fmu.getBoolean([v.valueReference])[0]
+                assert got == (v.start in ("true", True)), v.name
+            else:
+                got = s.fmu.getReal([v.valueReference])[0]
+                assert got == float(v.start), v.name  # bit for bit: shortest round-trip text
+
+
+def test_defaults_equal_the_core_defaults() -> None:
+    """Cross-check with the Python binding of librrr (the C harness checks the same in C)."""
+    import rrr_robot
+
+    m = rrr_robot.Model.default()
+    expected = {**m.dh, "g": m.g, "u_max": m.u_max}
+    expected |= {f"p[{i + 1}]": float(x) for i, x in enumerate(m.p)}
+    expected |= {f"kt[{i + 1}]": float(x) for i, x in enumerate(m.kt)}
+    expected |= {f"b[{i + 1}]": float(x) for i, x in enumerate(m.b)}
+    for i in range(3):
+        for k in range(3):
+            expected[f"f[{i + 1},{k + 1}]"] = float(m.f[i][k])
+            expected[f"w[{i + 1},{k + 1}]"] = float(m.w[i][k])
+    for which in FMU_NAMES:
+        with Slave(which).instantiate() as s:
+            s.fmu.enterInitializationMode()
+            got = dict(zip(expected, s.get(expected), strict=True))
+        assert got == expected
