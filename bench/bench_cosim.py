@@ -1,0 +1,105 @@
+"""Real-time factor of the FMPy co-simulation of the default writing task, against the bare
+FMPy loop ceiling measured in the same run, and where the time goes.
+
+The ceiling is the same FMI call sequence per communication step (controller set/get, plant
+set, two doSteps, plant get) on the same FMUs with no master work around it (no reference copy,
+no recording, no progress). The breakdown times each FMI call kind alone in a loop.
+
+Run:  python bench/bench_cosim.py [--repeats 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from collections.abc import Callable
+
+import numpy as np
+import rrr_robot as rr
+from rrr_robot.cosim import CTRL_IN, CTRL_OUT, PLANT_IN, PLANT_OUT, CosimOptions, run_cosim
+from rrr_robot.fmu_slave import FmuSlave
+from rrr_robot.trajectory import make_reference
+
+
+def bare_loop(n: int, step: float, q0: np.ndarray) -> float:
+    """Seconds for n steps of the FMI calls alone."""
+    with FmuSlave(rr.fmu_path("controller"), "c") as ctrl, \
+            FmuSlave(rr.fmu_path("plant"), "p") as plant:
+        ctrl.initialize()
+        plant.initialize(0.0, {f"q0[{i + 1}]": float(q0[i]) for i in range(3)})
+        c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)
+        p_in, p_out = plant.real_block(PLANT_IN), plant.real_block(PLANT_OUT)
+        c_in.values[:3] = q0
+        c_in.values[9:12] = q0
+        start = time.perf_counter()
+        for _ in range(n):
+            ctrl.set_block(c_in)
+            ctrl.get_block(c_out)
+            plant.set_block(p_in)
+            plant.do_step(step)
+            ctrl.do_step(step)
+            plant.get_block(p_out)
+        return time.perf_counter() - start
+
+
+def per_call(n: int, step: float) -> dict[str, float]:
+    """Microseconds per call of each FMI call kind, each timed alone."""
+    out: dict[str, float] = {}
+    with FmuSlave(rr.fmu_path("controller"), "c") as ctrl, \
+            FmuSlave(rr.fmu_path("plant"), "p") as plant:
+        ctrl.initialize()
+        plant.initialize(0.0, {"q0[2]": 0.4, "q0[3]": 1.0})
+        c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)
+        p_in, p_out = plant.real_block(PLANT_IN), plant.real_block(PLANT_OUT)
+        c_in.values[:] = 0.1
+        calls: dict[str, Callable[[], object]] = {
+            "controller setReal (15 inputs)": lambda: ctrl.set_block(c_in),
+            "controller getReal (9 outputs, runs rrr_ctc)": lambda: (ctrl.set_block(c_in),
+                                                                     ctrl.get_block(c_out)),
+            "plant setReal (3 inputs)": lambda: plant.set_block(p_in),
+            "plant doStep (1 ms = 10 RK4 substeps)": lambda: plant.do_step(step),
+            "controller doStep": lambda: ctrl.do_step(step),
+            "plant getReal (12 outputs)": lambda: plant.get_block(p_out),
+        }
+        for name, fn in calls.items():
+            start = time.perf_counter()
+            for _ in range(n):
+                fn()
+            out[name] = 1e6 * (time.perf_counter() - start) / n
+        key = "controller getReal (9 outputs, runs rrr_ctc)"
+        out[key] -= out["controller setReal (15 inputs)"]  # the set only marks inputs dirty
+    return out
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3, help="best of this many runs")
+    args = parser.parse_args()
+    model = rr.Model.default()
+    ref = make_reference(model)
+    step = float(ref.t[1] - ref.t[0])
+    n = ref.t.size
+    sim_time = float(ref.t[-1] - ref.t[0])
+    ours = min(run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, CosimOptions(step=step)).wall_time
+               for _ in range(args.repeats))
+    ceiling = min(bare_loop(n - 1, step, ref.q[0]) for _ in range(args.repeats))
+    print(f"# Co-simulation speed: {platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} CPUs, Python {platform.python_version()}, best of {args.repeats}")
+    print(f"default writing task: {sim_time:.2f} s simulated, {n} steps of {1e3 * step:g} ms\n")
+    print("| loop | wall time (s) | real-time factor | us/step |")
+    print("|---|---|---|---|")
+    for name, wall in (("run_cosim (master, recording)", ours), ("bare FMPy loop (ceiling)",
+                                                                  ceiling)):
+        print(f"| {name} | {wall:.3f} | {sim_time / wall:.1f}x | {1e6 * wall / n:.1f} |")
+    print(f"\nmaster reaches {100 * ceiling / ours:.0f} % of the ceiling\n")
+    print("| where the time goes (each call alone) | us/call |")
+    print("|---|---|")
+    for name, us in per_call(5000, step).items():
+        print(f"| {name} | {us:.2f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
