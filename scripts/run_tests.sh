@@ -14,6 +14,6 @@ cmake --build build-asan -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$JOBS"
 echo "== ruff =="
-ruff check python tests bench c_src/rrr/gen
+ruff check python tests bench tools c_src/rrr/gen
 echo "== pytest =="
 python -m pytest -q tests/python
