@@ -1,0 +1,547 @@
+// Benchmark driver: the closed-form core librrr (C) against Pinocchio (C++) on the SAME robot
+// (the default robot of rrr_model_default / rrr_inertial_default) and the SAME pre-generated
+// random states. Prints one JSON object per line (kind = meta | time | check | info); the
+// table is assembled by bench/run_bench.py.
+//
+// Timing: for each operation, `--repeats` repeats of `--calls` calls cycling over `--states`
+// pre-generated states (a throughput loop: consecutive calls are independent); ns/call is the
+// repeat time / calls, the best repeat is reported (the median as well). One output of every call
+// is summed into a sink written to a volatile global, so no call can be optimised away (the calls
+// cross into librrr.a and libpinocchio_default.so anyway: no LTO).
+//
+// Usage: bench_core [--states N (power of 2)] [--calls N] [--repeats N] [--seed N] [--ik-tol E]
+#include <pinocchio/multibody.hpp>
+#include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/kinematics.hpp>
+#include <pinocchio/algorithm/regressor.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "rrr/rrr.h"
+
+#ifdef BENCH_INTERNALS
+// private header of librrr: rrr_trig_of and the generated kernels, without the input checks
+#include <math.h>
+#include <stddef.h>
+extern "C" {
+#include "rrr_dynamics_gen.h"
+}
+#endif
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+volatile double g_sink = 0.0;  // results of every timed loop end here
+
+struct Options {
+    std::size_t states = 1024;  // power of two (index = i & (states - 1))
+    long calls = 200000;        // calls per repeat
+    int repeats = 7;            // best of
+    unsigned long seed = 20240601;
+    double ik_tol = 1e-12;      // numeric IK stops when 1/2 |e|^2 < ik_tol (as RTB's tol)
+};
+
+using V3 = std::array<double, 3>;
+
+struct States {
+    std::vector<V3> q, qd, qdd, tau, x, q_ik;          // plain arrays for librrr
+    std::vector<Eigen::VectorXd> eq, eqd, eqdd, etau;  // the same numbers for Pinocchio
+};
+
+// ------------------------------------------------------------------------------------------
+// Output
+// ------------------------------------------------------------------------------------------
+void print_time(const std::string &id, std::vector<double> ns)
+{
+    std::sort(ns.begin(), ns.end());
+    std::printf("{\"kind\": \"time\", \"id\": \"%s\", \"ns\": %.3f, \"median_ns\": %.3f, \"all_ns\": [",
+                id.c_str(), ns.front(), ns[ns.size() / 2]);
+    for (std::size_t i = 0; i < ns.size(); ++i) {
+        std::printf("%s%.3f", i ? ", " : "", ns[i]);
+    }
+    std::printf("]}\n");
+    std::fflush(stdout);
+}
+
+void print_check(const std::string &id, double max_abs_diff, double scale)
+{
+    std::printf("{\"kind\": \"check\", \"id\": \"%s\", \"max_abs_diff\": %.3e, \"scale\": %.3e}\n",
+                id.c_str(), max_abs_diff, scale);
+}
+
+// Best-of-repeats ns/call of f(k), k cycling over the states.
+template <class F>
+void time_op(const std::string &id, const Options &o, F &&f)
+{
+    const std::size_t mask = o.states - 1;
+    double sink = 0.0;
+    const long warm = std::min<long>(o.calls, 20000);
+    for (long i = 0; i < warm; ++i) {
+        sink += f(static_cast<std::size_t>(i) & mask);
+    }
+    std::vector<double> ns;
+    for (int r = 0; r < o.repeats; ++r) {
+        const auto t0 = std::chrono::steady_clock::now();
+        for (long i = 0; i < o.calls; ++i) {
+            sink += f(static_cast<std::size_t>(i) & mask);
+        }
+        const auto t1 = std::chrono::steady_clock::now();
+        ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() /
+                     static_cast<double>(o.calls));
+    }
+    g_sink = g_sink + sink;
+    print_time(id, ns);
+}
+
+void require_ok(rrr_status st, const char *what)
+{
+    if (st != RRR_OK) {
+        std::fprintf(stderr, "bench_core: %s failed: %s\n", what, rrr_status_str(st));
+        std::exit(2);
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// The same robot in Pinocchio
+// ------------------------------------------------------------------------------------------
+// Tz(d) Tx(a) Rx(alpha): the fixed part of the standard DH transform A_i = Rz(q_i) Tz Tx Rx.
+pinocchio::SE3 dh_fixed(double d, double a, double alpha)
+{
+    Eigen::Matrix3d rx;
+    rx << 1.0, 0.0, 0.0, 0.0, std::cos(alpha), -std::sin(alpha), 0.0, std::sin(alpha),
+        std::cos(alpha);
+    return pinocchio::SE3(rx, Eigen::Vector3d(a, 0.0, d));
+}
+
+// Joint i rotates frame i-1 about z (JointModelRZ); joint i+1 sits at Tz(d_i) Tx(a_i) Rx(alpha_i)
+// from joint i. Link i is given in DH frame i, which is that fixed transform away from joint i:
+// com = p + R r_c, I = R I_c R^T. armature = J_m, so rnea/crba/aba include the rotor inertia
+// exactly as tau = R p does. A frame "tip" at the origin of DH frame 3 serves FK and IK.
+pinocchio::Model pinocchio_model(const rrr_model &m, const rrr_inertial &in,
+                                 pinocchio::FrameIndex *tip, pinocchio::SE3 *tip_placement)
+{
+    pinocchio::Model model;
+    model.gravity.linear(Eigen::Vector3d(0.0, 0.0, -m.g));
+    const double alpha[3] = {kPi / 2.0, 0.0, 0.0};
+    const double a[3] = {0.0, m.a2, m.a3};
+    const double d[3] = {m.d1, m.d2, m.d3};
+    pinocchio::JointIndex parent = 0;
+    pinocchio::SE3 placement = pinocchio::SE3::Identity();
+    for (int i = 0; i < 3; ++i) {
+        const pinocchio::JointIndex joint = model.addJoint(
+            parent, pinocchio::JointModelRZ(), placement, "joint" + std::to_string(i + 1));
+        const pinocchio::SE3 fixed = dh_fixed(d[i], a[i], alpha[i]);
+        const rrr_link_inertia &l = in.link[i];
+        Eigen::Matrix3d ic;
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) {
+                ic(r, c) = l.inertia_com[r][c];
+            }
+        }
+        const Eigen::Vector3d com =
+            fixed.translation() + fixed.rotation() * Eigen::Vector3d(l.com[0], l.com[1], l.com[2]);
+        const Eigen::Matrix3d inertia = fixed.rotation() * ic * fixed.rotation().transpose();
+        model.appendBodyToJoint(joint, pinocchio::Inertia(l.mass, com, inertia),
+                                pinocchio::SE3::Identity());
+        parent = joint;
+        placement = fixed;
+    }
+    model.armature = Eigen::Vector3d(in.rotor_inertia[0], in.rotor_inertia[1], in.rotor_inertia[2]);
+    *tip = model.addFrame(pinocchio::Frame("tip", parent, placement, pinocchio::OP_FRAME));
+    *tip_placement = placement;
+    return model;
+}
+
+// Numeric position IK on Pinocchio kinematics, written here as a compiled reference for RTB's
+// ets.ik_LM: the same algorithm (Levenberg-Marquardt with Chan's damping lambda = k E, k = 1,
+// position-only mask, E = 1/2 |e|^2 < tol, at most 30 iterations per search and 100 searches,
+// the first from q0 = (0.1, 0.2, 1.0), the others from random q in [-pi, pi]^3).
+// Returns the number of iterations, or -1 when every search failed.
+struct NumericIk {
+    const pinocchio::Model &model;
+    pinocchio::Data &data;
+    pinocchio::FrameIndex tip;
+    double tol;
+    int ilimit = 30;
+    int slimit = 100;
+    Eigen::Matrix<double, 6, Eigen::Dynamic> J;
+    std::mt19937_64 rng{12345};
+    std::uniform_real_distribution<double> ang{-kPi, kPi};
+
+    NumericIk(const pinocchio::Model &m, pinocchio::Data &d, pinocchio::FrameIndex t, double e)
+        : model(m), data(d), tip(t), tol(e), J(6, m.nv)
+    {
+        J.setZero();
+    }
+
+    int solve(const V3 &x, Eigen::VectorXd &q)
+    {
+        const Eigen::Vector3d target(x[0], x[1], x[2]);
+        int iterations = 0;
+        for (int search = 0; search < slimit; ++search) {
+            if (search == 0) {
+                q = Eigen::Vector3d(0.1, 0.2, 1.0);
+            } else {
+                q = Eigen::Vector3d(ang(rng), ang(rng), ang(rng));
+            }
+            for (int it = 0; it < ilimit; ++it) {
+                pinocchio::computeFrameJacobian(model, data, q, tip,
+                                                pinocchio::LOCAL_WORLD_ALIGNED, J);
+                const Eigen::Vector3d e = target - data.oMf[tip].translation();
+                const double energy = 0.5 * e.squaredNorm();
+                if (energy < tol) {
+                    return iterations;
+                }
+                const Eigen::Matrix3d jp = J.topRows<3>();
+                Eigen::Matrix3d a = jp.transpose() * jp;
+                a.diagonal().array() += energy;  // Chan: W_n = k E 1, k = 1
+                q += a.ldlt().solve(jp.transpose() * e);
+                ++iterations;
+            }
+        }
+        return -1;
+    }
+};
+
+// ------------------------------------------------------------------------------------------
+// States
+// ------------------------------------------------------------------------------------------
+States make_states(const rrr_model &m, const Options &o)
+{
+    std::mt19937_64 rng(o.seed);
+    std::uniform_real_distribution<double> ang(-kPi, kPi), vel(-3.0, 3.0), acc(-10.0, 10.0);
+    std::uniform_real_distribution<double> q2(-kPi / 2.0, kPi / 2.0), q3(0.2, 2.5);
+    States s;
+    for (std::size_t k = 0; k < o.states; ++k) {
+        V3 q = {ang(rng), ang(rng), ang(rng)};
+        V3 qd = {vel(rng), vel(rng), vel(rng)};
+        V3 qdd = {acc(rng), acc(rng), acc(rng)};
+        V3 tau;
+        require_ok(rrr_inverse_dynamics(&m, q.data(), qd.data(), qdd.data(), tau.data()), "tau");
+        // IK targets: the same distribution as run_bench.py uses for RTB (q3 away from 0 and pi)
+        V3 qi = {ang(rng), q2(rng), q3(rng)};
+        V3 x;
+        require_ok(rrr_fk(&m, qi.data(), x.data(), nullptr), "fk");
+        s.q.push_back(q);
+        s.qd.push_back(qd);
+        s.qdd.push_back(qdd);
+        s.tau.push_back(tau);
+        s.q_ik.push_back(qi);
+        s.x.push_back(x);
+        s.eq.push_back(Eigen::Vector3d(q[0], q[1], q[2]));
+        s.eqd.push_back(Eigen::Vector3d(qd[0], qd[1], qd[2]));
+        s.eqdd.push_back(Eigen::Vector3d(qdd[0], qdd[1], qdd[2]));
+        s.etau.push_back(Eigen::Vector3d(tau[0], tau[1], tau[2]));
+    }
+    return s;
+}
+
+double wrap(double a)
+{
+    return std::remainder(a, 2.0 * kPi);
+}
+
+Options parse(int argc, char **argv)
+{
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (i + 1 >= argc) {
+            std::fprintf(stderr, "bench_core: %s needs a value\n", a.c_str());
+            std::exit(1);
+        }
+        const char *v = argv[++i];
+        if (a == "--states") {
+            o.states = std::strtoul(v, nullptr, 10);
+        } else if (a == "--calls") {
+            o.calls = std::strtol(v, nullptr, 10);
+        } else if (a == "--repeats") {
+            o.repeats = std::atoi(v);
+        } else if (a == "--seed") {
+            o.seed = std::strtoul(v, nullptr, 10);
+        } else if (a == "--ik-tol") {
+            o.ik_tol = std::strtod(v, nullptr);
+        } else {
+            std::fprintf(stderr, "bench_core: unknown option %s\n", a.c_str());
+            std::exit(1);
+        }
+    }
+    if (o.states == 0 || (o.states & (o.states - 1)) != 0 || o.calls <= 0 || o.repeats <= 0) {
+        std::fprintf(stderr, "bench_core: --states must be a power of 2, --calls/--repeats > 0\n");
+        std::exit(1);
+    }
+    return o;
+}
+
+}  // namespace
+
+int main(int argc, char **argv)
+{
+    const Options o = parse(argc, argv);
+    rrr_model m;
+    rrr_inertial in;
+    require_ok(rrr_model_default(&m), "rrr_model_default");
+    require_ok(rrr_inertial_default(&in), "rrr_inertial_default");
+    pinocchio::FrameIndex tip = 0;
+    pinocchio::SE3 tip_fixed;
+    const pinocchio::Model model = pinocchio_model(m, in, &tip, &tip_fixed);
+    pinocchio::Data data(model);
+    const States s = make_states(m, o);
+    const std::size_t n = o.states;
+
+    std::printf("{\"kind\": \"meta\", \"cxx\": \"%s\", \"c\": \"%s\", \"pinocchio\": \"%s\", "
+                "\"eigen\": \"%d.%d.%d\", \"rrr\": \"%s\", \"states\": %zu, \"calls\": %ld, "
+                "\"repeats\": %d, \"seed\": %lu, \"ik_tol\": %.3g}\n",
+                BENCH_CXX_FLAGS, BENCH_C_FLAGS, BENCH_PINOCCHIO_VERSION, EIGEN_WORLD_VERSION,
+                EIGEN_MAJOR_VERSION, EIGEN_MINOR_VERSION, RRR_VERSION_STRING, n, o.calls,
+                o.repeats, o.seed, o.ik_tol);
+
+    // ---------------------------------------------------------------- agreement checks
+    {
+        double fk_pos = 0.0, fk_rot = 0.0, tau = 0.0, reg = 0.0, mass = 0.0, cor = 0.0, grav = 0.0,
+               nle = 0.0, fd = 0.0, sc_tau = 0.0, sc_mass = 0.0, sc_grav = 0.0, sc_nle = 0.0,
+               sc_fd = 0.0;
+        const double zero[3] = {0.0, 0.0, 0.0};
+        for (std::size_t k = 0; k < n; ++k) {
+            double x[3], rot[3][3], t[3], y[3][RRR_NP], dm[3][3], c[3], h[3], b[3], a[3];
+            require_ok(rrr_fk(&m, s.q[k].data(), x, rot), "fk");
+            require_ok(rrr_inverse_dynamics(&m, s.q[k].data(), s.qd[k].data(), s.qdd[k].data(), t),
+                       "tau");
+            require_ok(rrr_regressor(&m, s.q[k].data(), s.qd[k].data(), s.qdd[k].data(), y),
+                       "regressor");
+            require_ok(rrr_mass_matrix(&m, s.q[k].data(), dm), "D");
+            require_ok(rrr_coriolis(&m, s.q[k].data(), s.qd[k].data(), c), "c");
+            require_ok(rrr_gravity(&m, s.q[k].data(), h), "h");
+            require_ok(rrr_inverse_dynamics(&m, s.q[k].data(), s.qd[k].data(), zero, b), "c + h");
+            require_ok(rrr_forward_dynamics(&m, s.q[k].data(), s.qd[k].data(), s.tau[k].data(), a),
+                       "fd");
+
+            pinocchio::forwardKinematics(model, data, s.eq[k]);
+            const pinocchio::SE3 pose = data.oMi[3] * tip_fixed;
+            const Eigen::VectorXd &rt = pinocchio::rnea(model, data, s.eq[k], s.eqd[k], s.eqdd[k]);
+            const Eigen::Vector3d rtau = rt;
+            pinocchio::crba(model, data, s.eq[k]);
+            const Eigen::Matrix3d upper = data.M;  // crba fills the upper triangle
+            Eigen::Matrix3d pm = upper.triangularView<Eigen::Upper>();
+            pm.triangularView<Eigen::StrictlyLower>() = upper.transpose();
+            const Eigen::Vector3d pg = pinocchio::computeGeneralizedGravity(model, data, s.eq[k]);
+            const Eigen::Vector3d pn = pinocchio::nonLinearEffects(model, data, s.eq[k], s.eqd[k]);
+            const Eigen::Vector3d pa = pinocchio::aba(model, data, s.eq[k], s.eqd[k], s.etau[k]);
+
+            for (int i = 0; i < 3; ++i) {
+                fk_pos = std::max(fk_pos, std::abs(x[i] - pose.translation()[i]));
+                double rp = 0.0;
+                for (int j = 0; j < RRR_NP; ++j) {
+                    rp += y[i][j] * m.p[j];
+                }
+                reg = std::max(reg, std::abs(rp - rtau[i]));
+                tau = std::max(tau, std::abs(t[i] - rtau[i]));
+                cor = std::max(cor, std::abs(c[i] - (pn[i] - pg[i])));
+                grav = std::max(grav, std::abs(h[i] - pg[i]));
+                nle = std::max(nle, std::abs(b[i] - pn[i]));
+                fd = std::max(fd, std::abs(a[i] - pa[i]));
+                sc_tau = std::max(sc_tau, std::abs(rtau[i]));
+                sc_grav = std::max(sc_grav, std::abs(pg[i]));
+                sc_nle = std::max(sc_nle, std::abs(pn[i]));
+                sc_fd = std::max(sc_fd, std::abs(pa[i]));
+                for (int j = 0; j < 3; ++j) {
+                    fk_rot = std::max(fk_rot, std::abs(rot[i][j] - pose.rotation()(i, j)));
+                    mass = std::max(mass, std::abs(dm[i][j] - pm(i, j)));
+                    sc_mass = std::max(sc_mass, std::abs(pm(i, j)));
+                }
+            }
+        }
+        print_check("fk_position", fk_pos, 1.0);
+        print_check("fk_rotation", fk_rot, 1.0);
+        print_check("tau", tau, sc_tau);
+        print_check("regressor", reg, sc_tau);
+        print_check("mass", mass, sc_mass);
+        print_check("coriolis", cor, sc_nle);
+        print_check("gravity", grav, sc_grav);
+        print_check("nle", nle, sc_nle);
+        print_check("fd", fd, sc_fd);
+
+        // IK: every branch maps back onto the target; the generating q is among the branches
+        double ik_fk = 0.0, ik_q = 0.0;
+        int solutions = 0;
+        for (std::size_t k = 0; k < n; ++k) {
+            rrr_ik_set set;
+            require_ok(rrr_ik(&m, s.x[k].data(), &set), "ik");
+            solutions += set.n;
+            double best = std::numeric_limits<double>::infinity();
+            for (int b = 0; b < set.n; ++b) {
+                double x[3];
+                require_ok(rrr_fk(&m, set.q[b], x, nullptr), "fk");
+                double dq = 0.0;
+                for (int i = 0; i < 3; ++i) {
+                    ik_fk = std::max(ik_fk, std::abs(x[i] - s.x[k][i]));
+                    dq = std::max(dq, std::abs(wrap(set.q[b][i] - s.q_ik[k][i])));
+                }
+                best = std::min(best, dq);
+            }
+            ik_q = std::max(ik_q, best);
+        }
+        print_check("ik_fk", ik_fk, 1.0);
+        print_check("ik_q", ik_q, kPi);
+        std::printf("{\"kind\": \"info\", \"id\": \"ik.ours\", \"targets\": %zu, "
+                    "\"mean_solutions\": %.3f}\n",
+                    n, static_cast<double>(solutions) / static_cast<double>(n));
+
+        // the numeric reference IK: success rate, iterations, position error
+        NumericIk nik(model, data, tip, o.ik_tol);
+        Eigen::VectorXd q(3);
+        int ok = 0;
+        long iters = 0;
+        double err = 0.0;
+        for (std::size_t k = 0; k < n; ++k) {
+            const int it = nik.solve(s.x[k], q);
+            if (it >= 0) {
+                ++ok;
+                iters += it;
+                double x[3];
+                const double qa[3] = {q[0], q[1], q[2]};
+                require_ok(rrr_fk(&m, qa, x, nullptr), "fk");
+                for (int i = 0; i < 3; ++i) {
+                    err = std::max(err, std::abs(x[i] - s.x[k][i]));
+                }
+            }
+        }
+        std::printf("{\"kind\": \"info\", \"id\": \"ik.pin_lm\", \"targets\": %zu, \"success\": %d, "
+                    "\"mean_iterations\": %.3f, \"max_position_error\": %.3e}\n",
+                    n, ok, ok ? static_cast<double>(iters) / ok : 0.0, err);
+        std::fflush(stdout);
+    }
+
+    // ---------------------------------------------------------------- timings
+    const double zero[3] = {0.0, 0.0, 0.0};
+    time_op("loop.empty", o, [&](std::size_t k) { return s.q[k][0]; });
+
+    // libm floor of the closed forms: sin/cos of q2, q3 as in rrr_trig_of (gcc fuses each pair
+    // into one sincos call), and one atan2 (rrr_ik makes 12, rrr_ik_branch 3)
+    time_op("floor.trig", o, [&](std::size_t k) {
+        const double s2 = std::sin(s.q[k][1]), c2 = std::cos(s.q[k][1]);
+        const double s3 = std::sin(s.q[k][2]), c3 = std::cos(s.q[k][2]);
+        return (s2 * c3 + c2 * s3) + (c2 * c3 - s2 * s3);
+    });
+    time_op("floor.atan2", o, [&](std::size_t k) { return std::atan2(s.x[k][1], s.x[k][0]); });
+
+    time_op("fk.ours", o, [&](std::size_t k) {
+        double x[3], rot[3][3];
+        rrr_fk(&m, s.q[k].data(), x, rot);
+        return x[0] + rot[0][0];
+    });
+    time_op("fk.pin", o, [&](std::size_t k) {
+        pinocchio::forwardKinematics(model, data, s.eq[k]);
+        const pinocchio::SE3 pose = data.oMi[3] * tip_fixed;
+        return pose.translation()[0] + pose.rotation()(0, 0);
+    });
+
+    time_op("ik.ours", o, [&](std::size_t k) {
+        rrr_ik_set set;
+        rrr_ik(&m, s.x[k].data(), &set);
+        return set.q[0][0] + set.n;
+    });
+    time_op("ik_branch.ours", o, [&](std::size_t k) {
+        double q[3];
+        rrr_ik_branch(&m, s.x[k].data(), RRR_SHOULDER_FRONT, RRR_ELBOW_UP, q);
+        return q[0];
+    });
+    {
+        NumericIk nik(model, data, tip, o.ik_tol);
+        Eigen::VectorXd q(3);
+        Options oc = o;
+        oc.calls = std::max<long>(1, o.calls / 20);  // ~100x slower per call
+        time_op("ik.pin_lm", oc, [&](std::size_t k) {
+            const int it = nik.solve(s.x[k], q);
+            return q[0] + it;
+        });
+    }
+
+    time_op("tau.ours", o, [&](std::size_t k) {
+        double t[3];
+        rrr_inverse_dynamics(&m, s.q[k].data(), s.qd[k].data(), s.qdd[k].data(), t);
+        return t[0];
+    });
+    time_op("tau.pin", o, [&](std::size_t k) {
+        return pinocchio::rnea(model, data, s.eq[k], s.eqd[k], s.eqdd[k])[0];
+    });
+
+#ifdef BENCH_INTERNALS
+    // diagnostic: what rrr_inverse_dynamics costs without its argument checks
+    time_op("kernel.tau", o, [&](std::size_t k) {
+        const rrr_trig t = rrr_trig_of(s.q[k].data());
+        double out[3];
+        rrr_gen_inverse_dynamics(&m, &t, s.qd[k].data(), s.qdd[k].data(), out);
+        return out[0];
+    });
+#endif
+
+    time_op("regressor.ours", o, [&](std::size_t k) {
+        double y[3][RRR_NP];
+        rrr_regressor(&m, s.q[k].data(), s.qd[k].data(), s.qdd[k].data(), y);
+        return y[0][0];
+    });
+    time_op("regressor.pin", o, [&](std::size_t k) {
+        return pinocchio::computeJointTorqueRegressor(model, data, s.eq[k], s.eqd[k], s.eqdd[k])(
+            0, 0);
+    });
+
+    time_op("mass.ours", o, [&](std::size_t k) {
+        double dm[3][3];
+        rrr_mass_matrix(&m, s.q[k].data(), dm);
+        return dm[0][0];
+    });
+    time_op("mass.pin", o, [&](std::size_t k) {
+        return pinocchio::crba(model, data, s.eq[k])(0, 0);
+    });
+
+    time_op("coriolis.ours", o, [&](std::size_t k) {
+        double c[3];
+        rrr_coriolis(&m, s.q[k].data(), s.qd[k].data(), c);
+        return c[0];
+    });
+    time_op("gravity.ours", o, [&](std::size_t k) {
+        double h[3];
+        rrr_gravity(&m, s.q[k].data(), h);
+        return h[1];
+    });
+    time_op("gravity.pin", o, [&](std::size_t k) {
+        return pinocchio::computeGeneralizedGravity(model, data, s.eq[k])[1];
+    });
+    time_op("nle.ours", o, [&](std::size_t k) {
+        double b[3];
+        rrr_inverse_dynamics(&m, s.q[k].data(), s.qd[k].data(), zero, b);
+        return b[0];
+    });
+    time_op("nle.pin", o, [&](std::size_t k) {
+        return pinocchio::nonLinearEffects(model, data, s.eq[k], s.eqd[k])[0];
+    });
+
+    time_op("fd.ours", o, [&](std::size_t k) {
+        double a[3];
+        rrr_forward_dynamics(&m, s.q[k].data(), s.qd[k].data(), s.tau[k].data(), a);
+        return a[0];
+    });
+    time_op("fd.pin", o, [&](std::size_t k) {
+        return pinocchio::aba(model, data, s.eq[k], s.eqd[k], s.etau[k])[0];
+    });
+
+    std::printf("{\"kind\": \"info\", \"id\": \"sink\", \"value\": %.6e}\n", g_sink);
+    return 0;
+}
