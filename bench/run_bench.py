@@ -260,28 +260,27 @@ IK_GEOMETRY = (
     Ops("e = m->d2 + m->d3", add=1),
     Ops("L = a2 + a3 + fabs(e)", add=2, other="fabs"),
     Ops("rho2 = x[0] * x[0] + x[1] * x[1] - e * e", add=2, mul=3),
-    Ops("g->rabs = sqrt(rho2)", sqrt=1),
-    Ops("g->pwv = x[2] - m->d1", add=1),
-    Ops("c3 = (rho2 + g->pwv * g->pwv - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)",
-        add=3, mul=5, div=1),
+    Ops("pwv = x[2] - m->d1", add=1),
+    Ops("c3 = (rho2 + pwv * pwv - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)", add=3, mul=5, div=1),
     Ops("fabs(c3) > 1.0", other="fabs"),
+    Ops("g->rabs = sqrt(rho2)", sqrt=1),
     Ops("g->s3abs = sqrt(fmax(0.0, 1.0 - c3 * c3))", add=1, mul=1, sqrt=1, other="fmax"),
+    Ops("g->psi = atan2(x[1], x[0])", atan2=1),
+    Ops("g->gamma_f = atan2(e, g->rabs)", atan2=1),
+    Ops("g->gamma_b = copysign(RRR_PI, e) - g->gamma_f", add=1, other="copysign"),
+    Ops("g->phi_f = atan2(pwv, g->rabs)", atan2=1),
+    Ops("g->phi_b = copysign(RRR_PI, pwv) - g->phi_f", add=1, other="copysign"),
+    Ops("g->beta_down = atan2(a3 * g->s3abs, a2 + a3 * c3)", add=1, mul=1, atan2=1),
+    Ops("g->q3_down = atan2(g->s3abs, c3)", atan2=1),
 )
-# ik_solve_branch(): once per branch. The two sign flips (r on the back shoulder branch, s3 on
-# the elbow-up branch) are counted per branch where they happen, in ik_negations().
+# ik_solve_branch(): once per branch. The sign flips of the elbow-up branch (beta, q3) are
+# counted per branch where they happen, in ik_count(); wrap_pi() counts as one add (worst case)
+# for q1 and q2.
 IK_BRANCH = (
-    Ops("e = m->d2 + m->d3", add=1),
-    Ops("r = shoulder == RRR_SHOULDER_FRONT ? g->rabs : -g->rabs"),
-    Ops("s3 = elbow == RRR_ELBOW_UP ? -g->s3abs : g->s3abs"),
-    Ops("sy = x[0] * e + x[1] * r", add=1, mul=2),
-    Ops("sx = x[0] * r - x[1] * e", add=1, mul=2),
-    Ops("angle(sy, sx)", atan2=1),
-    Ops("angle(s3, g->c3)", atan2=1),
-    Ops("A = a2 + a3 * g->c3", add=1, mul=1),
-    Ops("B = a3 * s3", mul=1),
-    Ops("ny = A * g->pwv - B * r", add=1, mul=2),
-    Ops("nx = A * r + B * g->pwv", add=1, mul=2),
-    Ops("angle(ny, nx)", atan2=1),
+    Ops("q[0] = wrap_pi(g->psi + (front ? g->gamma_f : g->gamma_b))", add=2),
+    Ops("q[1] = wrap_pi((front ? g->phi_f : g->phi_b) - (down ? g->beta_down : -g->beta_down))",
+        add=2),
+    Ops("q[2] = wrap_pi(down ? g->q3_down : -g->q3_down)"),
 )
 
 
@@ -301,9 +300,9 @@ def ik_count(branches: Sequence[tuple[bool, bool]]) -> IkCount:
     add = sum(op.add for op in IK_GEOMETRY) + len(branches) * sum(op.add for op in IK_BRANCH)
     mul = sum(op.mul for op in IK_GEOMETRY) + len(branches) * sum(op.mul for op in IK_BRANCH)
     div = sum(op.div for op in IK_GEOMETRY) + len(branches) * sum(op.div for op in IK_BRANCH)
-    neg = sum(int(back) + int(up) for back, up in branches)
+    neg = sum(2 * int(up) for _back, up in branches)
     sqrt = sum(op.sqrt for op in IK_GEOMETRY)
-    atan2 = len(branches) * sum(op.atan2 for op in IK_BRANCH)
+    atan2 = sum(op.atan2 for op in IK_GEOMETRY) + len(branches) * sum(op.atan2 for op in IK_BRANCH)
     flops = add + mul + div + neg + sqrt
     detail = f"{add} add/sub, {mul} mul, {div} div, {neg} neg, {sqrt} sqrt; + {atan2} atan2"
     return IkCount(flops, sqrt, atan2, detail, stale)

@@ -2,14 +2,11 @@
 
 from __future__ import annotations
 
-import ctypes as ct
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .errors import BadInputError
 
-DPTR = ct.POINTER(ct.c_double)
 FloatArray = NDArray[np.float64]
 
 
@@ -26,16 +23,23 @@ def as_rows(value: ArrayLike, name: str, width: int = 3) -> tuple[FloatArray, bo
 def broadcast_rows(*pairs: tuple[ArrayLike, str]) -> tuple[list[FloatArray], bool]:
     """Convert several (value, name) pairs to (n, 3) arrays of a common n."""
     rows = [as_rows(v, name) for v, name in pairs]
-    batch = any(b for _, b in rows)
+    if not any(b for _, b in rows):  # fast path: single vectors, nothing to broadcast
+        return [a for a, _ in rows], False
     n = max(a.shape[0] for a, _ in rows)
     out = []
     for (a, _), (_, name) in zip(rows, pairs, strict=True):
         if a.shape[0] not in (1, n):
             raise BadInputError(f"{name} has {a.shape[0]} rows, expected {n}")
         out.append(np.ascontiguousarray(np.broadcast_to(a, (n, a.shape[1]))))
-    return out, batch
+    return out, True
 
 
-def ptr(a: FloatArray) -> ct._Pointer:  # type: ignore[name-defined]
-    """Pointer to the data of a C-contiguous float64 array."""
-    return a.ctypes.data_as(DPTR)
+def ptr(a: FloatArray) -> int:
+    """Address of the data of a C-contiguous float64 array (passed as a C double pointer)."""
+    return int(a.ctypes.data)
+
+
+def rows_of(a: FloatArray) -> tuple[int, int]:
+    """(address of row 0, bytes between rows) of a C-contiguous (n, ...) float64 array, so a loop
+    over rows passes ``base + i * stride`` without building ctypes objects per row."""
+    return int(a.ctypes.data), int(a.strides[0])

@@ -95,7 +95,7 @@ class RawPlantState(ct.Structure):
 
 _P = ct.POINTER
 _M = _P(RawModel)
-_D = _P(ct.c_double)
+_D = ct.c_void_p  # double arrays travel as addresses (ints): numpy rows without ctypes objects
 
 # name -> argument types; every function returns rrr_status (int)
 _SIGNATURES: dict[str, list[Any]] = {
@@ -182,14 +182,24 @@ def _load() -> ct.CDLL:
 
 
 LIB = _load()
+FUNCS: dict[str, Callable[..., int]] = {name: getattr(LIB, name) for name in _SIGNATURES}
 
 
-def call(name: str, *args: Any, context: str = "") -> None:
-    """Call a librrr function and raise the typed error matching a non-OK status."""
-    fn: Callable[..., int] = getattr(LIB, name)
-    status = fn(*args)
+def call(name: str, *args: Any, context: str | Callable[[], str] = "") -> None:
+    """Call a librrr function and raise the typed error matching a non-OK status.
+
+    ``context`` (a string, or a callable building it only when the call fails) is appended to
+    the message.
+    """
+    status = FUNCS[name](*args)
     if status != 0:
-        cls = _ERRORS.get(status, RrrError)
-        sname = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
-        detail = f": {context}" if context else ""
-        raise cls(f"{name} failed with {sname} ({_MEANING.get(status, '?')}){detail}", name, sname)
+        raise_for(name, status, context)
+
+
+def raise_for(name: str, status: int, context: str | Callable[[], str] = "") -> None:
+    """Raise the exception for a non-OK status of function ``name``."""
+    cls = _ERRORS.get(status, RrrError)
+    sname = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
+    text = context() if callable(context) else context
+    detail = f": {text}" if text else ""
+    raise cls(f"{name} failed with {sname} ({_MEANING.get(status, '?')}){detail}", name, sname)

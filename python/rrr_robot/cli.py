@@ -87,6 +87,9 @@ def build_parser() -> argparse.ArgumentParser:
     p_w.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p_w.set_defaults(func=_cmd_writing)
+    from .identify.cli import register_cli as register_identify
+
+    register_identify(sub)
     return parser
 
 

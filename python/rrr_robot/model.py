@@ -8,7 +8,7 @@ from __future__ import annotations
 import copy
 import ctypes as ct
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from . import _lib
-from ._arrays import FloatArray, as_rows, broadcast_rows, ptr
+from ._arrays import FloatArray, as_rows, broadcast_rows, ptr, rows_of
 from .errors import BadInputError, ModelError
 
 DH_KEYS = ("d1", "a2", "a3", "d2", "d3")
@@ -213,10 +213,7 @@ class Model:
     def fk(self, q: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Tip position (3,) and orientation (3, 3) (eqs 3-5); (n, 3), (n, 3, 3) for batches."""
         qs, batch = as_rows(q, "q")
-        x = np.empty((qs.shape[0], 3))
-        rot = np.empty((qs.shape[0], 3, 3))
-        for i in range(qs.shape[0]):
-            _lib.call("rrr_fk", self._ref, ptr(qs[i]), ptr(x[i]), ptr(rot[i]))
+        x, rot = self._rowwise("rrr_fk", [qs], [(3,), (3, 3)], "q")
         return (x, rot) if batch else (x[0], rot[0])
 
     def jacobian(self, q: ArrayLike) -> FloatArray:
@@ -227,14 +224,8 @@ class Model:
         self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike
     ) -> tuple[FloatArray, FloatArray]:
         """Tip velocity and acceleration from joint motion."""
-        (qs, qds, qdds), batch = broadcast_rows((q, "q"), (qd, "qd"), (qdd, "qdd"))
-        xd = np.empty_like(qs)
-        xdd = np.empty_like(qs)
-        for i in range(qs.shape[0]):
-            _lib.call(
-                "rrr_tip_motion",
-                self._ref, ptr(qs[i]), ptr(qds[i]), ptr(qdds[i]), ptr(xd[i]), ptr(xdd[i]),
-            )
+        rows, batch = broadcast_rows((q, "q"), (qd, "qd"), (qdd, "qdd"))
+        xd, xdd = self._rowwise("rrr_tip_motion", rows, [(3,), (3,)], "q, qd, qdd")
         return (xd, xdd) if batch else (xd[0], xdd[0])
 
     def joint_motion(
@@ -242,15 +233,8 @@ class Model:
     ) -> tuple[FloatArray, FloatArray]:
         """Joint velocity and acceleration from tip motion (raises SingularError at a
         singular configuration)."""
-        (qs, xds, xdds), batch = broadcast_rows((q, "q"), (xd, "xd"), (xdd, "xdd"))
-        qd = np.empty_like(qs)
-        qdd = np.empty_like(qs)
-        for i in range(qs.shape[0]):
-            _lib.call(
-                "rrr_joint_motion",
-                self._ref, ptr(qs[i]), ptr(xds[i]), ptr(xdds[i]), ptr(qd[i]), ptr(qdd[i]),
-                context=f"at sample {i}, q = {qs[i].tolist()}",
-            )
+        rows, batch = broadcast_rows((q, "q"), (xd, "xd"), (xdd, "xdd"))
+        qd, qdd = self._rowwise("rrr_joint_motion", rows, [(3,), (3,)], "q, xd, xdd")
         return (qd, qdd) if batch else (qd[0], qdd[0])
 
     def ik(self, x: ArrayLike) -> FloatArray:
@@ -277,11 +261,12 @@ class Model:
             raise BadInputError(f"posture must be front|back and up|down, got {shoulder}, {elbow}")
         xs, batch = as_rows(x, "x")
         q = np.empty_like(xs)
+        fn = _lib.FUNCS["rrr_ik_branch"]
+        (xb, xs_), (qb, qs_) = rows_of(xs), rows_of(q)
         for i in range(xs.shape[0]):
-            _lib.call(
-                "rrr_ik_branch", self._ref, ptr(xs[i]), SHOULDER[shoulder], ELBOW[elbow], ptr(q[i]),
-                context=f"x = {xs[i].tolist()}",
-            )
+            status = fn(self._ref, xb + i * xs_, SHOULDER[shoulder], ELBOW[elbow], qb + i * qs_)
+            if status:
+                _lib.raise_for("rrr_ik_branch", status, lambda i=i: f"x = {xs[i].tolist()}")
         return q if batch else q[0]
 
     def ik_nearest(self, x: ArrayLike, q_prev: ArrayLike) -> FloatArray:
@@ -290,12 +275,15 @@ class Model:
         xs, batch = as_rows(x, "x")
         prev = np.array(as_rows(q_prev, "q_prev")[0][0])
         q = np.empty_like(xs)
+        fn = _lib.FUNCS["rrr_ik_nearest"]
+        (xb, xs_), (qb, qs_) = rows_of(xs), rows_of(q)
+        prev_addr = ptr(prev)
         for i in range(xs.shape[0]):
-            _lib.call(
-                "rrr_ik_nearest", self._ref, ptr(xs[i]), ptr(prev), ptr(q[i]), None,
-                context=f"target {i}, x = {xs[i].tolist()}",
-            )
-            prev = q[i]
+            status = fn(self._ref, xb + i * xs_, prev_addr, qb + i * qs_, None)
+            if status:
+                _lib.raise_for("rrr_ik_nearest", status,
+                               lambda i=i: f"target {i}, x = {xs[i].tolist()}")
+            prev_addr = qb + i * qs_
         return q if batch else q[0]
 
     def singularity(self, q: ArrayLike, tol: float = 1e-6) -> Singularity:
@@ -313,10 +301,12 @@ class Model:
         """Signed distance (m) of targets from the workspace boundary: > 0 reachable."""
         xs, batch = as_rows(x, "x")
         out = np.empty(xs.shape[0])
-        margin = ct.c_double()
+        fn = _lib.FUNCS["rrr_workspace_margin"]
+        (xb, xs_), (ob, os_) = rows_of(xs), rows_of(out)
         for i in range(xs.shape[0]):
-            _lib.call("rrr_workspace_margin", self._ref, ptr(xs[i]), ct.byref(margin), None)
-            out[i] = margin.value
+            status = fn(self._ref, xb + i * xs_, ob + i * os_, None)
+            if status:
+                _lib.raise_for("rrr_workspace_margin", status, lambda i=i: f"x = {xs[i]}")
         return out if batch else float(out[0])
 
     # ---- dynamics -------------------------------------------------------------------------
@@ -370,32 +360,51 @@ class Model:
         return self.voltage_from_torque(qd, tau)
 
     # ---- helpers ---------------------------------------------------------------------------
+    def _rowwise(self, fn: str, ins: list[FloatArray], out_shapes: list[tuple[int, ...]],
+                 names: str) -> list[FloatArray]:
+        """Call ``fn(model, in_1[i], ..., out_1[i], ...)`` for every row i of the inputs."""
+        n = ins[0].shape[0]
+        outs = [np.empty((n, *shape)) for shape in out_shapes]
+        bases = [rows_of(a) for a in (*ins, *outs)]
+        call = _lib.FUNCS[fn]
+        ref = self._ref
+        if len(bases) == 2:  # unrolled common cases: no per-row list building
+            (a, sa), (b, sb) = bases
+            for i in range(n):
+                if status := call(ref, a + i * sa, b + i * sb):
+                    self._fail(fn, status, ins, names, i)
+        elif len(bases) == 3:
+            (a, sa), (b, sb), (c, sc) = bases
+            for i in range(n):
+                if status := call(ref, a + i * sa, b + i * sb, c + i * sc):
+                    self._fail(fn, status, ins, names, i)
+        else:
+            for i in range(n):
+                if status := call(ref, *[base + i * step for base, step in bases]):
+                    self._fail(fn, status, ins, names, i)
+        return outs
+
+    @staticmethod
+    def _fail(fn: str, status: int, ins: list[FloatArray], names: str, i: int) -> None:
+        values = ", ".join(str(a[i].tolist()) for a in ins)
+        _lib.raise_for(fn, status, f"sample {i}: {names} = {values}")
+
     def _map1(self, fn: str, a: ArrayLike, name: str, shape: tuple[int, ...]) -> FloatArray:
         rows, batch = as_rows(a, name)
-        out = np.empty((rows.shape[0], *shape))
-        call: Callable[..., None] = _lib.call
-        for i in range(rows.shape[0]):
-            call(fn, self._ref, ptr(rows[i]), ptr(out[i]), context=f"{name} = {rows[i].tolist()}")
+        (out,) = self._rowwise(fn, [rows], [shape], name)
         return out if batch else out[0]
 
     def _map2(self, fn: str, a: tuple[ArrayLike, str], b: tuple[ArrayLike, str]) -> FloatArray:
-        (ra, rb), batch = broadcast_rows(a, b)
-        out = np.empty((ra.shape[0], 3))
-        for i in range(ra.shape[0]):
-            _lib.call(fn, self._ref, ptr(ra[i]), ptr(rb[i]), ptr(out[i]), context=f"sample {i}")
+        rows, batch = broadcast_rows(a, b)
+        (out,) = self._rowwise(fn, rows, [(3,)], f"{a[1]}, {b[1]}")
         return out if batch else out[0]
 
     def _map3(
         self, fn: str, a: ArrayLike, b: ArrayLike, c: ArrayLike, shape: tuple[int, ...],
         names: tuple[str, str, str] = ("q", "qd", "qdd"),
     ) -> FloatArray:
-        (ra, rb, rc), batch = broadcast_rows((a, names[0]), (b, names[1]), (c, names[2]))
-        out = np.empty((ra.shape[0], *shape))
-        for i in range(ra.shape[0]):
-            _lib.call(
-                fn, self._ref, ptr(ra[i]), ptr(rb[i]), ptr(rc[i]), ptr(out[i]),
-                context=f"sample {i}",
-            )
+        rows, batch = broadcast_rows((a, names[0]), (b, names[1]), (c, names[2]))
+        (out,) = self._rowwise(fn, rows, [shape], ", ".join(names))
         return out if batch else out[0]
 
     def __repr__(self) -> str:

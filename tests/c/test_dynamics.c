@@ -482,6 +482,25 @@ static void test_errors(const rrr_model *good)
         }
     }
 
+    /* the hot paths classify after computing: a non-finite parameter must show even where
+     * every factor it meets is zero (robot at rest, zero acceleration or torque) */
+    const double rest[3] = {0.0, 0.0, 0.0};
+    for (int b = 0; b < 2; ++b) {
+        rrr_model mb = *good;
+        mb.a2 = bad[b];
+        expect_all(&mb, rest, rest, rest, all_are(RRR_BAD_INPUT), "bad a2 at rest");
+        mb = *good;
+        mb.g = bad[b];
+        const expect bad_g = {RRR_BAD_INPUT, RRR_BAD_INPUT, RRR_OK, RRR_BAD_INPUT};
+        expect_all(&mb, rest, rest, rest, bad_g, "bad g at rest");
+        for (int k = 0; k < RRR_NP; ++k) {
+            mb = *good;
+            mb.p[k] = bad[b];
+            const expect bad_p = {RRR_BAD_INPUT, RRR_OK, RRR_BAD_INPUT, RRR_BAD_INPUT};
+            expect_all(&mb, rest, rest, rest, bad_p, "bad p at rest");
+        }
+    }
+
     /* finite inputs whose result overflows: RRR_NUMERIC, outputs untouched */
     rrr_model huge = *good;
     for (int k = 0; k < RRR_NP; ++k) {

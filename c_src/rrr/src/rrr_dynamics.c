@@ -32,6 +32,23 @@ static int model_finite(const rrr_model *m, int uses)
     return 1;
 }
 
+/*
+ * The two hot paths (inverse dynamics for the controller, forward dynamics inside the plant's
+ * RK4) check only what cannot reach their result (q1) up front, compute, and classify a
+ * non-finite result afterwards: every other input (q2, q3, qd, qdd, tau, a2, g and all 16 p,
+ * each of which the generated expressions contain with a structurally nonzero factor) turns the
+ * result NaN or Inf when it is NaN or Inf. The statuses are those of checking first.
+ */
+static rrr_status classify(const rrr_model *m, const double a[3], const double b[3],
+                           const double c[3])
+{
+    if (!model_finite(m, USES_A2 | USES_G | USES_P) || !rrr_finite_n(a, 3)
+        || !rrr_finite_n(b, 3) || !rrr_finite_n(c, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    return RRR_NUMERIC;
+}
+
 rrr_status rrr_regressor(const rrr_model *m, const double q[3], const double qd[3],
                          const double qdd[3], double Y[3][RRR_NP])
 {
@@ -59,18 +76,14 @@ rrr_status rrr_regressor(const rrr_model *m, const double q[3], const double qd[
 rrr_status rrr_inverse_dynamics(const rrr_model *m, const double q[3], const double qd[3],
                                 const double qdd[3], double tau[3])
 {
-    if (m == NULL || q == NULL || qd == NULL || qdd == NULL || tau == NULL) {
-        return RRR_BAD_INPUT;
-    }
-    if (!model_finite(m, USES_A2 | USES_G | USES_P) || !rrr_finite_n(q, 3)
-        || !rrr_finite_n(qd, 3) || !rrr_finite_n(qdd, 3)) {
+    if (m == NULL || q == NULL || qd == NULL || qdd == NULL || tau == NULL || !isfinite(q[0])) {
         return RRR_BAD_INPUT;
     }
     const rrr_trig t = rrr_trig_of(q);
     double out[3];
     rrr_gen_inverse_dynamics(m, &t, qd, qdd, out);
     if (!rrr_finite_n(out, 3)) {
-        return RRR_NUMERIC;
+        return classify(m, q, qd, qdd);
     }
     tau[0] = out[0];
     tau[1] = out[1];
@@ -149,23 +162,20 @@ static int pivot_ok(double v)
 rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], const double qd[3],
                                 const double tau[3], double qdd[3])
 {
-    if (m == NULL || q == NULL || qd == NULL || tau == NULL || qdd == NULL) {
-        return RRR_BAD_INPUT;
-    }
-    if (!model_finite(m, USES_A2 | USES_G | USES_P) || !rrr_finite_n(q, 3)
-        || !rrr_finite_n(qd, 3) || !rrr_finite_n(tau, 3)) {
+    if (m == NULL || q == NULL || qd == NULL || tau == NULL || qdd == NULL || !isfinite(q[0])) {
         return RRR_BAD_INPUT;
     }
     const rrr_trig t = rrr_trig_of(q);
-    double D[3][3];
-    rrr_gen_mass_matrix(m, &t, D);
-    /* bias c(q, qd) + h(q) = tau(q, qd, 0): one fused call */
+    /* bias c(q, qd) + h(q) = tau(q, qd, 0): one fused call; a non-finite p, a2, g, q or qd
+     * shows here (before D, whose NaN would look like a failed pivot) */
     const double zero[3] = {0.0, 0.0, 0.0};
     double bias[3];
     rrr_gen_inverse_dynamics(m, &t, qd, zero, bias);
     if (!rrr_finite_n(bias, 3)) {
-        return RRR_NUMERIC;
+        return classify(m, q, qd, tau);
     }
+    double D[3][3];
+    rrr_gen_mass_matrix(m, &t, D);
 
     /* D = L L^T */
     const double d00 = D[0][0];
@@ -199,7 +209,7 @@ rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], const dou
     x[1] = (y1 - l21 * x[2]) / l11;
     x[0] = (y0 - l10 * x[1] - l20 * x[2]) / l00;
     if (!rrr_finite_n(x, 3)) {
-        return RRR_NUMERIC;
+        return classify(m, q, qd, tau);
     }
     qdd[0] = x[0];
     qdd[1] = x[1];

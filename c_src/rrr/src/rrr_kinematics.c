@@ -156,19 +156,36 @@ rrr_status rrr_joint_motion(const rrr_model *m, const double q[3], const double 
     return RRR_OK;
 }
 
-/* atan2 mapped to (-pi, pi]. */
-static double angle(double y, double x)
+/* An angle in [-2 pi, 2 pi] mapped to (-pi, pi]. */
+static double wrap_pi(double a)
 {
-    const double a = atan2(y, x);
-    return a <= -RRR_PI ? RRR_PI : a;
+    if (a > RRR_PI) {
+        return a - 2.0 * RRR_PI;
+    }
+    if (a <= -RRR_PI) {
+        return a + 2.0 * RRR_PI;
+    }
+    return a;
 }
 
-/* Geometry of one target shared by its branches. */
+/*
+ * Everything the four branches of one target share. With r = +/-|r| the planar reach and
+ * e = d2 + d3, eq 5 says (x, y) is (r, -e) turned by q1, (r, z - d1) is (A, B) turned by q2 with
+ * A = a2 + a3 c3, B = a3 s3. So q1 = atan2(y, x) + atan2(e, r), q2 = atan2(z - d1, r) -
+ * atan2(B, A), q3 = atan2(s3, c3), and the back shoulder and the other elbow follow from the
+ * front/down angles by atan2(y, -x) = copysign(pi, y) - atan2(y, x) and atan2(-y, x) =
+ * -atan2(y, x): five atan2 calls serve all four branches.
+ */
 typedef struct ik_geom {
-    double rabs;   /* |r| = sqrt(x^2 + y^2 - e^2) */
-    double pwv;    /* z - d1 */
-    double c3;     /* cos q3 */
-    double s3abs;  /* |sin q3| */
+    double rabs;      /* |r| = sqrt(x^2 + y^2 - e^2) */
+    double s3abs;     /* |sin q3| */
+    double psi;       /* atan2(y, x) */
+    double gamma_f;   /* atan2(e, |r|) */
+    double gamma_b;   /* atan2(e, -|r|) */
+    double phi_f;     /* atan2(z - d1, |r|) */
+    double phi_b;     /* atan2(z - d1, -|r|) */
+    double beta_down; /* atan2(a3 |s3|, a2 + a3 c3) */
+    double q3_down;   /* atan2(|s3|, c3) */
 } ik_geom;
 
 static rrr_status ik_geometry(const rrr_model *m, const double x[3], ik_geom *g)
@@ -185,33 +202,33 @@ static rrr_status ik_geometry(const rrr_model *m, const double x[3], ik_geom *g)
         }
         rho2 = 0.0;
     }
-    g->rabs = sqrt(rho2);
-    g->pwv = x[2] - m->d1;
-    double c3 = (rho2 + g->pwv * g->pwv - a2 * a2 - a3 * a3) / (2.0 * a2 * a3);
+    const double pwv = x[2] - m->d1;
+    double c3 = (rho2 + pwv * pwv - a2 * a2 - a3 * a3) / (2.0 * a2 * a3);
     if (fabs(c3) > 1.0) {
         if (fabs(c3) > 1.0 + RRR_IK_BOUNDARY_TOL) {
             return RRR_UNREACHABLE; /* beyond the outer or inside the inner sphere */
         }
         c3 = c3 > 0.0 ? 1.0 : -1.0;
     }
-    g->c3 = c3;
+    g->rabs = sqrt(rho2);
     g->s3abs = sqrt(fmax(0.0, 1.0 - c3 * c3));
+    g->psi = atan2(x[1], x[0]);
+    g->gamma_f = atan2(e, g->rabs);
+    g->gamma_b = copysign(RRR_PI, e) - g->gamma_f;
+    g->phi_f = atan2(pwv, g->rabs);
+    g->phi_b = copysign(RRR_PI, pwv) - g->phi_f;
+    g->beta_down = atan2(a3 * g->s3abs, a2 + a3 * c3);
+    g->q3_down = atan2(g->s3abs, c3);
     return RRR_OK;
 }
 
-static void ik_solve_branch(const rrr_model *m, const double x[3], const ik_geom *g,
-                            rrr_shoulder shoulder, rrr_elbow elbow, double q[3])
+static void ik_solve_branch(const ik_geom *g, rrr_shoulder shoulder, rrr_elbow elbow,
+                            double q[3])
 {
-    const double a2 = m->a2, a3 = m->a3, e = m->d2 + m->d3;
-    const double r = shoulder == RRR_SHOULDER_FRONT ? g->rabs : -g->rabs;
-    const double s3 = elbow == RRR_ELBOW_UP ? -g->s3abs : g->s3abs;
-    /* q1: x e + y r = s1 (r^2 + e^2), x r - y e = c1 (r^2 + e^2); 0 when undetermined */
-    const double sy = x[0] * e + x[1] * r, sx = x[0] * r - x[1] * e;
-    q[0] = (sy == 0.0 && sx == 0.0) ? 0.0 : angle(sy, sx);
-    q[2] = angle(s3, g->c3);
-    const double A = a2 + a3 * g->c3, B = a3 * s3;
-    const double ny = A * g->pwv - B * r, nx = A * r + B * g->pwv;
-    q[1] = (ny == 0.0 && nx == 0.0) ? 0.0 : angle(ny, nx);
+    const int front = shoulder == RRR_SHOULDER_FRONT, down = elbow == RRR_ELBOW_DOWN;
+    q[0] = wrap_pi(g->psi + (front ? g->gamma_f : g->gamma_b));
+    q[1] = wrap_pi((front ? g->phi_f : g->phi_b) - (down ? g->beta_down : -g->beta_down));
+    q[2] = wrap_pi(down ? g->q3_down : -g->q3_down);
 }
 
 rrr_status rrr_ik_branch(const rrr_model *m, const double x[3], rrr_shoulder shoulder,
@@ -226,7 +243,7 @@ rrr_status rrr_ik_branch(const rrr_model *m, const double x[3], rrr_shoulder sho
     if (st != RRR_OK) {
         return st;
     }
-    ik_solve_branch(m, x, &g, shoulder, elbow, q);
+    ik_solve_branch(&g, shoulder, elbow, q);
     return RRR_OK;
 }
 
@@ -247,7 +264,7 @@ rrr_status rrr_ik(const rrr_model *m, const double x[3], rrr_ik_set *sol)
     const int n_el = g.s3abs > 0.0 ? 2 : 1;
     for (int s = 0; s < n_sh; ++s) {
         for (int k = 0; k < n_el; ++k) {
-            ik_solve_branch(m, x, &g, (rrr_shoulder)s, (rrr_elbow)k, out.q[out.n]);
+            ik_solve_branch(&g, (rrr_shoulder)s, (rrr_elbow)k, out.q[out.n]);
             out.branch[out.n] = s * 2 + k;
             out.n++;
         }

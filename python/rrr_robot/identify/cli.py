@@ -1,0 +1,104 @@
+"""``rrr identify`` and ``rrr identify-experiment`` (registered by rrr_robot.cli)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..model import DEFAULT_ROBOT_TOML, Model
+
+log = logging.getLogger(__name__)
+
+
+def _cmd_identify(args: argparse.Namespace) -> int:
+    from .logs import read_log
+    from .pipeline import Settings, identify, write_robot
+
+    prior_file = Path(args.robot) if args.robot else DEFAULT_ROBOT_TOML
+    prior = Model.from_toml(prior_file)
+    settings = Settings(derivatives=args.derivatives, cutoff=args.cutoff,
+                        friction_method=args.friction_method, weighting=args.weighting,
+                        v_min=args.v_min)
+    friction = read_log(args.friction_log, friction=True) if args.friction_log else None
+    result = identify(read_log(args.log), prior, friction, settings)
+    write_robot(result, Path(args.out), prior_file)
+    report: dict[str, Any] = result.report()
+    est = result.base.wls if settings.weighting == "wls" else result.base.ls
+    print(f"cond(W) = {result.base.cond:.1f} from {result.base.rows} rows; {est.method}:")
+    for k, (p, s) in enumerate(zip(est.p, est.std, strict=True)):
+        print(f"  p{k + 1:<2} = {p: .6g} +/- {1.96 * s:.2g} (95 %)")
+    if args.validate:
+        from .validation import validate_writing
+
+        tables = tomllib.loads(prior_file.read_text())
+        report["writing"] = validate_writing(prior, result.model, tables["control"],
+                                             tables.get("writing"))
+        ratio = report["writing"]["tip_error_ratio"]
+        print(f"writing task: tip error ratio identified/prior {ratio:.2f}")
+    if args.report:
+        Path(args.report).write_text(json.dumps(report, indent=2) + "\n")
+    print(f"identified robot written to {args.out}")
+    return 0
+
+
+def _cmd_experiment(args: argparse.Namespace) -> int:
+    from . import experiments as ex
+    from .excitation import design_excitation
+
+    model = Model.from_toml(args.robot) if args.robot else Model.default()
+    sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
+    traj.to_json(out / "excitation.json")
+    note = f"simulated, sensors: {sensors}"
+    ex.friction_experiment(model, sensors=sensors).to_csv(out / "friction.csv", note)
+    ex.excitation_experiment(model, traj, args.periods, sensors=sensors).to_csv(
+        out / "excitation.csv", f"{note}; cond(W) = {cond:.2f}")
+    print(f"cond(W) of the excitation: {cond:.2f}; logs in {out}/ (friction.csv, "
+          "excitation.csv, excitation.json)")
+    return 0
+
+
+def register_cli(sub: Any) -> None:
+    """Add the identification subcommands to the ``rrr`` parser's subparsers."""
+    p = sub.add_parser(
+        "identify", help="identify friction and the 16 base parameters from logs",
+        description="Estimate eq 9 friction from a constant-velocity sweep log and the base "
+        "parameters p from an excitation log (CSV, columns documented in "
+        "rrr_robot.identify.logs) and write a robot TOML with [base_parameters] and [friction].")
+    p.add_argument("--log", required=True, help="excitation log CSV (t, q[i], u[i])")
+    p.add_argument("--friction-log", help="friction sweep CSV (adds column joint); without "
+                   "it the prior's friction is used")
+    p.add_argument("--robot", help="prior robot TOML: kinematics, k_t, u_max (default: packaged)")
+    p.add_argument("--out", required=True, help="identified robot TOML to write")
+    p.add_argument("--derivatives", choices=("butter", "savgol", "log"), default="butter",
+                   help="zero-phase Butterworth, Savitzky-Golay, or the logged qd/qdd")
+    p.add_argument("--cutoff", type=float, default=15.0, help="filter cutoff, Hz (default 15)")
+    p.add_argument("--friction-method", choices=("nls", "ls"), default="nls",
+                   help="nls: f, w, b; ls: f, b with the prior's w")
+    p.add_argument("--weighting", choices=("ls", "wls"), default="ls",
+                   help="ls (default; honest 95 %% intervals) or wls (one noise level per joint)")
+    p.add_argument("--v-min", type=float, default=0.05,
+                   help="drop rows of joints slower than this, rad/s")
+    p.add_argument("--report", help="write the figures of merit as JSON")
+    p.add_argument("--validate", action="store_true",
+                   help="run the writing task with the prior and the identified model")
+    p.set_defaults(func=_cmd_identify)
+    e = sub.add_parser(
+        "identify-experiment", help="simulate friction and excitation logs on the plant FMU",
+        description="Design an excitation, run the friction sweep and the excitation on the "
+        "plant FMU with encoder quantisation and noise, and write the logs.")
+    e.add_argument("--out", required=True, help="output folder")
+    e.add_argument("--robot", help="true robot TOML (default: packaged)")
+    e.add_argument("--noise-free", action="store_true", help="ideal sensors (logs qd, qdd)")
+    e.add_argument("--seed", type=int, default=1)
+    e.add_argument("--periods", type=int, default=1, help="excitation periods of 10 s")
+    e.set_defaults(func=_cmd_experiment)

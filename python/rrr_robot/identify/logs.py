@@ -1,0 +1,136 @@
+"""Identification logs: CSV files with documented columns, read and validated.
+
+Format (one header row of column names, then one row per sample; lines starting with ``#``
+are comments; extra columns are ignored):
+
+==========  =======  ==========================================================================
+column      unit     meaning
+==========  =======  ==========================================================================
+t           s        sample time, strictly increasing, uniform sampling (1 kHz typical)
+q[1..3]     rad      measured joint positions (encoder), unwrapped
+u[1..3]     V        motor voltages commanded to the current inverters (eq 10), not saturated
+qd[1..3]    rad/s    optional: measured joint velocities (used only with derivatives="log")
+qdd[1..3]   rad/s^2  optional: measured joint accelerations (likewise)
+joint       -        friction logs only: the joint (1, 2 or 3) driven at constant velocity in
+                     this row while the other two are held still; 0 marks rows to ignore
+==========  =======  ==========================================================================
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._arrays import FloatArray
+from ..errors import BadInputError
+
+log = logging.getLogger(__name__)
+
+J = (1, 2, 3)
+REQUIRED = ("t", *(f"q[{i}]" for i in J), *(f"u[{i}]" for i in J))
+OPTIONAL = (*(f"qd[{i}]" for i in J), *(f"qdd[{i}]" for i in J), "joint")
+MIN_SAMPLES = 200
+
+
+@dataclass(frozen=True)
+class Log:
+    """One experiment: uniformly sampled time, positions and voltages (+ optional columns)."""
+
+    t: FloatArray                      # (n,)
+    q: FloatArray                      # (n, 3)
+    u: FloatArray                      # (n, 3)
+    qd: FloatArray | None = None       # (n, 3) if logged
+    qdd: FloatArray | None = None
+    joint: np.ndarray | None = None    # (n,) int, friction logs
+    source: str = field(default="log", compare=False)
+
+    @property
+    def dt(self) -> float:
+        return float(self.t[1] - self.t[0])
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    def select(self, mask: np.ndarray) -> Log:
+        """The rows where mask is true (sampling becomes non-uniform only if mask has gaps)."""
+        pick = (lambda a: None if a is None else a[mask])  # noqa: E731
+        return Log(self.t[mask], self.q[mask], self.u[mask], pick(self.qd), pick(self.qdd),
+                   pick(self.joint), self.source)
+
+    def to_csv(self, path: str | Path, comment: str = "") -> None:
+        """Write in the documented format (optional columns only if present)."""
+        cols: dict[str, FloatArray] = {"t": self.t}
+        for name in ("q", "u", "qd", "qdd"):
+            arr = getattr(self, name)
+            if arr is not None:
+                cols |= {f"{name}[{i}]": arr[:, i - 1] for i in J}
+        if self.joint is not None:
+            cols["joint"] = self.joint.astype(float)
+        with Path(path).open("w", newline="") as fh:
+            for line in comment.splitlines():
+                fh.write(f"# {line}\n")
+            writer = csv.writer(fh)
+            writer.writerow(cols)
+            writer.writerows(np.column_stack(list(cols.values())).tolist())
+
+
+def _header(path: Path) -> tuple[list[str], int]:
+    with path.open(newline="") as fh:
+        for lineno, line in enumerate(fh):
+            if line.strip() and not line.lstrip().startswith("#"):
+                return [c.strip() for c in next(csv.reader([line]))], lineno
+    raise BadInputError(f"{path}: no header row (expected columns {', '.join(REQUIRED)})")
+
+
+def read_log(path: str | Path, *, friction: bool = False) -> Log:
+    """Read and validate a CSV log; BadInputError names the file and the problem."""
+    path = Path(path)
+    if not path.is_file():
+        raise BadInputError(f"log {path} does not exist")
+    names, skip = _header(path)
+    need = REQUIRED + (("joint",) if friction else ())
+    missing = [c for c in need if c not in names]
+    if missing:
+        raise BadInputError(f"{path}: missing column(s) {', '.join(missing)} "
+                            f"(required: {', '.join(need)})")
+    try:
+        data = np.loadtxt(path, delimiter=",", skiprows=skip + 1, comments="#", ndmin=2)
+    except ValueError as exc:
+        raise BadInputError(f"{path}: not a numeric CSV table: {exc}") from exc
+    if data.shape[1] != len(names):
+        raise BadInputError(f"{path}: {data.shape[1]} values per row but {len(names)} columns")
+    col = {n: data[:, k] for k, n in enumerate(names)}
+    stack = (lambda s: np.column_stack([col[f"{s}[{i}]"] for i in J])  # noqa: E731
+             if all(f"{s}[{i}]" in col for i in J) else None)
+    joint = col["joint"].astype(int) if "joint" in col else None
+    return validate(Log(col["t"], stack("q"), stack("u"), stack("qd"), stack("qdd"), joint,
+                        str(path)))
+
+
+def validate(lg: Log) -> Log:
+    """Check NaN/Inf, length, monotonic uniform time; raises BadInputError naming the problem."""
+    n = len(lg)
+    for name in ("t", "q", "u", "qd", "qdd"):
+        arr = getattr(lg, name)
+        if arr is None:
+            continue
+        bad = ~np.isfinite(arr).reshape(n, -1).all(axis=1)
+        if bad.any():
+            rows = np.flatnonzero(bad)
+            raise BadInputError(f"{lg.source}: {bad.sum()} row(s) with NaN or Inf in {name} "
+                                f"(first at data row {rows[0] + 1}, t = {lg.t[rows[0]]})")
+    if n < MIN_SAMPLES:
+        raise BadInputError(f"{lg.source}: too short: {n} samples, need at least {MIN_SAMPLES}")
+    dt = np.diff(lg.t)
+    if np.any(dt <= 0):
+        raise BadInputError(f"{lg.source}: time column t is not strictly increasing")
+    if not np.allclose(dt, dt[0], rtol=1e-3, atol=1e-9):
+        raise BadInputError(f"{lg.source}: non-uniform sampling (dt from {dt.min():.3g} to "
+                            f"{dt.max():.3g} s); resample the log first")
+    if lg.joint is not None and not np.isin(lg.joint, (0, *J)).all():
+        raise BadInputError(f"{lg.source}: column joint must hold 0, 1, 2 or 3")
+    return lg

@@ -1,0 +1,116 @@
+"""Identification end to end: friction log + excitation log + prior robot file -> robot file.
+
+The prior robot file supplies what is not identified (kinematics, g, k_t, u_max, [control],
+[writing]); the written file has the identified ``[base_parameters] p`` and ``[friction]``
+tables, readable by Model.from_toml, the core and both FMUs (writing.model_fmu_values), plus an
+``[identification]`` table with the standard deviations and figures of merit.
+"""
+
+from __future__ import annotations
+
+import logging
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ModelError
+from ..model import Model
+from ..robot_file import write_toml
+from .base_params import BaseParamResult, estimate_base_params
+from .friction import FrictionFit, curve_points, fit_ls, fit_nls
+from .logs import Log
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class Settings:
+    derivatives: str = "butter"     # butter | savgol | log
+    cutoff: float = 15.0            # Hz, excitation log
+    friction_cutoff: float = 5.0    # Hz, friction log
+    friction_method: str = "nls"    # nls (f, w, b) | ls (w fixed from the prior)
+    weighting: str = "ls"           # ls | wls (WLS intervals are optimistic, see report)
+    v_min: float = 0.05             # rad/s
+
+
+@dataclass(frozen=True)
+class Identified:
+    model: Model
+    friction: list[FrictionFit] | None
+    base: BaseParamResult
+
+    def report(self) -> dict[str, Any]:
+        est = self.base.wls if self.model_uses_wls else self.base.ls
+        other = self.base.ls if self.model_uses_wls else self.base.wls
+        out: dict[str, Any] = {
+            "p": est.p.tolist(), "p_std": est.std.tolist(), "estimator": est.method,
+            "cond": self.base.cond, "rows": self.base.rows,
+            "residual_std_Nm": est.sigma.tolist(),
+            f"p_{other.method}": other.p.tolist(), f"p_std_{other.method}": other.std.tolist(),
+        }
+        if self.friction:
+            out["friction_method"] = self.friction[0].method
+            out["friction_residual_rms_V"] = [f.residual_rms for f in self.friction]
+            out["friction_residual_max_V"] = [f.residual_max for f in self.friction]
+        return out
+
+    @property
+    def model_uses_wls(self) -> bool:
+        return bool(np.array_equal(self.model.p, self.base.wls.p))
+
+
+def identify_friction(lg: Log, prior: Model, settings: Settings = Settings(),
+                      ) -> list[FrictionFit]:
+    """One fit per joint (eq 9) from a sweep log."""
+    method = "log" if settings.derivatives == "log" else "butter"
+    fits = []
+    for j in (1, 2, 3):
+        pts = curve_points(lg, j, prior, settings.friction_cutoff, method)
+        fit = fit_nls(pts) if settings.friction_method == "nls" else fit_ls(pts, prior.w[j - 1])
+        log.info("friction joint %d (%s): f %s, w %s, b %.5g; residual rms %.2e V", j,
+                 fit.method, np.array2string(fit.f, precision=5),
+                 np.array2string(fit.w, precision=4), fit.b, fit.residual_rms)
+        fits.append(fit)
+    return fits
+
+
+def identify(excitation: Log, prior: Model, friction: Log | None = None,
+             settings: Settings = Settings()) -> Identified:
+    """Friction (if a sweep log is given; otherwise the prior's) then the base parameters."""
+    fits = identify_friction(friction, prior, settings) if friction is not None else None
+    model = prior
+    if fits is not None:
+        model = prior.with_params(f=np.array([f.f for f in fits]),
+                                  w=np.array([f.w for f in fits]),
+                                  b=np.array([f.b for f in fits]))
+    base = estimate_base_params(excitation, model, settings.derivatives, settings.cutoff,
+                                settings.v_min)
+    est = base.wls if settings.weighting == "wls" else base.ls
+    try:
+        model = model.with_params(p=est.p)
+    except ModelError as exc:
+        raise ModelError(f"the identified parameters give an invalid model ({exc}); the "
+                         "excitation is probably too weak") from exc
+    return Identified(model, fits, base)
+
+
+def write_robot(result: Identified, path: Path, prior_file: Path | None = None) -> None:
+    """The identified robot file; tables of the prior file that are not identified (control,
+    writing, ...) are carried over."""
+    tables: dict[str, Any] = {}
+    if prior_file is not None:
+        with Path(prior_file).open("rb") as fh:
+            tables = tomllib.load(fh)
+        for drop in ("link1", "link2", "link3", "base_parameters", "friction", "identification"):
+            tables.pop(drop, None)
+        tables.get("motors", {}).pop("rotor_inertia", None)
+    ident = result.model.to_dict()
+    for name, table in ident.items():
+        tables[name] = tables.get(name, {}) | table
+    tables["identification"] = {k: v for k, v in result.report().items()}
+    header = ("Identified by rrr identify: [base_parameters] and [friction] estimated from logs;\n"
+              "[identification] holds p_std (1 sigma) and figures of merit.")
+    write_toml(tables, Path(path), header=header)

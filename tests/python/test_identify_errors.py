@@ -1,0 +1,87 @@
+"""Bad identification input gives a BadInputError naming the problem."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rrr_robot.errors import BadInputError
+from rrr_robot.identify.base_params import estimate_base_params
+from rrr_robot.identify.friction import CurvePoints, fit_nls
+from rrr_robot.identify.logs import Log, read_log
+from rrr_robot.model import Model
+
+MODEL = Model.default()
+
+
+def fake_log(n: int = 2000, moving: tuple[int, ...] = (0, 1, 2)) -> Log:
+    t = np.arange(n) * 1e-3
+    q = np.zeros((n, 3))
+    for i in moving:
+        q[:, i] = 0.5 * np.sin(2 * np.pi * (0.5 + 0.3 * i) * t + i) + 0.3 * np.sin(5 * t * (i + 1))
+    u = np.random.default_rng(0).normal(size=(n, 3))
+    return Log(t, q, u, source="fake")
+
+
+def write(path: Path, header: str, rows: np.ndarray) -> Path:
+    path.write_text(header + "\n" + "\n".join(",".join(map(str, r)) for r in rows) + "\n")
+    return path
+
+
+def test_missing_column(tmp_path: Path) -> None:
+    p = write(tmp_path / "a.csv", "t,q[1],q[2],q[3],u[1],u[2]", np.zeros((300, 6)))
+    with pytest.raises(BadInputError, match=r"missing column\(s\) u\[3\]"):
+        read_log(p)
+
+
+def test_friction_log_needs_joint(tmp_path: Path) -> None:
+    lg = fake_log()
+    lg.to_csv(tmp_path / "a.csv")
+    with pytest.raises(BadInputError, match=r"missing column.*joint"):
+        read_log(tmp_path / "a.csv", friction=True)
+
+
+def test_nan_rows(tmp_path: Path) -> None:
+    lg = fake_log()
+    lg.u[17, 1] = np.nan
+    lg.to_csv(tmp_path / "a.csv")
+    with pytest.raises(BadInputError, match=r"NaN or Inf in u.*data row 18"):
+        read_log(tmp_path / "a.csv")
+
+
+def test_too_short(tmp_path: Path) -> None:
+    fake_log(50).to_csv(tmp_path / "a.csv")
+    with pytest.raises(BadInputError, match="too short: 50 samples"):
+        read_log(tmp_path / "a.csv")
+
+
+def test_non_uniform_time(tmp_path: Path) -> None:
+    lg = fake_log()
+    lg.t[500:] += 0.01
+    lg.to_csv(tmp_path / "a.csv")
+    with pytest.raises(BadInputError, match="non-uniform sampling"):
+        read_log(tmp_path / "a.csv")
+
+
+def test_not_a_file() -> None:
+    with pytest.raises(BadInputError, match="does not exist"):
+        read_log("/nonexistent/log.csv")
+
+
+def test_rank_deficient_names_parameters() -> None:
+    with pytest.raises(BadInputError, match=r"not exciting enough.*p1"):
+        estimate_base_params(fake_log(moving=(1, 2)), MODEL)
+
+
+def test_too_slow() -> None:
+    lg = fake_log()
+    slow = Log(lg.t, 1e-4 * lg.q, lg.u, source="slow")
+    with pytest.raises(BadInputError, match="too short or too slow"):
+        estimate_base_params(slow, MODEL)
+
+
+def test_too_few_friction_levels() -> None:
+    pts = CurvePoints(np.array([0.1, 0.2, 0.5]), np.array([0.1, 0.11, 0.12]))
+    with pytest.raises(BadInputError, match="sweep at least 8 speeds"):
+        fit_nls(pts)

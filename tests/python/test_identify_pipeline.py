@@ -1,0 +1,128 @@
+"""Identification (issue 4) on simulated plant-FMU experiments: noise-free recovery, 95 %
+intervals with quantisation and noise, the writing task with identified parameters, the CLI."""
+
+from __future__ import annotations
+
+import argparse
+import tomllib
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rrr_robot.identify import experiments as ex
+from rrr_robot.identify.base_params import estimate_base_params
+from rrr_robot.identify.cli import register_cli
+from rrr_robot.identify.excitation import (
+    ExcitationLimits,
+    FourierTrajectory,
+    design_excitation,
+    stacked_regressor,
+)
+from rrr_robot.identify.pipeline import Settings, identify, write_robot
+from rrr_robot.identify.validation import validate_writing
+from rrr_robot.model import DEFAULT_ROBOT_TOML, Model
+
+TRUE = Model.default()
+#: a prior that is wrong in p and friction: only kinematics, g, k_t, u_max are taken from it
+PRIOR = TRUE.with_params(p=TRUE.p * 1.3, f=TRUE.f * 0.5, w=TRUE.w * 0.7, b=TRUE.b * 2)
+SWEEP = ex.SweepDesign(cruise=1.2, settle=0.4)
+
+
+def rel_err(est: np.ndarray, true: np.ndarray, floor: float) -> np.ndarray:
+    """Relative error, absolute where |true| < floor."""
+    err = np.abs(est - true)
+    return np.where(np.abs(true) > floor, err / np.maximum(np.abs(true), floor), err)
+
+
+@pytest.fixture(scope="module")
+def traj() -> tuple[FourierTrajectory, float]:
+    return design_excitation(PRIOR, np.array(SWEEP.pose), maxiter=30, seed=0)
+
+
+@pytest.fixture(scope="module")
+def ideal_logs(traj: tuple[FourierTrajectory, float]) -> tuple:
+    return (ex.friction_experiment(TRUE, SWEEP, sensors=ex.IDEAL),
+            ex.excitation_experiment(TRUE, traj[0], sensors=ex.IDEAL))
+
+
+@pytest.fixture(scope="module")
+def noisy_logs(traj: tuple[FourierTrajectory, float]) -> tuple:
+    return (ex.friction_experiment(TRUE, SWEEP, sensors=ex.NOISY),
+            ex.excitation_experiment(TRUE, traj[0], sensors=replace(ex.NOISY, seed=2)))
+
+
+def test_excitation_within_limits_and_well_conditioned(traj) -> None:
+    trajectory, cond = traj
+    lim = ExcitationLimits()
+    t = np.linspace(0, trajectory.period, 2000)
+    q, qd, qdd = trajectory.evaluate(t)
+    assert np.all(np.abs(q - trajectory.q0) <= lim.q_amp * 1.01)
+    assert np.all(np.abs(qd) <= lim.qd_max * 1.01)
+    assert np.all(np.abs(qdd) <= lim.qdd_max * 1.01)
+    assert cond < 20
+    assert np.isclose(np.linalg.cond(stacked_regressor(PRIOR, trajectory)), cond)
+    u = TRUE.nominal_voltage(q, qd, qdd)
+    assert np.max(np.abs(u)) < 0.7 * TRUE.u_max
+
+
+def test_noise_free_recovery(ideal_logs) -> None:
+    fric, exc = ideal_logs
+    res = identify(exc, PRIOR, fric, Settings(derivatives="log"))
+    assert np.max(rel_err(res.model.p, TRUE.p, 1e-6)) < 1e-3
+    for i, fit in enumerate(res.friction):
+        assert np.max(rel_err(np.r_[fit.f, fit.w, fit.b],
+                              np.r_[TRUE.f[i], TRUE.w[i], TRUE.b[i]], 1e-9)) < 0.01, fit
+
+
+def test_noise_free_recovery_through_filters(ideal_logs) -> None:
+    _, exc = ideal_logs
+    exc = replace(exc, qd=None, qdd=None)       # positions only, as from an encoder
+    res = estimate_base_params(exc, TRUE, method="savgol", cutoff=50.0)
+    assert np.max(rel_err(res.ls.p, TRUE.p, 1e-6)) < 1e-3
+
+
+def test_friction_ls_with_w_fixed(ideal_logs) -> None:
+    fric, _ = ideal_logs
+    res = identify(ideal_logs[1], TRUE, fric, Settings(derivatives="log", friction_method="ls"))
+    for i, fit in enumerate(res.friction):
+        np.testing.assert_allclose(fit.f, TRUE.f[i], rtol=0.01)
+        assert fit.residual_rms < 1e-4
+
+
+def test_noisy_intervals_and_writing(noisy_logs) -> None:
+    fric, exc = noisy_logs
+    assert exc.qd is None and fric.qd is None
+    res = identify(exc, PRIOR, fric)
+    est = res.base.ls
+    assert np.array_equal(res.model.p, est.p)     # the default estimator
+    inside = np.abs(est.p - TRUE.p) <= 1.96 * est.std
+    assert inside.sum() >= 15, (est.p - TRUE.p) / est.std
+    tables = tomllib.loads(DEFAULT_ROBOT_TOML.read_text())
+    val = validate_writing(TRUE, res.model, tables["control"], tables["writing"])
+    assert val["tip_error_ratio"] < 2.0
+    assert max(val["rms_u_n_error"]) < 0.05 * max(val["rms_u_n_true"])
+
+
+def test_cli_writes_robot_file(tmp_path: Path, noisy_logs) -> None:
+    fric, exc = noisy_logs
+    fric.to_csv(tmp_path / "friction.csv")
+    exc.to_csv(tmp_path / "excitation.csv", "simulated")
+    parser = argparse.ArgumentParser()
+    register_cli(parser.add_subparsers(dest="command"))
+    out = tmp_path / "identified.toml"
+    args = parser.parse_args(["identify", "--log", str(tmp_path / "excitation.csv"),
+                              "--friction-log", str(tmp_path / "friction.csv"),
+                              "--out", str(out), "--report", str(tmp_path / "r.json")])
+    assert args.func(args) == 0
+    model = Model.from_toml(out)
+    assert np.max(np.abs(model.p - TRUE.p)) < 0.05
+    data = tomllib.loads(out.read_text())
+    assert {"base_parameters", "friction", "control", "identification"} <= set(data)
+    assert len(data["identification"]["p_std"]) == 16
+
+
+def test_write_robot_roundtrip(tmp_path: Path, ideal_logs) -> None:
+    res = identify(ideal_logs[1], PRIOR, None, Settings(derivatives="log"))
+    write_robot(res, tmp_path / "r.toml")
+    np.testing.assert_allclose(Model.from_toml(tmp_path / "r.toml").p, res.model.p)
