@@ -485,7 +485,7 @@ def report(
         f"{t['loop.empty']:.1f} ns, not subtracted)")
     add(f"- libm floor in the same driver: sin + cos of q2 and q3 as in rrr_trig_of "
         f"(two sincos calls) {t['floor.trig']:.1f} ns, one atan2 {t['floor.atan2']:.1f} ns "
-        "(`rrr_ik` calls atan2 12 times, `rrr_ik_branch` 3 times)")
+        f"(`rrr_ik` calls atan2 {ik_all.atan2} times, `rrr_ik_branch` {ik_one.atan2} times)")
     if "kernel.tau" in t:
         add(f"- diagnostic: the tau kernel alone (rrr_trig_of + generated code, no argument "
             f"checks, called from the driver) {t['kernel.tau']:.1f} ns of the "
