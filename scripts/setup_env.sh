@@ -10,4 +10,4 @@ fi
 # shellcheck disable=SC1091
 . .venv/bin/activate
 python -m pip install --quiet --upgrade pip
-python -m pip install --quiet "${RRR_PIP_TARGET:-.}"
+python -m pip install --quiet "${RRR_PIP_TARGET:-.[verify]}"
