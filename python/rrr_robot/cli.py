@@ -90,6 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .identify.cli import register_cli as register_identify
 
     register_identify(sub)
+    from .hil import register_cli as register_hil
+
+    register_hil(sub)
     return parser
 
 

@@ -1,0 +1,356 @@
+/* Shared pieces of the bench nodes (see hil_node.h). */
+#define _GNU_SOURCE /* prctl(PR_SET_TIMERSLACK), sched_setscheduler */
+
+#include "hil_node.h"
+
+#include <errno.h>
+#include <math.h>
+#include <sched.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/prctl.h>
+
+#include "hil_codec.h"
+
+/* ---- command line ---------------------------------------------------------------------------- */
+
+int rrr_hil_parse_hostport(const char *s, char host[64], uint16_t *port)
+{
+    const char *colon = strrchr(s, ':');
+    if (colon == NULL || colon == s || (size_t)(colon - s) >= 64u) {
+        return -1;
+    }
+    char *end;
+    errno = 0;
+    const unsigned long p = strtoul(colon + 1, &end, 10);
+    if (errno != 0 || end == colon + 1 || *end != '\0' || p > 65535ul) {
+        return -1;
+    }
+    memcpy(host, s, (size_t)(colon - s));
+    host[colon - s] = '\0';
+    *port = (uint16_t)p;
+    return 0;
+}
+
+int rrr_hil_parse_vec3(const char *s, double v[3])
+{
+    const char *p = s;
+    for (int i = 0; i < 3; ++i) {
+        char *end;
+        errno = 0;
+        const double x = strtod(p, &end);
+        if (end == p || errno != 0 || !isfinite(x) || *end != (i < 2 ? ',' : '\0')) {
+            return -1;
+        }
+        v[i] = x;
+        p = end + 1;
+    }
+    return 0;
+}
+
+int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog)
+{
+    const char *a = argv[*i];
+    const int is_listen = strcmp(a, "--listen") == 0;
+    const int is_connect = strcmp(a, "--connect") == 0;
+    const int is_sc = strcmp(a, "--socketcan") == 0;
+    const int is_channel = strcmp(a, "--channel") == 0;
+    if (!is_listen && !is_connect && !is_sc && !is_channel) {
+        return 0;
+    }
+    if (*i + 1 >= argc) {
+        fprintf(stderr, "%s: %s needs a value\n", prog, a);
+        return -1;
+    }
+    const char *v = argv[++*i];
+    if (is_channel) {
+        if (strlen(v) == 0u || strlen(v) >= sizeof o->channel) {
+            fprintf(stderr, "%s: --channel: 1..31 characters\n", prog);
+            return -1;
+        }
+        strcpy(o->channel, v);
+        return 1;
+    }
+    if (o->kind != 0) {
+        fprintf(stderr, "%s: give only one of --listen, --connect, --socketcan\n", prog);
+        return -1;
+    }
+    if (is_sc) {
+        if (strlen(v) == 0u || strlen(v) >= sizeof o->ifname) {
+            fprintf(stderr, "%s: --socketcan: bad interface name '%s'\n", prog, v);
+            return -1;
+        }
+        strcpy(o->ifname, v);
+        o->kind = 3;
+        return 1;
+    }
+    if (rrr_hil_parse_hostport(v, o->host, &o->port) != 0) {
+        fprintf(stderr, "%s: %s: expected HOST:PORT (e.g. 127.0.0.1:29536), got '%s'\n", prog, a,
+                v);
+        return -1;
+    }
+    o->kind = is_listen ? 1 : 2;
+    return 1;
+}
+
+int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_t *rx_ids,
+                      unsigned n_rx, const char *prog)
+{
+    const char *channel = o->channel[0] ? o->channel : "bench0";
+    int rc;
+    switch (o->kind) {
+    case 1:
+        rc = rrr_hil_scd_listen(&l->scd, o->host, o->port, channel);
+        if (rc == 0) {
+            printf("%s: listening on %s:%u (socketcand, bus %s)\n", prog, o->host,
+                   (unsigned)l->scd.port, channel);
+            fflush(stdout);
+        }
+        break;
+    case 2:
+        rc = rrr_hil_scd_connect(&l->scd, o->host, o->port, channel,
+                                 o->connect_wait_ms > 0 ? o->connect_wait_ms : 5000);
+        break;
+    case 3:
+        rc = rrr_hil_socketcan_open(&l->sc, o->ifname, rx_ids, n_rx);
+        break;
+    default:
+        fprintf(stderr, "%s: no transport: give --listen HOST:PORT, --connect HOST:PORT or "
+                        "--socketcan IF\n", prog);
+        return -1;
+    }
+    if (rc != 0) {
+        fprintf(stderr, "%s: %s\n", prog, l->base.last_error);
+        return -1;
+    }
+    return 0;
+}
+
+void rrr_hil_link_json(FILE *out, const rrr_hil_transport *t)
+{
+    const rrr_hil_transport_err *e = &t->err;
+    fprintf(out,
+            "\"transport\": \"%s\", \"rx_frames\": %llu, \"tx_frames\": %llu, "
+            "\"rx_malformed\": %u, \"tx_dropped\": %u, \"tx_failed\": %u, \"bus_off\": %u, "
+            "\"bus_errors\": %u, \"disconnects\": %u, \"connects\": %u",
+            t->name ? t->name : "", (unsigned long long)e->rx_frames,
+            (unsigned long long)e->tx_frames, e->rx_malformed, e->tx_dropped, e->tx_failed,
+            e->bus_off, e->bus_errors, e->disconnects, e->connects);
+}
+
+/* ---- real time ------------------------------------------------------------------------------- */
+
+static int64_t ts_ns(const struct timespec *t)
+{
+    return (int64_t)t->tv_sec * 1000000000 + t->tv_nsec;
+}
+
+static void ts_add(struct timespec *t, int64_t ns)
+{
+    const int64_t v = ts_ns(t) + ns;
+    t->tv_sec = (time_t)(v / 1000000000);
+    t->tv_nsec = (long)(v % 1000000000);
+}
+
+int rrr_hil_rt_init(rrr_hil_rt *rt, double period_s, uint32_t max_periods, int fifo_prio, int lock)
+{
+    memset(rt, 0, sizeof *rt);
+    rt->period_ns = (int64_t)llround(period_s * 1e9);
+    rt->cap = max_periods;
+    rt->lat_ns = calloc(max_periods > 0u ? max_periods : 1u, sizeof *rt->lat_ns);
+    if (rt->lat_ns == NULL) {
+        return -1;
+    }
+    int n = snprintf(rt->setup, sizeof rt->setup, "timer slack 1 ns: %s",
+                     prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL) == 0 ? "yes" : strerror(errno));
+    if (lock) {
+        n += snprintf(rt->setup + n, sizeof rt->setup - (size_t)n, "; mlockall: %s",
+                      mlockall(MCL_CURRENT | MCL_FUTURE) == 0 ? "yes" : strerror(errno));
+    }
+    if (fifo_prio > 0) {
+        struct sched_param sp;
+        memset(&sp, 0, sizeof sp);
+        sp.sched_priority = fifo_prio;
+        snprintf(rt->setup + n, sizeof rt->setup - (size_t)n, "; SCHED_FIFO %d: %s", fifo_prio,
+                 sched_setscheduler(0, SCHED_FIFO, &sp) == 0 ? "yes" : strerror(errno));
+    }
+    clock_gettime(CLOCK_MONOTONIC, &rt->next);
+    ts_add(&rt->next, rt->period_ns);
+    return 0;
+}
+
+void rrr_hil_rt_shift(rrr_hil_rt *rt, double shift_s)
+{
+    ts_add(&rt->next, (int64_t)llround(shift_s * 1e9));
+}
+
+void rrr_hil_rt_wait(rrr_hil_rt *rt)
+{
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &rt->next, NULL) == EINTR) {
+    }
+    clock_gettime(CLOCK_MONOTONIC, &rt->woke);
+    if (rt->n < rt->cap) {
+        rt->lat_ns[rt->n++] = ts_ns(&rt->woke) - ts_ns(&rt->next);
+    }
+}
+
+void rrr_hil_rt_done(rrr_hil_rt *rt)
+{
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    const int64_t work = ts_ns(&now) - ts_ns(&rt->woke);
+    if (work > rt->work_max_ns) {
+        rt->work_max_ns = work;
+    }
+    ts_add(&rt->next, rt->period_ns);
+    if (ts_ns(&now) > ts_ns(&rt->next)) {
+        ++rt->misses;
+        /* catch up: skip the releases already past instead of bursting through them */
+        while (ts_ns(&now) > ts_ns(&rt->next)) {
+            ts_add(&rt->next, rt->period_ns);
+            ++rt->skipped;
+        }
+    }
+}
+
+static int cmp_i64(const void *a, const void *b)
+{
+    const int64_t x = *(const int64_t *)a;
+    const int64_t y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+void rrr_hil_rt_report(rrr_hil_rt *rt, FILE *out, const char *prog)
+{
+    double p50 = 0.0, p99 = 0.0, mx = 0.0;
+    if (rt->n > 0u) {
+        qsort(rt->lat_ns, rt->n, sizeof *rt->lat_ns, cmp_i64);
+        p50 = (double)rt->lat_ns[(rt->n - 1u) / 2u] * 1e-3;
+        p99 = (double)rt->lat_ns[(uint32_t)((double)(rt->n - 1u) * 0.99)] * 1e-3;
+        mx = (double)rt->lat_ns[rt->n - 1u] * 1e-3;
+    }
+    fprintf(stderr,
+            "%s: real time: %u periods of %.0f us; wake-up latency p50 %.1f us, p99 %.1f us, "
+            "max %.1f us; %u deadline misses (%u releases skipped); longest work %.1f us; %s\n",
+            prog, rt->n, (double)rt->period_ns * 1e-3, p50, p99, mx, rt->misses, rt->skipped,
+            (double)rt->work_max_ns * 1e-3, rt->setup);
+    fprintf(out,
+            "\"rt_periods\": %u, \"rt_latency_p50_us\": %.3f, \"rt_latency_p99_us\": %.3f, "
+            "\"rt_latency_max_us\": %.3f, \"rt_deadline_misses\": %u, \"rt_skipped\": %u, "
+            "\"rt_work_max_us\": %.3f, \"rt_setup\": \"%s\"",
+            rt->n, p50, p99, mx, rt->misses, rt->skipped, (double)rt->work_max_ns * 1e-3,
+            rt->setup);
+}
+
+void rrr_hil_rt_free(rrr_hil_rt *rt)
+{
+    free(rt->lat_ns);
+    rt->lat_ns = NULL;
+}
+
+/* ---- reference table ------------------------------------------------------------------------- */
+
+static const char *const REF_HEADER =
+    "t,q_ref[1],q_ref[2],q_ref[3],qd_ref[1],qd_ref[2],qd_ref[3],qdd_ref[1],qdd_ref[2],qdd_ref[3]";
+
+void rrr_hil_reference_free(rrr_hil_reference *r)
+{
+    free(r->t);
+    free(r->q);
+    free(r->qd);
+    free(r->qdd);
+    memset(r, 0, sizeof *r);
+}
+
+static int grow(rrr_hil_reference *r, size_t cap)
+{
+    double *t = realloc(r->t, cap * sizeof *r->t);
+    if (t != NULL) {
+        r->t = t;
+    }
+    double(*q)[3] = realloc(r->q, cap * sizeof *r->q);
+    if (q != NULL) {
+        r->q = q;
+    }
+    double(*qd)[3] = realloc(r->qd, cap * sizeof *r->qd);
+    if (qd != NULL) {
+        r->qd = qd;
+    }
+    double(*qdd)[3] = realloc(r->qdd, cap * sizeof *r->qdd);
+    if (qdd != NULL) {
+        r->qdd = qdd;
+    }
+    return (t && q && qd && qdd) ? 0 : -1;
+}
+
+int rrr_hil_reference_load(const char *path, rrr_hil_reference *r, char *err, size_t err_len)
+{
+    memset(r, 0, sizeof *r);
+    FILE *fp = fopen(path, "r");
+    if (fp == NULL) {
+        snprintf(err, err_len, "cannot open reference %s: %s", path, strerror(errno));
+        return -1;
+    }
+    char line[1024];
+    size_t cap = 0;
+    long lineno = 1;
+    int rc = 0;
+    if (fgets(line, sizeof line, fp) == NULL || strncmp(line, REF_HEADER, strlen(REF_HEADER)) != 0) {
+        snprintf(err, err_len, "%s:1: expected the header '%s'", path, REF_HEADER);
+        rc = -1;
+    }
+    while (rc == 0 && fgets(line, sizeof line, fp) != NULL) {
+        ++lineno;
+        if (line[0] == '\n' || line[0] == '\0') {
+            continue;
+        }
+        if (r->n == cap) {
+            cap = cap ? 2u * cap : 4096u;
+            if (grow(r, cap) != 0) {
+                snprintf(err, err_len, "%s: out of memory at line %ld", path, lineno);
+                rc = -1;
+                break;
+            }
+        }
+        double v[10];
+        const char *p = line;
+        for (int i = 0; i < 10 && rc == 0; ++i) {
+            char *end;
+            v[i] = strtod(p, &end);
+            const char want = i < 9 ? ',' : '\n';
+            if (end == p || !isfinite(v[i]) || (*end != want && !(i == 9 && *end == '\0') &&
+                                                 !(i == 9 && *end == '\r'))) {
+                snprintf(err, err_len, "%s:%ld: column %d is not a finite number", path, lineno,
+                         i + 1);
+                rc = -1;
+            }
+            p = end + 1;
+        }
+        if (rc != 0) {
+            break;
+        }
+        const size_t k = r->n;
+        r->t[k] = v[0];
+        for (int j = 0; j < 3; ++j) {
+            r->q[k][j] = v[1 + j];
+            r->qd[k][j] = v[4 + j];
+            r->qdd[k][j] = v[7 + j];
+        }
+        if (k > 0u && fabs(r->t[k] - r->t[k - 1u] - RRR_HIL_PERIOD_S) > 1e-6 * RRR_HIL_PERIOD_S) {
+            snprintf(err, err_len, "%s:%ld: t steps by %.17g s; the bench needs %.17g s", path,
+                     lineno, r->t[k] - r->t[k - 1u], RRR_HIL_PERIOD_S);
+            rc = -1;
+        }
+        ++r->n;
+    }
+    fclose(fp);
+    if (rc == 0 && r->n < 2u) {
+        snprintf(err, err_len, "%s: needs at least two samples", path);
+        rc = -1;
+    }
+    if (rc != 0) {
+        rrr_hil_reference_free(r);
+    }
+    return rc;
+}

@@ -1,0 +1,95 @@
+/**
+ * @file hil_node.h
+ * @brief What both bench nodes share: command-line pieces, opening the transport they name,
+ *        the real-time loop with its statistics, and the reference table of the controller.
+ */
+#ifndef RRR_HIL_NODE_H
+#define RRR_HIL_NODE_H
+
+#include <stdint.h>
+#include <stdio.h>
+#include <time.h>
+
+#include "hil_transport.h"
+
+/* ---- transport from the command line --------------------------------------------------------- */
+
+/** Which transport, from --listen HOST:PORT, --connect HOST:PORT or --socketcan IF. */
+typedef struct rrr_hil_link_opts {
+    int kind;          ///< 0 none given, 1 socketcand server, 2 socketcand client, 3 SocketCAN
+    char host[64];     ///< IPv4 address
+    uint16_t port;     ///< TCP port (server: 0 = any free port)
+    char ifname[32];   ///< SocketCAN interface
+    char channel[32];  ///< socketcand bus name (--channel, default "bench0")
+    int connect_wait_ms; ///< client: how long to retry connecting (5000)
+} rrr_hil_link_opts;
+
+/** Storage for any transport. */
+typedef union rrr_hil_link {
+    rrr_hil_transport base;
+    rrr_hil_scd scd;
+    rrr_hil_socketcan sc;
+} rrr_hil_link;
+
+/** Parse "HOST:PORT". 0 or -1. */
+int rrr_hil_parse_hostport(const char *s, char host[64], uint16_t *port);
+/** Parse "a,b,c" into three finite doubles. 0 or -1. */
+int rrr_hil_parse_vec3(const char *s, double v[3]);
+/** Handle a transport option (argv[*i] and its value); 1 consumed, 0 not a transport option,
+ *  -1 bad value (message printed). */
+int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog);
+/** Open the transport; SocketCAN receives only @p rx_ids. Prints "PROG: listening on H:P" for a
+ *  server. 0 or -1 (message printed to stderr). */
+int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_t *rx_ids,
+                      unsigned n_rx, const char *prog);
+/** Print the transport's counters as JSON members (no braces). */
+void rrr_hil_link_json(FILE *out, const rrr_hil_transport *t);
+
+/* ---- real-time loop -------------------------------------------------------------------------- */
+
+/** Periodic loop on CLOCK_MONOTONIC with absolute-time sleeps and its statistics. */
+typedef struct rrr_hil_rt {
+    int64_t period_ns;   ///< period
+    struct timespec next; ///< next release time
+    int64_t *lat_ns;     ///< wake-up latency of each period (heap, cap entries)
+    uint32_t n, cap;     ///< periods recorded, capacity
+    uint32_t misses;     ///< periods whose work ended after the next release (deadline misses)
+    uint32_t skipped;    ///< releases skipped to catch up after a miss
+    int64_t work_max_ns; ///< longest work time of a period
+    struct timespec woke; ///< wake-up time of the current period
+    char setup[160];     ///< what was applied: SCHED_FIFO, mlockall, timer slack (or why not)
+} rrr_hil_rt;
+
+/** Prepare: optional SCHED_FIFO priority (0: no), mlockall, timer slack 1 ns. 0 or -1 (no memory). */
+int rrr_hil_rt_init(rrr_hil_rt *rt, double period_s, uint32_t max_periods, int fifo_prio, int lock);
+/** Move every later release by @p shift_s (phase against another node's loop). */
+void rrr_hil_rt_shift(rrr_hil_rt *rt, double shift_s);
+/** Sleep until the next release (clock_nanosleep TIMER_ABSTIME) and record the latency. */
+void rrr_hil_rt_wait(rrr_hil_rt *rt);
+/** End of the period's work: count a miss if it ended after the next release. */
+void rrr_hil_rt_done(rrr_hil_rt *rt);
+/** Print p50/p99/max latency, misses, as text on stderr and as JSON members on out. */
+void rrr_hil_rt_report(rrr_hil_rt *rt, FILE *out, const char *prog);
+/** Free the statistics buffer. */
+void rrr_hil_rt_free(rrr_hil_rt *rt);
+
+/* ---- reference table ------------------------------------------------------------------------- */
+
+/** Reference samples, one per period: t, q_ref, qd_ref, qdd_ref. */
+typedef struct rrr_hil_reference {
+    size_t n;        ///< samples
+    double *t;       ///< (n,) s
+    double (*q)[3];  ///< (n, 3) rad
+    double (*qd)[3]; ///< (n, 3) rad/s
+    double (*qdd)[3]; ///< (n, 3) rad/s2
+} rrr_hil_reference;
+
+/**
+ * @brief Read a CSV with the header "t,q_ref[1],q_ref[2],q_ref[3],qd_ref[1],...,qdd_ref[3]" and
+ *        one row of 10 numbers per period (uniform step RRR_HIL_PERIOD_S, relative tolerance 1e-6).
+ * @return 0, or -1 with a message naming the line in err.
+ */
+int rrr_hil_reference_load(const char *path, rrr_hil_reference *r, char *err, size_t err_len);
+void rrr_hil_reference_free(rrr_hil_reference *r);
+
+#endif /* RRR_HIL_NODE_H */

@@ -1,0 +1,492 @@
+/*
+ * rrr_hil_plant: the plant node of the CAN bench. Runs the plant FMU (the same rrr_plant binary
+ * the Python co-simulation uses, loaded with dlopen) and exchanges the DBC's frames over a
+ * transport. By default it is the socketcand server the controller (C node or python-can)
+ * connects to.
+ *
+ * Lockstep (default): the plant publishes its state (JointState1..3, PlantStatus) at period 0
+ * after the controller's first frame, then advances exactly one period per Sync frame, applying
+ * the voltage its supervisor decides from the VoltageCmd frames received since the previous
+ * Sync, and publishes the new state. The run ends with the controller's heartbeat "stopped".
+ * Real time: the same every 1 ms of CLOCK_MONOTONIC (clock_nanosleep TIMER_ABSTIME), half a
+ * period out of phase with the controller's loop (which starts with its first frame); Sync
+ * frames are ignored; the run lasts --duration seconds or until the controller stops.
+ *
+ * Output: a summary on stderr and one line "RRR_HIL_SUMMARY {json}" on stdout at exit; with
+ * --log, one CSV row per period (k, t, q, qd, applied u, zero, faults).
+ * Exit status: 0 finished; 1 usage; 2 setup failed (FMU, transport); 3 the controller was lost
+ * (lockstep) or the FMU failed.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "hil_codec.h"
+#include "hil_fmu.h"
+#include "hil_node.h"
+#include "hil_supervisor.h"
+
+#define PROG "rrr_hil_plant"
+#define MAX_SETS 64
+
+static volatile sig_atomic_t stop_requested = 0;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    stop_requested = 1;
+}
+
+typedef struct opts {
+    rrr_hil_link_opts link;
+    const char *fmu_dir;
+    const char *log_path;
+    int realtime;
+    double duration_s;
+    double q0[3], qd0[3];
+    int have_q0, have_qd0;
+    const char *set_name[MAX_SETS];
+    double set_value[MAX_SETS];
+    int n_set;
+    rrr_hil_sup_config sup;
+    int fifo_prio;
+    int mlock;
+} opts;
+
+typedef struct plant {
+    rrr_hil_fmu fmu;
+    fmi2ValueReference vr_u[3];
+    fmi2ValueReference vr_x[6]; /* q[1..3], qd[1..3] */
+    double x[6];
+    double u[3];
+    rrr_hil_sup sup;
+    rrr_hil_transport *tr;
+    uint32_t k;           /* periods advanced */
+    uint32_t tx_state_range; /* states that could not be encoded (outside the DBC range) */
+    uint8_t hb_counter;
+    uint8_t ctrl_nmt;     /* last NMT state of the controller heartbeat, 255 before any */
+    int started;          /* the controller's first frame arrived (lockstep) */
+    uint32_t rx_bad[RRR_HIL_RX_COUNT]; /* decode results of all frames */
+    uint32_t rx_ignored;  /* frames of the bench not meant for the plant */
+    FILE *log;
+} plant;
+
+static void usage(void)
+{
+    fprintf(stderr,
+            "usage: " PROG " --fmu DIR (--listen HOST:PORT | --connect HOST:PORT | --socketcan IF)\n"
+            "       [--channel NAME] [--realtime --duration S [--fifo PRIO] [--mlock]]\n"
+            "       [--q0 a,b,c] [--qd0 a,b,c] [--set NAME=VALUE]... [--max-missed N]\n"
+            "       [--max-delta-counter N] [--log FILE.csv]\n"
+            "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n");
+}
+
+static int parse_args(int argc, char **argv, opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->sup = rrr_hil_sup_config_default();
+    for (int i = 1; i < argc; ++i) {
+        const int r = rrr_hil_link_arg(&o->link, argc, argv, &i, PROG);
+        if (r < 0) {
+            return -1;
+        }
+        if (r > 0) {
+            continue;
+        }
+        const char *a = argv[i];
+        if (strcmp(a, "--realtime") == 0) {
+            o->realtime = 1;
+            continue;
+        }
+        if (strcmp(a, "--mlock") == 0) {
+            o->mlock = 1;
+            continue;
+        }
+        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+            usage();
+            exit(0);
+        }
+        if (i + 1 >= argc) {
+            fprintf(stderr, PROG ": unknown option or missing value: %s\n", a);
+            return -1;
+        }
+        const char *v = argv[++i];
+        char *end = NULL;
+        if (strcmp(a, "--fmu") == 0) {
+            o->fmu_dir = v;
+        } else if (strcmp(a, "--log") == 0) {
+            o->log_path = v;
+        } else if (strcmp(a, "--duration") == 0) {
+            o->duration_s = strtod(v, &end);
+            if (*end != '\0' || !(o->duration_s > 0.0) || o->duration_s > 1e6) {
+                fprintf(stderr, PROG ": --duration: expected seconds in (0, 1e6], got '%s'\n", v);
+                return -1;
+            }
+        } else if (strcmp(a, "--q0") == 0 || strcmp(a, "--qd0") == 0) {
+            const int is_q0 = a[3] == '0';
+            if (rrr_hil_parse_vec3(v, is_q0 ? o->q0 : o->qd0) != 0) {
+                fprintf(stderr, PROG ": %s: expected three numbers a,b,c, got '%s'\n", a, v);
+                return -1;
+            }
+            *(is_q0 ? &o->have_q0 : &o->have_qd0) = 1;
+        } else if (strcmp(a, "--set") == 0) {
+            const char *eq = strchr(v, '=');
+            double x = eq ? strtod(eq + 1, &end) : 0.0;
+            if (eq == NULL || eq == v || end == eq + 1 || *end != '\0' || o->n_set >= MAX_SETS) {
+                fprintf(stderr, PROG ": --set: expected NAME=VALUE (at most %d), got '%s'\n",
+                        MAX_SETS, v);
+                return -1;
+            }
+            static char names[MAX_SETS][64];
+            const size_t n = (size_t)(eq - v) < 63u ? (size_t)(eq - v) : 63u;
+            memcpy(names[o->n_set], v, n);
+            names[o->n_set][n] = '\0';
+            o->set_name[o->n_set] = names[o->n_set];
+            o->set_value[o->n_set++] = x;
+        } else if (strcmp(a, "--max-missed") == 0 || strcmp(a, "--max-delta-counter") == 0 ||
+                   strcmp(a, "--fifo") == 0) {
+            const long x = strtol(v, &end, 10);
+            if (*end != '\0' || x < 0 || x > 99) {
+                fprintf(stderr, PROG ": %s: expected an integer 0..99, got '%s'\n", a, v);
+                return -1;
+            }
+            if (a[2] == 'f') {
+                o->fifo_prio = (int)x;
+            } else if (a[6] == 'm') {
+                o->sup.max_missed = (unsigned)x;
+            } else {
+                o->sup.max_delta_counter = (unsigned)x;
+            }
+        } else {
+            fprintf(stderr, PROG ": unknown option %s\n", a);
+            return -1;
+        }
+    }
+    if (o->fmu_dir == NULL) {
+        fprintf(stderr, PROG ": --fmu DIR is required\n");
+        return -1;
+    }
+    if (o->realtime && o->duration_s <= 0.0) {
+        fprintf(stderr, PROG ": --realtime needs --duration S\n");
+        return -1;
+    }
+    if (o->sup.max_missed < 1u || o->sup.max_delta_counter < 1u || o->sup.max_delta_counter > 15u) {
+        fprintf(stderr, PROG ": --max-missed must be >= 1 and --max-delta-counter in 1..15\n");
+        return -1;
+    }
+    return 0;
+}
+
+static int setup_fmu(plant *p, const opts *o)
+{
+    if (rrr_hil_fmu_open(&p->fmu, o->fmu_dir, "plant") != 0) {
+        fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+        return -1;
+    }
+    static const char *const xn[6] = {"q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]"};
+    static const char *const un[3] = {"u[1]", "u[2]", "u[3]"};
+    for (int i = 0; i < 6; ++i) {
+        const long vr = rrr_hil_fmu_vr(&p->fmu, xn[i]);
+        if (vr < 0) {
+            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+            return -1;
+        }
+        p->vr_x[i] = (fmi2ValueReference)vr;
+    }
+    for (int i = 0; i < 3; ++i) {
+        const long vr = rrr_hil_fmu_vr(&p->fmu, un[i]);
+        if (vr < 0) {
+            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+            return -1;
+        }
+        p->vr_u[i] = (fmi2ValueReference)vr;
+    }
+    char name[16];
+    for (int i = 0; i < 3; ++i) {
+        snprintf(name, sizeof name, "q0[%d]", i + 1);
+        if (o->have_q0 && rrr_hil_fmu_set_by_name(&p->fmu, name, o->q0[i]) != 0) {
+            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+            return -1;
+        }
+        snprintf(name, sizeof name, "qd0[%d]", i + 1);
+        if (o->have_qd0 && rrr_hil_fmu_set_by_name(&p->fmu, name, o->qd0[i]) != 0) {
+            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+            return -1;
+        }
+    }
+    for (int i = 0; i < o->n_set; ++i) {
+        if (rrr_hil_fmu_set_by_name(&p->fmu, o->set_name[i], o->set_value[i]) != 0) {
+            fprintf(stderr, PROG ": --set: %s\n", p->fmu.last_error);
+            return -1;
+        }
+    }
+    if (rrr_hil_fmu_init(&p->fmu, 0.0) != 0 || rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0) {
+        fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+        return -1;
+    }
+    return 0;
+}
+
+static void log_row(plant *p)
+{
+    if (p->log == NULL) {
+        return;
+    }
+    fprintf(p->log, "%u,%.17g", p->k, p->fmu.time);
+    for (int i = 0; i < 6; ++i) {
+        fprintf(p->log, ",%.17g", p->x[i]);
+    }
+    for (int i = 0; i < 3; ++i) {
+        fprintf(p->log, ",%.17g", p->u[i]);
+    }
+    fprintf(p->log, ",%u,%u\n", (unsigned)p->sup.zero_applied, (unsigned)p->sup.faults);
+}
+
+/* Publish the state of period k: JointState1..3 then PlantStatus. */
+static void publish(plant *p)
+{
+    rrr_hil_frame f;
+    const uint8_t counter = (uint8_t)(p->k & 15u);
+    for (uint8_t j = 0; j < 3u; ++j) {
+        const rrr_hil_joint_state js = {j, counter, p->x[j], p->x[3 + j]};
+        if (rrr_hil_encode_joint_state(&js, &f) != 0) {
+            ++p->tx_state_range;
+            continue;
+        }
+        (void)rrr_hil_send(p->tr, &f);
+    }
+    rrr_hil_plant_status st;
+    rrr_hil_sup_status(&p->sup, &st);
+    st.counter = counter;
+    if (rrr_hil_encode_plant_status(&st, &f) == 0) {
+        (void)rrr_hil_send(p->tr, &f);
+    }
+    if (p->k % RRR_HIL_HEARTBEAT_PERIODS == 0u) {
+        const rrr_hil_heartbeat hb = {2u, RRR_HIL_NMT_OPERATIONAL, p->hb_counter++};
+        if (rrr_hil_encode_heartbeat(&hb, &f) == 0) {
+            (void)rrr_hil_send(p->tr, &f);
+        }
+    }
+}
+
+/* Advance one period: supervisor decision, FMU step, new state. 0 or -1 (FMU failed). */
+static int advance(plant *p)
+{
+    (void)rrr_hil_sup_next_period(&p->sup, p->u);
+    if (rrr_hil_fmu_set(&p->fmu, p->vr_u, 3, p->u) != 0 ||
+        rrr_hil_fmu_step(&p->fmu, RRR_HIL_PERIOD_S) != 0 ||
+        rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0) {
+        fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+        return -1;
+    }
+    ++p->k;
+    log_row(p);
+    return 0;
+}
+
+/* Handle one received frame. Returns 1 when it is a lockstep Sync (period to advance). */
+static int handle(plant *p, const rrr_hil_frame *f, int lockstep)
+{
+    rrr_hil_msg m;
+    const rrr_hil_rx rx = rrr_hil_decode(f, &m);
+    ++p->rx_bad[rx];
+    if (rx == RRR_HIL_RX_UNKNOWN_ID) {
+        return 0;
+    }
+    p->started = 1;
+    if (m.kind == RRR_HIL_VOLTAGE_CMD) {
+        rrr_hil_sup_on_command(&p->sup, rx, rx == RRR_HIL_RX_OK ? &m.u.cmd : NULL);
+        return 0;
+    }
+    if (rx != RRR_HIL_RX_OK) {
+        return 0;
+    }
+    if (m.kind == RRR_HIL_HEARTBEAT && m.u.heartbeat.node == 1u) {
+        p->ctrl_nmt = m.u.heartbeat.nmt_state;
+        return 0;
+    }
+    if (m.kind == RRR_HIL_SYNC && lockstep) {
+        if (m.u.sync.cycle != p->k) {
+            rrr_hil_sup_raise(&p->sup, RRR_HIL_FAULT_SYNC);
+        }
+        return 1;
+    }
+    if (m.kind != RRR_HIL_SYNC) {
+        ++p->rx_ignored;
+    }
+    return 0;
+}
+
+static int run_lockstep(plant *p)
+{
+    int published0 = 0;
+    for (;;) {
+        if (stop_requested) {
+            return 0;
+        }
+        rrr_hil_frame f;
+        const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 200000);
+        if (io == RRR_HIL_IO_TIMEOUT) {
+            continue;
+        }
+        if (io != RRR_HIL_IO_OK) {
+            if (!p->started && io == RRR_HIL_IO_DISCONNECTED) {
+                continue; /* a client left during the handshake: wait for the next one */
+            }
+            rrr_hil_sup_raise(&p->sup, RRR_HIL_FAULT_BUS);
+            fprintf(stderr, PROG ": period %u: transport %s: %s\n", p->k, rrr_hil_io_str(io),
+                    p->tr->last_error);
+            return 3;
+        }
+        const int sync = handle(p, &f, 1);
+        if (p->started && !published0) {
+            publish(p); /* the state of period 0, after the controller's first frame */
+            published0 = 1;
+        }
+        if (p->ctrl_nmt == RRR_HIL_NMT_STOPPED) {
+            return 0;
+        }
+        if (sync) {
+            if (advance(p) != 0) {
+                return 3;
+            }
+            publish(p);
+        }
+    }
+}
+
+static int run_realtime(plant *p, const opts *o)
+{
+    const uint32_t n = (uint32_t)(o->duration_s / RRR_HIL_PERIOD_S + 0.5);
+    rrr_hil_rt rt;
+    int rc = 0;
+    /* the plant is held (brakes on, not integrated) until the controller's first frame */
+    for (int waited_ms = 0; !p->started && !stop_requested; waited_ms += 200) {
+        rrr_hil_frame f;
+        const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 200000);
+        if (io == RRR_HIL_IO_OK) {
+            (void)handle(p, &f, 0);
+        } else if (io == RRR_HIL_IO_ERROR || waited_ms > (int)(o->duration_s * 1000.0)) {
+            fprintf(stderr, PROG ": no controller within %.0f s\n", o->duration_s);
+            return 3;
+        }
+    }
+    if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, n, o->fifo_prio, o->mlock) != 0) {
+        fprintf(stderr, PROG ": out of memory\n");
+        return 2;
+    }
+    /* the controller's loop started when it sent that frame: run half a period out of phase,
+     * so that its command reaches us before our release and our state reaches it before its */
+    rrr_hil_rt_shift(&rt, 0.5 * RRR_HIL_PERIOD_S);
+    for (uint32_t k = 0; k < n && !stop_requested && p->ctrl_nmt != RRR_HIL_NMT_STOPPED; ++k) {
+        rrr_hil_rt_wait(&rt);
+        rrr_hil_frame f;
+        rrr_hil_io io;
+        while ((io = rrr_hil_recv(p->tr, &f, 0)) == RRR_HIL_IO_OK) {
+            (void)handle(p, &f, 0);
+        }
+        if (io == RRR_HIL_IO_DISCONNECTED && p->ctrl_nmt == RRR_HIL_NMT_STOPPED) {
+            break; /* the controller said goodbye, then hung up */
+        }
+        if (io == RRR_HIL_IO_DISCONNECTED || io == RRR_HIL_IO_BUS_OFF) {
+            rrr_hil_sup_raise(&p->sup, RRR_HIL_FAULT_BUS);
+        } else if (io == RRR_HIL_IO_ERROR) {
+            fprintf(stderr, PROG ": transport error: %s\n", p->tr->last_error);
+            rc = 3;
+            break;
+        }
+        if (advance(p) != 0) {
+            rc = 3;
+            break;
+        }
+        publish(p);
+        rrr_hil_rt_done(&rt);
+    }
+    printf("RRR_HIL_RT {");
+    rrr_hil_rt_report(&rt, stdout, PROG);
+    printf("}\n");
+    rrr_hil_rt_free(&rt);
+    return rc;
+}
+
+static void summary(const plant *p, int rc)
+{
+    const rrr_hil_sup_err *e = &p->sup.err;
+    fprintf(stderr,
+            PROG ": %u periods; faults latched 0x%02X; fault events %u (crc %u, counter %u, "
+                 "range %u, format %u, sync %u, bus %u, timeout %u); periods without command %u, "
+                 "at 0 V %u; resets %u; states out of DBC range %u\n",
+            p->k, (unsigned)p->sup.faults, e->fault_events, e->crc, e->counter, e->range,
+            e->format, e->sync, e->bus, e->timeout, e->cmd_missed, e->zero_periods, e->resets,
+            p->tx_state_range);
+    printf("RRR_HIL_SUMMARY {\"node\": \"plant\", \"exit\": %d, \"periods\": %u, \"faults\": %u, "
+           "\"fault_events\": %u, \"crc\": %u, \"counter\": %u, \"range\": %u, \"format\": %u, "
+           "\"sync\": %u, \"bus\": %u, \"timeout\": %u, \"cmd_missed\": %u, \"zero_periods\": %u, "
+           "\"resets\": %u, \"state_out_of_range\": %u, \"rx_unknown_id\": %u, \"rx_bad_dlc\": %u, "
+           "\"rx_bad_crc\": %u, \"rx_out_of_range\": %u, \"rx_ignored\": %u, ",
+           rc, p->k, (unsigned)p->sup.faults, e->fault_events, e->crc, e->counter, e->range,
+           e->format, e->sync, e->bus, e->timeout, e->cmd_missed, e->zero_periods, e->resets,
+           p->tx_state_range, p->rx_bad[RRR_HIL_RX_UNKNOWN_ID], p->rx_bad[RRR_HIL_RX_BAD_DLC],
+           p->rx_bad[RRR_HIL_RX_BAD_CRC], p->rx_bad[RRR_HIL_RX_OUT_OF_RANGE], p->rx_ignored);
+    rrr_hil_link_json(stdout, p->tr);
+    printf("}\n");
+    fflush(stdout);
+}
+
+int main(int argc, char **argv)
+{
+    opts o;
+    if (parse_args(argc, argv, &o) != 0) {
+        usage();
+        return 1;
+    }
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    signal(SIGPIPE, SIG_IGN);
+    static plant p;
+    memset(&p, 0, sizeof p);
+    p.ctrl_nmt = 255u;
+    if (rrr_hil_sup_init(&p.sup, &o.sup) != 0 || setup_fmu(&p, &o) != 0) {
+        rrr_hil_fmu_close(&p.fmu);
+        return 2;
+    }
+    if (o.log_path != NULL) {
+        p.log = fopen(o.log_path, "w");
+        if (p.log == NULL) {
+            fprintf(stderr, PROG ": cannot write %s\n", o.log_path);
+            rrr_hil_fmu_close(&p.fmu);
+            return 2;
+        }
+        fprintf(p.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u[2],u[3],zero,faults\n");
+        log_row(&p);
+    }
+    static rrr_hil_link link;
+    const uint32_t rx_ids[] = {RRR_BENCH_SYNC_FRAME_ID, RRR_BENCH_VOLTAGE_CMD_FRAME_ID,
+                               RRR_BENCH_HEARTBEAT_CTRL_FRAME_ID};
+    if (rrr_hil_link_open(&o.link, &link, rx_ids, 3u, PROG) != 0) {
+        if (p.log) {
+            fclose(p.log);
+        }
+        rrr_hil_fmu_close(&p.fmu);
+        return 2;
+    }
+    p.tr = &link.base;
+    {   /* CANopen-style boot-up message (dropped by a socketcand server without a client) */
+        rrr_hil_frame f;
+        const rrr_hil_heartbeat hb = {2u, RRR_HIL_NMT_BOOT, p.hb_counter++};
+        if (rrr_hil_encode_heartbeat(&hb, &f) == 0) {
+            (void)rrr_hil_send(p.tr, &f);
+        }
+    }
+    const int rc = o.realtime ? run_realtime(&p, &o) : run_lockstep(&p);
+    summary(&p, rc);
+    rrr_hil_close(p.tr);
+    if (p.log) {
+        fclose(p.log);
+    }
+    rrr_hil_fmu_close(&p.fmu);
+    return rc;
+}

@@ -1,0 +1,184 @@
+"""Fault injection against the C plant node, with python-can's socketcand interface as the
+controller: dropped frames, a silent controller, corrupted CRC, repeated counter, out-of-range
+voltage, wrong DLC, unknown ids, malformed socketcand input, a disconnect. The plant must apply
+0 V within 3 periods and latch the fault (PlantStatus), count every event, and never crash.
+
+Plant log rows: row 0 is the initial state, row k + 1 the state after period k, with the voltage
+applied during period k.
+"""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+from typing import Any
+
+import can
+import numpy as np
+import pytest
+from rrr_robot import hil
+
+Q0 = (0.2, 0.8, -1.2)
+U = (1.0, -0.5, 0.25)
+F = hil.FAULT_BITS
+
+
+class Rig:
+    """A plant node plus a python-can controller stepping it period by period."""
+
+    def __init__(self, tmp_path: Path, extra: tuple[str, ...] = ()) -> None:
+        self.log_path = tmp_path / "plant.csv"
+        self.plant = hil.start_plant(q0=Q0, log_csv=self.log_path, extra=extra)
+        self.bus = hil.open_bus("socketcand", port=self.plant.port)
+        self.k = 0
+        self.bus.send(hil.encode("HeartbeatCtrl", {"NmtState": hil.NMT_OPERATIONAL, "Counter": 0}))
+        self.status = self.read_status(0)
+
+    def read_status(self, k: int) -> dict[str, float]:
+        while True:
+            msg = self.bus.recv(timeout=5.0)
+            assert msg is not None, f"no PlantStatus for period {k}"
+            name, sig = hil.decode(msg)
+            if name == "PlantStatus" and sig["AliveCounter"] == k & 15:
+                return sig
+
+    def cmd(self, u: tuple[float, ...] = U, counter: int | None = None, **kw: Any) -> can.Message:
+        sig = {"AliveCounter": self.k & 15 if counter is None else counter, "Enable": 1,
+               "ResetFault": 0, **{f"U{i + 1}": v for i, v in enumerate(u)}}
+        return hil.encode("VoltageCmd", sig | {k: v for k, v in kw.items() if k != "corrupt_crc"},
+                          corrupt_crc=kw.get("corrupt_crc", False))
+
+    def period(self, *frames: can.Message) -> dict[str, float]:
+        """Send frames (default: a valid command), then Sync(k); the status after period k."""
+        for f in frames or (self.cmd(),):
+            self.bus.send(f)
+        self.bus.send(hil.encode("Sync", {"Cycle": self.k}))
+        self.k += 1
+        self.status = self.read_status(self.k)
+        return self.status
+
+    def finish(self) -> tuple[dict[str, Any], np.ndarray]:
+        self.bus.send(hil.encode("HeartbeatCtrl", {"NmtState": hil.NMT_STOPPED, "Counter": 1}))
+        self.bus.shutdown()
+        summary = self.plant.wait(30)
+        return summary, np.loadtxt(self.log_path, delimiter=",", skiprows=1, ndmin=2)
+
+
+@pytest.fixture
+def rig(tmp_path: Path):
+    r = Rig(tmp_path)
+    yield r
+    r.bus.shutdown()
+    r.plant.close()
+
+
+def applied(log: np.ndarray, k: int) -> np.ndarray:
+    return log[k + 1, 8:11]
+
+
+def test_normal_run_and_one_dropped_frame(rig: Rig) -> None:
+    for _ in range(5):
+        assert rig.period()["Faults"] == 0
+    st = rig.period(hil.encode("HeartbeatCtrl", {"NmtState": 5, "Counter": 2}))  # no command
+    assert st["Faults"] == 0 and st["ZeroVoltage"] == 0 and st["CmdMissed"] == 1
+    st = rig.period()  # counter jumps by 2: accepted
+    assert st["Faults"] == 0
+    summary, log = rig.finish()
+    assert summary["exit"] == 0 and summary["fault_events"] == 0 and summary["cmd_missed"] == 1
+    np.testing.assert_allclose(applied(log, 5), U)  # held over the dropped period
+    np.testing.assert_allclose(applied(log, 6), U)
+
+
+def test_silent_controller_zero_volts_within_three_periods(rig: Rig) -> None:
+    for _ in range(3):
+        rig.period()
+    sync_only = hil.encode("HeartbeatCtrl", {"NmtState": 5, "Counter": 3})
+    statuses = [rig.period(sync_only) for _ in range(6)]
+    assert [s["ZeroVoltage"] for s in statuses] == [0, 0, 1, 1, 1, 1]
+    assert all(s["Faults"] == F["timeout"] for s in statuses[2:])
+    assert statuses[-1]["State"] == 2
+    # latched: the controller's return is not enough (its counter jumped by 7: flagged as well)
+    assert rig.period()["Faults"] == F["timeout"] | F["counter"]
+    summary, log = rig.finish()
+    assert summary["timeout"] == 1 and summary["counter"] == 1
+    assert summary["cmd_missed"] == 7  # 6 silent periods + the rejected command
+    np.testing.assert_allclose(applied(log, 3), U)
+    np.testing.assert_allclose(applied(log, 4), U)
+    assert not applied(log, 5).any() and not applied(log, 9).any()
+
+
+@pytest.mark.parametrize("fault", ["crc", "counter", "range", "format"])
+def test_bad_command_latches_at_once(rig: Rig, fault: str) -> None:
+    for _ in range(3):
+        rig.period()
+    if fault == "crc":
+        bad = rig.cmd(corrupt_crc=True)
+    elif fault == "counter":
+        bad = rig.cmd(counter=(rig.k - 1) & 15)  # repeated
+    elif fault == "range":
+        msg = hil.database().get_message_by_name("VoltageCmd")
+        data = bytearray(msg.encode({"Crc": 0, "AliveCounter": rig.k & 15, "Enable": 1,
+                                     "ResetFault": 0, "U1": 31.0, "U2": 0, "U3": 0},
+                                    strict=False))
+        from cantools.autosar.end_to_end import compute_profile2_crc
+
+        data[0] = compute_profile2_crc(bytes(data), hil.DATA_IDS["VoltageCmd"])
+        bad = can.Message(arbitration_id=0x100, data=data, is_extended_id=False)
+    else:
+        good = rig.cmd()
+        bad = can.Message(arbitration_id=0x100, data=bytes(good.data)[:7], is_extended_id=False)
+    st = rig.period(bad)
+    assert st["Faults"] == F[fault] and st["ZeroVoltage"] == 1 and st["State"] == 2
+    assert rig.period()["Faults"] == F[fault]  # latched
+    # reset: a valid command with ResetFault = 1, Enable = 0
+    st = rig.period(rig.cmd(Enable=0, ResetFault=1))
+    assert st["Faults"] == 0 and st["State"] == 1
+    assert rig.period()["ZeroVoltage"] == 0
+    summary, log = rig.finish()
+    assert summary[fault] == 1 and summary["fault_events"] == 1 and summary["resets"] == 1
+    assert not applied(log, 3).any() and not applied(log, 4).any()
+    np.testing.assert_allclose(applied(log, 6), U)
+
+
+def test_unknown_ids_and_extended_frames_are_counted_not_faults(rig: Rig) -> None:
+    junk = [can.Message(arbitration_id=0x123, data=bytes(8), is_extended_id=False),
+            can.Message(arbitration_id=0x100, data=bytes(8), is_extended_id=True)]
+    st = rig.period(*junk, rig.cmd())
+    assert st["Faults"] == 0
+    summary, _ = rig.finish()
+    assert summary["rx_unknown_id"] == 2 and summary["fault_events"] == 0
+
+
+def test_malformed_socketcand_input_and_disconnect(tmp_path: Path) -> None:
+    with hil.start_plant(q0=Q0) as plant:
+        s = socket.create_connection(("127.0.0.1", plant.port), timeout=5)
+        assert s.recv(64) == b"< hi >"
+        s.sendall(b"< open wrongbus >")
+        assert s.recv(64).startswith(b"< error")
+        s.sendall(b"< open bench0 >")
+        assert s.recv(64) == b"< ok >"
+        s.sendall(b"< rawmode >")
+        assert s.recv(64) == b"< ok >"
+        s.sendall(b"garbage< send 100 >< send 100 9 1 2 3 4 5 6 7 8 9 >< send zz 1 1 >"
+                  + b"< " + b"x" * 400 + b" >")
+        s.sendall(b"< send 701 2 5 0 >")  # heartbeat: the plant answers with period 0
+        s.settimeout(5)
+        assert b"< frame 201 " in s.recv(4096)
+        s.close()  # the controller disappears in the middle of the run
+        summary = plant.wait(30)
+    assert summary["exit"] == 3  # controller lost
+    assert summary["bus"] == 1 and summary["faults"] == F["bus"]
+    assert summary["rx_malformed"] >= 5 and summary["disconnects"] == 1
+
+
+def test_socketcan_interface_fails_clearly_where_it_cannot_open() -> None:
+    """Without AF_CAN (this CI) the socketcan bus cannot open; with AF_CAN, an interface that
+    does not exist cannot either. Either way a clear error, no crash."""
+    channel = "vcan0"
+    try:
+        socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW).close()
+        channel = "rrrnosuchif0"  # AF_CAN exists: name an interface that does not
+    except (AttributeError, OSError):
+        pass
+    with pytest.raises((OSError, can.CanError)):
+        hil.open_bus("socketcan", channel=channel)
