@@ -29,7 +29,7 @@ def _pen_down_xz(xyz: FloatArray, pen_down: np.ndarray) -> tuple[FloatArray, Flo
 
 def _save(fig: Figure, path: Path) -> None:
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    fig.savefig(path, dpi=120, bbox_inches="tight")
     log.info("wrote %s", path)
 
 
@@ -105,7 +105,7 @@ def fig_letters(out: Path, ref: Reference, results: Mapping[str, CosimResult]) -
         ax.set(xlabel="x [m]", ylabel="z [m]",
                title=f"Scenario {name}: max tip error {1e3 * err.max():.2f} mm")
         ax.set_aspect("equal")
-        ax.legend(loc="upper right")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=2, frameon=False)
         _save(fig, out / f"fig_letters_{name}.png")
 
 
