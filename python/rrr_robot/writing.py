@@ -133,7 +133,8 @@ def run_writing(job: WritingJob,
                  1e3 * summary["scenarios"][scn.name]["tip_error_max"],
                  1e3 * summary["scenarios"][scn.name]["tip_error_rms"], res.realtime_factor)
     summary["reference"] = {
-        "text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]), "step": float(ref.t[1] - ref.t[0]),
+        "text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]),
+        "step": float(ref.t[1] - ref.t[0]),
         "min_workspace_margin_m": ref.min_margin_m, "min_elbow_margin": ref.min_elbow_margin,
         "min_shoulder_margin_m": ref.min_shoulder_margin_m,
     }
