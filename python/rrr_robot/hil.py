@@ -472,6 +472,10 @@ def _cmd_hil(args: Any) -> int:
         path = export_reference(ref.t, ref.q, ref.qd, ref.qdd, out / "reference.csv")
         print(f"reference: {path} ({ref.t.size} periods)")
         return 0
+    if args.side == "plant":
+        from .hil_plant import cmd_plant
+
+        return cmd_plant(args, ref, out)
     if args.side == "bench":
         run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=out)
         print(f"C bench: {run.t.size} periods; plant faults {run.plant_summary['faults']}; "
@@ -503,19 +507,26 @@ def _cmd_hil(args: Any) -> int:
 def register_cli(subparsers: Any) -> None:
     """Add the ``hil`` subcommand to the ``rrr`` command line."""
     p = subparsers.add_parser(
-        "hil", help="CAN bench: C nodes, the controller FMU over python-can",
+        "hil", help="CAN bench: C nodes, either FMU side over python-can",
         description="Run the writing task on the CAN bench. 'controller': the controller FMU "
         "(FMPy) over python-can against the C plant node (started here unless --connect); "
+        "'plant': the plant FMU (FMPy) behind the C supervisor (ctypes) over python-can "
+        "against the C controller node (started here with --listen unless --connect; "
+        "lockstep only: the Python plant has no real-time mode, use rrr_hil_plant --realtime); "
         "'bench': the C controller node against the C plant node (lockstep, socketcand "
         "transport); 'export-reference': write the reference table the C controller reads.",
     )
-    p.add_argument("side", choices=["controller", "bench", "export-reference"])
+    p.add_argument("side", choices=["controller", "plant", "bench", "export-reference"])
     p.add_argument("--text", help="text to write (default: the writing task's default)")
     p.add_argument("--out", default="results/hil", help="output folder (default: results/hil)")
     p.add_argument("--interface", default="socketcand", choices=["socketcand", "socketcan"],
                    help="python-can interface (default socketcand)")
     p.add_argument("--connect", metavar="HOST:PORT",
-                   help="socketcand server of a running plant node (default: start one)")
+                   help="socketcand server of a running node: the plant node for 'controller', "
+                   "a controller node started with --listen for 'plant' (default: start one)")
     p.add_argument("--channel", default="bench0",
                    help="socketcand bus name, or the SocketCAN interface (default bench0)")
+    p.add_argument("--drop-commands-from", type=int, metavar="K",
+                   help="'plant' only, fault injection: VoltageCmd frames of periods >= K do "
+                   "not reach the plant (0 V at the 3rd period, timeout latched)")
     p.set_defaults(func=_cmd_hil)

@@ -1,0 +1,361 @@
+"""The plant side of the CAN bench from Python (``rrr hil plant``).
+
+The plant FMU runs under FMPy (:class:`~rrr_robot.fmu_slave.FmuSlave`) and speaks the lockstep
+protocol of ``c_src/hil/rrr_hil_plant.c`` over a python-can bus: ``socketcand`` as client of the
+C controller node started with ``--listen``, or ``socketcan`` where the kernel has AF_CAN.
+Outgoing frames (JointState1..3, PlantStatus, HeartbeatPlant) are encoded with cantools from the
+shipped DBC; Sync and HeartbeatCtrl are decoded with cantools.
+
+The safety policy is NOT implemented here: every VoltageCmd frame goes to the C decoder and the
+C supervisor (``hil_supervisor.c`` through :mod:`rrr_robot._hil_lib`), exactly the calls the C
+plant node makes, so CRC, alive-counter, range and DLC checks, the hold / timeout / 0 V rule,
+the latch and the reset are the C code's. Python only moves frames and steps the FMU.
+
+Lockstep only (deterministic): after the controller's first frame the plant publishes the state
+of period 0; each Sync(k) closes period k (the supervisor decides the voltage), the FMU advances
+exactly one period and the plant publishes the state of k + 1; the controller's heartbeat
+"stopped" ends the run. There is no real-time mode for the Python plant (use the C plant node,
+``rrr_hil_plant --realtime``).
+"""
+
+from __future__ import annotations
+
+import errno
+import logging
+import shutil
+import tempfile
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import _hil_lib as hl
+from ._arrays import FloatArray
+from .fmus import fmu_path
+from .hil import (
+    NMT_BOOT,
+    NMT_OPERATIONAL,
+    NMT_STOPPED,
+    PERIOD,
+    BenchRun,
+    FrameError,
+    HilError,
+    NodeProcess,
+    decode,
+    encode,
+    export_reference,
+    node_executable,
+    open_bus,
+)
+
+log = logging.getLogger(__name__)
+
+__all__ = ["LOG_HEADER", "PlantRun", "PythonPlant", "drop_commands_from",
+           "run_python_plant_bench", "start_listening_controller"]
+
+VOLTAGE_CMD_ID = 0x100
+HEARTBEAT_PERIODS = 100
+#: Columns of the plant log (the C plant node's --log): row 0 is the initial state, row k + 1
+#: the state after period k with the voltage applied during period k.
+LOG_HEADER = ["k", "t", "q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]", "u[1]", "u[2]",
+              "u[3]", "zero", "faults"]
+
+#: Fault injection between the bus and the plant: (period k, frame) -> the frame to deliver
+#: (possibly modified), or None to drop it.
+RxFilter = Callable[[int, Any], Any | None]
+
+
+def drop_commands_from(k0: int) -> RxFilter:
+    """Fault injection: VoltageCmd frames of periods >= k0 never reach the plant (the controller
+    "stops commanding" while Sync keeps the lockstep going)."""
+
+    def rx_filter(k: int, msg: Any) -> Any | None:
+        return None if k >= k0 and msg.arbitration_id == VOLTAGE_CMD_ID else msg
+
+    return rx_filter
+
+
+@dataclass(frozen=True)
+class PlantRun:
+    """One Python plant run: the log rows (see LOG_HEADER) and the summary (the same keys as the
+    C plant node's RRR_HIL_SUMMARY, node 'python-plant')."""
+
+    log: FloatArray
+    summary: dict[str, Any]
+
+    @property
+    def q(self) -> FloatArray:
+        return self.log[:, 2:5]
+
+    @property
+    def qd(self) -> FloatArray:
+        return self.log[:, 5:8]
+
+    @property
+    def u(self) -> FloatArray:
+        """Row k + 1: the voltage applied during period k."""
+        return self.log[:, 8:11]
+
+
+class _BusLost(HilError):
+    """The controller is lost: a send or receive failed, or no frame within the timeout."""
+
+
+@dataclass
+class _Counters:
+    rx: list[int] = field(default_factory=lambda: [0] * hl.RX_COUNT)
+    rx_ignored: int = 0
+    state_out_of_range: int = 0
+
+
+class PythonPlant:
+    """The plant node in Python (see module docstring); ``run()`` once per instance."""
+
+    def __init__(self, bus: Any, *, q0: Sequence[float] = (0.0, 0.0, 0.0),
+                 qd0: Sequence[float] = (0.0, 0.0, 0.0), values: Mapping[str, float] = {},
+                 max_missed: int = 3, max_delta_counter: int = 3, timeout: float = 5.0,
+                 start_timeout: float = 30.0, rx_filter: RxFilter | None = None,
+                 fmu: Path | None = None) -> None:
+        self.bus = bus
+        self.values = {f"q0[{i + 1}]": float(q0[i]) for i in range(3)}
+        self.values |= {f"qd0[{i + 1}]": float(qd0[i]) for i in range(3)} | dict(values)
+        self.sup = hl.Supervisor(max_missed, max_delta_counter)
+        self.timeout, self.start_timeout = timeout, start_timeout
+        self.rx_filter = rx_filter
+        self.fmu_path = Path(fmu) if fmu else fmu_path("plant")
+        self.k = 0
+        self.started = False
+        self.ctrl_nmt = -1
+        self.n = _Counters()
+        self._hb = 0
+        self._rows: list[list[float]] = []
+
+    # ---- frames ------------------------------------------------------------------------------
+    def _send(self, name: str, signals: Mapping[str, float]) -> None:
+        import can
+
+        try:
+            self.bus.send(encode(name, signals))
+        except (OSError, can.CanError) as exc:
+            raise _BusLost(f"send {name}: {exc}") from exc
+
+    def _heartbeat(self, nmt: int) -> None:
+        self._send("HeartbeatPlant", {"NmtState": nmt, "Counter": self._hb & 0xFF})
+        self._hb += 1
+
+    def _publish(self, x: FloatArray) -> None:
+        """The state of period k: JointState1..3, PlantStatus, every 100 periods a heartbeat."""
+        from cantools.database import EncodeError
+
+        counter = self.k & 15
+        for j in range(3):
+            try:
+                self._send(f"JointState{j + 1}", {"AliveCounter": counter, "Q": float(x[j]),
+                                                  "Qd": float(x[3 + j])})
+            except (EncodeError, ValueError):
+                self.n.state_out_of_range += 1
+        self._send("PlantStatus", {"AliveCounter": counter, **self.sup.status()})
+        if self.k % HEARTBEAT_PERIODS == 0:
+            self._heartbeat(NMT_OPERATIONAL)
+
+    def _handle(self, msg: Any) -> bool:
+        """One received frame (rrr_hil_plant.c handle()); True for a Sync (advance a period)."""
+        if msg.arbitration_id == VOLTAGE_CMD_ID and not msg.is_extended_id:
+            self.n.rx[self.sup.on_command_frame(msg)] += 1
+            self.started = True
+            return False
+        try:
+            name, sig = decode(msg)
+        except FrameError as exc:
+            reason = {"unknown id": hl.RX_UNKNOWN_ID, "wrong DLC": hl.RX_BAD_DLC}
+            self.n.rx[reason.get(exc.reason, hl.RX_BAD_CRC)] += 1
+            self.started = self.started or exc.reason != "unknown id"
+            return False
+        self.n.rx[hl.RX_OK] += 1
+        self.started = True
+        if name == "HeartbeatCtrl":
+            self.ctrl_nmt = int(sig["NmtState"])
+            return False
+        if name == "Sync":
+            if int(sig["Cycle"]) != self.k:
+                self.sup.raise_fault(hl.FAULT_SYNC)
+            return True
+        self.n.rx_ignored += 1
+        return False
+
+    # ---- the loop ----------------------------------------------------------------------------
+    def _record(self, t: float, x: FloatArray, u: Sequence[float]) -> None:
+        self._rows.append([self.k, t, *x, *u, float(self.sup.zero_applied),
+                           float(self.sup.faults)])
+
+    def _recv(self, deadline: float) -> Any | None:
+        """The next frame (after the fault-injection filter), or None past the deadline;
+        raises _BusLost when the bus fails."""
+        import can
+
+        while time.monotonic() < deadline:
+            try:
+                msg = self.bus.recv(timeout=min(0.2, max(0.0, deadline - time.monotonic())))
+            except (OSError, can.CanError) as exc:
+                raise _BusLost(f"receive: {str(exc).splitlines()[0]}") from exc
+            if msg is None:
+                continue
+            if self.rx_filter is not None:
+                msg = self.rx_filter(self.k, msg)
+            if msg is not None:
+                return msg
+        return None
+
+    def _lockstep(self, slave: Any, p_in: Any, p_out: Any) -> int:
+        """The loop of rrr_hil_plant.c run_lockstep(); raises _BusLost, HilError."""
+        x = slave.get_block(p_out).copy()
+        self._record(slave.time, x, (0.0, 0.0, 0.0))
+        self._heartbeat(NMT_BOOT)
+        published0 = False
+        while True:
+            wait = self.timeout if self.started else self.start_timeout
+            msg = self._recv(time.monotonic() + wait)
+            if msg is None:
+                what = "the controller went silent" if self.started else "no controller"
+                raise _BusLost(f"{what} (no frame within {wait:.1f} s)")
+            sync = self._handle(msg)
+            if self.started and not published0:
+                self._publish(x)
+                published0 = True
+            if self.ctrl_nmt == NMT_STOPPED:
+                return 0
+            if sync:
+                u, _ = self.sup.next_period()
+                p_in.values[:] = u
+                slave.set_block(p_in)
+                slave.do_step(PERIOD)
+                x = slave.get_block(p_out).copy()
+                self.k += 1
+                self._record(slave.time, x, u)
+                self._publish(x)
+
+    def run(self, log_csv: Path | None = None) -> PlantRun:
+        """Run until the controller's heartbeat "stopped" (exit 0) or until it is lost (exit 3,
+        bus fault latched); optionally write the log as the C node's --log does."""
+        from .cosim import PLANT_IN
+        from .fmu_slave import FmuSlave
+
+        with FmuSlave(self.fmu_path, "plant") as slave:
+            slave.initialize(0.0, self.values)
+            p_in = slave.real_block(PLANT_IN)
+            p_out = slave.real_block([f"{s}[{i}]" for s in ("q", "qd") for i in (1, 2, 3)])
+            try:
+                rc = self._lockstep(slave, p_in, p_out)
+            except _BusLost as exc:
+                log.error("python plant: period %d: %s", self.k, exc)
+                self.sup.raise_fault(hl.FAULT_BUS)
+                rc = 3
+        rows = np.array(self._rows, dtype=float).reshape(-1, len(LOG_HEADER))
+        if log_csv is not None:
+            np.savetxt(log_csv, rows, delimiter=",", header=",".join(LOG_HEADER), comments="",
+                       fmt="%.17g")
+        return PlantRun(log=rows, summary=self._summary(rc))
+
+    def _summary(self, rc: int) -> dict[str, Any]:
+        s: dict[str, Any] = {"node": "python-plant", "exit": rc, "periods": self.k,
+                             "faults": self.sup.faults, **self.sup.counters(),
+                             "state_out_of_range": self.n.state_out_of_range}
+        s |= {f"rx_{name}": self.n.rx[i] for i, name in enumerate(hl.RX_NAMES) if i > 0}
+        s["rx_ignored"] = self.n.rx_ignored
+        log.debug("python plant: %s", s)
+        return s
+
+
+# ---- with the C controller node ---------------------------------------------------------------
+
+
+def start_listening_controller(reference_csv: Path, *, listen: str = "127.0.0.1:0",
+                               log_csv: Path | None = None,
+                               extra: Sequence[str] = ()) -> NodeProcess:
+    """Start the C controller node as socketcand server on ``listen`` (port 0: any free port,
+    read back in ``.port``); it waits for the plant's boot-up heartbeat."""
+    args = [str(node_executable("controller")), "--reference", str(reference_csv),
+            "--listen", listen]
+    if log_csv is not None:
+        args += ["--log", str(log_csv)]
+    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=True)
+
+
+def run_python_plant_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
+                           qdd_ref: FloatArray, workdir: Path | None = None, *,
+                           rx_filter: RxFilter | None = None, timeout: float = 120.0,
+                           ) -> tuple[BenchRun, PlantRun]:
+    """The C controller node (``--listen``) and the Python plant in lockstep over the
+    socketcand transport. The plant starts at (q_ref[0], qd_ref[0]); default robot and gains.
+    Returns the bench run (plant q, qd exact; the controller's u) and the plant run."""
+    own = workdir is None
+    work = Path(tempfile.mkdtemp(prefix="rrr_hilpy_")) if workdir is None else Path(workdir)
+    try:
+        ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, work / "reference.csv")
+        with start_listening_controller(ref_csv, log_csv=work / "controller.csv") as ctrl:
+            with open_bus("socketcand", port=ctrl.port or 0) as bus:
+                plant = PythonPlant(bus, q0=q_ref[0], qd0=qd_ref[0], rx_filter=rx_filter)
+                prun = plant.run(work / "plant.csv")
+            cs = ctrl.wait(timeout)
+        if cs["exit"] != 0 or prun.summary["exit"] != 0:
+            raise HilError(f"bench failed: controller exit {cs['exit']}: {ctrl.stderr.strip()}; "
+                           f"python plant exit {prun.summary['exit']}")
+        c = np.loadtxt(work / "controller.csv", delimiter=",", skiprows=1, ndmin=2)
+        run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, [8, 11, 14]],
+                       plant_summary=prun.summary, controller_summary=cs)
+        return run, prun
+    finally:
+        if own:
+            shutil.rmtree(work, ignore_errors=True)
+
+
+# ---- command line (``rrr hil plant``, wired in hil.register_cli) ------------------------------
+
+
+def _open(interface: str, host: str, port: int, channel: str) -> Any:
+    try:
+        return open_bus(interface, host=host, port=port, channel=channel)
+    except OSError as exc:
+        hint = (" (this kernel has no AF_CAN: use --interface socketcand)"
+                if exc.errno == errno.EAFNOSUPPORT else "")
+        raise HilError(f"cannot open the {interface} bus {channel or ''}: {exc}{hint}") from exc
+
+
+def cmd_plant(args: Any, ref: Any, out: Path) -> int:
+    """``rrr hil plant``: the Python plant against the C controller node along ``ref``. Without
+    --connect (socketcand) the controller is started here with --listen; with --connect it is a
+    running ``rrr_hil_controller --listen HOST:PORT``; with --interface socketcan it is a running
+    ``rrr_hil_controller --socketcan IF`` started after this plant."""
+    rx_filter = None if args.drop_commands_from is None else drop_commands_from(
+        args.drop_commands_from)
+    ctrl = None
+    try:
+        if args.connect or args.interface == "socketcan":
+            host, _, port = (args.connect or "127.0.0.1:0").rpartition(":")
+        else:
+            ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, out / "reference.csv")
+            ctrl = start_listening_controller(ref_csv, log_csv=out / "controller.csv")
+            host, port = "127.0.0.1", str(ctrl.port)
+        with _open(args.interface, host, int(port), args.channel) as bus:
+            if args.interface == "socketcan":
+                print(f"python plant on {args.channel}: start rrr_hil_controller --socketcan "
+                      f"{args.channel} now", flush=True)
+            run = PythonPlant(bus, q0=ref.q[0], qd0=ref.qd[0], rx_filter=rx_filter,
+                              start_timeout=120.0).run(out / "plant.csv")
+        s = run.summary
+        err = np.abs(run.q[: ref.q.shape[0]] - ref.q[: run.q.shape[0]]).max()
+        print(f"python plant: exit {s['exit']}, {s['periods']} periods, max |q - q_ref| "
+              f"{err:.3e} rad, faults latched {s['faults']} (events {s['fault_events']}, "
+              f"timeout {s['timeout']}, crc {s['crc']}, counter {s['counter']}, "
+              f"range {s['range']}, bus {s['bus']}), periods at 0 V {s['zero_periods']}; "
+              f"log {out / 'plant.csv'}")
+        if ctrl is not None:
+            cs = ctrl.wait()
+            print(f"controller node: exit {cs['exit']}, plant faults seen {cs['plant_faults']}")
+        return 0 if s["exit"] == 0 else 3
+    finally:
+        if ctrl is not None:
+            ctrl.close()
