@@ -21,6 +21,8 @@ import numpy.typing as npt
 import pinocchio as pin
 import pytest
 import rrr_robot as rr
+from rrr_robot.references import Inertial
+from rrr_robot.references import pinocchio_model as pinocchio_model_of
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -88,28 +90,12 @@ def random_robot(seed: int) -> Robot:
     return Robot(model, dh, g, masses, coms, inertias, rotor)
 
 
-def dh_transform(d: float, a: float, alpha: float) -> pin.SE3:
-    """Tz(d) Tx(a) Rx(alpha): the fixed part of the DH transform A_i."""
-    ca, sa = np.cos(alpha), np.sin(alpha)
-    rot_x = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
-    return pin.SE3(rot_x, np.array([a, 0.0, d]))
-
-
 def pinocchio_model(robot: Robot) -> tuple[pin.Model, pin.Data]:
-    """Joint i rotates frame i-1 about z; link i (given in DH frame i) hangs on joint i."""
-    model = pin.Model()
-    model.gravity.linear = np.array([0.0, 0.0, -robot.g])
-    parent, placement = 0, pin.SE3.Identity()
-    for i in range(3):
-        joint = model.addJoint(parent, pin.JointModelRZ(), placement, f"joint{i + 1}")
-        fixed = dh_transform(robot.d[i], robot.a[i], ALPHA[i])
-        com = fixed.translation + fixed.rotation @ robot.coms[i]
-        inertia = fixed.rotation @ robot.inertias[i] @ fixed.rotation.T
-        model.appendBodyToJoint(
-            joint, pin.Inertia(float(robot.masses[i]), com, inertia), pin.SE3.Identity()
-        )
-        parent, placement = joint, fixed
-    model.armature = robot.rotor.copy()
+    """The package's Pinocchio builder (also behind the writing task's Fig 6): revolute-z joints
+    placed by Tz(d) Tx(a) Rx(alpha), link i (given in DH frame i) hung on joint i, J_m as
+    armature."""
+    inertial = Inertial(robot.masses, robot.coms, robot.inertias, robot.rotor)
+    model = pinocchio_model_of(robot.dh, robot.g, inertial)
     return model, model.createData()
 
 
