@@ -4,6 +4,8 @@
 #include "hil_node.h"
 
 #include <errno.h>
+#include <stddef.h>
+#include <stdio.h>
 #include <math.h>
 #include <sched.h>
 #include <stdlib.h>
@@ -46,6 +48,82 @@ int rrr_hil_parse_vec3(const char *s, double v[3])
         v[i] = x;
         p = end + 1;
     }
+    return 0;
+}
+
+/* 1 when name is exactly fmt ("x[%d]%n" or "x[%d,%d]%n") with indices in 1..max. */
+static int indexed(const char *name, const char *fmt, int *i, int *k, int max)
+{
+    int used = -1;
+    const int want = k == NULL ? 1 : 2;
+    const int got = k == NULL ? sscanf(name, fmt, i, &used) : sscanf(name, fmt, i, k, &used);
+    if (got != want || used < 0 || name[used] != '\0' || *i < 1 || *i > max) {
+        return 0;
+    }
+    return k == NULL || (*k >= 1 && *k <= max);
+}
+
+/* The field of a model parameter named as in the FMUs, or NULL. */
+static double *model_field(rrr_model *m, const char *name)
+{
+    static const struct {
+        const char *name;
+        size_t offset;
+    } scalars[] = {
+        {"d1", offsetof(rrr_model, d1)}, {"a2", offsetof(rrr_model, a2)},
+        {"a3", offsetof(rrr_model, a3)}, {"d2", offsetof(rrr_model, d2)},
+        {"d3", offsetof(rrr_model, d3)}, {"g", offsetof(rrr_model, g)},
+        {"u_max", offsetof(rrr_model, u_max)},
+    };
+    for (size_t j = 0; j < sizeof scalars / sizeof scalars[0]; ++j) {
+        if (strcmp(name, scalars[j].name) == 0) {
+            return (double *)(void *)((char *)m + scalars[j].offset);
+        }
+    }
+    int i = 0, k = 0;
+    if (indexed(name, "p[%d]%n", &i, NULL, RRR_NP)) {
+        return &m->p[i - 1];
+    }
+    if (indexed(name, "kt[%d]%n", &i, NULL, 3)) {
+        return &m->kt[i - 1];
+    }
+    if (indexed(name, "b[%d]%n", &i, NULL, 3)) {
+        return &m->b[i - 1];
+    }
+    if (indexed(name, "f[%d,%d]%n", &i, &k, 3)) {
+        return &m->f[i - 1][k - 1];
+    }
+    if (indexed(name, "w[%d,%d]%n", &i, &k, 3)) {
+        return &m->w[i - 1][k - 1];
+    }
+    return NULL;
+}
+
+int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, size_t err_len)
+{
+    const char *eq = strchr(assignment, '=');
+    char name[32];
+    const size_t len = eq == NULL ? 0u : (size_t)(eq - assignment);
+    if (eq == NULL || len == 0u || len >= sizeof name) {
+        snprintf(err, err_len, "expected NAME=VALUE, got '%s'", assignment);
+        return -1;
+    }
+    memcpy(name, assignment, len);
+    name[len] = '\0';
+    double *field = model_field(m, name);
+    if (field == NULL) {
+        snprintf(err, err_len, "unknown model parameter '%s' (d1, a2, a3, d2, d3, g, u_max, "
+                 "p[1..16], kt[i], b[i], f[i,k], w[i,k])", name);
+        return -1;
+    }
+    char *end;
+    errno = 0;
+    const double v = strtod(eq + 1, &end);
+    if (end == eq + 1 || *end != '\0' || errno != 0 || !isfinite(v)) {
+        snprintf(err, err_len, "%s: expected a finite number, got '%s'", name, eq + 1);
+        return -1;
+    }
+    *field = v;
     return 0;
 }
 

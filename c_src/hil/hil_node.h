@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "hil_transport.h"
+#include "rrr/rrr_model.h"
 
 /* ---- transport from the command line --------------------------------------------------------- */
 
@@ -35,6 +36,11 @@ typedef union rrr_hil_link {
 int rrr_hil_parse_hostport(const char *s, char host[64], uint16_t *port);
 /** Parse "a,b,c" into three finite doubles. 0 or -1. */
 int rrr_hil_parse_vec3(const char *s, double v[3]);
+/** Apply "NAME=VALUE" to a model, NAME as the FMUs name the parameters: d1, a2, a3, d2, d3, g,
+ *  u_max, p[1..16], kt[i], b[i], f[i,k], w[i,k] (i, k = 1..3). The value must be finite; the
+ *  model is not validated here (call rrr_model_validate after the last one). 0, or -1 with a
+ *  message in err. */
+int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, size_t err_len);
 /** Handle a transport option (argv[*i] and its value); 1 consumed, 0 not a transport option,
  *  -1 bad value (message printed). */
 int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog);

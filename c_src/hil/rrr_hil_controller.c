@@ -49,6 +49,8 @@ typedef struct opts {
     rrr_ctc_gains gains;
     int fifo_prio;
     int mlock;
+    const char *sets[64]; /* "NAME=VALUE" model parameters (--set), applied in order */
+    int n_sets;
 } opts;
 
 typedef struct ctrl {
@@ -76,9 +78,12 @@ static void usage(void)
     fprintf(stderr,
             "usage: " PROG " --reference REF.csv (--connect HOST:PORT | --listen HOST:PORT |\n"
             "       --socketcan IF) [--channel NAME] [--realtime [--fifo PRIO] [--mlock]]\n"
-            "       [--kp a,b,c] [--kd a,b,c] [--no-feedforward] [--timeout-ms N] [--log FILE.csv]\n"
-            "  the model is the default robot (rrr_model_default); gains default to "
-            "rrr_ctc_gains_default\n");
+            "       [--kp a,b,c] [--kd a,b,c] [--no-feedforward] [--set NAME=VALUE]...\n"
+            "       [--timeout-ms N] [--log FILE.csv]\n"
+            "  the model is the default robot (rrr_model_default) with the --set parameters\n"
+            "  (named as in the FMUs: d1, a2, a3, d2, d3, g, u_max, p[k], kt[i], b[i], f[i,k],\n"
+            "  w[i,k]), so the controller's model may differ from the plant's; gains default\n"
+            "  to rrr_ctc_gains_default\n");
 }
 
 static int parse_args(int argc, char **argv, opts *o)
@@ -114,6 +119,13 @@ static int parse_args(int argc, char **argv, opts *o)
                 o->ref_path = v;
             } else if (strcmp(a, "--log") == 0) {
                 o->log_path = v;
+            } else if (strcmp(a, "--set") == 0) {
+                if (o->n_sets >= (int)(sizeof o->sets / sizeof o->sets[0])) {
+                    fprintf(stderr, PROG ": --set: at most %d parameters\n",
+                            (int)(sizeof o->sets / sizeof o->sets[0]));
+                    return -1;
+                }
+                o->sets[o->n_sets++] = v;
             } else if (strcmp(a, "--kp") == 0 || strcmp(a, "--kd") == 0) {
                 if (rrr_hil_parse_vec3(v, a[3] == 'p' ? o->gains.kp : o->gains.kd) != 0) {
                     fprintf(stderr, PROG ": %s: expected three numbers a,b,c, got '%s'\n", a, v);
@@ -369,6 +381,19 @@ int main(int argc, char **argv)
     memset(&c, 0, sizeof c);
     char err[512];
     (void)rrr_model_default(&c.model);
+    for (int i = 0; i < o.n_sets; ++i) {
+        if (rrr_hil_set_model_param(&c.model, o.sets[i], err, sizeof err) != 0) {
+            fprintf(stderr, PROG ": --set: %s\n", err);
+            return 2;
+        }
+    }
+    const char *field = "";
+    const rrr_status valid = rrr_model_validate(&c.model, &field);
+    if (valid != RRR_OK) {
+        fprintf(stderr, PROG ": the controller's model is invalid: parameter %s (%s)\n", field,
+                rrr_status_str(valid));
+        return 2;
+    }
     if (rrr_hil_reference_load(o.ref_path, &c.ref, err, sizeof err) != 0) {
         fprintf(stderr, PROG ": %s\n", err);
         return 2;

@@ -292,6 +292,25 @@ def start_controller(reference_csv: Path, *, connect: str, log_csv: Path | None 
     return NodeProcess("rrr_hil_controller", [*args, *extra], listening=False)
 
 
+def controller_node_args(values: Mapping[str, float | bool]) -> list[str]:
+    """rrr_hil_controller arguments for controller FMU start values (the same names): kp[i],
+    kd[i] -> --kp/--kd, feedforward false -> --no-feedforward, model parameters -> --set."""
+    args: list[str] = []
+    for gain in ("kp", "kd"):
+        names = [f"{gain}[{i}]" for i in (1, 2, 3)]
+        given = [n for n in names if n in values]
+        if given and len(given) != 3:
+            raise ValueError(f"{gain}: give all three of {names} or none")
+        if given:
+            args += [f"--{gain}", _vec([float(values[n]) for n in names])]
+    if "feedforward" in values and not values["feedforward"]:
+        args.append("--no-feedforward")
+    for name, v in values.items():
+        if name != "feedforward" and not name.startswith(("kp[", "kd[")):
+            args += ["--set", f"{name}={float(v):.17g}"]
+    return args
+
+
 def open_bus(interface: str = "socketcand", *, host: str = "127.0.0.1", port: int = 29536,
              channel: str = "bench0") -> Any:
     """A python-can bus: ``socketcand`` (TCP, to the C node) or ``socketcan`` (channel = vcan0)."""
@@ -388,17 +407,24 @@ def _read_log(path: Path) -> FloatArray:
 
 
 def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
-                workdir: Path | None = None, timeout: float = 300.0) -> BenchRun:
+                workdir: Path | None = None, timeout: float = 300.0,
+                controller_values: Mapping[str, float | bool] = {}) -> BenchRun:
     """Both C nodes in lockstep over the socketcand transport (plant = server). The plant starts
-    at (q_ref[0], qd_ref[0]); both use the default robot and gains (the FMU defaults)."""
+    at (q_ref[0], qd_ref[0]) on the default robot; the controller uses the default robot and
+    gains changed by ``controller_values`` (controller FMU names, e.g. a scenario's)."""
     own = workdir is None
     work = Path(tempfile.mkdtemp(prefix="rrr_hil_")) if workdir is None else Path(workdir)
     try:
         ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, work / "reference.csv")
         with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=work / "plant.csv") as plant, \
                 start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
-                                 log_csv=work / "controller.csv") as ctrl:
+                                 log_csv=work / "controller.csv",
+                                 extra=controller_node_args(controller_values)) as ctrl:
             cs = ctrl.wait(timeout)
+            if cs["exit"] != 0:  # the plant would wait for a controller that is gone
+                plant.close()
+                raise HilError(f"bench failed: controller exit {cs['exit']}: "
+                               f"{ctrl.stderr.strip()}")
             ps = plant.wait(timeout)
         if cs["exit"] != 0 or ps["exit"] != 0:
             raise HilError(f"bench failed: controller exit {cs['exit']}: {ctrl.stderr.strip()}; "
@@ -457,15 +483,17 @@ def quantised_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_re
 # ---- command line ---------------------------------------------------------------------------
 
 
-def _writing_reference(text: str | None) -> Any:
-    from .writing import WritingJob, prepare
+def _writing_setup(text: str | None, scenario: str) -> tuple[Any, dict[str, float | bool]]:
+    """The writing reference and the controller values of a scenario (default robot)."""
+    from .writing import WritingJob, controller_fmu_values, prepare
 
-    job = WritingJob(out=Path("."), text=text, scenarios=["ctc"])
-    return prepare(job)[3]
+    model, tables, scenarios, ref = prepare(WritingJob(out=Path("."), text=text,
+                                                       scenarios=[scenario]))
+    return ref, controller_fmu_values(scenarios[0], model, tables["control"])
 
 
 def _cmd_hil(args: Any) -> int:
-    ref = _writing_reference(args.text)
+    ref, ctrl_values = _writing_setup(args.text, args.scenario)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if args.side == "export-reference":
@@ -475,9 +503,10 @@ def _cmd_hil(args: Any) -> int:
     if args.side == "plant":
         from .hil_plant import cmd_plant
 
-        return cmd_plant(args, ref, out)
+        return cmd_plant(args, ref, out, ctrl_values)
     if args.side == "bench":
-        run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=out)
+        run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=out,
+                          controller_values=ctrl_values)
         print(f"C bench: {run.t.size} periods; plant faults {run.plant_summary['faults']}; "
               f"logs in {out}/ (plant.csv, controller.csv)")
         return 0
@@ -491,7 +520,7 @@ def _cmd_hil(args: Any) -> int:
             plant = start_plant(q0=ref.q[0], qd0=ref.qd[0], log_csv=out / "plant.csv")
             host, port = "127.0.0.1", str(plant.port)
         with open_bus(args.interface, host=host, port=int(port), channel=args.channel) as bus:
-            run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd)
+            run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd, ctrl_values)
         err = np.abs(run.q - ref.q).max()
         print(f"FMU controller vs plant node: {run.t.size} periods, max |q - q_ref| "
               f"{err:.3e} rad, plant status {run.plant_summary}")
@@ -518,6 +547,9 @@ def register_cli(subparsers: Any) -> None:
     )
     p.add_argument("side", choices=["controller", "plant", "bench", "export-reference"])
     p.add_argument("--text", help="text to write (default: the writing task's default)")
+    p.add_argument("--scenario", default="ctc",
+                   help="controller scenario (gains, feedforward, model): pd, ctc, mismatch or "
+                   "a scenario .toml (default ctc)")
     p.add_argument("--out", default="results/hil", help="output folder (default: results/hil)")
     p.add_argument("--interface", default="socketcand", choices=["socketcand", "socketcan"],
                    help="python-can interface (default socketcand)")

@@ -44,6 +44,7 @@ from .hil import (
     FrameError,
     HilError,
     NodeProcess,
+    controller_node_args,
     decode,
     encode,
     export_reference,
@@ -324,7 +325,8 @@ def _open(interface: str, host: str, port: int, channel: str) -> Any:
         raise HilError(f"cannot open the {interface} bus {channel or ''}: {exc}{hint}") from exc
 
 
-def cmd_plant(args: Any, ref: Any, out: Path) -> int:
+def cmd_plant(args: Any, ref: Any, out: Path,
+              controller_values: Mapping[str, float | bool] = {}) -> int:
     """``rrr hil plant``: the Python plant against the C controller node along ``ref``. Without
     --connect (socketcand) the controller is started here with --listen; with --connect it is a
     running ``rrr_hil_controller --listen HOST:PORT``; with --interface socketcan it is a running
@@ -337,7 +339,8 @@ def cmd_plant(args: Any, ref: Any, out: Path) -> int:
             host, _, port = (args.connect or "127.0.0.1:0").rpartition(":")
         else:
             ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, out / "reference.csv")
-            ctrl = start_listening_controller(ref_csv, log_csv=out / "controller.csv")
+            ctrl = start_listening_controller(ref_csv, log_csv=out / "controller.csv",
+                                              extra=controller_node_args(controller_values))
             host, port = "127.0.0.1", str(ctrl.port)
         with _open(args.interface, host, int(port), args.channel) as bus:
             if args.interface == "socketcan":

@@ -82,3 +82,30 @@ def test_python_can_controller_fmu_against_c_plant(writing, tmp_path: Path) -> N
     assert np.abs(log[:, 2:5] - qc.q).max() < 1e-9
     # what the controller received is the plant state quantised by the DBC
     assert np.abs(run.q - qc.q).max() <= 0.5e-6 + 1e-12
+
+
+def test_c_controller_takes_a_scenario_model(writing, tmp_path: Path) -> None:
+    """The mismatch scenario on the bench: the C controller node runs with the perturbed model
+    and PD gains of the scenario (--set, --kp, --kd), and again equals the quantised FMPy loop
+    with the same controller FMU values."""
+    from rrr_robot.scenarios import load_scenario
+
+    model, tables, _, ref = writing
+    values = controller_fmu_values(load_scenario("mismatch"), model, tables["control"])
+    n = 1500
+    t, q, qd, qdd = ref.t[:n], ref.q[:n], ref.qd[:n], ref.qdd[:n]
+    bench = hil.run_c_bench(t, q, qd, qdd, workdir=tmp_path, controller_values=values)
+    qc = hil.quantised_cosim(t, q, qd, qdd, controller_values=values)
+    exact = hil.quantised_cosim(t, q, qd, qdd)
+    assert np.abs(bench.q - qc.q).max() < 1e-9
+    assert np.abs(bench.u - qc.u).max() < 1e-9
+    assert np.abs(bench.u - exact.u).max() > 1e-3  # the perturbed model does change u
+
+
+def test_controller_node_rejects_bad_model_values(writing, tmp_path: Path) -> None:
+    ref = writing[3]
+    with pytest.raises(hil.HilError, match=r"parameter kt\[2\]"):
+        hil.run_c_bench(ref.t[:10], ref.q[:10], ref.qd[:10], ref.qdd[:10], workdir=tmp_path,
+                        controller_values={"kt[2]": -1.0})
+    with pytest.raises(ValueError, match="give all three"):
+        hil.controller_node_args({"kp[1]": 1.0})
