@@ -12,7 +12,14 @@ FloatArray = NDArray[np.float64]
 
 def as_rows(value: ArrayLike, name: str, width: int = 3) -> tuple[FloatArray, bool]:
     """Return (array of shape (n, width), was_batch); raise BadInputError on a wrong shape."""
-    arr = np.ascontiguousarray(value, dtype=np.float64)
+    try:
+        raw = np.asarray(value)
+        if not np.iscomplexobj(raw):
+            arr = np.ascontiguousarray(raw, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise BadInputError(f"{name} must be an array of numbers: {exc}") from exc
+    if np.iscomplexobj(raw):
+        raise BadInputError(f"{name} must be real, got complex values")
     if arr.ndim == 1 and arr.shape[0] == width:
         return arr.reshape(1, width), False
     if arr.ndim == 2 and arr.shape[1] == width:

@@ -273,7 +273,11 @@ class Model:
         """IK solution nearest to q_prev, unwrapped by whole turns. For a batch of targets the
         solution of each row seeds the next, giving a continuous joint path."""
         xs, batch = as_rows(x, "x")
-        prev = np.array(as_rows(q_prev, "q_prev")[0][0])
+        prev_rows, prev_batch = as_rows(q_prev, "q_prev")
+        if prev_batch:
+            raise BadInputError(f"q_prev must have shape (3,) (the seed of the first target), "
+                                f"got {prev_rows.shape}")
+        prev = np.array(prev_rows[0])
         q = np.empty_like(xs)
         fn = _lib.FUNCS["rrr_ik_nearest"]
         (xb, xs_), (qb, qs_) = rows_of(xs), rows_of(q)

@@ -228,6 +228,15 @@ static void test_singular_and_bad(const rrr_model *m)
     const double prev_nan[3] = {0.0, NAN, 0.0};
     rrr_fk(m, up, x, NULL);
     CHECK_STATUS(rrr_ik_nearest(m, x, prev_nan, qk, NULL), RRR_BAD_INPUT);
+    /* beyond RRR_Q_UNWRAP_MAX a double cannot hold the unwrapped angle: refused, not wrong */
+    const double prev_far[3] = {2.0 * RRR_Q_UNWRAP_MAX, 0.0, 0.0};
+    CHECK_STATUS(rrr_ik_nearest(m, x, prev_far, qk, NULL), RRR_BAD_INPUT);
+    const double prev_edge[3] = {RRR_Q_UNWRAP_MAX, 0.3, -0.2};
+    double q_edge[3], x_edge[3];
+    CHECK_STATUS(rrr_ik_nearest(m, x, prev_edge, q_edge, NULL), RRR_OK);
+    rrr_fk(m, q_edge, x_edge, NULL);
+    CHECK_CLOSE(x_edge[0], x[0], 1e-9);
+    CHECK_CLOSE(x_edge[2], x[2], 1e-9);
     CHECK(qk[0] == 7.0);
     CHECK_STATUS(rrr_jacobian(m, nan_x, NULL), RRR_BAD_INPUT);
     rrr_model broken = *m;

@@ -120,6 +120,25 @@ static void test_validate(void)
     m = ok;
     m.p[13] = -1.0; /* D33 = p14 < 0 */
     expect_invalid(&m, RRR_NOT_POSITIVE_DEFINITE, "p");
+    /* D(q) loses positive definiteness only in a thin dip between the points of a 64 x 64 grid
+     * (found by a review: smallest eigenvalue -4.2e-4 at q2 = -pi/2, q3 = -3.0910); the
+     * pattern search from the grid minima must catch it */
+    static const double dip[RRR_NP] = {0.72, -0.0, 0.49939772810258615, -0.02453383716370898,
+                                       0.125, 0.0, 0.521, 0.0, -0.06, 0.0, -0.36,
+                                       0.5816198099497684, 0.13, 0.14, 2.2, 0.0};
+    m = ok;
+    memcpy(m.p, dip, sizeof dip);
+    expect_invalid(&m, RRR_NOT_POSITIVE_DEFINITE, "p");
+    double Dd[3][3];
+    const double q_dip[3] = {0.0, -1.5707963, -3.0910};
+    CHECK_STATUS(rrr_mass_matrix(&m, q_dip, Dd), RRR_OK);
+    CHECK(Dd[0][0] * Dd[1][1] - Dd[0][1] * Dd[1][0] < 0.0 || Dd[0][0] <= 0.0 ||
+          Dd[0][0] * (Dd[1][1] * Dd[2][2] - Dd[1][2] * Dd[2][1]) -
+                  Dd[0][1] * (Dd[1][0] * Dd[2][2] - Dd[1][2] * Dd[2][0]) +
+                  Dd[0][2] * (Dd[1][0] * Dd[2][1] - Dd[1][1] * Dd[2][0]) <
+              0.0); /* there D really is indefinite */
+    m.p[11] += 1e-3; /* a little more I_zz lifts the dip: valid again */
+    CHECK_STATUS(rrr_model_validate(&m, NULL), RRR_OK);
     CHECK_STATUS(rrr_model_validate(NULL, NULL), RRR_BAD_INPUT);
     CHECK(strcmp(rrr_status_str(RRR_UNREACHABLE), "RRR_UNREACHABLE") == 0);
     CHECK(strcmp(rrr_status_str((rrr_status)99), "RRR_UNKNOWN_STATUS") == 0);

@@ -140,3 +140,20 @@ def test_singularity_classification(model: rr.Model) -> None:
     assert s.folded
     s = model.singularity([0.1, 0.4, 1.2])
     assert not (s.stretched or s.folded or s.shoulder) and s.det_jacobian != 0.0
+
+
+def test_ik_nearest_refuses_what_it_cannot_unwrap(model: rr.Model) -> None:
+    x, _ = model.fk([0.1, 0.2, 0.3])
+    with pytest.raises(rr.BadInputError, match="q_prev must have shape"):
+        model.ik_nearest(np.array([x, x]), np.zeros((3, 3)))
+    # beyond 1e6 rad a double cannot hold the unwrapped angle: refused, never a wrong answer
+    with pytest.raises(rr.BadInputError):
+        model.ik_nearest(x, [1e7, 0.0, 0.0])
+    q = model.ik_nearest(x, [1e6, 0.0, 0.0])
+    np.testing.assert_allclose(model.fk(q)[0], x, atol=1e-9)
+
+
+@pytest.mark.parametrize("bad", [np.array([1j, 0, 0]), ["a", "b", "c"], [[1, 2], [3]]])
+def test_non_numeric_inputs_raise(model: rr.Model, bad: object) -> None:
+    with pytest.raises(rr.BadInputError):
+        model.fk(bad)

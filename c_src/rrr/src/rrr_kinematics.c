@@ -276,7 +276,9 @@ rrr_status rrr_ik(const rrr_model *m, const double x[3], rrr_ik_set *sol)
 rrr_status rrr_ik_nearest(const rrr_model *m, const double x[3], const double q_prev[3],
                           double q[3], int *branch)
 {
-    if (q_prev == NULL || q == NULL || !rrr_finite_n(q_prev, 3)) {
+    if (q_prev == NULL || q == NULL || !rrr_finite_n(q_prev, 3) ||
+        fabs(q_prev[0]) > RRR_Q_UNWRAP_MAX || fabs(q_prev[1]) > RRR_Q_UNWRAP_MAX ||
+        fabs(q_prev[2]) > RRR_Q_UNWRAP_MAX) {
         return RRR_BAD_INPUT;
     }
     rrr_ik_set set;

@@ -29,6 +29,9 @@ typedef struct rrr_ik_set {
     int branch[4];               ///< branch index shoulder * 2 + elbow of each solution
 } rrr_ik_set;
 
+/** Largest |q_prev| that rrr_ik_nearest unwraps to (the spacing of doubles there is 1.2e-10 rad). */
+#define RRR_Q_UNWRAP_MAX 1e6
+
 /** Singularity flags (bits of rrr_singularity.flags). */
 #define RRR_SING_ELBOW_STRETCHED 1u   ///< q3 = 0 (mod 2 pi): elbow straight, tip on the outer workspace boundary
 #define RRR_SING_ELBOW_FOLDED    2u   ///< q3 = pi (mod 2 pi): elbow folded back, tip on the inner boundary
@@ -95,10 +98,11 @@ RRR_API rrr_status rrr_ik(const rrr_model *m, const double x[3], rrr_ik_set *sol
 /**
  * @brief The IK solution nearest to a given configuration, unwrapped by multiples of 2 pi per
  *        joint (the joints turn without limit), so that a trajectory stays continuous.
- * @param[in]  q_prev configuration to stay near (any real angles)
+ * @param[in]  q_prev configuration to stay near, |q_prev_i| <= RRR_Q_UNWRAP_MAX (about 160,000
+ *                    turns: beyond it a double cannot hold the unwrapped angle to 1e-9 rad)
  * @param[out] q      solution with |q_i - q_prev_i| <= pi on every joint
  * @param[out] branch if not NULL, branch index of the chosen solution
- * @return RRR_OK, RRR_BAD_INPUT or RRR_UNREACHABLE
+ * @return RRR_OK, RRR_BAD_INPUT (also for |q_prev_i| > RRR_Q_UNWRAP_MAX) or RRR_UNREACHABLE
  */
 RRR_API rrr_status rrr_ik_nearest(const rrr_model *m, const double x[3], const double q_prev[3],
                           double q[3], int *branch);
