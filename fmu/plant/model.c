@@ -118,6 +118,14 @@ static fmu_status do_step(fmu_instance *inst, double h)
     rrr_plant_state x = p->x;
     double qdd[RRR_NJ];
     double tip[3];
+    if (h / p->h_int > RRR_PLANT_MAX_SUBSTEPS) {
+        fmu_log(inst, FMU_DISCARD, FMU_LOG_DISCARD,
+                "fmi2DoStep: a communication step of %.17g s needs %.3g substeps of h_int = "
+                "%.17g s, more than the %.0e one step may take: use shorter communication "
+                "steps or a larger h_int; the state stays at t = %.17g",
+                h, h / p->h_int, p->h_int, RRR_PLANT_MAX_SUBSTEPS, inst->time);
+        return FMU_DISCARD;
+    }
     rrr_status st = rrr_plant_step(&p->model, p->h_int, p->u, h, &x, qdd);
     if (st == RRR_OK) {
         st = rrr_fk(&p->model, x.q, tip, NULL);

@@ -103,7 +103,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                         format="%(levelname)s %(name)s: %(message)s")
     try:
         return int(args.func(args))
-    except RrrError as exc:
+    except (RrrError, OSError) as exc:  # OSError: an output path that cannot be written
         print(f"rrr: error: {exc}", file=sys.stderr)
         return 2
 

@@ -113,8 +113,10 @@ class Model:
                 data = tomllib.load(fh)
         except FileNotFoundError as exc:
             raise ModelError(f"robot file {path} does not exist") from exc
-        except tomllib.TOMLDecodeError as exc:
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise ModelError(f"robot file {path} is not valid TOML: {exc}") from exc
+        except OSError as exc:
+            raise ModelError(f"cannot read robot file {path}: {exc}") from exc
         return cls.from_dict(data, source=str(path))
 
     @classmethod

@@ -19,12 +19,22 @@ if TYPE_CHECKING:
     from .model import Model
 
 
+def _all_numbers(value: Any) -> bool:
+    """True for an int or float, or nested lists of them (TOML booleans and strings are not
+    numbers, although numpy would convert them)."""
+    if isinstance(value, list):
+        return all(_all_numbers(v) for v in value)
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
 def _get(data: Mapping[str, Any], table: str, key: str, shape: tuple[int, ...], src: str) -> Any:
     section = data.get(table)
     if not isinstance(section, Mapping):
         raise ModelError(f"{src}: missing table [{table}]")
     if key not in section:
         raise ModelError(f"{src}: missing key {key!r} in [{table}]")
+    if not _all_numbers(section[key]):
+        raise ModelError(f"{src}: [{table}] {key} must be numbers, got {section[key]!r}")
     try:
         arr = np.asarray(section[key], dtype=float)
     except (TypeError, ValueError) as exc:

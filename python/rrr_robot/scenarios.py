@@ -99,6 +99,8 @@ def load_scenario(name_or_path: str) -> Scenario:
             )
     try:
         data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise BadInputError(f"{path}: malformed scenario file: {exc}") from exc
+    except OSError as exc:
+        raise BadInputError(f"cannot read scenario file {path}: {exc}") from exc
     return scenario_from_dict(data, str(path))

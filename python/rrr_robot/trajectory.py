@@ -59,9 +59,15 @@ logger = logging.getLogger(__name__)
 
 #: Omega, m and gamma of the paper (where its PD corrections peak) between cursive latin letters.
 DEFAULT_TEXT = "a\u03c9m\u03b3"  # "a omega m gamma"
+MAX_TEXT = 200              # characters per run; joining strokes costs O(n^2) in the text
 _TIME_GRID = 5e-4            # s, grid of the timing law's quintic spline
 _PATH_GRID = 1e-4            # m, grid of s for the speed limit
 _TOML_IGNORED = ("duration_hint",)
+
+
+def short_text(text: str, limit: int = 30) -> str:
+    """The text quoted for a message, cut to ``limit`` characters."""
+    return repr(text if len(text) <= limit else text[: limit - 3] + "...")
 
 
 @dataclass(frozen=True)
@@ -117,8 +123,15 @@ class WritingSpec:
             raise BadInputError("WritingSpec.min_speed must be below peak_speed")
         if self.rest < 0.0 or self.dt > 0.01:
             raise BadInputError("WritingSpec.rest must be >= 0 and dt at most 10 ms")
+        if isinstance(self.text, str) and len(self.text) > MAX_TEXT:
+            raise BadInputError(
+                f"text has {len(self.text)} characters ({short_text(self.text)}); at most "
+                f"{MAX_TEXT} per run (planning grows faster than the text): split it"
+            )
         if not isinstance(self.text, str) or not self.text.strip():
-            raise BadInputError(f"WritingSpec.text must be a non-empty string, got {self.text!r}")
+            raise BadInputError(
+                f"WritingSpec.text must be a non-empty string, got {short_text(str(self.text))}"
+            )
         if self.shoulder not in ("front", "back") or self.elbow not in ("up", "down"):
             raise BadInputError(
                 f"WritingSpec posture must be front|back and up|down, got {self.shoulder}, "
@@ -178,7 +191,7 @@ def writing_path(spec: WritingSpec) -> WritingPath:
     for k, axis in enumerate(("wide", "high")):
         if size[k] > room[k]:
             raise BadInputError(
-                f"text {spec.text!r} is {size[k]:.3f} m {axis} at letter_height "
+                f"text {short_text(spec.text)} is {size[k]:.3f} m {axis} at letter_height "
                 f"{spec.letter_height} m, but the writing area is only {room[k]:.3f} m {axis} "
                 f"(x_range {spec.x_range}, z_range {spec.z_range}): shorten the text or make "
                 "the letters smaller"
@@ -205,7 +218,8 @@ def check_workspace(model: Model, path: WritingPath, spec: WritingSpec) -> float
     if margin[k] < spec.min_workspace_margin:
         where = "outside the workspace" if margin[k] < 0 else "too close to its boundary"
         raise BadInputError(
-            f"text {spec.text!r}: the tip would pass {where} at x = {np.round(x[k], 4).tolist()} "
+            f"text {short_text(spec.text)}: the tip would pass {where} at x = "
+            f"{np.round(x[k], 4).tolist()} "
             f"(margin {margin[k]:.4f} m, required {spec.min_workspace_margin} m); move the "
             "writing area (plane_y, x_range, z_range) or make the letters smaller"
         )
@@ -311,12 +325,13 @@ def _singular_margins(model: Model, q: FloatArray, spec: WritingSpec) -> tuple[f
     det_sign = np.sign([si.det_jacobian for si in sing])
     if np.any(det_sign != det_sign[0]):
         raise BadInputError(
-            f"text {spec.text!r}: the joint path changes posture branch at t = "
+            f"text {short_text(spec.text)}: the joint path changes posture branch at t = "
             f"{np.argmax(det_sign != det_sign[0]) * spec.dt:.3f} s (passes a singularity)"
         )
     if elbow.min() < spec.min_elbow_margin:
         raise BadInputError(
-            f"text {spec.text!r}: the elbow comes within |sin q3| = {elbow.min():.3f} of a "
+            f"text {short_text(spec.text)}: the elbow comes within |sin q3| = "
+            f"{elbow.min():.3f} of a "
             f"singular configuration (required {spec.min_elbow_margin})"
         )
     return float(elbow.min()), float(shoulder.min())

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from .cosim import CosimOptions, CosimResult, run_cosim
-from .errors import ModelError
+from .errors import BadInputError, ModelError
 from .model import DEFAULT_ROBOT_TOML, Model
 from .scenarios import BUILTIN, Scenario, load_scenario
 from .trajectory import Reference, WritingSpec, make_reference
@@ -84,7 +84,7 @@ def metrics(result: CosimResult) -> dict[str, Any]:
 def _robot_tables(path: Path) -> dict[str, Any]:
     try:
         return tomllib.loads(Path(path).read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise ModelError(f"cannot read robot file {path}: {exc}") from exc
 
 
@@ -110,7 +110,10 @@ def run_writing(job: WritingJob,
                 progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
     """Run the job and write its outputs; returns the summary written to summary.json."""
     model, tables, scenarios, ref = prepare(job)
-    job.out.mkdir(parents=True, exist_ok=True)
+    try:
+        job.out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise BadInputError(f"cannot create the output folder {job.out}: {exc}") from exc
     log.info("reference: %.2f s, %d samples, least workspace margin %.3f m, least |sin q3| %.3f",
              ref.t[-1] - ref.t[0], ref.t.size, ref.min_margin_m, ref.min_elbow_margin)
     results: dict[str, CosimResult] = {}

@@ -53,6 +53,8 @@ def test_bad_values_name_the_field(tmp_path) -> None:
         "a3 = 0.35": ("a3 = nan", "a3 contains NaN"),
         "mass = 6.0": ("mass = -6.0", "inertial parameters rejected"),
         "u_max = 10.0": ("u_max = [1, 2]", "u_max must have shape"),
+        "d1 = 0.50": ("d1 = true", r"\[kinematics\] d1 must be numbers"),
+        "b = [0.02, 0.02, 0.02]": ('b = [0.02, "0.02", 0.02]', r"\[friction\] b must be numbers"),
     }
     for old, (new, message) in cases.items():
         assert old in src

@@ -85,3 +85,28 @@ def test_too_few_friction_levels() -> None:
     pts = CurvePoints(np.array([0.1, 0.2, 0.5]), np.array([0.1, 0.11, 0.12]))
     with pytest.raises(BadInputError, match="sweep at least 8 speeds"):
         fit_nls(pts)
+
+
+def test_voltage_beyond_the_inverter_range_names_the_row() -> None:
+    from rrr_robot.identify.pipeline import identify
+
+    lg = fake_log()
+    lg.u[123, 0] = 1e308
+    with pytest.raises(BadInputError, match=r"row 124: u\[1\] = 1e\+308 V is outside"):
+        identify(lg, MODEL)
+
+
+def test_bad_settings_and_files(tmp_path: Path) -> None:
+    from rrr_robot.identify.pipeline import Settings
+
+    with pytest.raises(BadInputError, match="v_min must be a finite number"):
+        Settings(v_min=float("nan"))
+    dup = write(tmp_path / "d.csv", "t,q[1],q[1],q[2],q[3],u[1],u[2],u[3]", np.zeros((300, 8)))
+    with pytest.raises(BadInputError, match=r"duplicated column\(s\) q\[1\]"):
+        read_log(dup)
+    binary = tmp_path / "b.csv"
+    binary.write_bytes(b"\xff\xfe\x00\x01")
+    with pytest.raises(BadInputError, match="not a text"):
+        read_log(binary)
+    with pytest.raises(BadInputError, match="is a directory"):
+        read_log(tmp_path)

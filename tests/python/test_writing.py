@@ -75,6 +75,7 @@ def test_csv_matches_summary(run: tuple[Path, dict]) -> None:
         (["--scenario", "nonsense"], "unknown scenario 'nonsense'"),
         (["--scale", "6"], "writing area"),
         (["--text", "\u263a"], "\u263a"),
+        (["--text", "a" * 5000], "at most 200"),
     ],
 )
 def test_bad_inputs_fail_before_simulating(tmp_path: Path, args: list[str], message: str) -> None:
@@ -114,3 +115,23 @@ def test_fmu_error_is_a_clear_exception() -> None:
         run_cosim(t, q, zero, zero, zero, CosimOptions(controller_values={"kp": 1.0}))
     with pytest.raises(rr.BadInputError, match="NaN"):
         run_cosim(t, q + np.nan, zero, zero, zero)
+
+
+def test_unreadable_files_and_outputs_fail_cleanly(tmp_path: Path) -> None:
+    """Binary robot or scenario files and an output path that is a file: a message and exit 2,
+    no traceback, before any simulation."""
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"\xff\xfe\x00")
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    cases = [
+        (["--robot", str(binary), "--out", str(tmp_path / "o1")], "robot file"),
+        (["--scenario", str(binary), "--out", str(tmp_path / "o2")], "malformed scenario file"),
+        (["--out", str(blocker), "--scenario", "ctc", "--no-figures"], "output folder"),
+    ]
+    for args, message in cases:
+        result = subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--quiet", *args],
+                                capture_output=True, text=True, timeout=300)
+        assert result.returncode == 2, result.stderr
+        assert message in result.stderr and "Traceback" not in result.stderr
+    assert blocker.read_text() == "not a folder"

@@ -3,9 +3,6 @@
 
 #include "rrr_internal.h"
 
-/* Upper bound on substeps per call: a guard against h / h_int that would never finish. */
-#define RRR_PLANT_MAX_SUBSTEPS 10000000.0
-
 static rrr_status accel(const rrr_model *m, const double q[3], const double qd[3],
                         const double u[3], double qdd[3])
 {

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import BadInputError
 from ..model import DEFAULT_ROBOT_TOML, Model
 
 log = logging.getLogger(__name__)
@@ -23,6 +24,9 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
     prior_file = Path(args.robot) if args.robot else DEFAULT_ROBOT_TOML
     prior = Model.from_toml(prior_file)
+    out_dir = Path(args.out).resolve().parent
+    if not out_dir.is_dir():  # fail before the estimation, not after it
+        raise BadInputError(f"cannot write {args.out}: the folder {out_dir} does not exist")
     settings = Settings(derivatives=args.derivatives, cutoff=args.cutoff,
                         friction_method=args.friction_method, weighting=args.weighting,
                         v_min=args.v_min)

@@ -79,10 +79,17 @@ class Log:
 
 
 def _header(path: Path) -> tuple[list[str], int]:
-    with path.open(newline="") as fh:
-        for lineno, line in enumerate(fh):
-            if line.strip() and not line.lstrip().startswith("#"):
-                return [c.strip() for c in next(csv.reader([line]))], lineno
+    try:
+        with path.open(newline="") as fh:
+            for lineno, line in enumerate(fh):
+                if line.strip() and not line.lstrip().startswith("#"):
+                    names = [c.strip() for c in next(csv.reader([line]))]
+                    duplicated = sorted({n for n in names if names.count(n) > 1})
+                    if duplicated:
+                        raise BadInputError(f"{path}: duplicated column(s) {', '.join(duplicated)}")
+                    return names, lineno
+    except UnicodeDecodeError as exc:
+        raise BadInputError(f"{path}: not a text (CSV) file: {exc}") from exc
     raise BadInputError(f"{path}: no header row (expected columns {', '.join(REQUIRED)})")
 
 
@@ -90,7 +97,8 @@ def read_log(path: str | Path, *, friction: bool = False) -> Log:
     """Read and validate a CSV log; BadInputError names the file and the problem."""
     path = Path(path)
     if not path.is_file():
-        raise BadInputError(f"log {path} does not exist")
+        what = "is a directory, not a CSV file" if path.is_dir() else "does not exist"
+        raise BadInputError(f"log {path} {what}")
     names, skip = _header(path)
     need = REQUIRED + (("joint",) if friction else ())
     missing = [c for c in need if c not in names]

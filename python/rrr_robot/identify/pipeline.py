@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import BadInputError, ModelError
 from ..model import Model
 from ..robot_file import write_toml
 from .base_params import BaseParamResult, estimate_base_params
@@ -34,6 +34,22 @@ class Settings:
     friction_method: str = "nls"    # nls (f, w, b) | ls (w fixed from the prior)
     weighting: str = "ls"           # ls | wls (WLS intervals are optimistic, see report)
     v_min: float = 0.05             # rad/s
+
+    def __post_init__(self) -> None:
+        for name in ("cutoff", "friction_cutoff", "v_min"):
+            value = getattr(self, name)
+            if not (np.isfinite(value) and value > 0.0):
+                raise BadInputError(f"{name} must be a finite number > 0, got {value}")
+
+
+def check_voltages(lg: Log, u_max: float) -> None:
+    """A logged voltage beyond the inverter's range cannot have been applied: name the row."""
+    bad = np.argwhere(np.abs(lg.u) > u_max * (1.0 + 1e-9))
+    if bad.size:
+        row, col = (int(v) for v in bad[0])
+        raise BadInputError(f"{lg.source}: row {row + 1}: u[{col + 1}] = {lg.u[row, col]:.6g} V "
+                            f"is outside the voltage range +/- {u_max:g} V of the robot "
+                            f"({bad.shape[0]} such value(s))")
 
 
 @dataclass(frozen=True)
@@ -80,6 +96,9 @@ def identify_friction(lg: Log, prior: Model, settings: Settings = Settings(),
 def identify(excitation: Log, prior: Model, friction: Log | None = None,
              settings: Settings = Settings()) -> Identified:
     """Friction (if a sweep log is given; otherwise the prior's) then the base parameters."""
+    for lg in (excitation, friction):
+        if lg is not None:
+            check_voltages(lg, prior.u_max)
     fits = identify_friction(friction, prior, settings) if friction is not None else None
     model = prior
     if fits is not None:

@@ -23,6 +23,10 @@ extern "C" {
 /** Default internal integration step, s. */
 #define RRR_PLANT_H_INT_DEFAULT 1e-4
 
+/** Most substeps one rrr_plant_step call takes (a guard against an h / h_int that would not
+ *  finish): a longer interval is refused with RRR_BAD_INPUT. */
+#define RRR_PLANT_MAX_SUBSTEPS 1e7
+
 /** @brief State of the plant. */
 typedef struct rrr_plant_state {
     double q[3];                 ///< joint positions, rad (unwrapped, any real value)
@@ -43,7 +47,7 @@ RRR_API rrr_status rrr_plant_accel(const rrr_model *m, const rrr_plant_state *x,
  * @param[in]     h     interval, s, > 0
  * @param[in,out] x     state; updated only on RRR_OK
  * @param[out]    qdd   if not NULL, acceleration at the end of the interval, rad/s^2
- * @return RRR_OK, RRR_BAD_INPUT (NULL, non-finite, h <= 0, h_int <= 0, more than 1e7 substeps),
+ * @return RRR_OK, RRR_BAD_INPUT (NULL, non-finite, h <= 0, h_int <= 0, more than RRR_PLANT_MAX_SUBSTEPS substeps),
  *         RRR_NUMERIC (the state became non-finite) or RRR_NOT_POSITIVE_DEFINITE; x untouched unless RRR_OK
  */
 RRR_API rrr_status rrr_plant_step(const rrr_model *m, double h_int, const double u[3], double h,
