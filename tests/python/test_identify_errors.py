@@ -110,3 +110,7 @@ def test_bad_settings_and_files(tmp_path: Path) -> None:
         read_log(binary)
     with pytest.raises(BadInputError, match="is a directory"):
         read_log(tmp_path)
+    header_only = tmp_path / "h.csv"
+    header_only.write_text("t,q[1],q[2],q[3],u[1],u[2],u[3]\n")
+    with pytest.raises(BadInputError, match="no data rows"):
+        read_log(header_only)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import csv
 import logging
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -106,9 +107,13 @@ def read_log(path: str | Path, *, friction: bool = False) -> Log:
         raise BadInputError(f"{path}: missing column(s) {', '.join(missing)} "
                             f"(required: {', '.join(need)})")
     try:
-        data = np.loadtxt(path, delimiter=",", skiprows=skip + 1, comments="#", ndmin=2)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": below
+            data = np.loadtxt(path, delimiter=",", skiprows=skip + 1, comments="#", ndmin=2)
     except ValueError as exc:
         raise BadInputError(f"{path}: not a numeric CSV table: {exc}") from exc
+    if data.size == 0:
+        raise BadInputError(f"{path}: no data rows after the header")
     if data.shape[1] != len(names):
         raise BadInputError(f"{path}: {data.shape[1]} values per row but {len(names)} columns")
     col = {n: data[:, k] for k, n in enumerate(names)}
