@@ -42,3 +42,4 @@ cmake --build build-fuzz --target fuzz_hil_decode -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus 2>&1 | tail -n 12
+echo "== all test stages passed (CTest, ruff, pytest, libFuzzer) =="
