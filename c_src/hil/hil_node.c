@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <math.h>
 #include <sched.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -49,6 +50,27 @@ int rrr_hil_parse_vec3(const char *s, double v[3])
         p = end + 1;
     }
     return 0;
+}
+
+/* The one piece of process state of a node: set from the signal handler. */
+static volatile sig_atomic_t stop_flag = 0;
+
+static void on_stop_signal(int sig)
+{
+    (void)sig;
+    stop_flag = 1;
+}
+
+void rrr_hil_install_signals(void)
+{
+    signal(SIGINT, on_stop_signal);
+    signal(SIGTERM, on_stop_signal);
+    signal(SIGPIPE, SIG_IGN);
+}
+
+int rrr_hil_stop_requested(void)
+{
+    return stop_flag != 0;
 }
 
 /* 1 when name is exactly fmt ("x[%d]%n" or "x[%d,%d]%n") with indices in 1..max. */

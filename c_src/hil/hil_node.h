@@ -32,6 +32,12 @@ typedef union rrr_hil_link {
     rrr_hil_socketcan sc;
 } rrr_hil_link;
 
+/** SIGINT and SIGTERM ask the node to stop (see rrr_hil_stop_requested); SIGPIPE is ignored
+ *  (a peer that hangs up shows as a send error). */
+void rrr_hil_install_signals(void);
+/** 1 once SIGINT or SIGTERM arrived. */
+int rrr_hil_stop_requested(void);
+
 /** Parse "HOST:PORT". 0 or -1. */
 int rrr_hil_parse_hostport(const char *s, char host[64], uint16_t *port);
 /** Parse "a,b,c" into three finite doubles. 0 or -1. */

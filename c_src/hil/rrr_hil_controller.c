@@ -20,7 +20,6 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,14 +30,6 @@
 
 #define PROG "rrr_hil_controller"
 #define STALE_PERIODS 3u
-
-static volatile sig_atomic_t stop_requested = 0;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    stop_requested = 1;
-}
 
 typedef struct opts {
     rrr_hil_link_opts link;
@@ -281,7 +272,7 @@ static int run_lockstep(ctrl *c, const opts *o)
     if (wait_for_peer(c, o) != 0 || send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL) != 0) {
         return 3;
     }
-    for (size_t k = 0; k < c->ref.n && !stop_requested; ++k) {
+    for (size_t k = 0; k < c->ref.n && !rrr_hil_stop_requested(); ++k) {
         const uint8_t want = (uint8_t)(k & 15u);
         int complete = 0;
         while (!complete) {
@@ -311,7 +302,7 @@ static int run_realtime(ctrl *c, const opts *o)
     }
     int rc = (wait_for_peer(c, o) == 0 && send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL) == 0) ? 0 : 3;
     c->state_age = STALE_PERIODS + 1u; /* no state yet */
-    for (size_t k = 0; k < c->ref.n && rc == 0 && !stop_requested; ++k) {
+    for (size_t k = 0; k < c->ref.n && rc == 0 && !rrr_hil_stop_requested(); ++k) {
         rrr_hil_rt_wait(&rt);
         rrr_hil_frame f;
         rrr_hil_io io;
@@ -374,9 +365,7 @@ int main(int argc, char **argv)
         usage();
         return 1;
     }
-    signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
-    signal(SIGPIPE, SIG_IGN);
+    rrr_hil_install_signals();
     static ctrl c;
     memset(&c, 0, sizeof c);
     char err[512];

@@ -19,7 +19,6 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,14 +30,6 @@
 
 #define PROG "rrr_hil_plant"
 #define MAX_SETS 64
-
-static volatile sig_atomic_t stop_requested = 0;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    stop_requested = 1;
-}
 
 typedef struct opts {
     rrr_hil_link_opts link;
@@ -324,7 +315,7 @@ static int run_lockstep(plant *p)
 {
     int published0 = 0;
     for (;;) {
-        if (stop_requested) {
+        if (rrr_hil_stop_requested()) {
             return 0;
         }
         rrr_hil_frame f;
@@ -364,7 +355,7 @@ static int run_realtime(plant *p, const opts *o)
     rrr_hil_rt rt;
     int rc = 0;
     /* the plant is held (brakes on, not integrated) until the controller's first frame */
-    for (int waited_ms = 0; !p->started && !stop_requested; waited_ms += 200) {
+    for (int waited_ms = 0; !p->started && !rrr_hil_stop_requested(); waited_ms += 200) {
         rrr_hil_frame f;
         const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 200000);
         if (io == RRR_HIL_IO_OK) {
@@ -381,7 +372,8 @@ static int run_realtime(plant *p, const opts *o)
     /* the controller's loop started when it sent that frame: run half a period out of phase,
      * so that its command reaches us before our release and our state reaches it before its */
     rrr_hil_rt_shift(&rt, 0.5 * RRR_HIL_PERIOD_S);
-    for (uint32_t k = 0; k < n && !stop_requested && p->ctrl_nmt != RRR_HIL_NMT_STOPPED; ++k) {
+    for (uint32_t k = 0;
+         k < n && !rrr_hil_stop_requested() && p->ctrl_nmt != RRR_HIL_NMT_STOPPED; ++k) {
         rrr_hil_rt_wait(&rt);
         rrr_hil_frame f;
         rrr_hil_io io;
@@ -443,9 +435,7 @@ int main(int argc, char **argv)
         usage();
         return 1;
     }
-    signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
-    signal(SIGPIPE, SIG_IGN);
+    rrr_hil_install_signals();
     static plant p;
     memset(&p, 0, sizeof p);
     p.ctrl_nmt = 255u;
