@@ -40,6 +40,11 @@ class CosimOptions:
     plant_fmu: Path | None = None                        # default: the packaged FMU
     controller_fmu: Path | None = None
     progress: Callable[[int, int], None] | None = None  # called as progress(k, n) now and then
+    # what the controller measures of the plant's (q, qd) (6,), and what the plant receives of
+    # the controller's u (3,): e.g. the quantisation of a CAN bench (rrr_robot.hil); identity
+    # when None
+    measure: Callable[[FloatArray], FloatArray] | None = None
+    actuate: Callable[[FloatArray], FloatArray] | None = None
 
 
 @dataclass(frozen=True)
@@ -114,17 +119,18 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
         ref = np.hstack([q_ref, qd_ref, qdd_ref])
         plant.get_block(p_out)
         step, every = options.step, max(1, n // 100)
+        measure, actuate = options.measure, options.actuate
         start = time.perf_counter()
         for k in range(n):
             plant_rec[k] = p_out.values
             c_in.values[:9] = ref[k]
-            c_in.values[9:] = p_out.values[:6]
+            c_in.values[9:] = p_out.values[:6] if measure is None else measure(p_out.values[:6])
             ctrl.set_block(c_in)
             ctrl.get_block(c_out)
             ctrl_rec[k] = c_out.values
             if k == n - 1:
                 break
-            p_in.values[:] = c_out.values[:3]
+            p_in.values[:] = c_out.values[:3] if actuate is None else actuate(c_out.values[:3])
             plant.set_block(p_in)
             plant.do_step(step)
             ctrl.do_step(step)

@@ -55,7 +55,10 @@ __all__ = [
     "encode",
     "export_reference",
     "node_executable",
+    "controller_node_args",
     "open_bus",
+    "quantise_command",
+    "quantise_state",
     "quantised_cosim",
     "register_cli",
     "run_c_bench",
@@ -437,47 +440,33 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
             shutil.rmtree(work, ignore_errors=True)
 
 
+def quantise_state(q_qd: FloatArray) -> FloatArray:
+    """(q, qd) as the controller reads them from the JointState frames (the DBC's scaling)."""
+    meas = [_quantise(f"JointState{j + 1}", {"AliveCounter": 0, "Q": q_qd[j], "Qd": q_qd[3 + j]})
+            for j in range(3)]
+    return np.array([m["Q"] for m in meas] + [m["Qd"] for m in meas])
+
+
+def quantise_command(u: FloatArray) -> FloatArray:
+    """u as the plant reads it from a VoltageCmd frame (the DBC's scaling)."""
+    cmd = _quantise("VoltageCmd", {"AliveCounter": 0, "Enable": 1, "ResetFault": 0,
+                                   **{f"U{i + 1}": float(u[i]) for i in range(3)}})
+    return np.array([cmd[f"U{i + 1}"] for i in range(3)])
+
+
 def quantised_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
                     plant_values: Mapping[str, float] = {},
                     controller_values: Mapping[str, float | bool] = {}) -> BenchRun:
-    """The FMPy co-simulation loop with the bench's quantisation: the plant's q, qd pass through
-    JointState and the controller's u through VoltageCmd (cantools, the same DBC). This is the
-    arithmetic of the lockstep bench, so the C bench must match it to rounding."""
-    from .cosim import CTRL_IN, CTRL_OUT, PLANT_IN
-    from .fmu_slave import FmuSlave
+    """The FMPy co-simulation (cosim.run_cosim) with the bench's quantisation: the plant's q, qd
+    pass through JointState and the controller's u through VoltageCmd (cantools, the same DBC).
+    This is the arithmetic of the lockstep bench, so the C bench must match it to rounding."""
+    from .cosim import CosimOptions, run_cosim
 
-    n = t.shape[0]
-    values = {f"q0[{i + 1}]": float(q_ref[0, i]) for i in range(3)}
-    values |= {f"qd0[{i + 1}]": float(qd_ref[0, i]) for i in range(3)} | dict(plant_values)
-    q_rec, qd_rec, u_rec = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
-    ref = np.hstack([q_ref, qd_ref, qdd_ref])
-    with FmuSlave(fmu_path("controller"), "controller") as ctrl, \
-            FmuSlave(fmu_path("plant"), "plant") as plant:
-        ctrl.initialize(float(t[0]), controller_values)
-        plant.initialize(float(t[0]), values)
-        c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)
-        p_in = plant.real_block(PLANT_IN)
-        p_out = plant.real_block([f"{s}[{i}]" for s in ("q", "qd") for i in (1, 2, 3)])
-        for k in range(n):
-            plant.get_block(p_out)
-            q_rec[k], qd_rec[k] = p_out.values[:3], p_out.values[3:]
-            meas = [_quantise(f"JointState{j + 1}", {"AliveCounter": 0, "Q": q_rec[k, j],
-                                                      "Qd": qd_rec[k, j]}) for j in range(3)]
-            c_in.values[:9] = ref[k]
-            c_in.values[9:12] = [m["Q"] for m in meas]
-            c_in.values[12:15] = [m["Qd"] for m in meas]
-            ctrl.set_block(c_in)
-            ctrl.get_block(c_out)
-            u_rec[k] = c_out.values[:3]
-            if k == n - 1:
-                break
-            cmd = _quantise("VoltageCmd", {"AliveCounter": 0, "Enable": 1, "ResetFault": 0,
-                                           **{f"U{i + 1}": float(u_rec[k, i]) for i in range(3)}})
-            p_in.values[:] = [cmd[f"U{i + 1}"] for i in range(3)]
-            plant.set_block(p_in)
-            plant.do_step(PERIOD)
-            ctrl.do_step(PERIOD)
-    return BenchRun(t=t, q=q_rec, qd=qd_rec, u=u_rec, plant_summary={}, controller_summary={})
+    options = CosimOptions(step=PERIOD, plant_values=plant_values,
+                           controller_values=controller_values, measure=quantise_state,
+                           actuate=quantise_command)
+    r = run_cosim(t, q_ref, qd_ref, qdd_ref, np.zeros_like(q_ref), options)
+    return BenchRun(t=t, q=r.q, qd=r.qd, u=r.u, plant_summary={}, controller_summary={})
 
 
 # ---- command line ---------------------------------------------------------------------------
