@@ -1,7 +1,8 @@
 /*
- * The FMI 2.0 co-simulation API: a thin adapter in the shape of the Reference-FMUs'
- * src/fmi2Functions.c. Every function with a component starts with BEGIN_FUNCTION, which checks
- * the component and the state mask of the FMI 2.0.4 state machine (section 4.2.4), and ends in
+ * The FMI 2.0 API (Co-Simulation and Model Exchange): a thin adapter in the shape of the
+ * Reference-FMUs' src/fmi2Functions.c over the version-neutral instance of fmu_instance.c.
+ * Every function with a component starts with BEGIN_FUNCTION, which checks the component and
+ * the state mask of the FMI 2.0.4 state machines (sections 3.2.3 and 4.2.4), and ends in
  * END_FUNCTION, the single exit.
  *
  * Two kinds of failure:
@@ -10,41 +11,47 @@
  *  - a failure of the model (CALL of a model hook): the worst status is kept; fmi2Discard from
  *    doStep moves to StepFailed, fmi2Error to the Error state, fmi2Fatal to the Fatal state.
  */
+#include "fmu_internal.h" /* first: see fmu_model.h */
+#include "fmi2Functions.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "fmu_internal.h"
+_Static_assert(sizeof(fmi2ValueReference) == sizeof(fmu_vr), "value references are 32-bit");
+_Static_assert(sizeof(fmi2Boolean) == sizeof(int), "fmi2Boolean is an int");
 
 /* ---- allowed states of every function ---------------------------------------------------------
- * FMI 2.0.4, table in section 4.2.4 ("calling sequence for co-simulation"). StartAndEnd only
- * allows fmi2Instantiate, fmi2GetTypesPlatform and fmi2GetVersion, which take no component.
+ * FMI 2.0.4, tables in sections 3.2.3 (Model Exchange) and 4.2.4 (Co-Simulation). StartAndEnd
+ * only allows fmi2Instantiate, fmi2GetTypesPlatform and fmi2GetVersion, which take no component.
+ * The Co-Simulation states (StepComplete = FMU_STEP_MODE, ...) and the Model Exchange states
+ * (EventMode, ContinuousTimeMode) never meet in one instance.
  */
 
 #define MASK_ANY_INSTANCE                                                                     \
-    (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_COMPLETE | FMU_STEP_IN_PROGRESS |            \
-     FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED | FMU_ERROR_STATE)
+    (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE |  \
+     FMU_STEP_IN_PROGRESS | FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED |             \
+     FMU_ERROR_STATE)
 
 /* common functions */
 #define MASK_fmi2SetDebugLogging MASK_ANY_INSTANCE
-#define MASK_fmi2FreeInstance                                                                 \
-    (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_COMPLETE | FMU_STEP_FAILED |                  \
-     FMU_STEP_CANCELED | FMU_TERMINATED | FMU_ERROR_STATE)
+#define MASK_fmi2FreeInstance (MASK_ANY_INSTANCE & ~(unsigned)FMU_STEP_IN_PROGRESS)
 #define MASK_fmi2SetupExperiment FMU_INSTANTIATED
 #define MASK_fmi2EnterInitializationMode FMU_INSTANTIATED
 #define MASK_fmi2ExitInitializationMode FMU_INIT_MODE
-#define MASK_fmi2Terminate (FMU_STEP_COMPLETE | FMU_STEP_FAILED)
+#define MASK_fmi2Terminate (FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE | FMU_STEP_FAILED)
 #define MASK_fmi2Reset MASK_fmi2FreeInstance
 #define MASK_fmi2GetReal                                                                      \
-    (FMU_INIT_MODE | FMU_STEP_COMPLETE | FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED | \
-     FMU_ERROR_STATE)
+    (FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE | FMU_STEP_FAILED |   \
+     FMU_STEP_CANCELED | FMU_TERMINATED | FMU_ERROR_STATE)
 #define MASK_fmi2GetInteger MASK_fmi2GetReal
 #define MASK_fmi2GetBoolean MASK_fmi2GetReal
 #define MASK_fmi2GetString MASK_fmi2GetReal
-#define MASK_fmi2SetReal (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_COMPLETE)
-#define MASK_fmi2SetInteger MASK_fmi2SetReal
-#define MASK_fmi2SetBoolean MASK_fmi2SetReal
-#define MASK_fmi2SetString MASK_fmi2SetReal
+#define MASK_fmi2SetReal                                                                      \
+    (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE)
+#define MASK_fmi2SetInteger (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_STEP_MODE)
+#define MASK_fmi2SetBoolean MASK_fmi2SetInteger
+#define MASK_fmi2SetString MASK_fmi2SetInteger
 #define MASK_fmi2GetFMUstate MASK_fmi2FreeInstance
 #define MASK_fmi2SetFMUstate MASK_fmi2FreeInstance
 #define MASK_fmi2FreeFMUstate MASK_fmi2FreeInstance
@@ -53,21 +60,32 @@
 #define MASK_fmi2DeSerializeFMUstate MASK_fmi2FreeInstance
 #define MASK_fmi2GetDirectionalDerivative MASK_fmi2GetReal
 
+/* model exchange functions */
+#define MASK_fmi2EnterEventMode (FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
+#define MASK_fmi2NewDiscreteStates FMU_EVENT_MODE
+#define MASK_fmi2EnterContinuousTimeMode FMU_EVENT_MODE
+#define MASK_fmi2CompletedIntegratorStep FMU_CONT_TIME_MODE
+#define MASK_fmi2SetTime (FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
+#define MASK_fmi2SetContinuousStates FMU_CONT_TIME_MODE
+#define MASK_fmi2GetEventIndicators                                                           \
+    (FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
+#define MASK_fmi2GetContinuousStates MASK_fmi2GetEventIndicators
+#define MASK_fmi2GetDerivatives                                                               \
+    (FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
+#define MASK_fmi2GetNominalsOfContinuousStates                                                \
+    (FMU_INSTANTIATED | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
+
 /* co-simulation functions */
-#define MASK_fmi2SetRealInputDerivatives (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_COMPLETE)
+#define MASK_fmi2SetRealInputDerivatives (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_MODE)
 #define MASK_fmi2GetRealOutputDerivatives                                                     \
-    (FMU_STEP_COMPLETE | FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED | FMU_ERROR_STATE)
-#define MASK_fmi2DoStep FMU_STEP_COMPLETE
+    (FMU_STEP_MODE | FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED | FMU_ERROR_STATE)
+#define MASK_fmi2DoStep FMU_STEP_MODE
 #define MASK_fmi2CancelStep FMU_STEP_IN_PROGRESS
-#define MASK_fmi2GetStatus                                                                    \
-    (FMU_STEP_COMPLETE | FMU_STEP_IN_PROGRESS | FMU_STEP_FAILED | FMU_TERMINATED)
+#define MASK_fmi2GetStatus (FMU_STEP_MODE | FMU_STEP_IN_PROGRESS | FMU_STEP_FAILED | FMU_TERMINATED)
 #define MASK_fmi2GetRealStatus MASK_fmi2GetStatus
 #define MASK_fmi2GetIntegerStatus MASK_fmi2GetStatus
 #define MASK_fmi2GetBooleanStatus MASK_fmi2GetStatus
 #define MASK_fmi2GetStringStatus MASK_fmi2GetStatus
-
-/* Relative tolerance on currentCommunicationPoint (importers count time differently). */
-#define FMU_TIME_RTOL 1e-9
 
 /* ---- the adapter macros ---------------------------------------------------------------------- */
 
@@ -76,11 +94,11 @@ static int allowed_state(fmu_instance *S, unsigned mask, const char *fn)
     if ((mask & (unsigned)S->state) != 0u) {
         return 1;
     }
-    char states[160];
-    fmu_states_str(mask, states, sizeof states);
+    char states[200];
+    fmu_states_str(2, mask, states, sizeof states);
     fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
             "%s: illegal call sequence: not allowed in state %s (allowed in: %s)", fn,
-            fmu_state_name(S->state), states);
+            fmu_state_name(2, S->state), states);
     return 0;
 }
 
@@ -161,6 +179,16 @@ const char *fmi2GetVersion(void)
 
 /* ---- creation, destruction, debug logging ---------------------------------------------------- */
 
+/* The importer's logger formats like printf: pass the text as an argument, never as the format. */
+static void host_log(const fmu_instance *S, fmu_status status, const char *category,
+                     const char *message)
+{
+    const fmi2CallbackLogger logger = (fmi2CallbackLogger)S->host.logger;
+    if (logger != NULL) {
+        logger(S->host.env, S->name, (fmi2Status)status, category, "%s", message);
+    }
+}
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation,
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
@@ -168,7 +196,30 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 {
     (void)fmuResourceLocation; /* no resources */
     (void)visible;             /* no user interface */
-    return fmu_create(instanceName, fmuType, fmuGUID, functions, loggingOn);
+    fmu_host host;
+    memset(&host, 0, sizeof host);
+    host.log = host_log;
+    if (functions != NULL) {
+        host.logger = (void (*)(void))functions->logger;
+        host.env = functions->componentEnvironment;
+        host.alloc = functions->allocateMemory;
+        host.release = functions->freeMemory;
+    }
+    if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange) {
+        fmu_instance tmp;
+        memset(&tmp, 0, sizeof tmp);
+        tmp.host = host;
+        tmp.name = (char *)(instanceName != NULL ? instanceName : "?");
+        tmp.log_mask = 1u << FMU_LOG_ERROR;
+        fmu_log(&tmp, FMU_ERROR, FMU_LOG_ERROR,
+                "fmi2Instantiate: fmuType must be fmi2ModelExchange (%d) or fmi2CoSimulation "
+                "(%d), got %d",
+                (int)fmi2ModelExchange, (int)fmi2CoSimulation, (int)fmuType);
+        return NULL;
+    }
+    return fmu_create("fmi2Instantiate", &host, 2,
+                      fmuType == fmi2ModelExchange ? FMU_MODEL_EXCHANGE : FMU_CO_SIMULATION,
+                      instanceName, fmuGUID, loggingOn != fmi2False);
 }
 
 void fmi2FreeInstance(fmi2Component c)
@@ -185,7 +236,8 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 {
     BEGIN_FUNCTION(SetDebugLogging)
     TRACE("fmi2SetDebugLogging(loggingOn=%d, nCategories=%zu)", (int)loggingOn, nCategories);
-    CHECKED(fmu_set_logging(S, loggingOn, nCategories, categories));
+    CHECKED(fmu_set_logging(S, "fmi2SetDebugLogging", loggingOn != fmi2False, nCategories,
+                            categories));
     END_FUNCTION()
 }
 
@@ -198,19 +250,10 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     TRACE("fmi2SetupExperiment(toleranceDefined=%d, tolerance=%.17g, startTime=%.17g, "
           "stopTimeDefined=%d, stopTime=%.17g)",
           (int)toleranceDefined, tolerance, startTime, (int)stopTimeDefined, stopTime);
-    (void)toleranceDefined; /* fixed-step integration: no tolerance */
+    (void)toleranceDefined; /* no iteration inside the model: nothing to tighten */
     (void)tolerance;
-    if (!isfinite(startTime)) {
-        REFUSE("fmi2SetupExperiment: startTime must be finite, got %.17g", startTime);
-    }
-    if (stopTimeDefined && !(isfinite(stopTime) && stopTime >= startTime)) {
-        REFUSE("fmi2SetupExperiment: stopTime must be finite and >= startTime = %.17g, got %.17g",
-               startTime, stopTime);
-    }
-    S->start_time = startTime;
-    S->time = startTime;
-    S->stop_time_defined = stopTimeDefined ? 1 : 0;
-    S->stop_time = stopTimeDefined ? stopTime : 0.0;
+    CHECKED(fmu_setup_experiment(S, "fmi2SetupExperiment", startTime, stopTimeDefined != fmi2False,
+                                 stopTime));
     END_FUNCTION()
 }
 
@@ -227,10 +270,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
     BEGIN_FUNCTION(ExitInitializationMode)
     TRACE("fmi2ExitInitializationMode()");
-    CALL(S->model->initialize(S));
-    S->state = FMU_STEP_COMPLETE;
-    S->dirty = 1;
-    CALL(fmu_update(S));
+    status = fmu_exit_initialization(S);
     END_FUNCTION()
 }
 
@@ -252,6 +292,16 @@ fmi2Status fmi2Reset(fmi2Component c)
 
 /* ---- getting and setting variable values ----------------------------------------------------- */
 
+/* A Get/Set of a type the models do not use: refused unless empty. */
+#define NO_VARIABLES_OF_TYPE(F, TYPE)                                                         \
+    do {                                                                                      \
+        if (nvr > 0) {                                                                        \
+            ASSERT_NOT_NULL(F, vr);                                                           \
+            REFUSE("fmi2" #F ": %s has no " TYPE " variables (vr %u requested)",             \
+                   S->model->identifier, (unsigned)vr[0]);                                    \
+        }                                                                                     \
+    } while (0)
+
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                        fmi2Real value[])
 {
@@ -264,7 +314,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     if (fmu_needs_update(S, vr, nvr)) {
         CALL(fmu_update(S));
     }
-    CHECKED(fmu_get_values(S, "fmi2GetReal", FMU_REAL, vr, nvr, value));
+    CHECKED(fmu_get_values(S, "fmi2GetReal", FMU_REAL, vr, nvr, value, FMU_BOOL_INT));
     END_FUNCTION()
 }
 
@@ -274,11 +324,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     BEGIN_FUNCTION(GetInteger)
     TRACE("fmi2GetInteger(nvr=%zu)", nvr);
     (void)value;
-    if (nvr > 0) {
-        ASSERT_NOT_NULL(GetInteger, vr);
-        REFUSE("fmi2GetInteger: %s has no Integer variables (vr %u requested)",
-               S->model->identifier, (unsigned)vr[0]);
-    }
+    NO_VARIABLES_OF_TYPE(GetInteger, "Integer");
     END_FUNCTION()
 }
 
@@ -294,7 +340,7 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     if (fmu_needs_update(S, vr, nvr)) {
         CALL(fmu_update(S));
     }
-    CHECKED(fmu_get_values(S, "fmi2GetBoolean", FMU_BOOLEAN, vr, nvr, value));
+    CHECKED(fmu_get_values(S, "fmi2GetBoolean", FMU_BOOLEAN, vr, nvr, value, FMU_BOOL_INT));
     END_FUNCTION()
 }
 
@@ -304,11 +350,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     BEGIN_FUNCTION(GetString)
     TRACE("fmi2GetString(nvr=%zu)", nvr);
     (void)value;
-    if (nvr > 0) {
-        ASSERT_NOT_NULL(GetString, vr);
-        REFUSE("fmi2GetString: %s has no String variables (vr %u requested)",
-               S->model->identifier, (unsigned)vr[0]);
-    }
+    NO_VARIABLES_OF_TYPE(GetString, "String");
     END_FUNCTION()
 }
 
@@ -321,7 +363,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
         ASSERT_NOT_NULL(SetReal, vr);
         ASSERT_NOT_NULL(SetReal, value);
     }
-    CHECKED(fmu_set_values(S, "fmi2SetReal", FMU_REAL, vr, nvr, value));
+    CHECKED(fmu_set_values(S, "fmi2SetReal", FMU_REAL, vr, nvr, value, FMU_BOOL_INT));
     END_FUNCTION()
 }
 
@@ -331,11 +373,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     BEGIN_FUNCTION(SetInteger)
     TRACE("fmi2SetInteger(nvr=%zu)", nvr);
     (void)value;
-    if (nvr > 0) {
-        ASSERT_NOT_NULL(SetInteger, vr);
-        REFUSE("fmi2SetInteger: %s has no Integer variables (vr %u requested)",
-               S->model->identifier, (unsigned)vr[0]);
-    }
+    NO_VARIABLES_OF_TYPE(SetInteger, "Integer");
     END_FUNCTION()
 }
 
@@ -348,7 +386,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
         ASSERT_NOT_NULL(SetBoolean, vr);
         ASSERT_NOT_NULL(SetBoolean, value);
     }
-    CHECKED(fmu_set_values(S, "fmi2SetBoolean", FMU_BOOLEAN, vr, nvr, value));
+    CHECKED(fmu_set_values(S, "fmi2SetBoolean", FMU_BOOLEAN, vr, nvr, value, FMU_BOOL_INT));
     END_FUNCTION()
 }
 
@@ -358,11 +396,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     BEGIN_FUNCTION(SetString)
     TRACE("fmi2SetString(nvr=%zu)", nvr);
     (void)value;
-    if (nvr > 0) {
-        ASSERT_NOT_NULL(SetString, vr);
-        REFUSE("fmi2SetString: %s has no String variables (vr %u requested)",
-               S->model->identifier, (unsigned)vr[0]);
-    }
+    NO_VARIABLES_OF_TYPE(SetString, "String");
     END_FUNCTION()
 }
 
@@ -373,7 +407,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     BEGIN_FUNCTION(GetFMUstate)
     TRACE("fmi2GetFMUstate()");
     ASSERT_NOT_NULL(GetFMUstate, FMUstate);
-    CHECKED(fmu_snapshot_get(S, FMUstate));
+    CHECKED(fmu_snapshot_get(S, "fmi2GetFMUstate", FMUstate));
     END_FUNCTION()
 }
 
@@ -381,7 +415,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
     BEGIN_FUNCTION(SetFMUstate)
     TRACE("fmi2SetFMUstate(FMUstate=%p)", FMUstate);
-    CHECKED(fmu_snapshot_set(S, FMUstate));
+    CHECKED(fmu_snapshot_set(S, "fmi2SetFMUstate", FMUstate));
     END_FUNCTION()
 }
 
@@ -390,7 +424,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
     BEGIN_FUNCTION(FreeFMUstate)
     TRACE("fmi2FreeFMUstate()");
     ASSERT_NOT_NULL(FreeFMUstate, FMUstate);
-    CHECKED(fmu_snapshot_free(S, FMUstate));
+    CHECKED(fmu_snapshot_free(S, "fmi2FreeFMUstate", FMUstate));
     END_FUNCTION()
 }
 
@@ -399,7 +433,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
     BEGIN_FUNCTION(SerializedFMUstateSize)
     TRACE("fmi2SerializedFMUstateSize(FMUstate=%p)", FMUstate);
     ASSERT_NOT_NULL(SerializedFMUstateSize, size);
-    CHECKED(fmu_snapshot_size(S, FMUstate, size));
+    CHECKED(fmu_snapshot_size(S, "fmi2SerializedFMUstateSize", FMUstate, size));
     END_FUNCTION()
 }
 
@@ -409,7 +443,8 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
     BEGIN_FUNCTION(SerializeFMUstate)
     TRACE("fmi2SerializeFMUstate(FMUstate=%p, size=%zu)", FMUstate, size);
     ASSERT_NOT_NULL(SerializeFMUstate, serializedState);
-    CHECKED(fmu_snapshot_serialize(S, FMUstate, serializedState, size));
+    CHECKED(fmu_snapshot_serialize(S, "fmi2SerializeFMUstate", FMUstate,
+                                   (unsigned char *)serializedState, size));
     END_FUNCTION()
 }
 
@@ -420,7 +455,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     TRACE("fmi2DeSerializeFMUstate(size=%zu)", size);
     ASSERT_NOT_NULL(DeSerializeFMUstate, serializedState);
     ASSERT_NOT_NULL(DeSerializeFMUstate, FMUstate);
-    CHECKED(fmu_snapshot_deserialize(S, serializedState, size, FMUstate));
+    CHECKED(fmu_snapshot_deserialize(S, "fmi2DeSerializeFMUstate",
+                                     (const unsigned char *)serializedState, size, FMUstate));
     END_FUNCTION()
 }
 
@@ -465,7 +501,115 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     END_FUNCTION()
 }
 
-/* ---- stepping -------------------------------------------------------------------------------- */
+/* ---- model exchange ---------------------------------------------------------------------------- */
+
+fmi2Status fmi2EnterEventMode(fmi2Component c)
+{
+    BEGIN_FUNCTION(EnterEventMode)
+    TRACE("fmi2EnterEventMode()");
+    S->state = FMU_EVENT_MODE;
+    END_FUNCTION()
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
+{
+    BEGIN_FUNCTION(NewDiscreteStates)
+    TRACE("fmi2NewDiscreteStates()");
+    ASSERT_NOT_NULL(NewDiscreteStates, eventInfo);
+    /* no discrete states, no time events, no state events */
+    eventInfo->newDiscreteStatesNeeded = fmi2False;
+    eventInfo->terminateSimulation = fmi2False;
+    eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    eventInfo->nextEventTimeDefined = fmi2False;
+    eventInfo->nextEventTime = 0.0;
+    END_FUNCTION()
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c)
+{
+    BEGIN_FUNCTION(EnterContinuousTimeMode)
+    TRACE("fmi2EnterContinuousTimeMode()");
+    S->state = FMU_CONT_TIME_MODE;
+    END_FUNCTION()
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation)
+{
+    BEGIN_FUNCTION(CompletedIntegratorStep)
+    TRACE("fmi2CompletedIntegratorStep(noSetFMUStatePriorToCurrentPoint=%d)",
+          (int)noSetFMUStatePriorToCurrentPoint);
+    ASSERT_NOT_NULL(CompletedIntegratorStep, enterEventMode);
+    ASSERT_NOT_NULL(CompletedIntegratorStep, terminateSimulation);
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    END_FUNCTION()
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
+{
+    BEGIN_FUNCTION(SetTime)
+    TRACE("fmi2SetTime(time=%.17g)", time);
+    CHECKED(fmu_me_set_time(S, "fmi2SetTime", time));
+    END_FUNCTION()
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx)
+{
+    BEGIN_FUNCTION(SetContinuousStates)
+    TRACE("fmi2SetContinuousStates(nx=%zu)", nx);
+    if (nx > 0) {
+        ASSERT_NOT_NULL(SetContinuousStates, x);
+    }
+    CHECKED(fmu_me_set_states(S, "fmi2SetContinuousStates", x, nx));
+    END_FUNCTION()
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx)
+{
+    BEGIN_FUNCTION(GetDerivatives)
+    TRACE("fmi2GetDerivatives(nx=%zu)", nx);
+    if (nx > 0) {
+        ASSERT_NOT_NULL(GetDerivatives, derivatives);
+    }
+    CHECKED(fmu_me_check_count(S, "fmi2GetDerivatives", nx));
+    CALL(fmu_me_get_derivatives(S, derivatives, nx));
+    END_FUNCTION()
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni)
+{
+    BEGIN_FUNCTION(GetEventIndicators)
+    TRACE("fmi2GetEventIndicators(ni=%zu)", ni);
+    (void)eventIndicators;
+    CHECKED(fmu_me_get_event_indicators(S, "fmi2GetEventIndicators", ni));
+    END_FUNCTION()
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
+{
+    BEGIN_FUNCTION(GetContinuousStates)
+    TRACE("fmi2GetContinuousStates(nx=%zu)", nx);
+    if (nx > 0) {
+        ASSERT_NOT_NULL(GetContinuousStates, x);
+    }
+    CHECKED(fmu_me_get_states(S, "fmi2GetContinuousStates", x, nx));
+    END_FUNCTION()
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx)
+{
+    BEGIN_FUNCTION(GetNominalsOfContinuousStates)
+    TRACE("fmi2GetNominalsOfContinuousStates(nx=%zu)", nx);
+    if (nx > 0) {
+        ASSERT_NOT_NULL(GetNominalsOfContinuousStates, x_nominal);
+    }
+    CHECKED(fmu_me_get_nominals(S, "fmi2GetNominalsOfContinuousStates", x_nominal, nx));
+    END_FUNCTION()
+}
+
+/* ---- co-simulation: stepping -------------------------------------------------------------------- */
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize, fmi2Boolean noSetFMUStatePriorToCurrentPoint)
@@ -474,26 +618,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
     TRACE("fmi2DoStep(currentCommunicationPoint=%.17g, communicationStepSize=%.17g, "
           "noSetFMUStatePriorToCurrentPoint=%d)",
           currentCommunicationPoint, communicationStepSize, (int)noSetFMUStatePriorToCurrentPoint);
-    const double t = currentCommunicationPoint;
-    const double h = communicationStepSize;
-    if (!(isfinite(h) && h > 0.0)) {
-        REFUSE("fmi2DoStep: communicationStepSize must be finite and > 0, got %.17g", h);
-    }
-    if (!(fabs(t - S->time) <= FMU_TIME_RTOL * fmax(1.0, fabs(S->time)))) {
-        REFUSE("fmi2DoStep: currentCommunicationPoint %.17g differs from the FMU time %.17g "
-               "(tolerance %.3g)",
-               t, S->time, FMU_TIME_RTOL * fmax(1.0, fabs(S->time)));
-    }
-    if (S->stop_time_defined && t + h > S->stop_time + FMU_TIME_RTOL * fmax(1.0, S->stop_time)) {
-        REFUSE("fmi2DoStep: the step to %.17g goes past stopTime %.17g", t + h, S->stop_time);
-    }
-    const fmu_status st = S->model->do_step(S, h);
-    if (st == FMU_DISCARD) {
-        S->state = FMU_STEP_FAILED; /* time stays at the last successful point */
-    }
-    CALL(st);
-    S->time = t + h; /* the master's clock is authoritative: no drift from summing h */
-    S->dirty = 0;    /* do_step leaves the outputs up to date */
+    CHECKED(fmu_check_step(S, "fmi2DoStep", currentCommunicationPoint, communicationStepSize));
+    status = fmu_do_step(S, currentCommunicationPoint, communicationStepSize);
     END_FUNCTION()
 }
 

@@ -1,115 +1,125 @@
 /*
- * Instances: creation, logging, table-driven get/set, FMU state snapshots.
- * The FMI state machine lives in fmi2_functions.c; nothing here checks call sequences.
+ * Instances: creation, logging, table-driven get/set, Model Exchange states, FMU state
+ * snapshots, and the checks both FMI adapters share. Independent of the FMI version: the
+ * adapters (fmi2_functions.c, fmi3_functions.c) own the state machines and translate types;
+ * nothing here checks call sequences.
  */
+#include "fmu_internal.h"
+
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "fmu_internal.h"
-
 /* ---- logging --------------------------------------------------------------------------------- */
+
+static void vlog(const fmu_instance *inst, fmu_status status, const char *category,
+                 const char *fmt, va_list ap)
+{
+    char buf[1024];
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    inst->host.log(inst, status, category, buf);
+}
 
 void fmu_log(const fmu_instance *inst, fmu_status status, fmu_category category, const char *fmt,
              ...)
 {
-    if (inst == NULL || inst->cb.logger == NULL || (unsigned)category >= FMU_LOG_CATEGORY_COUNT ||
+    if (inst == NULL || inst->host.log == NULL || (unsigned)category >= FMU_LOG_CATEGORY_COUNT ||
         (inst->log_mask & (1u << category)) == 0u) {
         return;
     }
-    char buf[1024];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
+    vlog(inst, status, fmu_log_categories[category].name, fmt, ap);
     va_end(ap);
-    /* the logger formats like printf: pass the text as an argument, never as the format */
-    inst->cb.logger(inst->cb.componentEnvironment, inst->name, (fmi2Status)status,
-                    fmu_log_categories[category].name, "%s", buf);
 }
 
-/* Before an instance exists (fmi2Instantiate failures). */
-#if defined(__GNUC__)
-__attribute__((format(printf, 3, 4)))
+/* Before an instance exists (instantiation failures): a stand-in with the host and the name. */
+#if defined(__MINGW32__) /* C99 printf: __USE_MINGW_ANSI_STDIO above */
+__attribute__((format(gnu_printf, 4, 5)))
+#elif defined(__GNUC__)
+__attribute__((format(printf, 4, 5)))
 #endif
-static void log_early(const fmi2CallbackFunctions *f, fmi2String name, const char *fmt, ...)
+static void log_early(const fmu_host *host, int fmi_version, const char *name, const char *fmt,
+                      ...)
 {
-    if (f == NULL || f->logger == NULL) {
+    if (host == NULL || host->log == NULL) {
         return;
     }
-    char buf[512];
+    fmu_instance tmp;
+    memset(&tmp, 0, sizeof tmp);
+    tmp.host = *host;
+    tmp.fmi_version = fmi_version;
+    tmp.name = (char *)(name != NULL ? name : "?");
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
+    vlog(&tmp, FMU_ERROR, fmu_log_categories[FMU_LOG_ERROR].name, fmt, ap);
     va_end(ap);
-    f->logger(f->componentEnvironment, name ? name : "?", fmi2Error,
-              fmu_log_categories[FMU_LOG_ERROR].name, "%s", buf);
 }
 
 /* ---- lifecycle ------------------------------------------------------------------------------- */
 
-fmu_instance *fmu_create(fmi2String name, fmi2Type type, fmi2String guid,
-                         const fmi2CallbackFunctions *functions, fmi2Boolean logging_on)
+fmu_instance *fmu_create(const char *fn, const fmu_host *host, int fmi_version,
+                         fmu_interface interface, const char *name, const char *token,
+                         int logging_on)
 {
     const fmu_model *m = &FMU_MODEL;
-    if (functions == NULL || functions->allocateMemory == NULL || functions->freeMemory == NULL) {
-        log_early(functions, name,
-                  "fmi2Instantiate: functions, functions->allocateMemory and "
-                  "functions->freeMemory must not be NULL");
+    if (host->alloc == NULL || host->release == NULL) {
+        log_early(host, fmi_version, name,
+                  "%s: functions, functions->allocateMemory and functions->freeMemory must not "
+                  "be NULL", fn);
         return NULL;
     }
     if (name == NULL || name[0] == '\0') {
-        log_early(functions, name, "fmi2Instantiate: instanceName must be a non-empty string");
+        log_early(host, fmi_version, name, "%s: instanceName must be a non-empty string", fn);
         return NULL;
     }
-    if (type != fmi2CoSimulation) {
-        log_early(functions, name,
-                  "fmi2Instantiate: %s supports fmuType fmi2CoSimulation (%d) only, got %d",
-                  m->identifier, (int)fmi2CoSimulation, (int)type);
-        return NULL;
-    }
-    if (guid == NULL) {
-        log_early(functions, name, "fmi2Instantiate: fmuGUID must not be NULL");
+    if (token == NULL) {
+        log_early(host, fmi_version, name, "%s: the instantiation token (GUID) must not be NULL",
+                  fn);
         return NULL;
     }
     const char *problem = NULL;
     size_t row = 0;
     if (fmu_model_check(m, &problem, &row) != 0) {
-        log_early(functions, name, "fmi2Instantiate: variable table of %s is broken at row %zu: %s",
-                  m->identifier, row, problem);
+        log_early(host, fmi_version, name, "%s: variable table of %s is broken at row %zu: %s",
+                  fn, m->identifier, row, problem);
         return NULL;
     }
 
-    fmu_instance *S = functions->allocateMemory(1, sizeof *S);
+    fmu_instance *S = host->alloc(1, sizeof *S);
     const size_t name_len = strlen(name) + 1;
-    char *name_copy = functions->allocateMemory(name_len, 1);
-    void *data = functions->allocateMemory(1, m->data_size);
+    char *name_copy = host->alloc(name_len, 1);
+    void *data = host->alloc(1, m->data_size);
     if (S == NULL || name_copy == NULL || data == NULL) {
-        log_early(functions, name, "fmi2Instantiate: out of memory");
-        functions->freeMemory(S);
-        functions->freeMemory(name_copy);
-        functions->freeMemory(data);
+        log_early(host, fmi_version, name, "%s: out of memory", fn);
+        host->release(S);
+        host->release(name_copy);
+        host->release(data);
         return NULL;
     }
     memcpy(name_copy, name, name_len);
     S->model = m;
-    S->cb = *functions;
+    S->host = *host;
+    S->fmi_version = fmi_version;
+    S->interface = interface;
     S->name = name_copy;
     S->data = data;
     S->log_mask = logging_on ? FMU_LOG_ALL_MASK : FMU_LOG_DEFAULT_MASK;
     if (fmu_reset_instance(S) > FMU_WARNING) {
-        log_early(functions, name, "fmi2Instantiate: %s could not set its start values",
+        log_early(host, fmi_version, name, "%s: %s could not set its start values", fn,
                   m->identifier);
         fmu_destroy(S);
         return NULL;
     }
     fmu_model_token(m, S->data, S->token);
-    if (strcmp(guid, S->token) != 0) {
-        log_early(functions, name,
-                  "fmi2Instantiate: wrong GUID: %s expects \"%s\", got \"%s\" (is the "
-                  "modelDescription.xml from another build?)",
-                  m->identifier, S->token, guid);
+    if (strcmp(token, S->token) != 0) {
+        log_early(host, fmi_version, name,
+                  "%s: wrong %s: %s expects \"%s\", got \"%s\" (is the modelDescription.xml "
+                  "from another build?)",
+                  fn, fmi_version == 3 ? "instantiationToken" : "GUID", m->identifier, S->token,
+                  token);
         fmu_destroy(S);
         return NULL;
     }
@@ -121,7 +131,7 @@ void fmu_destroy(fmu_instance *S)
     if (S == NULL) {
         return;
     }
-    const fmi2CallbackFreeMemory release = S->cb.freeMemory;
+    void (*release)(void *) = S->host.release;
     release(S->data);
     release(S->name);
     memset(S, 0, sizeof *S);
@@ -140,7 +150,8 @@ fmu_status fmu_reset_instance(fmu_instance *S)
     return S->model->set_defaults(S->data);
 }
 
-fmu_status fmu_set_logging(fmu_instance *S, fmi2Boolean on, size_t n, const fmi2String cats[])
+fmu_status fmu_set_logging(fmu_instance *S, const char *fn, int on, size_t n,
+                           const char *const cats[])
 {
     if (n == 0) {
         S->log_mask = on ? FMU_LOG_ALL_MASK : FMU_LOG_DEFAULT_MASK;
@@ -148,7 +159,7 @@ fmu_status fmu_set_logging(fmu_instance *S, fmi2Boolean on, size_t n, const fmi2
     }
     if (cats == NULL) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                "fmi2SetDebugLogging: categories must not be NULL when nCategories = %zu", n);
+                "%s: categories must not be NULL when nCategories = %zu", fn, n);
         return FMU_ERROR;
     }
     unsigned bits = 0;
@@ -164,10 +175,10 @@ fmu_status fmu_set_logging(fmu_instance *S, fmi2Boolean on, size_t n, const fmi2
         }
         if (bit == 0u) {
             fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                    "fmi2SetDebugLogging: unknown log category \"%s\" (categories[%zu]); known: "
+                    "%s: unknown log category \"%s\" (categories[%zu]); known: "
                     "logStatusWarning, logStatusDiscard, logStatusError, logStatusFatal, "
                     "logCalls, logAll",
-                    cats[i] ? cats[i] : "(null)", i);
+                    fn, cats[i] ? cats[i] : "(null)", i);
             return FMU_ERROR;
         }
         bits |= bit;
@@ -178,7 +189,7 @@ fmu_status fmu_set_logging(fmu_instance *S, fmi2Boolean on, size_t n, const fmi2
 
 /* ---- variables ------------------------------------------------------------------------------- */
 
-int fmu_needs_update(const fmu_instance *S, const fmi2ValueReference vr[], size_t n)
+int fmu_needs_update(const fmu_instance *S, const fmu_vr vr[], size_t n)
 {
     if (!S->dirty) {
         return 0;
@@ -205,8 +216,7 @@ fmu_status fmu_update(fmu_instance *S)
 }
 
 /* The row of vr if it exists and has type t; logs and returns NULL otherwise. */
-static const fmu_variable *typed_var(fmu_instance *S, const char *fn, fmu_type t,
-                                     fmi2ValueReference vr)
+static const fmu_variable *typed_var(fmu_instance *S, const char *fn, fmu_type t, fmu_vr vr)
 {
     const fmu_variable *v = fmu_find_var(S->model, vr);
     if (v == NULL) {
@@ -223,20 +233,40 @@ static const fmu_variable *typed_var(fmu_instance *S, const char *fn, fmu_type t
     return v;
 }
 
-fmu_status fmu_get_values(fmu_instance *S, const char *fn, fmu_type t,
-                          const fmi2ValueReference vr[], size_t n, void *values)
+/* Boolean i of an importer's array, and writing one, in either layout. */
+static int bool_at(const void *values, size_t i, fmu_bool_layout bl)
+{
+    if (bl == FMU_BOOL_C99) {
+        return ((const _Bool *)values)[i] ? 1 : 0;
+    }
+    return ((const int *)values)[i] != 0;
+}
+
+static void bool_put(void *values, size_t i, fmu_bool_layout bl, int b)
+{
+    if (bl == FMU_BOOL_C99) {
+        ((_Bool *)values)[i] = b != 0;
+    } else {
+        ((int *)values)[i] = b != 0;
+    }
+}
+
+fmu_status fmu_get_values(fmu_instance *S, const char *fn, fmu_type t, const fmu_vr vr[],
+                          size_t n, void *values, fmu_bool_layout bl)
 {
     for (size_t i = 0; i < n; ++i) {
         const fmu_variable *v = typed_var(S, fn, t, vr[i]);
         if (v == NULL) {
             return FMU_ERROR;
         }
-        if (t == FMU_REAL) {
+        if (v->causality == FMU_INDEPENDENT) {
+            ((double *)values)[i] = S->time;
+        } else if (t == FMU_REAL) {
             memcpy((double *)values + i, fmu_var_ptr(S->data, v), sizeof(double));
         } else {
             int b;
             memcpy(&b, fmu_var_ptr(S->data, v), sizeof b);
-            ((fmi2Boolean *)values)[i] = b ? fmi2True : fmi2False;
+            bool_put(values, i, bl, b);
         }
     }
     return FMU_OK;
@@ -251,21 +281,22 @@ static int settable(fmu_instance *S, const char *fn, const fmu_variable *v)
     }
     if (allowed == 0u) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                "%s: variable %s (vr %u) is an %s and cannot be set", fn, v->name,
-                (unsigned)v->vr, fmu_causality_name(v->causality));
+                "%s: variable %s (vr %u) is %s and cannot be set", fn, v->name,
+                (unsigned)v->vr,
+                v->causality == FMU_INDEPENDENT ? "the independent variable" : "an output");
     } else {
-        char states[128];
-        fmu_states_str(allowed, states, sizeof states);
+        char states[160];
+        fmu_states_str(S->fmi_version, allowed, states, sizeof states);
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
                 "%s: %s %s %s (vr %u) can be set in %s only, not in state %s", fn,
                 fmu_variability_name(v->variability), fmu_causality_name(v->causality), v->name,
-                (unsigned)v->vr, states, fmu_state_name(S->state));
+                (unsigned)v->vr, states, fmu_state_name(S->fmi_version, S->state));
     }
     return 0;
 }
 
-fmu_status fmu_set_values(fmu_instance *S, const char *fn, fmu_type t,
-                          const fmi2ValueReference vr[], size_t n, const void *values)
+fmu_status fmu_set_values(fmu_instance *S, const char *fn, fmu_type t, const fmu_vr vr[],
+                          size_t n, const void *values, fmu_bool_layout bl)
 {
     /* check everything first: a refused call changes nothing */
     for (size_t i = 0; i < n; ++i) {
@@ -286,7 +317,7 @@ fmu_status fmu_set_values(fmu_instance *S, const char *fn, fmu_type t,
         if (t == FMU_REAL) {
             memcpy(fmu_var_ptr(S->data, v), (const double *)values + i, sizeof(double));
         } else {
-            const int b = ((const fmi2Boolean *)values)[i] != fmi2False;
+            const int b = bool_at(values, i, bl);
             memcpy(fmu_var_ptr(S->data, v), &b, sizeof b);
         }
     }
@@ -294,6 +325,192 @@ fmu_status fmu_set_values(fmu_instance *S, const char *fn, fmu_type t,
         S->dirty = 1;
     }
     return FMU_OK;
+}
+
+/* ---- Model Exchange ----------------------------------------------------------------------------- */
+
+fmu_status fmu_me_set_time(fmu_instance *S, const char *fn, double t)
+{
+    if (!isfinite(t)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: time must be finite, got %.17g; it stays %.17g",
+                fn, t, S->time);
+        return FMU_ERROR;
+    }
+    S->time = t;
+    return FMU_OK;
+}
+
+static int count_ok(fmu_instance *S, const char *fn, const char *what, size_t n, size_t expected)
+{
+    if (n == expected) {
+        return 1;
+    }
+    fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: %s has %zu %s, got %zu", fn, S->model->identifier,
+            expected, what, n);
+    return 0;
+}
+
+static double *state_ptr(fmu_instance *S, fmu_vr vr)
+{
+    return (double *)fmu_var_ptr(S->data, fmu_find_var(S->model, vr));
+}
+
+fmu_status fmu_me_get_states(fmu_instance *S, const char *fn, double x[], size_t n)
+{
+    if (!count_ok(S, fn, "continuous states", n, S->model->n_states)) {
+        return FMU_ERROR;
+    }
+    if (S->state == FMU_INIT_MODE) {
+        /* the states follow the start values until initialization ends */
+        const fmu_status st = fmu_update(S);
+        if (st > FMU_WARNING) {
+            return st;
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        x[i] = *state_ptr(S, S->model->states[i].state);
+    }
+    return FMU_OK;
+}
+
+fmu_status fmu_me_set_states(fmu_instance *S, const char *fn, const double x[], size_t n)
+{
+    if (!count_ok(S, fn, "continuous states", n, S->model->n_states)) {
+        return FMU_ERROR;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        if (!isfinite(x[i])) {
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: state %zu (%s) must be finite, got %.17g; no state was changed", fn, i,
+                    fmu_find_var(S->model, S->model->states[i].state)->name, x[i]);
+            return FMU_ERROR;
+        }
+    }
+    for (size_t i = 0; i < n; ++i) {
+        *state_ptr(S, S->model->states[i].state) = x[i];
+    }
+    if (n > 0) {
+        S->dirty = 1;
+    }
+    return FMU_OK;
+}
+
+fmu_status fmu_me_check_count(fmu_instance *S, const char *fn, size_t n)
+{
+    return count_ok(S, fn, "continuous states", n, S->model->n_states) ? FMU_OK : FMU_ERROR;
+}
+
+fmu_status fmu_me_get_derivatives(fmu_instance *S, double dx[], size_t n)
+{
+    const fmu_status st = fmu_update(S);
+    if (st > FMU_WARNING) {
+        return st;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        dx[i] = *state_ptr(S, S->model->states[i].derivative);
+    }
+    return st;
+}
+
+fmu_status fmu_me_get_nominals(fmu_instance *S, const char *fn, double nominals[], size_t n)
+{
+    if (!count_ok(S, fn, "continuous states", n, S->model->n_states)) {
+        return FMU_ERROR;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        nominals[i] = S->model->states[i].nominal;
+    }
+    return FMU_OK;
+}
+
+fmu_status fmu_me_get_event_indicators(fmu_instance *S, const char *fn, size_t n)
+{
+    return count_ok(S, fn, "event indicators", n, 0) ? FMU_OK : FMU_ERROR;
+}
+
+/* ---- checks the adapters share ----------------------------------------------------------------- */
+
+fmu_status fmu_setup_experiment(fmu_instance *S, const char *fn, double start, int stop_defined,
+                                double stop)
+{
+    if (!isfinite(start)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: startTime must be finite, got %.17g", fn, start);
+        return FMU_ERROR;
+    }
+    if (stop_defined && !(isfinite(stop) && stop >= start)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: stopTime must be finite and >= startTime = %.17g, got %.17g", fn, start,
+                stop);
+        return FMU_ERROR;
+    }
+    S->start_time = start;
+    S->time = start;
+    S->stop_time_defined = stop_defined ? 1 : 0;
+    S->stop_time = stop_defined ? stop : 0.0;
+    return FMU_OK;
+}
+
+fmu_status fmu_check_step(fmu_instance *S, const char *fn, double t, double h)
+{
+    const double tol = FMU_TIME_RTOL * fmax(1.0, fabs(S->time));
+    if (!(isfinite(h) && h > 0.0)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: communicationStepSize must be finite and > 0, got %.17g", fn, h);
+        return FMU_ERROR;
+    }
+    if (!(fabs(t - S->time) <= tol)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: currentCommunicationPoint %.17g differs from the FMU time %.17g "
+                "(tolerance %.3g)",
+                fn, t, S->time, tol);
+        return FMU_ERROR;
+    }
+    if (S->stop_time_defined && t + h > S->stop_time + FMU_TIME_RTOL * fmax(1.0, S->stop_time)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: the step to %.17g goes past stopTime %.17g", fn,
+                t + h, S->stop_time);
+        return FMU_ERROR;
+    }
+    return FMU_OK;
+}
+
+fmu_status fmu_do_step(fmu_instance *S, double t, double h)
+{
+    const fmu_status st = S->model->do_step(S, h);
+    switch (st) {
+    case FMU_OK:
+    case FMU_WARNING:
+        S->time = t + h; /* the master's clock is authoritative: no drift from summing h */
+        S->dirty = 0;    /* do_step leaves the outputs up to date */
+        break;
+    case FMU_DISCARD:
+        S->state = FMU_STEP_FAILED; /* time stays at the last successful point */
+        break;
+    case FMU_ERROR:
+        S->state = FMU_ERROR_STATE;
+        break;
+    case FMU_FATAL:
+        S->state = FMU_FATAL_STATE;
+        break;
+    }
+    return st;
+}
+
+fmu_status fmu_exit_initialization(fmu_instance *S)
+{
+    fmu_status st = S->model->initialize(S);
+    if (st <= FMU_WARNING) {
+        S->state = S->interface == FMU_MODEL_EXCHANGE ? FMU_EVENT_MODE : FMU_STEP_MODE;
+        S->dirty = 1;
+        const fmu_status su = fmu_update(S);
+        st = su > st ? su : st;
+    }
+    if (st >= FMU_FATAL) {
+        S->state = FMU_FATAL_STATE;
+    } else if (st >= FMU_DISCARD) {
+        S->state = FMU_ERROR_STATE;
+        st = FMU_ERROR;
+    }
+    return st;
 }
 
 /* ---- FMU state snapshots ----------------------------------------------------------------------
@@ -323,19 +540,22 @@ typedef struct snapshot_fields {
     double stop_time;
 } snapshot_fields;
 
-/* States in which a snapshot may be taken (FMI 2.0.4 table in 4.2.4). */
+/* States a snapshot may hold (those in which one may be taken). */
 #define SNAPSHOT_STATES                                                                       \
-    (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_COMPLETE | FMU_STEP_FAILED | FMU_STEP_CANCELED | \
-     FMU_TERMINATED | FMU_ERROR_STATE)
+    (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE |    \
+     FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED | FMU_ERROR_STATE)
 
 static size_t snapshot_size(const fmu_instance *S)
 {
     return sizeof(snapshot_header) + sizeof(snapshot_fields) + S->model->data_size;
 }
 
+/* The model, the FMI version and the interface type: a snapshot of an FMI 2 Co-Simulation
+ * instance is refused by an FMI 3 or a Model Exchange instance of the same model. */
 static uint64_t model_hash(const fmu_instance *S)
 {
-    return fmu_fnv1a(FMU_FNV_OFFSET, S->token, strlen(S->token));
+    const unsigned char kind[2] = {(unsigned char)S->fmi_version, (unsigned char)S->interface};
+    return fmu_fnv1a(fmu_fnv1a(FMU_FNV_OFFSET, S->token, strlen(S->token)), kind, sizeof kind);
 }
 
 static uint64_t payload_checksum(const unsigned char *block, size_t size)
@@ -370,9 +590,10 @@ static int snapshot_check(fmu_instance *S, const char *fn, const unsigned char *
     }
     if (h.model_hash != model_hash(S)) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                "%s: the FMU state belongs to another model or build (GUID hash differs from "
-                "%s %s)",
-                fn, S->model->identifier, S->token);
+                "%s: the FMU state belongs to another model, build, FMI version or interface "
+                "type (hash differs from %s %s, FMI %d %s)",
+                fn, S->model->identifier, S->token, S->fmi_version,
+                S->interface == FMU_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation");
         return 1;
     }
     if (h.size != n || n != snapshot_size(S)) {
@@ -416,7 +637,7 @@ static void snapshot_fill(const fmu_instance *S, unsigned char *block)
     memcpy(block, &h, sizeof h);
 }
 
-fmu_status fmu_snapshot_get(fmu_instance *S, fmi2FMUstate *state)
+fmu_status fmu_snapshot_get(fmu_instance *S, const char *fn, void **state)
 {
     const size_t n = snapshot_size(S);
     unsigned char *block = *state;
@@ -426,14 +647,14 @@ fmu_status fmu_snapshot_get(fmu_instance *S, fmi2FMUstate *state)
         memcpy(&h, block, sizeof h);
         if (h.magic != FMU_SNAPSHOT_MAGIC || h.model_hash != model_hash(S) || h.size != n) {
             fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                    "fmi2GetFMUstate: *FMUstate is neither NULL nor an FMU state of %s",
+                    "%s: *FMUstate is neither NULL nor an FMU state of %s", fn,
                     S->model->identifier);
             return FMU_ERROR;
         }
     } else {
-        block = S->cb.allocateMemory(1, n);
+        block = S->host.alloc(1, n);
         if (block == NULL) {
-            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "fmi2GetFMUstate: out of memory (%zu bytes)", n);
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: out of memory (%zu bytes)", fn, n);
             return FMU_ERROR;
         }
     }
@@ -442,21 +663,21 @@ fmu_status fmu_snapshot_get(fmu_instance *S, fmi2FMUstate *state)
     return FMU_OK;
 }
 
-fmu_status fmu_snapshot_set(fmu_instance *S, fmi2FMUstate state)
+fmu_status fmu_snapshot_set(fmu_instance *S, const char *fn, const void *state)
 {
     const unsigned char *block = state;
     snapshot_header h;
     if (block == NULL) {
-        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "fmi2SetFMUstate: FMUstate must not be NULL");
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: FMUstate must not be NULL", fn);
         return FMU_ERROR;
     }
     memcpy(&h, block, sizeof h);
     if (h.magic != FMU_SNAPSHOT_MAGIC || h.size != snapshot_size(S)) {
-        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "fmi2SetFMUstate: not an FMU state of %s",
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: not an FMU state of %s", fn,
                 S->model->identifier);
         return FMU_ERROR;
     }
-    if (snapshot_check(S, "fmi2SetFMUstate", block, (size_t)h.size) != 0) {
+    if (snapshot_check(S, fn, block, (size_t)h.size) != 0) {
         return FMU_ERROR;
     }
     snapshot_fields f;
@@ -471,7 +692,7 @@ fmu_status fmu_snapshot_set(fmu_instance *S, fmi2FMUstate state)
     return FMU_OK;
 }
 
-fmu_status fmu_snapshot_free(fmu_instance *S, fmi2FMUstate *state)
+fmu_status fmu_snapshot_free(fmu_instance *S, const char *fn, void **state)
 {
     if (*state == NULL) {
         return FMU_OK;
@@ -480,54 +701,54 @@ fmu_status fmu_snapshot_free(fmu_instance *S, fmi2FMUstate *state)
     memcpy(&h, *state, sizeof h);
     if (h.magic != FMU_SNAPSHOT_MAGIC || h.model_hash != model_hash(S)) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                "fmi2FreeFMUstate: *FMUstate is not an FMU state of %s; not freed",
+                "%s: *FMUstate is not an FMU state of %s; not freed", fn,
                 S->model->identifier);
         return FMU_ERROR;
     }
     h.magic = 0u; /* a second free of the same block is then refused, not executed */
     memcpy(*state, &h, sizeof h);
-    S->cb.freeMemory(*state);
+    S->host.release(*state);
     *state = NULL;
     return FMU_OK;
 }
 
-fmu_status fmu_snapshot_size(fmu_instance *S, fmi2FMUstate state, size_t *size)
+fmu_status fmu_snapshot_size(fmu_instance *S, const char *fn, const void *state, size_t *size)
 {
     if (state == NULL) {
-        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "fmi2SerializedFMUstateSize: FMUstate must not be NULL");
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: FMUstate must not be NULL", fn);
         return FMU_ERROR;
     }
-    if (snapshot_check(S, "fmi2SerializedFMUstateSize", state, snapshot_size(S)) != 0) {
+    if (snapshot_check(S, fn, state, snapshot_size(S)) != 0) {
         return FMU_ERROR;
     }
     *size = snapshot_size(S);
     return FMU_OK;
 }
 
-fmu_status fmu_snapshot_serialize(fmu_instance *S, fmi2FMUstate state, fmi2Byte buf[],
-                                  size_t size)
+fmu_status fmu_snapshot_serialize(fmu_instance *S, const char *fn, const void *state,
+                                  unsigned char buf[], size_t size)
 {
     const size_t n = snapshot_size(S);
     if (state == NULL) {
-        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "fmi2SerializeFMUstate: FMUstate must not be NULL");
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: FMUstate must not be NULL", fn);
         return FMU_ERROR;
     }
-    if (snapshot_check(S, "fmi2SerializeFMUstate", state, n) != 0) {
+    if (snapshot_check(S, fn, state, n) != 0) {
         return FMU_ERROR;
     }
     if (size < n) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                "fmi2SerializeFMUstate: buffer of %zu bytes is too small, need %zu", size, n);
+                "%s: buffer of %zu bytes is too small, need %zu", fn, size, n);
         return FMU_ERROR;
     }
     memcpy(buf, state, n);
     return FMU_OK;
 }
 
-fmu_status fmu_snapshot_deserialize(fmu_instance *S, const fmi2Byte buf[], size_t size,
-                                    fmi2FMUstate *state)
+fmu_status fmu_snapshot_deserialize(fmu_instance *S, const char *fn, const unsigned char buf[],
+                                    size_t size, void **state)
 {
-    if (snapshot_check(S, "fmi2DeSerializeFMUstate", (const unsigned char *)buf, size) != 0) {
+    if (snapshot_check(S, fn, buf, size) != 0) {
         return FMU_ERROR;
     }
     unsigned char *block = *state;
@@ -537,15 +758,14 @@ fmu_status fmu_snapshot_deserialize(fmu_instance *S, const fmi2Byte buf[], size_
         memcpy(&h, block, sizeof h);
         if (h.magic != FMU_SNAPSHOT_MAGIC || h.model_hash != model_hash(S) || h.size != size) {
             fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                    "fmi2DeSerializeFMUstate: *FMUstate is neither NULL nor an FMU state of %s",
+                    "%s: *FMUstate is neither NULL nor an FMU state of %s", fn,
                     S->model->identifier);
             return FMU_ERROR;
         }
     } else {
-        block = S->cb.allocateMemory(1, size);
+        block = S->host.alloc(1, size);
         if (block == NULL) {
-            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-                    "fmi2DeSerializeFMUstate: out of memory (%zu bytes)", size);
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: out of memory (%zu bytes)", fn, size);
             return FMU_ERROR;
         }
     }

@@ -1,74 +1,116 @@
 /**
  * @file fmu_model.h
- * @brief The contract between the shared FMI 2.0 co-simulation glue (fmu/common) and one model
- *        (fmu/plant, fmu/controller), in the shape of the Reference-FMUs' include/model.h.
+ * @brief The contract between the shared FMI glue (fmu/common) and one model (fmu/plant,
+ *        fmu/controller), in the shape of the Reference-FMUs' include/model.h.
  *
  * A model provides exactly one constant descriptor, FMU_MODEL: its identifier, its variable
- * table and four hooks. The glue does everything else: the FMI state machine, argument checks,
- * logging, get/set by value reference through the table, the GUID, FMU state snapshots and the
- * modelDescription.xml (fmu_xml.c prints it from the same table, so value references, names,
- * units and start values have one source of truth).
+ * table, its continuous states and four hooks. The glue does everything else, for FMI 2.0 and
+ * FMI 3.0, Co-Simulation and Model Exchange alike: the state machines, argument checks, logging,
+ * get/set by value reference through the table, the instantiation token, FMU state snapshots,
+ * and the modelDescription.xml, buildDescription.xml and documentation (fmu_xml.c prints them
+ * from the same table, so value references, names, units and start values have one source of
+ * truth).
+ *
+ * This header is independent of the FMI version: fmi2_functions.c and fmi3_functions.c adapt it
+ * to one version each, and one FMU binary links exactly one of them.
  *
  * Rules the glue derives from the table (never written per variable):
  *  - initial: "exact" for parameters and inputs (start = the value after set_defaults),
  *    "calculated" for outputs (no start; listed in InitialUnknowns);
- *  - settable: inputs in Instantiated, InitializationMode and StepComplete; fixed parameters in
- *    Instantiated and InitializationMode; tunable parameters also in StepComplete; outputs never;
+ *  - settable: inputs in Instantiated, InitializationMode, StepMode (Co-Simulation), EventMode
+ *    and ContinuousTimeMode (Model Exchange); fixed parameters in Instantiated and
+ *    InitializationMode; tunable parameters also in StepMode and EventMode; outputs and the
+ *    independent variable never;
  *  - every Real must be finite: a NaN or Inf set is refused and the old value kept.
  */
 #ifndef FMU_MODEL_H
 #define FMU_MODEL_H
 
+/* Windows (mingw-w64): the C99 printf family, so that %zu and %.17g mean the same as on Linux;
+ * the instantiation token hashes start values printed with %.17g. Every file of the glue and of
+ * the models includes this header before any system header. */
+#if defined(__MINGW32__) && !defined(__USE_MINGW_ANSI_STDIO)
+#define __USE_MINGW_ANSI_STDIO 1
+#endif
+
 #include <stddef.h>
+#include <stdint.h>
 
-#include "fmi2Functions.h"
+/** @brief A value reference (fmi2ValueReference and fmi3ValueReference are both 32-bit). */
+typedef uint32_t fmu_vr;
 
-/** @brief Internal status, ordered by severity; values equal the fmi2Status ones. */
+/** @brief Internal status, ordered by severity; values equal the fmi2Status and fmi3Status ones. */
 typedef enum fmu_status {
-    FMU_OK = 0,       ///< fmi2OK
-    FMU_WARNING = 1,  ///< fmi2Warning
-    FMU_DISCARD = 2,  ///< fmi2Discard: this step cannot be taken, the state is unchanged
-    FMU_ERROR = 3,    ///< fmi2Error
-    FMU_FATAL = 4     ///< fmi2Fatal
+    FMU_OK = 0,       ///< fmi2OK, fmi3OK
+    FMU_WARNING = 1,  ///< fmi2Warning, fmi3Warning
+    FMU_DISCARD = 2,  ///< fmi2Discard, fmi3Discard: this step cannot be taken, the state is unchanged
+    FMU_ERROR = 3,    ///< fmi2Error, fmi3Error
+    FMU_FATAL = 4     ///< fmi2Fatal, fmi3Fatal
 } fmu_status;
 
-/** @brief States of the FMI 2.0 co-simulation state machine (FMI 2.0.4 section 4.2.4), as bits. */
+/** @brief The interface type of an instance. */
+typedef enum fmu_interface {
+    FMU_CO_SIMULATION = 0,            ///< the FMU integrates itself (doStep)
+    FMU_MODEL_EXCHANGE = 1            ///< the importer integrates the continuous states
+} fmu_interface;
+
+/**
+ * @brief States of the FMI state machines, as bits (FMI 2.0.4 sections 3.2.3 and 4.2.4, FMI 3.0
+ *        sections 3.2 and 4.2). One set for both versions and both interfaces: a state that an
+ *        interface never enters is simply never set. Names differ by version where the standard
+ *        renamed them (fmu_state_name).
+ */
 typedef enum fmu_state {
-    FMU_START_END = 1u << 0,          ///< before fmi2Instantiate / after fmi2FreeInstance
-    FMU_INSTANTIATED = 1u << 1,       ///< after fmi2Instantiate or fmi2Reset
-    FMU_INIT_MODE = 1u << 2,          ///< between fmi2Enter- and fmi2ExitInitializationMode
-    FMU_STEP_COMPLETE = 1u << 3,      ///< initialized, or the last fmi2DoStep succeeded
-    FMU_STEP_IN_PROGRESS = 1u << 4,   ///< asynchronous step (never entered: synchronous doStep)
-    FMU_STEP_FAILED = 1u << 5,        ///< the last fmi2DoStep returned fmi2Discard
-    FMU_STEP_CANCELED = 1u << 6,      ///< fmi2CancelStep was called (never entered)
-    FMU_TERMINATED = 1u << 7,         ///< after fmi2Terminate
-    FMU_ERROR_STATE = 1u << 8,        ///< a model hook returned fmi2Error
-    FMU_FATAL_STATE = 1u << 9         ///< a model hook returned fmi2Fatal
+    FMU_START_END = 1u << 0,          ///< before instantiation / after fmiXFreeInstance
+    FMU_INSTANTIATED = 1u << 1,       ///< after instantiation or fmiXReset
+    FMU_INIT_MODE = 1u << 2,          ///< between fmiXEnter- and fmiXExitInitializationMode
+    FMU_EVENT_MODE = 1u << 3,         ///< Model Exchange: event mode
+    FMU_CONT_TIME_MODE = 1u << 4,     ///< Model Exchange: continuous-time mode
+    FMU_STEP_MODE = 1u << 5,          ///< Co-Simulation: "StepComplete" (FMI 2), "StepMode" (FMI 3)
+    FMU_STEP_IN_PROGRESS = 1u << 6,   ///< FMI 2 asynchronous step (never entered: synchronous doStep)
+    FMU_STEP_FAILED = 1u << 7,        ///< doStep discarded: "StepFailed" (FMI 2), "StepDiscarded" (FMI 3)
+    FMU_STEP_CANCELED = 1u << 8,      ///< FMI 2 fmi2CancelStep (never entered)
+    FMU_TERMINATED = 1u << 9,         ///< after fmiXTerminate
+    FMU_ERROR_STATE = 1u << 10,       ///< a model hook returned an error
+    FMU_FATAL_STATE = 1u << 11        ///< a model hook returned a fatal status
 } fmu_state;
 
 /** Number of fmu_state bits. */
-#define FMU_STATE_COUNT 10
+#define FMU_STATE_COUNT 12
 
 /** @brief Base type of a variable. */
 typedef enum fmu_type { FMU_REAL, FMU_BOOLEAN } fmu_type;
 
 /** @brief Causality of a variable (the subset this project uses). */
-typedef enum fmu_causality { FMU_PARAMETER, FMU_INPUT, FMU_OUTPUT } fmu_causality;
+typedef enum fmu_causality {
+    FMU_PARAMETER,
+    FMU_INPUT,
+    FMU_OUTPUT,
+    FMU_INDEPENDENT                   ///< the time; its value is the instance's time
+} fmu_causality;
 
 /** @brief Variability of a variable (the subset this project uses). */
 typedef enum fmu_variability { FMU_FIXED, FMU_TUNABLE, FMU_CONTINUOUS } fmu_variability;
 
 /** @brief One row of a model's variable table. */
 typedef struct fmu_variable {
-    fmi2ValueReference vr;            ///< value reference = row index (fmu_model_check)
+    fmu_vr vr;                        ///< value reference = row index (fmu_model_check)
     fmu_type type;                    ///< Real (double in the data) or Boolean (int in the data)
-    fmu_causality causality;          ///< parameter, input or output
-    fmu_variability variability;      ///< fixed or tunable (parameters), continuous (inputs, outputs)
+    fmu_causality causality;          ///< parameter, input, output or independent
+    fmu_variability variability;      ///< fixed or tunable (parameters), continuous (the others)
     const char *name;                 ///< structured name, e.g. "u[1]", "f[2,3]", "tip.x"
-    const char *description;          ///< one line, no '"', '<' or '&'
-    const char *unit;                 ///< unit name declared in fmu_units (fmu_xml.c), or NULL
-    size_t offset;                    ///< byte offset of the value in the model data
+    const char *description;          ///< one line, no '"', '<', '&' or '#'
+    const char *unit;                 ///< unit name declared in fmu_units (fmu_table.c), or NULL
+    size_t offset;                    ///< byte offset of the value in the model data (unused for
+                                      ///< the independent variable)
 } fmu_variable;
+
+/** @brief One continuous state (Model Exchange): a variable and the variable that is its derivative. */
+typedef struct fmu_continuous_state {
+    fmu_vr state;                     ///< value reference of the state, e.g. q[1]
+    fmu_vr derivative;                ///< value reference of d(state)/dt, e.g. qd[1]
+    double nominal;                   ///< magnitude for the solver's error scaling, > 0
+} fmu_continuous_state;
 
 typedef struct fmu_instance fmu_instance;
 
@@ -81,39 +123,60 @@ typedef struct fmu_model {
     const char *description;          ///< one-line model description for the XML
     const fmu_variable *vars;         ///< the variable table
     size_t n_vars;                    ///< number of rows
+    const fmu_continuous_state *states; ///< continuous states (Model Exchange), or NULL
+    size_t n_states;                  ///< number of continuous states
     size_t data_size;                 ///< sizeof the model data (plain old data, no pointers)
     double default_stop_time;         ///< DefaultExperiment stopTime, s
     double default_step_size;         ///< DefaultExperiment stepSize (communication step), s
+    double default_tolerance;         ///< DefaultExperiment tolerance (Model Exchange solvers)
 
     /** Fill the data with the start values (called at instantiate, reset, and by the XML generator). */
     fmu_status (*set_defaults)(void *data);
-    /** fmi2ExitInitializationMode: validate parameters (log which one is wrong), set up the state. */
+    /** ExitInitializationMode: validate parameters (log which one is wrong), set up the state. */
     fmu_status (*initialize)(fmu_instance *inst);
-    /** Bring every output up to date with the current inputs and parameters. */
+    /** Bring every output (and state derivative) up to date with the inputs, states and parameters. */
     fmu_status (*calculate)(fmu_instance *inst);
-    /** Advance by h > 0 seconds; FMU_DISCARD leaves the data as it was. Outputs up to date on FMU_OK. */
+    /** Co-Simulation: advance by h > 0 seconds; FMU_DISCARD leaves the data as it was. Outputs
+     *  up to date on FMU_OK. */
     fmu_status (*do_step)(fmu_instance *inst, double h);
-    /** 1 when output out_vr depends directly on input in_vr (ModelStructure/Outputs, XML only). */
-    int (*depends)(fmi2ValueReference out_vr, fmi2ValueReference in_vr);
+    /** 1 when unknown (an output or a state derivative) depends directly on known (an input or
+     *  a continuous state): ModelStructure, XML only. */
+    int (*depends)(fmu_vr unknown, fmu_vr known);
 } fmu_model;
 
 /** The one model linked into this binary (defined in fmu/<model>/model.c). */
 extern const fmu_model FMU_MODEL;
 
+/**
+ * @brief How an instance talks to its importer; filled by the FMI adapter at instantiation.
+ *        The core calls `log` and the allocator only, so it needs no FMI header.
+ */
+typedef struct fmu_host {
+    /** Forwards one message to the importer's logger (set by the adapter; NULL: no logger). */
+    void (*log)(const fmu_instance *inst, fmu_status status, const char *category,
+                const char *message);
+    void (*logger)(void);             ///< the importer's logger callback; the adapter casts it back
+    void *env;                        ///< the importer's environment pointer for the logger
+    void *(*alloc)(size_t n, size_t size); ///< zero-filling allocator (importer's or calloc)
+    void (*release)(void *p);         ///< its deallocator
+} fmu_host;
+
 /** @brief One instance. Models read `data`, `state` and `time`; everything else belongs to the glue. */
 struct fmu_instance {
     const fmu_model *model;           ///< &FMU_MODEL
-    fmi2CallbackFunctions cb;         ///< copy of the importer's callbacks
-    char *name;                       ///< instance name (owned, allocated with cb.allocateMemory)
+    fmu_host host;                    ///< importer callbacks (see fmu_host)
+    int fmi_version;                  ///< 2 or 3: the adapter this instance was created by
+    fmu_interface interface;          ///< Co-Simulation or Model Exchange
+    char *name;                       ///< instance name (owned, allocated with host.alloc)
     fmu_state state;                  ///< exactly one bit
     unsigned log_mask;                ///< enabled log categories, bit i = fmu_log_categories[i]
-    double time;                      ///< current communication point, s
-    double start_time;                ///< from fmi2SetupExperiment, s
-    double stop_time;                 ///< from fmi2SetupExperiment when stop_time_defined, s
+    double time;                      ///< current time (communication point or ME time), s
+    double start_time;                ///< from setup/enter initialization, s
+    double stop_time;                 ///< when stop_time_defined, s
     int stop_time_defined;            ///< nonzero when stop_time applies
-    int dirty;                        ///< nonzero: outputs may be stale (input/parameter set)
+    int dirty;                        ///< nonzero: outputs may be stale (input/state/parameter set)
     char token[FMU_TOKEN_SIZE];       ///< the instantiation token (GUID) of this model
-    void *data;                       ///< model data, data_size bytes (cb.allocateMemory)
+    void *data;                       ///< model data, data_size bytes (host.alloc)
 };
 
 /** @brief Log categories declared in the XML, indices of fmu_instance.log_mask bits. */
@@ -139,18 +202,21 @@ extern const fmu_log_category fmu_log_categories[FMU_LOG_CATEGORY_COUNT];
  * @brief Log a message through the importer's logger if its category is enabled.
  *        Errors, discards, warnings and fatals are enabled by default.
  */
-#if defined(__GNUC__)
+#if defined(__MINGW32__) /* C99 printf: __USE_MINGW_ANSI_STDIO above */
+__attribute__((format(gnu_printf, 4, 5)))
+#elif defined(__GNUC__)
 __attribute__((format(printf, 4, 5)))
 #endif
 void fmu_log(const fmu_instance *inst, fmu_status status, fmu_category category, const char *fmt,
              ...);
 
-/** @brief Name of a state bit ("Instantiated", ...). */
-const char *fmu_state_name(fmu_state s);
+/** @brief Name of a state bit in the wording of FMI version 2 or 3 ("Instantiated", ...). */
+const char *fmu_state_name(int fmi_version, fmu_state s);
 
 /**
  * @brief Check a model descriptor: value references dense and equal to the row index, names
- *        unique, types, causality/variability combinations and units known.
+ *        unique, types, causality/variability combinations and units known, one independent
+ *        variable, continuous states that name distinct Real variables.
  * @param[out] msg receives a static description of the first problem
  * @param[out] row receives the table row of the problem
  * @return 0 when the descriptor is sound
@@ -160,7 +226,8 @@ int fmu_model_check(const fmu_model *m, const char **msg, size_t *row);
 /**
  * @brief The instantiation token (GUID) of a model: a hash of its identifier and table (value
  *        references, names, types, causality, variability, units and start values), written
- *        like a GUID, "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}".
+ *        like a GUID, "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}". The same for FMI 2 and 3: it
+ *        names the model, not the binary.
  * @param[in]  data the model data after set_defaults (start values), data_size bytes
  * @param[out] out  at least FMU_TOKEN_SIZE bytes
  */
@@ -171,5 +238,9 @@ static inline void *fmu_var_ptr(void *data, const fmu_variable *v)
 {
     return (char *)data + v->offset;
 }
+
+/** The row of the independent variable "time" (value reference VR), last in every table. */
+#define FMU_TIME_ROW(VR)                                                                      \
+    {(VR), FMU_REAL, FMU_INDEPENDENT, FMU_CONTINUOUS, "time", "simulation time", "s", 0}
 
 #endif /* FMU_MODEL_H */

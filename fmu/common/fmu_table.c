@@ -1,15 +1,15 @@
-/* Variable tables: lookup, settable-ness, sanity checks, the token (GUID), units and names. */
+/* Variable tables: lookup, settable-ness, sanity checks, the token (GUID), units and names.
+ * Independent of the FMI version. */
+#include "fmu_internal.h"
+
 #include <stdio.h>
 #include <string.h>
 
-#include "fmu_internal.h"
-
 const fmu_log_category fmu_log_categories[FMU_LOG_CATEGORY_COUNT] = {
-    {"logStatusWarning", "Messages of calls that return fmi2Warning"},
-    {"logStatusDiscard", "Messages of calls that return fmi2Discard (a step that cannot be taken)"},
-    {"logStatusError",
-     "Messages of calls that return fmi2Error (illegal call, bad argument, bad value)"},
-    {"logStatusFatal", "Messages of calls that return fmi2Fatal"},
+    {"logStatusWarning", "Messages of calls that return Warning"},
+    {"logStatusDiscard", "Messages of calls that return Discard (a step that cannot be taken)"},
+    {"logStatusError", "Messages of calls that return Error (illegal call, bad argument, bad value)"},
+    {"logStatusFatal", "Messages of calls that return Fatal"},
     {"logCalls", "Debug: every FMI function call with its arguments"},
 };
 
@@ -29,7 +29,7 @@ const fmu_unit fmu_units[] = {
 };
 const size_t fmu_n_units = sizeof fmu_units / sizeof fmu_units[0];
 
-const fmu_variable *fmu_find_var(const fmu_model *m, fmi2ValueReference vr)
+const fmu_variable *fmu_find_var(const fmu_model *m, fmu_vr vr)
 {
     /* value references are the row indices (fmu_model_check) */
     if (vr < m->n_vars && m->vars[vr].vr == vr) {
@@ -52,6 +52,8 @@ const char *fmu_causality_name(fmu_causality c)
         return "input";
     case FMU_OUTPUT:
         return "output";
+    case FMU_INDEPENDENT:
+        return "independent";
     }
     return "?";
 }
@@ -73,19 +75,42 @@ unsigned fmu_settable_states(const fmu_variable *v)
 {
     switch (v->causality) {
     case FMU_INPUT:
-        return FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_COMPLETE;
+        return FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_MODE | FMU_EVENT_MODE |
+               FMU_CONT_TIME_MODE;
     case FMU_PARAMETER:
         return v->variability == FMU_TUNABLE
-                   ? (unsigned)(FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_COMPLETE)
+                   ? (unsigned)(FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_MODE | FMU_EVENT_MODE)
                    : (unsigned)(FMU_INSTANTIATED | FMU_INIT_MODE);
     case FMU_OUTPUT:
+    case FMU_INDEPENDENT:
         return 0u;
     }
     return 0u;
 }
 
-const char *fmu_state_name(fmu_state s)
+int fmu_state_index(const fmu_model *m, fmu_vr vr)
 {
+    for (size_t i = 0; i < m->n_states; ++i) {
+        if (m->states[i].state == vr) {
+            return (int)i;
+        }
+    }
+    return -1;
+}
+
+int fmu_derivative_index(const fmu_model *m, fmu_vr vr)
+{
+    for (size_t i = 0; i < m->n_states; ++i) {
+        if (m->states[i].derivative == vr) {
+            return (int)i;
+        }
+    }
+    return -1;
+}
+
+const char *fmu_state_name(int fmi_version, fmu_state s)
+{
+    const int v3 = fmi_version == 3;
     switch (s) {
     case FMU_START_END:
         return "StartAndEnd";
@@ -93,12 +118,16 @@ const char *fmu_state_name(fmu_state s)
         return "Instantiated";
     case FMU_INIT_MODE:
         return "InitializationMode";
-    case FMU_STEP_COMPLETE:
-        return "StepComplete";
+    case FMU_EVENT_MODE:
+        return "EventMode";
+    case FMU_CONT_TIME_MODE:
+        return "ContinuousTimeMode";
+    case FMU_STEP_MODE:
+        return v3 ? "StepMode" : "StepComplete";
     case FMU_STEP_IN_PROGRESS:
         return "StepInProgress";
     case FMU_STEP_FAILED:
-        return "StepFailed";
+        return v3 ? "StepDiscarded" : "StepFailed";
     case FMU_STEP_CANCELED:
         return "StepCanceled";
     case FMU_TERMINATED:
@@ -111,7 +140,7 @@ const char *fmu_state_name(fmu_state s)
     return "Unknown";
 }
 
-void fmu_states_str(unsigned mask, char *buf, size_t n)
+void fmu_states_str(int fmi_version, unsigned mask, char *buf, size_t n)
 {
     size_t used = 0;
     if (n == 0) {
@@ -124,7 +153,7 @@ void fmu_states_str(unsigned mask, char *buf, size_t n)
             continue;
         }
         const int k = snprintf(buf + used, n - used, "%s%s", used ? "|" : "",
-                               fmu_state_name((fmu_state)s));
+                               fmu_state_name(fmi_version, (fmu_state)s));
         if (k < 0) {
             return;
         }
@@ -169,6 +198,7 @@ int fmu_model_check(const fmu_model *m, const char **msg, size_t *row)
         *msg = "identifier, description and variable table must be set";
         return 1;
     }
+    size_t n_independent = 0;
     for (size_t i = 0; i < m->n_vars; ++i) {
         const fmu_variable *v = &m->vars[i];
         *row = i;
@@ -183,6 +213,14 @@ int fmu_model_check(const fmu_model *m, const char **msg, size_t *row)
         if (v->unit != NULL && (v->type != FMU_REAL || !unit_known(v->unit))) {
             *msg = "a unit must be declared in fmu_units and belong to a Real";
             return 1;
+        }
+        if (v->causality == FMU_INDEPENDENT) {
+            ++n_independent;
+            if (v->type != FMU_REAL || v->variability != FMU_CONTINUOUS) {
+                *msg = "the independent variable is a continuous Real";
+                return 1;
+            }
+            continue;
         }
         const int param = v->causality == FMU_PARAMETER;
         const int cont = v->variability == FMU_CONTINUOUS;
@@ -201,6 +239,22 @@ int fmu_model_check(const fmu_model *m, const char **msg, size_t *row)
             }
         }
     }
+    if (n_independent != 1) {
+        *msg = "exactly one variable must be the independent variable (FMU_TIME_ROW)";
+        return 1;
+    }
+    for (size_t i = 0; i < m->n_states; ++i) {
+        const fmu_continuous_state *x = &m->states[i];
+        const fmu_variable *sv = fmu_find_var(m, x->state);
+        const fmu_variable *dv = fmu_find_var(m, x->derivative);
+        *row = i;
+        if (sv == NULL || dv == NULL || sv->causality != FMU_OUTPUT ||
+            dv->causality != FMU_OUTPUT || !(x->nominal > 0.0) ||
+            fmu_state_index(m, x->state) != (int)i || fmu_derivative_index(m, x->derivative) != (int)i) {
+            *msg = "continuous states and their derivatives are distinct outputs with a nominal > 0";
+            return 1;
+        }
+    }
     return 0;
 }
 
@@ -216,7 +270,7 @@ void fmu_model_token(const fmu_model *m, const void *data, char out[])
     for (size_t i = 0; i < m->n_vars; ++i) {
         const fmu_variable *v = &m->vars[i];
         char start[32] = "";
-        if (v->causality != FMU_OUTPUT) {
+        if (v->causality == FMU_PARAMETER || v->causality == FMU_INPUT) {
             const void *p = (const char *)data + v->offset;
             if (v->type == FMU_REAL) {
                 double d;

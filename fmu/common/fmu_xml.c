@@ -1,14 +1,23 @@
 /*
- * modelDescription.xml from a model's variable table (FMI 2.0, co-simulation).
- * The element order is the one the XSD requires: CoSimulation, UnitDefinitions, LogCategories,
- * DefaultExperiment, ModelVariables, ModelStructure.
+ * The descriptive files of an FMU from a model's variable table: modelDescription.xml for FMI 2.0
+ * and 3.0, the FMI 3.0 buildDescription.xml and documentation/index.html.
+ * Element order is the one the XSDs require: FMI 2: ModelExchange, CoSimulation,
+ * UnitDefinitions, LogCategories, DefaultExperiment, ModelVariables, ModelStructure (Outputs,
+ * Derivatives, InitialUnknowns); FMI 3: ModelExchange, CoSimulation, UnitDefinitions,
+ * LogCategories, DefaultExperiment, ModelVariables, ModelStructure (Output,
+ * ContinuousStateDerivative, InitialUnknown).
+ *
+ * FMI 3 uses the FMI 2 scalar variables with the same names and value references (no arrays),
+ * so a system wired for one version works with the other unchanged.
  */
+#include "fmu_internal.h"
+#include "fmu_xml.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "fmu_internal.h"
-#include "fmu_xml.h"
+#define GENERATOR "rrr fmu/common/fmu_xml.c"
 
 /* Shortest "%.*g" text that reads back as the same double. */
 static void fmt_real(char *buf, size_t n, double v)
@@ -20,6 +29,50 @@ static void fmt_real(char *buf, size_t n, double v)
         }
     }
 }
+
+/* The model data after set_defaults, or NULL (message on stderr). */
+static void *start_values(const fmu_model *m)
+{
+    const char *problem = NULL;
+    size_t row = 0;
+    if (fmu_model_check(m, &problem, &row) != 0) {
+        fprintf(stderr, "%s: broken variable table at row %zu: %s\n", m->identifier, row, problem);
+        return NULL;
+    }
+    void *data = calloc(1, m->data_size);
+    if (data == NULL || m->set_defaults(data) > FMU_WARNING) {
+        fprintf(stderr, "%s: could not compute the start values\n", m->identifier);
+        free(data);
+        return NULL;
+    }
+    return data;
+}
+
+/* Start value text of row v ("" for outputs and the independent variable). */
+static void start_text(const fmu_variable *v, const void *data, char *buf, size_t n)
+{
+    buf[0] = '\0';
+    if (v->causality != FMU_PARAMETER && v->causality != FMU_INPUT) {
+        return;
+    }
+    const void *p = (const char *)data + v->offset;
+    if (v->type == FMU_REAL) {
+        double d;
+        memcpy(&d, p, sizeof d);
+        fmt_real(buf, n, d);
+    } else {
+        int b;
+        memcpy(&b, p, sizeof b);
+        snprintf(buf, n, "%s", b ? "true" : "false");
+    }
+}
+
+static int is_known(const fmu_model *m, const fmu_variable *v)
+{
+    return v->causality == FMU_INPUT || fmu_state_index(m, v->vr) >= 0;
+}
+
+/* ---- shared parts --------------------------------------------------------------------------- */
 
 static int unit_used(const fmu_model *m, const char *unit)
 {
@@ -52,11 +105,98 @@ static void write_units(const fmu_model *m, FILE *f)
     fprintf(f, "  </UnitDefinitions>\n");
 }
 
-static void write_variables(const fmu_model *m, const void *data, FILE *f)
+static void write_log_categories(FILE *f)
+{
+    fprintf(f, "  <LogCategories>\n");
+    for (size_t i = 0; i < FMU_LOG_CATEGORY_COUNT; ++i) {
+        fprintf(f, "    <Category name=\"%s\" description=\"%s\"/>\n", fmu_log_categories[i].name,
+                fmu_log_categories[i].description);
+    }
+    fprintf(f, "  </LogCategories>\n");
+}
+
+static void write_default_experiment(const fmu_model *m, FILE *f)
+{
+    char stop[40], step[40], tol[40];
+    fmt_real(stop, sizeof stop, m->default_stop_time);
+    fmt_real(step, sizeof step, m->default_step_size);
+    fmt_real(tol, sizeof tol, m->default_tolerance);
+    fprintf(f,
+            "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" tolerance=\"%s\" "
+            "stepSize=\"%s\"/>\n",
+            stop, tol, step);
+}
+
+static void write_header(const fmu_model *m, FILE *f)
+{
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    fprintf(f, "<!-- Generated from the variable table of %s by fmu/common/fmu_xml.c; do not edit.\n"
+               "     To update the committed copy, build the CMake target rrr_fmu_update_xml. -->\n",
+            m->identifier);
+}
+
+/* " a b c": the knowns of unknown u, as 1-based indices (FMI 2) or value references (FMI 3). */
+static void write_dependencies(const fmu_model *m, const fmu_variable *u, int fmi_version, FILE *f)
+{
+    fprintf(f, " dependencies=\"");
+    int first = 1;
+    for (size_t k = 0; k < m->n_vars; ++k) {
+        const fmu_variable *kv = &m->vars[k];
+        if (is_known(m, kv) && m->depends(u->vr, kv->vr)) {
+            fprintf(f, "%s%zu", first ? "" : " ", fmi_version == 3 ? (size_t)kv->vr : k + 1);
+            first = 0;
+        }
+    }
+    fprintf(f, "\"");
+}
+
+/* ---- FMI 2.0 -------------------------------------------------------------------------------- */
+
+static void write_sources2(fmu_sources src, FILE *f)
+{
+    fprintf(f, "    <SourceFiles>\n");
+    for (size_t i = 0; i < src.n; ++i) {
+        fprintf(f, "      <File name=\"%s\"/>\n", src.files[i]);
+    }
+    fprintf(f, "    </SourceFiles>\n");
+}
+
+static void write_interfaces2(const fmu_model *m, fmu_sources src, FILE *f)
+{
+    fprintf(f,
+            "  <ModelExchange\n"
+            "    modelIdentifier=\"%s\"\n"
+            "    completedIntegratorStepNotNeeded=\"true\"\n"
+            "    canGetAndSetFMUstate=\"true\"\n"
+            "    canSerializeFMUstate=\"true\"%s\n",
+            m->identifier, src.n > 0 ? ">" : "/>");
+    if (src.n > 0) {
+        write_sources2(src, f);
+        fprintf(f, "  </ModelExchange>\n");
+    }
+    fprintf(f,
+            "  <CoSimulation\n"
+            "    modelIdentifier=\"%s\"\n"
+            "    canHandleVariableCommunicationStepSize=\"true\"\n"
+            "    canGetAndSetFMUstate=\"true\"\n"
+            "    canSerializeFMUstate=\"true\"%s\n",
+            m->identifier, src.n > 0 ? ">" : "/>");
+    if (src.n > 0) {
+        write_sources2(src, f);
+        fprintf(f, "  </CoSimulation>\n");
+    }
+}
+
+static void write_variables2(const fmu_model *m, const void *data, FILE *f)
 {
     fprintf(f, "  <ModelVariables>\n");
     for (size_t i = 0; i < m->n_vars; ++i) {
         const fmu_variable *v = &m->vars[i];
+        if (v->causality == FMU_INDEPENDENT) {
+            /* optional in FMI 2, and the FMI Library rejects one without a start value (which the
+             * standard forbids); it is the last row, so no index moves */
+            continue;
+        }
         fprintf(f, "    <!-- index %zu -->\n", i + 1);
         fprintf(f,
                 "    <ScalarVariable name=\"%s\" valueReference=\"%u\" causality=\"%s\" "
@@ -73,44 +213,47 @@ static void write_variables(const fmu_model *m, const void *data, FILE *f)
         if (v->unit != NULL) {
             fprintf(f, " unit=\"%s\"", v->unit);
         }
-        if (v->causality != FMU_OUTPUT) {
-            const void *p = (const char *)data + v->offset;
-            if (v->type == FMU_REAL) {
-                double d;
-                char buf[40];
-                memcpy(&d, p, sizeof d);
-                fmt_real(buf, sizeof buf, d);
-                fprintf(f, " start=\"%s\"", buf);
-            } else {
-                int b;
-                memcpy(&b, p, sizeof b);
-                fprintf(f, " start=\"%s\"", b ? "true" : "false");
-            }
+        char buf[40];
+        start_text(v, data, buf, sizeof buf);
+        if (buf[0] != '\0') {
+            fprintf(f, " start=\"%s\"", buf);
+        }
+        const int xs = fmu_state_index(m, v->vr);
+        if (xs >= 0) {
+            fmt_real(buf, sizeof buf, m->states[xs].nominal);
+            fprintf(f, " nominal=\"%s\"", buf);
+        }
+        const int xd = fmu_derivative_index(m, v->vr);
+        if (xd >= 0) {
+            fprintf(f, " derivative=\"%u\"", (unsigned)m->states[xd].state + 1u);
         }
         fprintf(f, "/>\n    </ScalarVariable>\n");
     }
     fprintf(f, "  </ModelVariables>\n");
 }
 
-static void write_structure(const fmu_model *m, FILE *f)
+static void write_structure2(const fmu_model *m, FILE *f)
 {
     fprintf(f, "  <ModelStructure>\n    <Outputs>\n");
     for (size_t i = 0; i < m->n_vars; ++i) {
-        const fmu_variable *o = &m->vars[i];
-        if (o->causality != FMU_OUTPUT) {
-            continue;
+        if (m->vars[i].causality == FMU_OUTPUT) {
+            fprintf(f, "      <Unknown index=\"%zu\"", i + 1);
+            write_dependencies(m, &m->vars[i], 2, f);
+            fprintf(f, "/>\n");
         }
-        fprintf(f, "      <Unknown index=\"%zu\" dependencies=\"", i + 1);
-        int first = 1;
-        for (size_t k = 0; k < m->n_vars; ++k) {
-            if (m->vars[k].causality == FMU_INPUT && m->depends(o->vr, m->vars[k].vr)) {
-                fprintf(f, "%s%zu", first ? "" : " ", k + 1);
-                first = 0;
-            }
-        }
-        fprintf(f, "\"/>\n");
     }
-    fprintf(f, "    </Outputs>\n    <InitialUnknowns>\n");
+    fprintf(f, "    </Outputs>\n");
+    if (m->n_states > 0) {
+        fprintf(f, "    <Derivatives>\n");
+        for (size_t i = 0; i < m->n_states; ++i) {
+            const fmu_vr d = m->states[i].derivative;
+            fprintf(f, "      <Unknown index=\"%u\"", (unsigned)d + 1u);
+            write_dependencies(m, fmu_find_var(m, d), 2, f);
+            fprintf(f, "/>\n");
+        }
+        fprintf(f, "    </Derivatives>\n");
+    }
+    fprintf(f, "    <InitialUnknowns>\n");
     for (size_t i = 0; i < m->n_vars; ++i) {
         if (m->vars[i].causality == FMU_OUTPUT) {
             fprintf(f, "      <Unknown index=\"%zu\"/>\n", i + 1);
@@ -119,60 +262,254 @@ static void write_structure(const fmu_model *m, FILE *f)
     fprintf(f, "    </InitialUnknowns>\n  </ModelStructure>\n");
 }
 
-int fmu_write_xml(const fmu_model *m, FILE *f)
+static void write_xml2(const fmu_model *m, const void *data, const char *token, fmu_sources src,
+                       FILE *f)
 {
-    const char *problem = NULL;
-    size_t row = 0;
-    if (fmu_model_check(m, &problem, &row) != 0) {
-        fprintf(stderr, "%s: broken variable table at row %zu: %s\n", m->identifier, row, problem);
-        return 1;
-    }
-    void *data = calloc(1, m->data_size);
-    if (data == NULL || m->set_defaults(data) > FMU_WARNING) {
-        fprintf(stderr, "%s: could not compute the start values\n", m->identifier);
-        free(data);
-        return 1;
-    }
-    char token[FMU_TOKEN_SIZE];
-    char stop[40];
-    char step[40];
-    fmu_model_token(m, data, token);
-    fmt_real(stop, sizeof stop, m->default_stop_time);
-    fmt_real(step, sizeof step, m->default_step_size);
-
-    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    fprintf(f, "<!-- Generated from the variable table of %s by fmu/common/fmu_xml.c; do not edit.\n"
-               "     To update the committed copy, build the CMake target rrr_fmu_update_xml. -->\n",
-            m->identifier);
     fprintf(f,
             "<fmiModelDescription\n"
             "  fmiVersion=\"2.0\"\n"
             "  modelName=\"%s\"\n"
             "  guid=\"%s\"\n"
             "  description=\"%s\"\n"
-            "  generationTool=\"rrr fmu/common/fmu_xml.c\"\n"
+            "  generationTool=\"" GENERATOR "\"\n"
             "  variableNamingConvention=\"structured\"\n"
             "  numberOfEventIndicators=\"0\">\n",
             m->identifier, token, m->description);
+    write_interfaces2(m, src, f);
+    write_units(m, f);
+    write_log_categories(f);
+    write_default_experiment(m, f);
+    write_variables2(m, data, f);
+    write_structure2(m, f);
+    fprintf(f, "</fmiModelDescription>\n");
+}
+
+/* ---- FMI 3.0 -------------------------------------------------------------------------------- */
+
+static void write_variables3(const fmu_model *m, const void *data, FILE *f)
+{
+    fprintf(f, "  <ModelVariables>\n");
+    for (size_t i = 0; i < m->n_vars; ++i) {
+        const fmu_variable *v = &m->vars[i];
+        fprintf(f, "    <%s name=\"%s\" valueReference=\"%u\" causality=\"%s\" variability=\"%s\"",
+                v->type == FMU_REAL ? "Float64" : "Boolean", v->name, (unsigned)v->vr,
+                fmu_causality_name(v->causality), fmu_variability_name(v->variability));
+        if (v->causality == FMU_PARAMETER) {
+            fprintf(f, " initial=\"exact\"");
+        } else if (v->causality == FMU_OUTPUT) {
+            fprintf(f, " initial=\"calculated\"");
+        }
+        fprintf(f, "\n      description=\"%s\"", v->description);
+        if (v->unit != NULL) {
+            fprintf(f, " unit=\"%s\"", v->unit);
+        }
+        char buf[40];
+        start_text(v, data, buf, sizeof buf);
+        if (buf[0] != '\0') {
+            fprintf(f, " start=\"%s\"", buf);
+        }
+        const int xs = fmu_state_index(m, v->vr);
+        if (xs >= 0) {
+            fmt_real(buf, sizeof buf, m->states[xs].nominal);
+            fprintf(f, " nominal=\"%s\"", buf);
+        }
+        const int xd = fmu_derivative_index(m, v->vr);
+        if (xd >= 0) {
+            fprintf(f, " derivative=\"%u\"", (unsigned)m->states[xd].state);
+        }
+        fprintf(f, "/>\n");
+    }
+    fprintf(f, "  </ModelVariables>\n");
+}
+
+static void write_structure3(const fmu_model *m, FILE *f)
+{
+    fprintf(f, "  <ModelStructure>\n");
+    for (size_t i = 0; i < m->n_vars; ++i) {
+        if (m->vars[i].causality == FMU_OUTPUT) {
+            fprintf(f, "    <Output valueReference=\"%u\"", (unsigned)m->vars[i].vr);
+            write_dependencies(m, &m->vars[i], 3, f);
+            fprintf(f, "/>\n");
+        }
+    }
+    for (size_t i = 0; i < m->n_states; ++i) {
+        const fmu_vr d = m->states[i].derivative;
+        fprintf(f, "    <ContinuousStateDerivative valueReference=\"%u\"", (unsigned)d);
+        write_dependencies(m, fmu_find_var(m, d), 3, f);
+        fprintf(f, "/>\n");
+    }
+    for (size_t i = 0; i < m->n_vars; ++i) {
+        if (m->vars[i].causality == FMU_OUTPUT) {
+            fprintf(f, "    <InitialUnknown valueReference=\"%u\"/>\n", (unsigned)m->vars[i].vr);
+        }
+    }
+    fprintf(f, "  </ModelStructure>\n");
+}
+
+static void write_xml3(const fmu_model *m, const void *data, const char *token, FILE *f)
+{
     fprintf(f,
+            "<fmiModelDescription\n"
+            "  fmiVersion=\"3.0\"\n"
+            "  modelName=\"%s\"\n"
+            "  instantiationToken=\"%s\"\n"
+            "  description=\"%s\"\n"
+            "  generationTool=\"" GENERATOR "\"\n"
+            "  variableNamingConvention=\"structured\">\n",
+            m->identifier, token, m->description);
+    fprintf(f,
+            "  <ModelExchange\n"
+            "    modelIdentifier=\"%s\"\n"
+            "    needsCompletedIntegratorStep=\"false\"\n"
+            "    canGetAndSetFMUState=\"true\"\n"
+            "    canSerializeFMUState=\"true\"/>\n"
             "  <CoSimulation\n"
             "    modelIdentifier=\"%s\"\n"
             "    canHandleVariableCommunicationStepSize=\"true\"\n"
-            "    canGetAndSetFMUstate=\"true\"\n"
-            "    canSerializeFMUstate=\"true\"/>\n",
-            m->identifier);
+            "    canGetAndSetFMUState=\"true\"\n"
+            "    canSerializeFMUState=\"true\"\n"
+            "    hasEventMode=\"false\"/>\n",
+            m->identifier, m->identifier);
     write_units(m, f);
-    fprintf(f, "  <LogCategories>\n");
-    for (size_t i = 0; i < FMU_LOG_CATEGORY_COUNT; ++i) {
-        fprintf(f, "    <Category name=\"%s\" description=\"%s\"/>\n", fmu_log_categories[i].name,
-                fmu_log_categories[i].description);
-    }
-    fprintf(f, "  </LogCategories>\n");
-    fprintf(f, "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" stepSize=\"%s\"/>\n", stop,
-            step);
-    write_variables(m, data, f);
-    write_structure(m, f);
+    write_log_categories(f);
+    write_default_experiment(m, f);
+    write_variables3(m, data, f);
+    write_structure3(m, f);
     fprintf(f, "</fmiModelDescription>\n");
+}
+
+int fmu_write_xml(const fmu_model *m, int fmi_version, fmu_sources src, FILE *f)
+{
+    if (fmi_version != 2 && fmi_version != 3) {
+        fprintf(stderr, "FMI version must be 2 or 3, got %d\n", fmi_version);
+        return 1;
+    }
+    void *data = start_values(m);
+    if (data == NULL) {
+        return 1;
+    }
+    char token[FMU_TOKEN_SIZE];
+    fmu_model_token(m, data, token);
+    write_header(m, f);
+    if (fmi_version == 2) {
+        write_xml2(m, data, token, src, f);
+    } else {
+        write_xml3(m, data, token, f);
+    }
+    free(data);
+    return ferror(f) ? 1 : 0;
+}
+
+int fmu_write_build_description(const fmu_model *m, fmu_sources src, FILE *f)
+{
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    fprintf(f, "<!-- Generated by fmu/common/fmu_xml.c; do not edit. -->\n");
+    fprintf(f, "<fmiBuildDescription fmiVersion=\"3.0\">\n");
+    fprintf(f,
+            "  <BuildConfiguration modelIdentifier=\"%s\"\n"
+            "    description=\"the binary of %s from these sources: any C11 compiler, no options "
+            "needed; hidden symbol visibility keeps the exports to the FMI functions\">\n",
+            m->identifier, m->identifier);
+    fprintf(f, "    <SourceFileSet language=\"C11\">\n");
+    for (size_t i = 0; i < src.n; ++i) {
+        fprintf(f, "      <SourceFile name=\"%s\"/>\n", src.files[i]);
+    }
+    fprintf(f, "    </SourceFileSet>\n");
+    fprintf(f, "    <Library name=\"m\" external=\"true\" description=\"the C math library "
+               "(link with -lm where it is separate)\"/>\n");
+    fprintf(f, "  </BuildConfiguration>\n</fmiBuildDescription>\n");
+    return ferror(f) ? 1 : 0;
+}
+
+/* ---- documentation/index.html ---------------------------------------------------------------- */
+
+static void write_doc_variables(const fmu_model *m, const void *data, FILE *f)
+{
+    fprintf(f, "<table>\n<tr><th>name</th><th>value reference</th><th>causality</th>"
+               "<th>variability</th><th>type</th><th>unit</th><th>default</th>"
+               "<th>description</th></tr>\n");
+    for (size_t i = 0; i < m->n_vars; ++i) {
+        const fmu_variable *v = &m->vars[i];
+        char start[40];
+        start_text(v, data, start, sizeof start);
+        const int xs = fmu_state_index(m, v->vr);
+        const int xd = fmu_derivative_index(m, v->vr);
+        fprintf(f, "<tr><td><code>%s</code></td><td>%u</td><td>%s</td><td>%s</td><td>%s</td>"
+                   "<td>%s</td><td>%s</td><td>%s",
+                v->name, (unsigned)v->vr, fmu_causality_name(v->causality),
+                fmu_variability_name(v->variability), fmu_type_name(v->type),
+                v->unit ? v->unit : "", start[0] != '\0' ? start : "(calculated)",
+                v->description);
+        if (xs >= 0) {
+            fprintf(f, "; continuous state (Model Exchange), nominal %g", m->states[xs].nominal);
+        }
+        if (xd >= 0) {
+            fprintf(f, "; derivative of <code>%s</code>",
+                    fmu_find_var(m, m->states[xd].state)->name);
+        }
+        fprintf(f, "</td></tr>\n");
+    }
+    fprintf(f, "</table>\n");
+}
+
+int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_html,
+                  const char *conventions_html, FILE *f)
+{
+    void *data = start_values(m);
+    if (data == NULL) {
+        return 1;
+    }
+    char token[FMU_TOKEN_SIZE];
+    fmu_model_token(m, data, token);
+    const char *platform_dirs = fmi_version == 3 ? "<code>x86_64-linux</code> and "
+                                                   "<code>x86_64-windows</code>"
+                                                 : "<code>linux64</code> and <code>win64</code>";
+    fprintf(f, "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+               "<title>%s (FMI %d.0)</title>\n"
+               "<style>body{font-family:sans-serif;max-width:70em;margin:2em auto;line-height:1.4}"
+               "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:2px 6px;"
+               "text-align:left;vertical-align:top}code{font-size:95%%}</style>\n"
+               "</head>\n<body>\n",
+            m->identifier, fmi_version);
+    fprintf(f, "<h1><code>%s</code>, FMI %d.0</h1>\n<p>%s.</p>\n", m->identifier, fmi_version,
+            m->description);
+    fprintf(f, "<p>Generated from the variable table of the model by <code>fmu/common/fmu_xml.c"
+               "</code>, like this FMU's <code>modelDescription.xml</code> (instantiation token "
+               "<code>%s</code>).</p>\n",
+            token);
+    fprintf(f, "<h2>What it computes</h2>\n%s\n", equations_html);
+    fprintf(f, "<h2>Interfaces</h2>\n<ul>\n"
+               "<li><b>Co-Simulation</b>: variable communication steps; inputs are held over a "
+               "step. FMU state get/set and serialization are supported.</li>\n"
+               "<li><b>Model Exchange</b>: %zu continuous state(s)%s, no event indicators, no "
+               "time events; the importer's solver integrates. FMU state get/set and "
+               "serialization are supported.</li>\n"
+               "<li>Every function checks the FMI %d.0 state machine: a call in a state where it "
+               "is not allowed returns Error with a log message and changes nothing. Every Real "
+               "that is set must be finite: NaN and Inf are refused and the old value kept.</li>\n"
+               "<li>Log categories: <code>logStatusWarning</code>, <code>logStatusDiscard</code>, "
+               "<code>logStatusError</code>, <code>logStatusFatal</code> (on by default) and "
+               "<code>logCalls</code> (every FMI call with its arguments).</li>\n"
+               "<li>Binaries for %s (platforms where the build had a compiler for them).</li>\n"
+               "</ul>\n",
+            m->n_states, m->n_states > 0 ? " (listed in the table below)" : "", fmi_version,
+            platform_dirs);
+    fprintf(f, "<h2>Variables</h2>\n<p>Value references are the same in the FMI 2.0 and FMI 3.0 "
+               "builds; FMI 3.0 uses the same scalar variables (no arrays).</p>\n");
+    write_doc_variables(m, data, f);
+    fprintf(f, "<h2>Conventions</h2>\n%s\n", conventions_html);
+    fprintf(f, "<h2>Building the binary from the sources</h2>\n<p>The folder <code>sources/"
+               "</code> holds every file the binary is built from (%s). With any C11 compiler, "
+               "from the unzipped FMU:</p>\n<pre>\n"
+               "cc -std=c11 -O2 -shared -fPIC -fvisibility=hidden -o %s.so sources/*.c -lm\n"
+               "x86_64-w64-mingw32-gcc -std=c11 -O2 -shared -static-libgcc -o %s.dll sources/*.c\n"
+               "</pre>\n<p>or <code>fmpy compile</code> on the FMU. No include path or "
+               "preprocessor definition is needed.</p>\n",
+            fmi_version == 3 ? "listed in <code>sources/buildDescription.xml</code>"
+                             : "listed in <code>SourceFiles</code> of <code>modelDescription.xml"
+                               "</code>",
+            m->identifier, m->identifier);
+    fprintf(f, "</body>\n</html>\n");
     free(data);
     return ferror(f) ? 1 : 0;
 }

@@ -11,10 +11,10 @@
 #ifndef RRR_MODEL_VARS_H
 #define RRR_MODEL_VARS_H
 
-#include <stddef.h>
-
 #include "fmu_model.h"
 #include "rrr/rrr_model.h"
+
+#include <stddef.h>
 
 /** Offsets of the model parameters from the first value reference B. */
 enum rrr_model_var_offset {

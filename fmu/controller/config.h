@@ -11,8 +11,8 @@
 #ifndef RRR_FMU_CONTROLLER_CONFIG_H
 #define RRR_FMU_CONTROLLER_CONFIG_H
 
+#include "rrr_model_vars.h" /* first: it includes fmu_model.h */
 #include "rrr/rrr.h"
-#include "rrr_model_vars.h"
 
 #define MODEL_IDENTIFIER "rrr_controller"
 
@@ -30,7 +30,8 @@ typedef enum controller_vr {
     vr_kd = vr_kp + RRR_NJ,                    ///< kd[1..3], parameter, V s/rad
     vr_feedforward = vr_kd + RRR_NJ,           ///< feedforward, Boolean parameter
     vr_model,                                  ///< first of the RRR_MV_COUNT model parameters
-    vr_count = vr_model + RRR_MV_COUNT
+    vr_time = vr_model + RRR_MV_COUNT,         ///< time, independent variable, s
+    vr_count
 } controller_vr;
 
 /** Model data of one controller instance (plain old data: copied into FMU state snapshots). */

@@ -2,9 +2,9 @@
  * The computed-torque controller FMU: its variable table and the call into librrr (rrr_ctc,
  * eq 15). No control law here.
  */
-#include <string.h>
-
 #include "config.h"
+
+#include <string.h>
 
 #define T controller_data
 
@@ -44,6 +44,7 @@ static const fmu_variable controller_vars[] = {
             "add the model feedforward u_n (computed-torque); false: PD only", NULL, T,
             gains.feedforward),
     RRR_MODEL_VARS(T, model, vr_model),
+    FMU_TIME_ROW(vr_time),
 };
 
 _Static_assert(sizeof controller_vars / sizeof controller_vars[0] == vr_count,
@@ -117,7 +118,8 @@ static fmu_status calculate(fmu_instance *inst)
     return FMU_OK;
 }
 
-/* Stateless: a step only has to leave the outputs consistent with the inputs. */
+/* Stateless (no continuous states in Model Exchange either): a step only has to leave the
+ * outputs consistent with the inputs. */
 static fmu_status do_step(fmu_instance *inst, double h)
 {
     (void)h;
@@ -127,7 +129,7 @@ static fmu_status do_step(fmu_instance *inst, double h)
 /* u_n(i) depends on the whole reference (D(q_ref) couples the joints); u_c(i) on joint i's
  * q_ref, qd_ref, q, qd; u = sat(u_n + u_c) on both sets. Unsigned wrap-around:
  * vr - first < n  <=>  first <= vr < first + n. */
-static int depends(fmi2ValueReference out_vr, fmi2ValueReference in_vr)
+static int depends(fmu_vr out_vr, fmu_vr in_vr)
 {
     const int ref = in_vr - vr_q_ref < 3 * RRR_NJ;                  /* q_ref, qd_ref, qdd_ref */
     const int same_joint = in_vr % RRR_NJ == out_vr % RRR_NJ;
@@ -150,6 +152,7 @@ const fmu_model FMU_MODEL = {
     .data_size = sizeof(controller_data),
     .default_stop_time = 1.0,
     .default_step_size = 1e-3,
+    .default_tolerance = 1e-8,
     .set_defaults = set_defaults,
     .initialize = initialize,
     .calculate = calculate,

@@ -4,13 +4,14 @@
  *
  * Inputs: motor voltages u. Outputs: joint motion q, qd, qdd and the tip position.
  * Parameters: the rrr_model (same names as the controller's), the initial state q0, qd0 and the
- * internal integration step h_int. doStep calls rrr_plant_step (RK4, input held over the step).
+ * internal integration step h_int. Co-Simulation: doStep calls rrr_plant_step (RK4, input held
+ * over the step). Model Exchange: continuous states q and qd, derivatives qd and qdd.
  */
 #ifndef RRR_FMU_PLANT_CONFIG_H
 #define RRR_FMU_PLANT_CONFIG_H
 
+#include "rrr_model_vars.h" /* first: it includes fmu_model.h */
 #include "rrr/rrr.h"
-#include "rrr_model_vars.h"
 
 #define MODEL_IDENTIFIER "rrr_plant"
 
@@ -25,6 +26,7 @@ typedef enum plant_vr {
     vr_q0 = vr_model + RRR_MV_COUNT,           ///< q0[1..3], parameter, rad
     vr_qd0 = vr_q0 + RRR_NJ,                   ///< qd0[1..3], parameter, rad/s
     vr_h_int = vr_qd0 + RRR_NJ,                ///< h_int, parameter, s
+    vr_time,                                   ///< time, independent variable, s
     vr_count
 } plant_vr;
 

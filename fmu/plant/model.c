@@ -2,9 +2,9 @@
  * The plant FMU: its variable table and the calls into librrr. No physics here: the dynamics,
  * the integrator and the kinematics are rrr_plant_step, rrr_plant_accel and rrr_fk.
  */
-#include <string.h>
-
 #include "config.h"
+
+#include <string.h>
 
 #define T plant_data
 
@@ -39,10 +39,19 @@ static const fmu_variable plant_vars[] = {
     FMU_PARAM(vr_h_int, "h_int",
               "internal RK4 step upper bound, > 0 (a step of h takes ceil(h/h_int) substeps)", "s",
               T, h_int),
+    FMU_TIME_ROW(vr_time),
 };
 
 _Static_assert(sizeof plant_vars / sizeof plant_vars[0] == vr_count,
                "one table row per value reference");
+
+/* Model Exchange: x = (q, qd), dx/dt = (qd, qdd). Nominals: the arm moves within a few rad at up
+ * to a few rad/s (writing task peaks: 1.2 rad/s), so 1 rad and 1 rad/s scale the solver's
+ * absolute tolerance. */
+static const fmu_continuous_state plant_states[] = {
+    {vr_q + 0, vr_qd + 0, 1.0},  {vr_q + 1, vr_qd + 1, 1.0},  {vr_q + 2, vr_qd + 2, 1.0},
+    {vr_qd + 0, vr_qdd + 0, 1.0}, {vr_qd + 1, vr_qdd + 1, 1.0}, {vr_qd + 2, vr_qdd + 2, 1.0},
+};
 
 static plant_data *data_of(fmu_instance *inst)
 {
@@ -144,23 +153,39 @@ static fmu_status do_step(fmu_instance *inst, double h)
     return FMU_OK;
 }
 
-/* qdd = D(q)^-1 (tau(u) - c - h) couples every input into every acceleration; q, qd and the tip
- * are states: no direct feedthrough. */
-static int depends(fmi2ValueReference out_vr, fmi2ValueReference in_vr)
+/* Direct dependencies of the unknowns on the knowns (inputs u and continuous states q, qd):
+ * q[i] and qd[i] are states (no feedthrough from u); qdd = D(q)^-1 (tau(u, qd) - c - h) couples
+ * every input and velocity into every acceleration, and D, c and h depend on q2 and q3 only;
+ * the tip depends on q. Unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n. */
+static int depends(fmu_vr unknown, fmu_vr known)
 {
-    /* unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n */
-    return out_vr - vr_qdd < RRR_NJ && in_vr - vr_u < RRR_NJ;
+    const int is_u = known - vr_u < RRR_NJ;
+    const int is_q = known - vr_q < RRR_NJ;
+    const int is_qd = known - vr_qd < RRR_NJ;
+    if (unknown - vr_q < RRR_NJ || unknown - vr_qd < RRR_NJ) {
+        return known == unknown;
+    }
+    if (unknown - vr_qdd < RRR_NJ) {
+        return is_u || is_qd || (is_q && known != vr_q);
+    }
+    if (unknown - vr_tip < 3) {
+        return is_q;
+    }
+    return 0;
 }
 
 const fmu_model FMU_MODEL = {
     .identifier = MODEL_IDENTIFIER,
     .description = "RRR robot arm plant: motor voltages in, joint motion and tip position out "
-                   "(closed-form dynamics of librrr, RK4)",
+                   "(closed-form dynamics of librrr; RK4 inside doStep, or continuous states for a solver)",
     .vars = plant_vars,
     .n_vars = sizeof plant_vars / sizeof plant_vars[0],
+    .states = plant_states,
+    .n_states = sizeof plant_states / sizeof plant_states[0],
     .data_size = sizeof(plant_data),
     .default_stop_time = 1.0,
     .default_step_size = 1e-3,
+    .default_tolerance = 1e-8,
     .set_defaults = set_defaults,
     .initialize = initialize,
     .calculate = calculate,

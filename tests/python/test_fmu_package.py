@@ -110,9 +110,11 @@ def test_model_description(which: str) -> None:
     with Slave(which) as s:
         md = s.md
     assert md.fmiVersion == "2.0"
-    assert md.coSimulation is not None and md.modelExchange is None
+    assert md.coSimulation is not None and md.modelExchange is not None  # one binary, both
     assert md.coSimulation.modelIdentifier == f"rrr_{which}"
-    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+    assert md.modelExchange.modelIdentifier == f"rrr_{which}"
+    for interface in (md.coSimulation, md.modelExchange):
+        assert interface.canGetAndSetFMUstate and interface.canSerializeFMUstate
     assert md.coSimulation.canHandleVariableCommunicationStepSize
     assert float(md.defaultExperiment.stepSize) == STEP
     assert {c.name for c in md.logCategories} >= {"logStatusError", "logCalls"}
@@ -133,11 +135,24 @@ def test_model_structure() -> None:
     with Slave("plant") as p, Slave("controller") as c:
         plant = {o.variable.name: {d.name for d in o.dependencies} for o in p.md.outputs}
         ctrl = {o.variable.name: {d.name for d in o.dependencies} for o in c.md.outputs}
+        derivatives = {d.variable.name: (d.variable.derivative.name,
+                                         {k.name for k in d.dependencies})
+                       for d in p.md.derivatives}
     u = set(joint("u"))
-    for name in joint("q") + joint("qd") + ["tip.x", "tip.y", "tip.z"]:
-        assert plant[name] == set(), name  # states: no direct feedthrough
+    # q and qd are continuous states: an output that is a state depends on that state only (no
+    # direct feedthrough from u); the tip on q; qdd on u, qd, q2 and q3 (D, c, h ignore q1)
+    for name in joint("q") + joint("qd"):
+        assert plant[name] == {name}, name
+    for name in ["tip.x", "tip.y", "tip.z"]:
+        assert plant[name] == set(joint("q")), name
+    accel = u | set(joint("qd")) | {"q[2]", "q[3]"}
     for name in joint("qdd"):
-        assert plant[name] == u
+        assert plant[name] == accel
+    assert derivatives == {
+        **{f"qd[{i}]": (f"q[{i}]", {f"qd[{i}]"}) for i in (1, 2, 3)},
+        **{f"qdd[{i}]": (f"qd[{i}]", accel) for i in (1, 2, 3)},
+    }
+    assert not c.md.derivatives  # the controller has no states
     ref = set(joint("q_ref") + joint("qd_ref") + joint("qdd_ref"))
     for i in (1, 2, 3):
         pd = {f"q_ref[{i}]", f"qd_ref[{i}]", f"q[{i}]", f"qd[{i}]"}

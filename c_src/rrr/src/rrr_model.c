@@ -168,14 +168,15 @@ rrr_status rrr_bps_from_inertia(const rrr_model *m, const rrr_inertial *in, doub
     return RRR_OK;
 }
 
-/* Names of model fields, for the validation report (static strings: reentrant). */
-static const char *const kt_names[RRR_NJ] = {"kt[1]", "kt[2]", "kt[3]"};
-static const char *const b_names[RRR_NJ] = {"b[1]", "b[2]", "b[3]"};
-static const char *const f_names[RRR_NJ][RRR_NF] = {
+/* Names of model fields, for the validation report (static strings: reentrant). Arrays of
+ * characters, not of pointers, so that they live in read-only data without relocations. */
+static const char kt_names[RRR_NJ][8] = {"kt[1]", "kt[2]", "kt[3]"};
+static const char b_names[RRR_NJ][8] = {"b[1]", "b[2]", "b[3]"};
+static const char f_names[RRR_NJ][RRR_NF][8] = {
     {"f[1,1]", "f[1,2]", "f[1,3]"}, {"f[2,1]", "f[2,2]", "f[2,3]"}, {"f[3,1]", "f[3,2]", "f[3,3]"}};
-static const char *const w_names[RRR_NJ][RRR_NF] = {
+static const char w_names[RRR_NJ][RRR_NF][8] = {
     {"w[1,1]", "w[1,2]", "w[1,3]"}, {"w[2,1]", "w[2,2]", "w[2,3]"}, {"w[3,1]", "w[3,2]", "w[3,3]"}};
-static const char *const p_names[RRR_NP] = {"p[1]",  "p[2]",  "p[3]",  "p[4]",  "p[5]",  "p[6]",
+static const char p_names[RRR_NP][8] = {"p[1]",  "p[2]",  "p[3]",  "p[4]",  "p[5]",  "p[6]",
                                             "p[7]",  "p[8]",  "p[9]",  "p[10]", "p[11]", "p[12]",
                                             "p[13]", "p[14]", "p[15]", "p[16]"};
 

@@ -4,13 +4,13 @@
  */
 #ifndef RRR_H
 #define RRR_H
-#include "rrr/rrr_status.h"
-#include "rrr/rrr_model.h"
-#include "rrr/rrr_kinematics.h"
-#include "rrr/rrr_dynamics.h"
-#include "rrr/rrr_actuator.h"
-#include "rrr/rrr_control.h"
-#include "rrr/rrr_plant.h"
+#include "rrr_status.h"
+#include "rrr_model.h"
+#include "rrr_kinematics.h"
+#include "rrr_dynamics.h"
+#include "rrr_actuator.h"
+#include "rrr_control.h"
+#include "rrr_plant.h"
 
 /** Version of librrr. */
 #define RRR_VERSION_STRING "0.1.0"

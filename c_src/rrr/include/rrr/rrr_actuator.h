@@ -12,7 +12,7 @@
 extern "C" {
 #endif
 
-#include "rrr/rrr_model.h"
+#include "rrr_model.h"
 
 /** @brief Friction voltage u_f(qd) of eq 9, V. */
 RRR_API rrr_status rrr_friction(const rrr_model *m, const double qd[3], double uf[3]);

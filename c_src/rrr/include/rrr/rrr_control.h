@@ -9,7 +9,7 @@
 extern "C" {
 #endif
 
-#include "rrr/rrr_model.h"
+#include "rrr_model.h"
 
 /** @brief Gains and switches of the computed-torque law. */
 typedef struct rrr_ctc_gains {

@@ -14,7 +14,7 @@
 extern "C" {
 #endif
 
-#include "rrr/rrr_model.h"
+#include "rrr_model.h"
 
 /**
  * @brief Regressor R(q, qd, qdd) of eq 10/13, 3 x 16 row-major: tau = R p.

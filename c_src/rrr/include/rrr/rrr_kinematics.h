@@ -11,7 +11,7 @@
 extern "C" {
 #endif
 
-#include "rrr/rrr_model.h"
+#include "rrr_model.h"
 
 /**
  * @brief Posture branches. The shoulder branch is the sign of the planar reach

@@ -14,7 +14,7 @@
 extern "C" {
 #endif
 
-#include "rrr/rrr_status.h"
+#include "rrr_status.h"
 
 /** Number of base parameters (eq 12). */
 #define RRR_NP 16

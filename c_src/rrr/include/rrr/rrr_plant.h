@@ -18,7 +18,7 @@
 extern "C" {
 #endif
 
-#include "rrr/rrr_model.h"
+#include "rrr_model.h"
 
 /** Default internal integration step, s. */
 #define RRR_PLANT_H_INT_DEFAULT 1e-4

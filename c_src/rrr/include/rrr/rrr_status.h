@@ -9,8 +9,10 @@
 extern "C" {
 #endif
 
-/** Marks the public functions of librrr (exported from the shared library, default visibility). */
-#if defined(__GNUC__) || defined(__clang__)
+/** Marks the public functions of librrr: exported (default visibility) when the shared library
+ *  is built (RRR_BUILDING_LIBRARY, set by CMake); plain declarations everywhere else, e.g. when
+ *  the sources are compiled into an FMU binary, which exports only the FMI functions. */
+#if defined(RRR_BUILDING_LIBRARY) && (defined(__GNUC__) || defined(__clang__)) && !defined(_WIN32)
 #define RRR_API __attribute__((visibility("default")))
 #else
 #define RRR_API
