@@ -14,10 +14,13 @@ log = logging.getLogger("rrr_robot")
 
 
 def _cmd_fmus(_: argparse.Namespace) -> int:
-    from .fmus import fmu_path
+    from .fmus import variants
 
-    for which in ("plant", "controller"):
-        print(f"{which}: {fmu_path(which)}")
+    for v in variants():
+        extras = [x for x, present in (("sources", v.has_sources),
+                                       ("documentation", v.has_documentation)) if present]
+        print(f"{v.which:<10} FMI {v.fmi_version}.0  {' + '.join(v.interfaces):<28} "
+              f"{', '.join(v.platforms):<30} {', '.join(extras):<22} {v.path}")
     return 0
 
 
@@ -46,7 +49,7 @@ def _cmd_writing(args: argparse.Namespace) -> int:
     job = WritingJob(
         out=Path(args.out), text=args.text, scenarios=args.scenario or list(BUILTIN),
         robot=Path(args.robot) if args.robot else WritingJob.robot, scale=args.scale,
-        figures=not args.no_figures,
+        figures=not args.no_figures, fmi_version=args.fmi,
     )
     summary = run_writing(job, progress=_ProgressBar(not args.quiet and sys.stderr.isatty()))
     for name, s in summary["scenarios"].items():
@@ -69,7 +72,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"rrr_robot {__version__}")
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     sub = parser.add_subparsers(dest="command", required=True)
-    p_fmus = sub.add_parser("fmus", help="print the paths of the plant and controller FMUs")
+    p_fmus = sub.add_parser(
+        "fmus", help="list the FMUs: plant and controller, FMI 2.0 and 3.0, with their "
+        "interfaces, platforms and paths")
     p_fmus.set_defaults(func=_cmd_fmus)
     p_w = sub.add_parser(
         "writing", help="run the writing task: co-simulate the FMUs for each scenario",
@@ -85,6 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
     p_w.add_argument("--scale", type=float, default=1.0,
                      help="factor on the letter height (default 1)")
     p_w.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    p_w.add_argument("--fmi", type=int, choices=(2, 3), default=2,
+                     help="FMI version of the FMUs to co-simulate (default 2; the results are "
+                     "identical)")
     p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p_w.set_defaults(func=_cmd_writing)
     from .identify.cli import register_cli as register_identify

@@ -39,6 +39,7 @@ class CosimOptions:
     controller_values: Mapping[str, float | bool] = field(default_factory=dict)
     plant_fmu: Path | None = None                        # default: the packaged FMU
     controller_fmu: Path | None = None
+    fmi_version: int = 2                                 # of the packaged FMUs: 2 or 3
     progress: Callable[[int, int], None] | None = None  # called as progress(k, n) now and then
     # what the controller measures of the plant's (q, qd) (6,), and what the plant receives of
     # the controller's u (3,): e.g. the quantisation of a CAN bench (rrr_robot.hil); identity
@@ -108,8 +109,9 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
     plant_values = {f"q0[{i}]": float(q_ref[0, i - 1]) for i in J}
     plant_values |= {f"qd0[{i}]": float(qd_ref[0, i - 1]) for i in J}
     plant_values |= dict(options.plant_values)
-    with FmuSlave(options.controller_fmu or fmu_path("controller"), "controller") as ctrl, \
-            FmuSlave(options.plant_fmu or fmu_path("plant"), "plant") as plant:
+    ctrl_fmu = options.controller_fmu or fmu_path("controller", options.fmi_version)
+    plant_fmu = options.plant_fmu or fmu_path("plant", options.fmi_version)
+    with FmuSlave(ctrl_fmu, "controller") as ctrl, FmuSlave(plant_fmu, "plant") as plant:
         ctrl.initialize(float(t[0]), options.controller_values)
         plant.initialize(float(t[0]), plant_values)
         c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)

@@ -1,10 +1,12 @@
-"""One FMI 2.0 co-simulation slave, driven through FMPy's FMU2Slave.
+"""One co-simulation slave of FMI 2.0 or 3.0, driven through FMPy's FMU2Slave / FMU3Slave.
 
 Owns the extraction folder and the instance (a context manager with an idempotent close), maps
 variable names to value references, exchanges blocks of reals through preallocated ctypes
 buffers viewed as numpy arrays (no per-step conversion), routes the FMU's log messages to
 ``logging``, and turns every failed FMI call into a :class:`CosimError` naming the FMU, the call,
-the simulation time and the FMU's last error message.
+the simulation time and the FMU's last error message. The FMI version is read from the FMU's
+model description; both versions have the same variable names and value references, so the
+callers never see the difference.
 """
 
 from __future__ import annotations
@@ -13,21 +15,15 @@ import ctypes as ct
 import logging
 import shutil
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
+from typing import Any
 
 import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-    fmi2Real,
-    fmi2ValueReference,
-)
 
 from ._arrays import FloatArray
 from .errors import BadInputError, CosimError
@@ -41,9 +37,109 @@ class RealBlock:
     """A fixed set of Real variables exchanged in one FMI call; ``values`` views the buffer."""
 
     names: tuple[str, ...]
-    vrs: ct.Array[fmi2ValueReference]
-    buffer: ct.Array[fmi2Real]
+    vrs: ct.Array[Any]
+    buffer: ct.Array[ct.c_double]
     values: FloatArray
+
+
+class _Fmi2:
+    """The FMI 2.0 calls FmuSlave needs, on FMPy's FMU2Slave."""
+
+    version = 2
+
+    def __init__(self, md: Any, unzipdir: str, name: str) -> None:
+        from fmpy.fmi2 import FMU2Slave
+
+        self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
+                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+
+    def instantiate(self, logger: Callable[[int, bytes, bytes], None]) -> None:
+        from fmpy.fmi2 import (
+            defaultCallbacks,
+            fmi2CallbackFunctions,
+            fmi2CallbackLoggerTYPE,
+        )
+        from fmpy.logging import addLoggerProxy
+
+        def log2(_env: object, _inst: bytes, status: int, category: bytes, msg: bytes) -> None:
+            logger(status, category, msg)
+
+        cb = fmi2CallbackFunctions()
+        self._logger_ref = fmi2CallbackLoggerTYPE(log2)
+        cb.logger = self._logger_ref
+        cb.allocateMemory = defaultCallbacks.allocateMemory
+        cb.freeMemory = defaultCallbacks.freeMemory
+        addLoggerProxy(ct.byref(cb))
+        self._callbacks = cb
+        self.fmu.instantiate(callbacks=cb, loggingOn=False)
+
+    def vr_array(self, vrs: Sequence[int]) -> ct.Array[Any]:
+        from fmpy.fmi2 import fmi2ValueReference
+
+        return (fmi2ValueReference * len(vrs))(*vrs)
+
+    def setup(self, start_time: float) -> None:
+        self.fmu.setupExperiment(startTime=start_time)
+
+    def enter_initialization(self, start_time: float) -> None:
+        self.fmu.enterInitializationMode()
+
+    def set_reals(self, vrs: ct.Array[Any], n: int, buf: ct.Array[ct.c_double]) -> None:
+        self.fmu.fmi2SetReal(self.fmu.component, vrs, n, buf)
+
+    def get_reals(self, vrs: ct.Array[Any], n: int, buf: ct.Array[ct.c_double]) -> None:
+        self.fmu.fmi2GetReal(self.fmu.component, vrs, n, buf)
+
+    def set_boolean(self, vr: int, value: bool) -> None:
+        self.fmu.setBoolean([vr], [value])
+
+    def do_step(self, t: float, h: float) -> None:
+        self.fmu.fmi2DoStep(self.fmu.component, t, h, 1)
+
+
+class _Fmi3:
+    """The FMI 3.0 calls FmuSlave needs, on FMPy's FMU3Slave."""
+
+    version = 3
+
+    def __init__(self, md: Any, unzipdir: str, name: str) -> None:
+        from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
+
+        self.fmu = FMU3Slave(guid=md.guid, unzipDirectory=unzipdir,
+                             modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
+        self._flags = [fmi3Boolean() for _ in range(3)]
+        self._last = fmi3Float64()
+
+    def instantiate(self, logger: Callable[[int, bytes, bytes], None]) -> None:
+        def log3(_env: object, status: int, category: bytes, msg: bytes) -> None:
+            logger(status, category, msg)
+
+        self.fmu.instantiate(loggingOn=False, logMessage=log3)
+
+    def vr_array(self, vrs: Sequence[int]) -> ct.Array[Any]:
+        from fmpy.fmi3 import fmi3ValueReference
+
+        return (fmi3ValueReference * len(vrs))(*vrs)
+
+    def setup(self, start_time: float) -> None:
+        """FMI 3 takes the start time when initialization begins."""
+
+    def enter_initialization(self, start_time: float) -> None:
+        self.fmu.enterInitializationMode(startTime=start_time)
+
+    def set_reals(self, vrs: ct.Array[Any], n: int, buf: ct.Array[ct.c_double]) -> None:
+        self.fmu.fmi3SetFloat64(self.fmu.component, vrs, n, buf, n)
+
+    def get_reals(self, vrs: ct.Array[Any], n: int, buf: ct.Array[ct.c_double]) -> None:
+        self.fmu.fmi3GetFloat64(self.fmu.component, vrs, n, buf, n)
+
+    def set_boolean(self, vr: int, value: bool) -> None:
+        self.fmu.setBoolean([vr], [value])
+
+    def do_step(self, t: float, h: float) -> None:
+        event, terminate, early = self._flags
+        self.fmu.fmi3DoStep(self.fmu.component, t, h, True, ct.byref(event),
+                            ct.byref(terminate), ct.byref(early), ct.byref(self._last))
 
 
 class FmuSlave:
@@ -56,42 +152,33 @@ class FmuSlave:
         self.last_message = ""
         self._closed = True
         md = read_model_description(str(self.path))
+        if md.coSimulation is None:
+            raise CosimError(f"{self.path} has no Co-Simulation interface")
+        calls = {"2.0": _Fmi2, "3.0": _Fmi3}.get(md.fmiVersion)
+        if calls is None:
+            raise CosimError(f"{self.path}: FMI version {md.fmiVersion} is not supported "
+                             "(2.0 and 3.0 are)")
+        self.fmi_version: int = calls.version
         self._vars = {v.name: v for v in md.modelVariables}
         self._unzipdir = extract(str(self.path))
-        self._callbacks = self._make_callbacks()
-        self._fmu = FMU2Slave(
-            guid=md.guid,
-            unzipDirectory=self._unzipdir,
-            modelIdentifier=md.coSimulation.modelIdentifier,
-            instanceName=instance_name,
-        )
+        self._api: _Fmi2 | _Fmi3 = calls(md, self._unzipdir, instance_name)
+        self._fmu = self._api.fmu
         self._closed = False
         try:
-            self._fmu.instantiate(callbacks=self._callbacks, loggingOn=False)
+            self._api.instantiate(self._log)
         except Exception as exc:  # FMPy raises a bare Exception here
             self.close()
-            raise CosimError(f"{self.name}: fmi2Instantiate failed: {exc}") from exc
+            raise CosimError(f"{self.name}: instantiation failed: {exc}"
+                             f"{': ' + self.last_message if self.last_message else ''}") from exc
         self._initialized = False
 
-    def _make_callbacks(self) -> fmi2CallbackFunctions:
-        from fmpy.fmi2 import defaultCallbacks
-        from fmpy.logging import addLoggerProxy
-
-        def logger(_env: object, _inst: bytes, status: int, category: bytes, msg: bytes) -> None:
-            text = msg.decode("utf-8", "replace")
-            level = logging.ERROR if status >= 2 else logging.DEBUG
-            if status >= 2:
-                self.last_message = text
-            log.log(level, "[%s] %s %s: %s", self.name, _STATUS[min(status, 5)],
-                    category.decode("utf-8", "replace"), text)
-
-        cb = fmi2CallbackFunctions()
-        self._logger_ref = fmi2CallbackLoggerTYPE(logger)
-        cb.logger = self._logger_ref
-        cb.allocateMemory = defaultCallbacks.allocateMemory
-        cb.freeMemory = defaultCallbacks.freeMemory
-        addLoggerProxy(ct.byref(cb))
-        return cb
+    def _log(self, status: int, category: bytes, msg: bytes) -> None:
+        text = msg.decode("utf-8", "replace")
+        level = logging.ERROR if status >= 2 else logging.DEBUG
+        if status >= 2:
+            self.last_message = text
+        log.log(level, "[%s] %s %s: %s", self.name, _STATUS[min(status, 5)],
+                category.decode("utf-8", "replace"), text)
 
     # ---- variables ---------------------------------------------------------------------------
     def vr(self, name: str) -> int:
@@ -102,17 +189,15 @@ class FmuSlave:
             raise BadInputError(f"{self.name}: no variable named {name!r} in {self.path}") from exc
 
     def real_block(self, names: Sequence[str]) -> RealBlock:
-        vrs = (fmi2ValueReference * len(names))(*[self.vr(n) for n in names])
-        buffer = (fmi2Real * len(names))()
+        vrs = self._api.vr_array([self.vr(n) for n in names])
+        buffer = (ct.c_double * len(names))()
         return RealBlock(tuple(names), vrs, buffer, np.ctypeslib.as_array(buffer))
 
     def set_block(self, block: RealBlock) -> None:
-        self._guard("fmi2SetReal", self._fmu.fmi2SetReal, self._fmu.component, block.vrs,
-                    len(block.names), block.buffer)
+        self._guard("SetReal", self._api.set_reals, block.vrs, len(block.names), block.buffer)
 
     def get_block(self, block: RealBlock) -> FloatArray:
-        self._guard("fmi2GetReal", self._fmu.fmi2GetReal, self._fmu.component, block.vrs,
-                    len(block.names), block.buffer)
+        self._guard("GetReal", self._api.get_reals, block.vrs, len(block.names), block.buffer)
         return block.values
 
     def set_values(self, values: Mapping[str, float | bool]) -> None:
@@ -122,11 +207,12 @@ class FmuSlave:
             if var is None:
                 raise BadInputError(f"{self.name}: no variable named {name!r}")
             if var.type == "Boolean":
-                self._guard(f"fmi2SetBoolean({name})", self._fmu.setBoolean, [self.vr(name)],
-                            [bool(value)])
+                self._guard(f"SetBoolean({name})", self._api.set_boolean, self.vr(name),
+                            bool(value))
             else:
-                self._guard(f"fmi2SetReal({name})", self._fmu.setReal, [self.vr(name)],
-                            [float(value)])
+                block = self.real_block([name])
+                block.values[0] = float(value)
+                self._guard(f"SetReal({name})", self._api.set_reals, block.vrs, 1, block.buffer)
 
     def get_values(self, names: Sequence[str]) -> dict[str, float]:
         return {n: float(v) for n, v in zip(names, self.get_block(self.real_block(names)),
@@ -136,15 +222,15 @@ class FmuSlave:
     def initialize(self, start_time: float = 0.0, start_values: Mapping[str, float | bool] = {},
                    ) -> None:
         fmu = self._fmu
-        self._guard("fmi2SetupExperiment", fmu.setupExperiment, startTime=start_time)
-        self.set_values(start_values)
-        self._guard("fmi2EnterInitializationMode", fmu.enterInitializationMode)
-        self._guard("fmi2ExitInitializationMode", fmu.exitInitializationMode)
+        self._guard("SetupExperiment", self._api.setup, start_time)
+        self.set_values(start_values)  # parameters and inputs, in state Instantiated
+        self._guard("EnterInitializationMode", self._api.enter_initialization, start_time)
+        self._guard("ExitInitializationMode", fmu.exitInitializationMode)
         self.time = start_time
         self._initialized = True
 
     def do_step(self, h: float) -> None:
-        self._guard("fmi2DoStep", self._fmu.fmi2DoStep, self._fmu.component, self.time, h, 1)
+        self._guard("DoStep", self._api.do_step, self.time, h)
         self.time += h
 
     def _guard(self, what: str, fn: object, *args: object, **kwargs: object) -> None:
@@ -155,6 +241,7 @@ class FmuSlave:
         except FMICallException as exc:
             status = _STATUS[exc.status] if 0 <= exc.status < 6 else str(exc.status)
             detail = f": {self.last_message}" if self.last_message else ""
+            what = f"fmi{self.fmi_version}{what}"
             raise CosimError(
                 f"{self.name}: {what} returned {status} at t = {self.time:.6f} s{detail}",
                 function=what, status=status,
@@ -169,7 +256,7 @@ class FmuSlave:
             if self._initialized:
                 self._fmu.terminate()
         except FMICallException:
-            log.warning("%s: fmi2Terminate failed", self.name)
+            log.warning("%s: fmi%dTerminate failed", self.name, self.fmi_version)
         finally:
             if getattr(self._fmu, "component", None) is not None:
                 self._fmu.freeInstance()
