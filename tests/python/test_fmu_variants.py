@@ -22,10 +22,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import rrr_robot as rr
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
-
-import rrr_robot as rr
 from rrr_robot.fmu_slave import FmuSlave
 from rrr_robot.fmus import variants
 
