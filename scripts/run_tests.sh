@@ -1,11 +1,30 @@
 #!/usr/bin/env bash
 # Sets up everything and runs every test: C tests (core, FMUs, CAN bench) under AddressSanitizer
-# and UndefinedBehaviorSanitizer via CTest, ruff, pytest (including the generated-code checks),
-# and a short libFuzzer run on the CAN frame decoders (clang is installed when missing and root).
+# and UndefinedBehaviorSanitizer via CTest (with the FMUs' Windows binaries run under wine), ruff,
+# pytest (including the generated-code checks), and a short libFuzzer run on the CAN frame
+# decoders. mingw-w64, wine and clang are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 export RRR_PIP_TARGET=".[test]"
+# The Windows binaries of the FMUs are cross-compiled with mingw-w64 and tested under wine: both
+# must be present before the FMUs are built (by pip install below and by CMake).
+windows_tools_ok() {
+  command -v x86_64-w64-mingw32-gcc >/dev/null 2>&1 && command -v wine >/dev/null 2>&1
+}
+if ! windows_tools_ok; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "== installing gcc-mingw-w64-x86-64 and wine (Windows binaries of the FMUs) =="
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+      gcc-mingw-w64-x86-64 wine >/dev/null
+  fi
+  if ! windows_tools_ok; then
+    echo "the FMU tests need the mingw-w64 cross compiler and wine (Debian: apt-get install" \
+         "gcc-mingw-w64-x86-64 wine)" >&2
+    exit 1
+  fi
+fi
 # shellcheck disable=SC1091
 . scripts/setup_env.sh
 JOBS="$(nproc 2>/dev/null || echo 2)"
