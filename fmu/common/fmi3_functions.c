@@ -11,8 +11,8 @@
  *
  * Not provided (capability flags false or absent in the XML): scheduled execution, event mode
  * in Co-Simulation, intermediate update, clocks, configuration mode, directional and adjoint
- * derivatives, output derivatives, per-element dependencies, and variables of any type other
- * than Float64 and Boolean. Each refuses with fmi3Error and says so.
+ * derivatives, output derivatives, per-element dependencies, fmi3EvaluateDiscreteStates, and
+ * variables of any type other than Float64 and Boolean. Each refuses with fmi3Error and says so.
  */
 #include "fmu_internal.h" /* first: see fmu_model.h */
 #include "fmi3Functions.h"
@@ -29,7 +29,13 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
  * bits (fmu_model.h): StepMode = FMU_STEP_MODE, StepDiscarded = FMU_STEP_FAILED. A mask of 0
  * marks a function whose states this FMU never enters (configuration mode, clock activation,
  * event mode in Co-Simulation): every call is an illegal call sequence.
+ * The Model Exchange functions "can only be called in Model Exchange" and fmi3GetOutputDerivatives
+ * is "not allowed in Model Exchange" (FMI 3.0, 2.3): ME_ONLY and CS_ONLY clear their masks for an
+ * instance of the other interface type (evaluated in BEGIN_FUNCTION, where S is the instance).
  */
+
+#define ME_ONLY(MASK) (S->interface == FMU_MODEL_EXCHANGE ? (unsigned)(MASK) : 0u)
+#define CS_ONLY(MASK) (S->interface == FMU_CO_SIMULATION ? (unsigned)(MASK) : 0u)
 
 #define MASK_ANY_INSTANCE                                                                     \
     (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE |  \
@@ -73,21 +79,22 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
 /* model exchange functions */
 #define MASK_fmi3EnterContinuousTimeMode FMU_EVENT_MODE
 #define MASK_fmi3CompletedIntegratorStep FMU_CONT_TIME_MODE
-#define MASK_fmi3SetTime (FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
+/* lenient where the Reference-FMUs are, for importers tested against them: fmi3SetTime also in
+ * EventMode (as in FMI 2.0) and the counts in every state; neither changes the model's state */
+#define MASK_fmi3SetTime ME_ONLY(FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
 #define MASK_fmi3SetContinuousStates FMU_CONT_TIME_MODE
 #define MASK_fmi3GetContinuousStateDerivatives                                                \
-    (FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
+    ME_ONLY(FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
 #define MASK_fmi3GetEventIndicators MASK_fmi3GetContinuousStateDerivatives
 #define MASK_fmi3GetContinuousStates MASK_fmi3GetContinuousStateDerivatives
-#define MASK_fmi3GetNominalsOfContinuousStates                                                \
-    (FMU_INSTANTIATED | MASK_fmi3GetContinuousStateDerivatives)
-#define MASK_fmi3GetNumberOfEventIndicators MASK_ANY_INSTANCE
-#define MASK_fmi3GetNumberOfContinuousStates MASK_ANY_INSTANCE
+#define MASK_fmi3GetNominalsOfContinuousStates MASK_fmi3GetContinuousStateDerivatives
+#define MASK_fmi3GetNumberOfEventIndicators ME_ONLY(MASK_ANY_INSTANCE)
+#define MASK_fmi3GetNumberOfContinuousStates ME_ONLY(MASK_ANY_INSTANCE)
 
 /* co-simulation functions */
 #define MASK_fmi3EnterStepMode 0u
 #define MASK_fmi3GetOutputDerivatives                                                         \
-    (FMU_STEP_MODE | FMU_STEP_FAILED | FMU_TERMINATED | FMU_ERROR_STATE)
+    CS_ONLY(FMU_STEP_MODE | FMU_STEP_FAILED | FMU_TERMINATED | FMU_ERROR_STATE)
 #define MASK_fmi3DoStep FMU_STEP_MODE
 
 /* scheduled execution */
@@ -102,9 +109,10 @@ static int allowed_state(fmu_instance *S, unsigned mask, const char *fn)
     }
     char states[200];
     fmu_states_str(3, mask, states, sizeof states);
+    const char *kind = S->interface == FMU_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation";
     fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-            "%s: illegal call sequence: not allowed in state %s (allowed in: %s)", fn,
-            fmu_state_name(3, S->state), states);
+            "%s: illegal call sequence: not allowed in state %s (allowed in: %s%s%s)", fn,
+            fmu_state_name(3, S->state), states, mask != 0u ? "" : " for ", mask != 0u ? "" : kind);
     return 0;
 }
 
@@ -590,7 +598,7 @@ NO_CLOCKS(SetShiftFraction, (const fmi3UInt64 counters[], const fmi3UInt64 resol
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance)
 {
     BEGIN_FUNCTION(EvaluateDiscreteStates)
-    TRACE("fmi3EvaluateDiscreteStates()"); /* no discrete states: nothing to evaluate */
+    NOT_PROVIDED(EvaluateDiscreteStates, "providesEvaluateDiscreteStates=false");
     END_FUNCTION()
 }
 

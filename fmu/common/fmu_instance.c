@@ -6,6 +6,7 @@
  */
 #include "fmu_internal.h"
 
+#include <ctype.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -60,6 +61,17 @@ static void log_early(const fmu_host *host, int fmi_version, const char *name, c
 
 /* ---- lifecycle ------------------------------------------------------------------------------- */
 
+/* 1 when s has no character that is not white space (FMI 2.0 and 3.0: not a valid instanceName). */
+static int blank(const char *s)
+{
+    for (; *s != '\0'; ++s) {
+        if (!isspace((unsigned char)*s)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
 fmu_instance *fmu_create(const char *fn, const fmu_host *host, int fmi_version,
                          fmu_interface interface, const char *name, const char *token,
                          int logging_on)
@@ -71,8 +83,10 @@ fmu_instance *fmu_create(const char *fn, const fmu_host *host, int fmi_version,
                   "be NULL", fn);
         return NULL;
     }
-    if (name == NULL || name[0] == '\0') {
-        log_early(host, fmi_version, name, "%s: instanceName must be a non-empty string", fn);
+    if (name == NULL || blank(name)) {
+        log_early(host, fmi_version, name,
+                  "%s: instanceName must be a non-empty string with a character that is not "
+                  "white space", fn);
         return NULL;
     }
     if (token == NULL) {

@@ -210,6 +210,10 @@ __attribute__((format(printf, 4, 5)))
 void fmu_log(const fmu_instance *inst, fmu_status status, fmu_category category, const char *fmt,
              ...);
 
+/** The name of FMI function NAME as the importer of inst called it, e.g.
+ *  FMU_FN(inst, "DoStep") is "fmi2DoStep" or "fmi3DoStep" (for the models' messages). */
+#define FMU_FN(inst, NAME) ((inst)->fmi_version == 3 ? "fmi3" NAME : "fmi2" NAME)
+
 /** @brief Name of a state bit in the wording of FMI version 2 or 3 ("Instantiated", ...). */
 const char *fmu_state_name(int fmi_version, fmu_state s);
 

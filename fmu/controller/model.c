@@ -87,14 +87,14 @@ static fmu_status initialize(fmu_instance *inst)
     const rrr_status st = rrr_model_validate(&c->model, &field);
     if (st != RRR_OK) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
-                "fmi2ExitInitializationMode: parameter %s is invalid (%s)%s", field,
-                rrr_status_str(st),
+                "%s: parameter %s is invalid (%s)%s", FMU_FN(inst, "ExitInitializationMode"),
+                field, rrr_status_str(st),
                 st == RRR_NOT_POSITIVE_DEFINITE
                     ? ": p[1]..p[16] give an inertia matrix D(q) that is not positive definite"
                     : "");
         return FMU_ERROR;
     }
-    return check_gains(inst, "fmi2ExitInitializationMode");
+    return check_gains(inst, FMU_FN(inst, "ExitInitializationMode"));
 }
 
 static fmu_status calculate(fmu_instance *inst)

@@ -76,8 +76,8 @@ static fmu_status initialize(fmu_instance *inst)
     const rrr_status st = rrr_model_validate(&p->model, &field);
     if (st != RRR_OK) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
-                "fmi2ExitInitializationMode: parameter %s is invalid (%s)%s", field,
-                rrr_status_str(st),
+                "%s: parameter %s is invalid (%s)%s", FMU_FN(inst, "ExitInitializationMode"),
+                field, rrr_status_str(st),
                 st == RRR_NOT_POSITIVE_DEFINITE
                     ? ": p[1]..p[16] give an inertia matrix D(q) that is not positive definite"
                     : "");
@@ -85,7 +85,8 @@ static fmu_status initialize(fmu_instance *inst)
     }
     if (!(p->h_int > 0.0)) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
-                "fmi2ExitInitializationMode: parameter h_int must be > 0, got %.17g", p->h_int);
+                "%s: parameter h_int must be > 0, got %.17g",
+                FMU_FN(inst, "ExitInitializationMode"), p->h_int);
         return FMU_ERROR;
     }
     memcpy(p->x.q, p->q0, sizeof p->x.q);
@@ -129,10 +130,11 @@ static fmu_status do_step(fmu_instance *inst, double h)
     double tip[3];
     if (h / p->h_int > RRR_PLANT_MAX_SUBSTEPS) {
         fmu_log(inst, FMU_DISCARD, FMU_LOG_DISCARD,
-                "fmi2DoStep: a communication step of %.17g s needs %.3g substeps of h_int = "
+                "%s: a communication step of %.17g s needs %.3g substeps of h_int = "
                 "%.17g s, more than the %.0e one step may take: use shorter communication "
                 "steps or a larger h_int; the state stays at t = %.17g",
-                h, h / p->h_int, p->h_int, RRR_PLANT_MAX_SUBSTEPS, inst->time);
+                FMU_FN(inst, "DoStep"), h, h / p->h_int, p->h_int, RRR_PLANT_MAX_SUBSTEPS,
+                inst->time);
         return FMU_DISCARD;
     }
     rrr_status st = rrr_plant_step(&p->model, p->h_int, p->u, h, &x, qdd);
@@ -141,10 +143,10 @@ static fmu_status do_step(fmu_instance *inst, double h)
     }
     if (st != RRR_OK) {
         fmu_log(inst, FMU_DISCARD, FMU_LOG_DISCARD,
-                "fmi2DoStep: rrr_plant_step from t = %.17g over h = %.17g failed: %s; the state "
+                "%s: rrr_plant_step from t = %.17g over h = %.17g failed: %s; the state "
                 "stays at t (q = [%.17g, %.17g, %.17g], qd = [%.17g, %.17g, %.17g])",
-                inst->time, h, rrr_status_str(st), p->x.q[0], p->x.q[1], p->x.q[2], p->x.qd[0],
-                p->x.qd[1], p->x.qd[2]);
+                FMU_FN(inst, "DoStep"), inst->time, h, rrr_status_str(st), p->x.q[0], p->x.q[1],
+                p->x.q[2], p->x.qd[0], p->x.qd[1], p->x.qd[2]);
         return FMU_DISCARD;
     }
     p->x = x;
