@@ -25,8 +25,13 @@ _Static_assert(sizeof(fmi2Boolean) == sizeof(int), "fmi2Boolean is an int");
  * FMI 2.0.4, tables in sections 3.2.3 (Model Exchange) and 4.2.4 (Co-Simulation). StartAndEnd
  * only allows fmi2Instantiate, fmi2GetTypesPlatform and fmi2GetVersion, which take no component.
  * The Co-Simulation states (StepComplete = FMU_STEP_MODE, ...) and the Model Exchange states
- * (EventMode, ContinuousTimeMode) never meet in one instance.
+ * (EventMode, ContinuousTimeMode) never meet in one instance. Instantiated, InitializationMode,
+ * Terminated and Error are shared, so a function of one interface type is masked out in an
+ * instance of the other (ME_ONLY, CS_ONLY: each table lists only its own functions).
  */
+
+#define ME_ONLY(mask) FMU_ME_ONLY(S, mask)
+#define CS_ONLY(mask) FMU_CS_ONLY(S, mask)
 
 #define MASK_ANY_INSTANCE                                                                     \
     (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE |  \
@@ -60,28 +65,32 @@ _Static_assert(sizeof(fmi2Boolean) == sizeof(int), "fmi2Boolean is an int");
 #define MASK_fmi2DeSerializeFMUstate MASK_fmi2FreeInstance
 #define MASK_fmi2GetDirectionalDerivative MASK_fmi2GetReal
 
-/* model exchange functions */
-#define MASK_fmi2EnterEventMode (FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
-#define MASK_fmi2NewDiscreteStates FMU_EVENT_MODE
-#define MASK_fmi2EnterContinuousTimeMode FMU_EVENT_MODE
-#define MASK_fmi2CompletedIntegratorStep FMU_CONT_TIME_MODE
-#define MASK_fmi2SetTime (FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
-#define MASK_fmi2SetContinuousStates FMU_CONT_TIME_MODE
+/* model exchange functions (fmi2GetDerivatives: "x" in Initialization Mode since FMI 2.0;
+ * fmi2GetNominalsOfContinuousStates: Initialization Mode added in FMI 2.0.3) */
+#define MASK_fmi2EnterEventMode ME_ONLY(FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
+#define MASK_fmi2NewDiscreteStates ME_ONLY(FMU_EVENT_MODE)
+#define MASK_fmi2EnterContinuousTimeMode ME_ONLY(FMU_EVENT_MODE)
+#define MASK_fmi2CompletedIntegratorStep ME_ONLY(FMU_CONT_TIME_MODE)
+#define MASK_fmi2SetTime ME_ONLY(FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
+#define MASK_fmi2SetContinuousStates ME_ONLY(FMU_CONT_TIME_MODE)
 #define MASK_fmi2GetEventIndicators                                                           \
-    (FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
+    ME_ONLY(FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED |             \
+            FMU_ERROR_STATE)
 #define MASK_fmi2GetContinuousStates MASK_fmi2GetEventIndicators
-#define MASK_fmi2GetDerivatives                                                               \
-    (FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
+#define MASK_fmi2GetDerivatives MASK_fmi2GetEventIndicators
 #define MASK_fmi2GetNominalsOfContinuousStates                                                \
-    (FMU_INSTANTIATED | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_TERMINATED | FMU_ERROR_STATE)
+    ME_ONLY(FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE |           \
+            FMU_TERMINATED | FMU_ERROR_STATE)
 
 /* co-simulation functions */
-#define MASK_fmi2SetRealInputDerivatives (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_MODE)
+#define MASK_fmi2SetRealInputDerivatives CS_ONLY(FMU_INSTANTIATED | FMU_INIT_MODE | FMU_STEP_MODE)
 #define MASK_fmi2GetRealOutputDerivatives                                                     \
-    (FMU_STEP_MODE | FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED | FMU_ERROR_STATE)
-#define MASK_fmi2DoStep FMU_STEP_MODE
-#define MASK_fmi2CancelStep FMU_STEP_IN_PROGRESS
-#define MASK_fmi2GetStatus (FMU_STEP_MODE | FMU_STEP_IN_PROGRESS | FMU_STEP_FAILED | FMU_TERMINATED)
+    CS_ONLY(FMU_STEP_MODE | FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED |             \
+            FMU_ERROR_STATE)
+#define MASK_fmi2DoStep CS_ONLY(FMU_STEP_MODE)
+#define MASK_fmi2CancelStep CS_ONLY(FMU_STEP_IN_PROGRESS)
+#define MASK_fmi2GetStatus                                                                    \
+    CS_ONLY(FMU_STEP_MODE | FMU_STEP_IN_PROGRESS | FMU_STEP_FAILED | FMU_TERMINATED)
 #define MASK_fmi2GetRealStatus MASK_fmi2GetStatus
 #define MASK_fmi2GetIntegerStatus MASK_fmi2GetStatus
 #define MASK_fmi2GetBooleanStatus MASK_fmi2GetStatus
@@ -89,26 +98,13 @@ _Static_assert(sizeof(fmi2Boolean) == sizeof(int), "fmi2Boolean is an int");
 
 /* ---- the adapter macros ---------------------------------------------------------------------- */
 
-static int allowed_state(fmu_instance *S, unsigned mask, const char *fn)
-{
-    if ((mask & (unsigned)S->state) != 0u) {
-        return 1;
-    }
-    char states[200];
-    fmu_states_str(2, mask, states, sizeof states);
-    fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-            "%s: illegal call sequence: not allowed in state %s (allowed in: %s)", fn,
-            fmu_state_name(2, S->state), states);
-    return 0;
-}
-
 #define BEGIN_FUNCTION(F)                                                                     \
     fmu_status status = FMU_OK;                                                               \
     fmu_instance *S = (fmu_instance *)c;                                                      \
     if (S == NULL) {                                                                          \
         return fmi2Error;                                                                     \
     }                                                                                         \
-    if (!allowed_state(S, MASK_fmi2##F, "fmi2" #F)) {                                         \
+    if (!fmu_allowed_state(S, MASK_fmi2##F, "fmi2" #F)) {                                     \
         status = FMU_ERROR;                                                                   \
         goto END;                                                                             \
     }
@@ -225,7 +221,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 void fmi2FreeInstance(fmi2Component c)
 {
     fmu_instance *S = (fmu_instance *)c;
-    if (S == NULL || !allowed_state(S, MASK_fmi2FreeInstance, "fmi2FreeInstance")) {
+    if (S == NULL || !fmu_allowed_state(S, MASK_fmi2FreeInstance, "fmi2FreeInstance")) {
         return;
     }
     fmu_destroy(S);

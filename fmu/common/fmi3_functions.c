@@ -34,8 +34,8 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
  * instance of the other interface type (evaluated in BEGIN_FUNCTION, where S is the instance).
  */
 
-#define ME_ONLY(MASK) (S->interface == FMU_MODEL_EXCHANGE ? (unsigned)(MASK) : 0u)
-#define CS_ONLY(MASK) (S->interface == FMU_CO_SIMULATION ? (unsigned)(MASK) : 0u)
+#define ME_ONLY(MASK) FMU_ME_ONLY(S, MASK)
+#define CS_ONLY(MASK) FMU_CS_ONLY(S, MASK)
 
 #define MASK_ANY_INSTANCE                                                                     \
     (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE |  \
@@ -102,20 +102,6 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
 
 /* ---- the adapter macros ---------------------------------------------------------------------- */
 
-static int allowed_state(fmu_instance *S, unsigned mask, const char *fn)
-{
-    if ((mask & (unsigned)S->state) != 0u) {
-        return 1;
-    }
-    char states[200];
-    fmu_states_str(3, mask, states, sizeof states);
-    const char *kind = S->interface == FMU_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation";
-    fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
-            "%s: illegal call sequence: not allowed in state %s (allowed in: %s%s%s)", fn,
-            fmu_state_name(3, S->state), states, mask != 0u ? "" : " for ", mask != 0u ? "" : kind);
-    return 0;
-}
-
 /* MASK names the state mask; FN the function name in messages. */
 #define BEGIN_FUNCTION_MASK(MASK, FN)                                                         \
     fmu_status status = FMU_OK;                                                               \
@@ -124,7 +110,7 @@ static int allowed_state(fmu_instance *S, unsigned mask, const char *fn)
     if (S == NULL) {                                                                          \
         return fmi3Error;                                                                     \
     }                                                                                         \
-    if (!allowed_state(S, (MASK), fn_)) {                                                     \
+    if (!fmu_allowed_state(S, (MASK), fn_)) {                                                 \
         status = FMU_ERROR;                                                                   \
         goto END;                                                                             \
     }
@@ -298,7 +284,7 @@ fmi3Instance fmi3InstantiateScheduledExecution(
 void fmi3FreeInstance(fmi3Instance instance)
 {
     fmu_instance *S = (fmu_instance *)instance;
-    if (S == NULL || !allowed_state(S, MASK_fmi3FreeInstance, "fmi3FreeInstance")) {
+    if (S == NULL || !fmu_allowed_state(S, MASK_fmi3FreeInstance, "fmi3FreeInstance")) {
         return;
     }
     fmu_destroy(S);

@@ -444,6 +444,22 @@ fmu_status fmu_me_get_event_indicators(fmu_instance *S, const char *fn, size_t n
 
 /* ---- checks the adapters share ----------------------------------------------------------------- */
 
+int fmu_allowed_state(fmu_instance *S, unsigned mask, const char *fn)
+{
+    if ((mask & (unsigned)S->state) != 0u) {
+        return 1;
+    }
+    char states[200];
+    fmu_states_str(S->fmi_version, mask, states, sizeof states);
+    fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+            "%s: illegal call sequence: not allowed in state %s (allowed in: %s%s%s)", fn,
+            fmu_state_name(S->fmi_version, S->state), states, mask != 0u ? "" : " for ",
+            mask != 0u ? ""
+            : S->interface == FMU_MODEL_EXCHANGE ? "Model Exchange"
+                                                  : "Co-Simulation");
+    return 0;
+}
+
 fmu_status fmu_setup_experiment(fmu_instance *S, const char *fn, double start, int stop_defined,
                                 double stop)
 {

@@ -135,6 +135,18 @@ fmu_status fmu_snapshot_deserialize(fmu_instance *S, const char *fn, const unsig
 
 /* ---- shared checks of the adapters (fmu_instance.c) ----------------------------------------- */
 
+/**
+ * @brief 1 when the instance's state is in mask; otherwise logs "<fn>: illegal call sequence:
+ *        not allowed in state X (allowed in: ...)" in the FMI version's wording and returns 0.
+ */
+int fmu_allowed_state(fmu_instance *S, unsigned mask, const char *fn);
+
+/** The state mask of a function of one interface type: its mask in an instance of that type, no
+ *  state at all in an instance of the other (the states Instantiated, InitializationMode,
+ *  Terminated and Error are shared, so the masks alone cannot keep the interfaces apart). */
+#define FMU_ME_ONLY(inst, mask) ((inst)->interface == FMU_MODEL_EXCHANGE ? (unsigned)(mask) : 0u)
+#define FMU_CS_ONLY(inst, mask) ((inst)->interface == FMU_CO_SIMULATION ? (unsigned)(mask) : 0u)
+
 /** Relative tolerance on a communication point (importers count time differently). */
 #define FMU_TIME_RTOL 1e-9
 

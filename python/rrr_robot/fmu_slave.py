@@ -53,25 +53,17 @@ class _Fmi2:
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipdir,
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
 
-    def instantiate(self, logger: Callable[[int, bytes, bytes], None]) -> None:
-        from fmpy.fmi2 import (
-            defaultCallbacks,
-            fmi2CallbackFunctions,
-            fmi2CallbackLoggerTYPE,
-        )
-        from fmpy.logging import addLoggerProxy
+    def instantiate(self, logger: Callable[[int, str, str], None]) -> None:
+        from ._fmi_log import fmi2_callbacks
 
-        def log2(_env: object, _inst: bytes, status: int, category: bytes, msg: bytes) -> None:
-            logger(status, category, msg)
+        self._callbacks = fmi2_callbacks(logger)  # kept as long as the instance
+        self.fmu.instantiate(callbacks=self._callbacks, loggingOn=False)
 
-        cb = fmi2CallbackFunctions()
-        self._logger_ref = fmi2CallbackLoggerTYPE(log2)
-        cb.logger = self._logger_ref
-        cb.allocateMemory = defaultCallbacks.allocateMemory
-        cb.freeMemory = defaultCallbacks.freeMemory
-        addLoggerProxy(ct.byref(cb))
-        self._callbacks = cb
-        self.fmu.instantiate(callbacks=cb, loggingOn=False)
+    def release(self) -> None:
+        from ._fmi_log import release
+
+        if hasattr(self, "_callbacks"):
+            release(self._callbacks)
 
     def vr_array(self, vrs: Sequence[int]) -> ct.Array[Any]:
         from fmpy.fmi2 import fmi2ValueReference
@@ -110,11 +102,15 @@ class _Fmi3:
         self._flags = [fmi3Boolean() for _ in range(3)]
         self._last = fmi3Float64()
 
-    def instantiate(self, logger: Callable[[int, bytes, bytes], None]) -> None:
+    def instantiate(self, logger: Callable[[int, str, str], None]) -> None:
         def log3(_env: object, status: int, category: bytes, msg: bytes) -> None:
-            logger(status, category, msg)
+            logger(int(status), category.decode("utf-8", "replace"),
+                   msg.decode("utf-8", "replace"))
 
         self.fmu.instantiate(loggingOn=False, logMessage=log3)
+
+    def release(self) -> None:
+        """FMI 3 log messages are not variadic: FMPy keeps one callback per instance."""
 
     def vr_array(self, vrs: Sequence[int]) -> ct.Array[Any]:
         from fmpy.fmi3 import fmi3ValueReference
@@ -172,13 +168,11 @@ class FmuSlave:
                              f"{': ' + self.last_message if self.last_message else ''}") from exc
         self._initialized = False
 
-    def _log(self, status: int, category: bytes, msg: bytes) -> None:
-        text = msg.decode("utf-8", "replace")
+    def _log(self, status: int, category: str, text: str) -> None:
         level = logging.ERROR if status >= 2 else logging.DEBUG
         if status >= 2:
             self.last_message = text
-        log.log(level, "[%s] %s %s: %s", self.name, _STATUS[min(status, 5)],
-                category.decode("utf-8", "replace"), text)
+        log.log(level, "[%s] %s %s: %s", self.name, _STATUS[min(status, 5)], category, text)
 
     # ---- variables ---------------------------------------------------------------------------
     def vr(self, name: str) -> int:
@@ -260,6 +254,7 @@ class FmuSlave:
         finally:
             if getattr(self._fmu, "component", None) is not None:
                 self._fmu.freeInstance()
+            self._api.release()
             shutil.rmtree(self._unzipdir, ignore_errors=True)
 
     def __enter__(self) -> FmuSlave:

@@ -1,8 +1,9 @@
 /*
  * FMU harness: loads the two FMU binaries with dlopen, like an importer, and drives them through
- * the FMI 2.0 co-simulation API. It knows nothing of fmu/common: value references, names and the
- * GUID come from each FMU's modelDescription.xml; the allowed states of every function are
- * typed in again below from the FMI 2.0.4 state table. Run it under ASan and UBSan
+ * the FMI 2.0 Co-Simulation and Model Exchange APIs. It knows nothing of fmu/common: value
+ * references, names, the GUID and the continuous states (<ModelStructure><Derivatives>) come from
+ * each FMU's modelDescription.xml; the allowed states of every function are typed in again below
+ * from the FMI 2.0.4 state tables (sections 4.2.4 and 3.2.3). Run it under ASan and UBSan
  * (-DRRR_SANITIZE=ON).
  *
  * Usage: test_fmu_harness <plant unzip dir> <controller unzip dir>
@@ -14,9 +15,20 @@
  * value kept); parameter validation naming the field; doStep arguments and a discarded step;
  * FMU state get/set/serialize/deserialize (bit-identical reruns, corrupted buffers refused);
  * two instances in one process; log categories; every allocation freed.
+ *
+ * Model Exchange (the same binaries): the lifecycle of section 3.2.3 with the value of every call
+ * (states = q0, qd0 in initialization mode, nominals > 0, no events); derivatives = librrr's
+ * rrr_plant_accel bit for bit and dq/dt = qd; RK4 through setContinuousStates/getDerivatives =
+ * the Co-Simulation plant bit for bit; controller outputs = Co-Simulation = rrr_ctc bit for bit;
+ * every function (Co-Simulation ones included) from every Model Exchange state, refused where
+ * the table does not allow it (message naming function and state, serialized FMU state
+ * unchanged) and accepted where it does; refused arguments (NaN/Inf states and time, wrong nx/ni,
+ * NULL arrays, outputs, fixed parameters after initialization); FMU state set/serialize with a
+ * bit-identical continuation; Co-Simulation and Model Exchange snapshots refused by each other.
  */
 #define _POSIX_C_SOURCE 200809L
 
+#include <ctype.h>
 #include <dlfcn.h>
 #include <math.h>
 #include <stdarg.h>
@@ -29,6 +41,7 @@
 #include "rrr_test.h"
 
 #define H 1e-3 /* communication step, s */
+#define MAX_STATES 16 /* most continuous states the harness handles */
 
 /* ---- memory callbacks: count what the FMUs allocate ------------------------------------------ */
 
@@ -92,6 +105,24 @@ typedef struct fmu_api {
     fmi2GetIntegerStatusTYPE *GetIntegerStatus;
     fmi2GetBooleanStatusTYPE *GetBooleanStatus;
     fmi2GetStringStatusTYPE *GetStringStatus;
+    /* Model Exchange */
+    fmi2EnterEventModeTYPE *EnterEventMode;
+    fmi2NewDiscreteStatesTYPE *NewDiscreteStates;
+    fmi2EnterContinuousTimeModeTYPE *EnterContinuousTimeMode;
+    fmi2CompletedIntegratorStepTYPE *CompletedIntegratorStep;
+    fmi2SetTimeTYPE *SetTime;
+    fmi2SetContinuousStatesTYPE *SetContinuousStates;
+    fmi2GetDerivativesTYPE *GetDerivatives;
+    fmi2GetEventIndicatorsTYPE *GetEventIndicators;
+    fmi2GetContinuousStatesTYPE *GetContinuousStates;
+    fmi2GetNominalsOfContinuousStatesTYPE *GetNominalsOfContinuousStates;
+    /* continuous states from <ModelStructure><Derivatives>, in that order (the state vector) */
+    size_t nx;                            /* number of continuous states */
+    size_t ni;                            /* numberOfEventIndicators */
+    char x_name[MAX_STATES][32];          /* state variable, e.g. "q[1]" */
+    char dx_name[MAX_STATES][32];         /* its derivative, e.g. "qd[1]" */
+    fmi2ValueReference x_vr[MAX_STATES];
+    fmi2ValueReference dx_vr[MAX_STATES];
 } fmu_api;
 
 static char *read_file(const char *path)
@@ -170,6 +201,60 @@ static void start_of(const fmu_api *api, const char *name, char *out, size_t n)
     }
 }
 
+/* The k-th (1-based, the XML's index) <ScalarVariable> of <ModelVariables>, or NULL. */
+static const char *xml_var_at(const fmu_api *api, unsigned long k)
+{
+    const char *p = strstr(api->xml, "<ModelVariables>");
+    for (unsigned long i = 0; p != NULL && i < k; ++i) {
+        p = strstr(p + 1, "<ScalarVariable ");
+    }
+    return k > 0 ? p : NULL;
+}
+
+/* The continuous states in the order of <ModelStructure><Derivatives> (FMI 2.0.4 section 3.3:
+ * that order is the state vector of fmi2GetContinuousStates and friends): each listed variable
+ * is a derivative whose attribute derivative="k" names its state. Returns 0 when parsed. */
+static int parse_states(fmu_api *api)
+{
+    char buf[32];
+    api->nx = 0;
+    api->ni = 0;
+    if (xml_attr(api->xml, "numberOfEventIndicators", buf, sizeof buf) == 0) {
+        api->ni = strtoul(buf, NULL, 10);
+    }
+    const char *d = strstr(api->xml, "<Derivatives>");
+    if (d == NULL) {
+        return 0; /* no continuous states */
+    }
+    const char *end = strstr(d, "</Derivatives>");
+    if (end == NULL) {
+        return 1;
+    }
+    for (const char *u = strstr(d, "<Unknown "); u != NULL && u < end;
+         u = strstr(u + 1, "<Unknown ")) {
+        const size_t k = api->nx;
+        if (k == MAX_STATES || xml_attr(u, "index", buf, sizeof buf) != 0) {
+            return 1;
+        }
+        const char *dv = xml_var_at(api, strtoul(buf, NULL, 10));
+        const char *dv_end = dv != NULL ? strstr(dv, "</ScalarVariable>") : NULL;
+        const char *der = dv != NULL ? strstr(dv, " derivative=\"") : NULL;
+        if (dv_end == NULL || der == NULL || der > dv_end ||
+            xml_attr(der, "derivative", buf, sizeof buf) != 0) {
+            return 1;
+        }
+        const char *sv = xml_var_at(api, strtoul(buf, NULL, 10));
+        if (sv == NULL || xml_attr(dv, "name", api->dx_name[k], sizeof api->dx_name[k]) != 0 ||
+            xml_attr(sv, "name", api->x_name[k], sizeof api->x_name[k]) != 0) {
+            return 1;
+        }
+        api->dx_vr[k] = vr_of(api, api->dx_name[k]);
+        api->x_vr[k] = vr_of(api, api->x_name[k]);
+        api->nx = k + 1;
+    }
+    return 0;
+}
+
 static void load_sym(fmu_api *api, const char *name, void *dst, size_t size)
 {
     void *p = dlsym(api->dl, name);
@@ -233,6 +318,25 @@ static int fmu_load(fmu_api *api, const char *dir)
     LOAD(GetIntegerStatus);
     LOAD(GetBooleanStatus);
     LOAD(GetStringStatus);
+    LOAD(EnterEventMode);
+    LOAD(NewDiscreteStates);
+    LOAD(EnterContinuousTimeMode);
+    LOAD(CompletedIntegratorStep);
+    LOAD(SetTime);
+    LOAD(SetContinuousStates);
+    LOAD(GetDerivatives);
+    LOAD(GetEventIndicators);
+    LOAD(GetContinuousStates);
+    LOAD(GetNominalsOfContinuousStates);
+    /* one binary, both interface types: <ModelExchange> names the same modelIdentifier */
+    const char *me = strstr(api->xml, "<ModelExchange");
+    char me_id[64];
+    if (me == NULL || xml_attr(me, "modelIdentifier", me_id, sizeof me_id) != 0 ||
+        strcmp(me_id, api->id) != 0 || parse_states(api) != 0) {
+        fprintf(stderr, "%s: no <ModelExchange> for the same binary, or unreadable "
+                        "<Derivatives> in %s\n", api->id, dir);
+        return 1;
+    }
     return 0;
 }
 
@@ -295,7 +399,7 @@ static void log_clear(inst *x)
 }
 
 /* Instantiate (x must not move afterwards: the log sink is its componentEnvironment). */
-static int inst_new(inst *x, const fmu_api *api, const char *name)
+static int inst_new_type(inst *x, const fmu_api *api, const char *name, fmi2Type type)
 {
     memset(x, 0, sizeof *x);
     x->api = api;
@@ -304,10 +408,22 @@ static int inst_new(inst *x, const fmu_api *api, const char *name)
     x->cb.freeMemory = count_free;
     x->cb.stepFinished = NULL;
     x->cb.componentEnvironment = &x->log;
-    x->c = api->Instantiate(name, fmi2CoSimulation, api->guid, "file:///nonexistent/resources",
-                            &x->cb, fmi2False, fmi2False);
+    x->c = api->Instantiate(name, type, api->guid, "file:///nonexistent/resources", &x->cb,
+                            fmi2False, fmi2False);
     CHECK(x->c != NULL);
     return x->c == NULL;
+}
+
+/* A Co-Simulation instance. */
+static int inst_new(inst *x, const fmu_api *api, const char *name)
+{
+    return inst_new_type(x, api, name, fmi2CoSimulation);
+}
+
+/* A Model Exchange instance of the same binary. */
+static int inst_new_me(inst *x, const fmu_api *api, const char *name)
+{
+    return inst_new_type(x, api, name, fmi2ModelExchange);
 }
 
 static void inst_free(inst *x)
@@ -717,84 +833,315 @@ CALLER(GetIntegerStatus, fmi2Integer v; return a->GetIntegerStatus(x->c, fmi2DoS
 CALLER(GetBooleanStatus, fmi2Boolean v; return a->GetBooleanStatus(x->c, fmi2Terminated, &v);)
 CALLER(GetStringStatus, fmi2String v; return a->GetStringStatus(x->c, fmi2PendingStatus, &v);)
 
-/* FMI 2.0.4 section 4.2.4: the reachable states in which each function may be called.
- * fmi2Set/SerializeFMUstate etc. are allowed in every reachable state, so they never appear
- * as illegal here; fmi2CancelStep needs StepInProgress, which a synchronous FMU never enters. */
+CALLER(SetFMUstate, fmi2FMUstate s = NULL; fmi2Status st = a->GetFMUstate(x->c, &s);
+       if (s != NULL) { st = a->SetFMUstate(x->c, s); a->FreeFMUstate(x->c, &s); } return st;)
+CALLER(SerializedFMUstateSize, fmi2FMUstate s = NULL; size_t n = 0;
+       fmi2Status st = a->GetFMUstate(x->c, &s);
+       if (s != NULL) { st = a->SerializedFMUstateSize(x->c, s, &n); a->FreeFMUstate(x->c, &s); }
+       return st;)
+CALLER(SerializeFMUstate, fmi2FMUstate s = NULL; fmi2Byte b[8];
+       fmi2Status st = a->GetFMUstate(x->c, &s);
+       if (s != NULL) {
+           st = a->SerializeFMUstate(x->c, s, b, sizeof b); /* too small: refused, not illegal */
+           a->FreeFMUstate(x->c, &s);
+       }
+       return st;)
+CALLER(DeSerializeFMUstate, fmi2FMUstate s = NULL; const fmi2Byte b[8] = {0};
+       const fmi2Status st = a->DeSerializeFMUstate(x->c, b, sizeof b, &s);
+       if (s != NULL) { a->FreeFMUstate(x->c, &s); } return st;)
+/* Model Exchange: well-formed arguments (nx and ni from the XML), so that only the state counts */
+CALLER(EnterEventMode, return a->EnterEventMode(x->c);)
+CALLER(NewDiscreteStates, fmi2EventInfo ev; memset(&ev, 0, sizeof ev);
+       return a->NewDiscreteStates(x->c, &ev);)
+CALLER(EnterContinuousTimeMode, return a->EnterContinuousTimeMode(x->c);)
+CALLER(CompletedIntegratorStep, fmi2Boolean e = fmi2False; fmi2Boolean t = fmi2False;
+       return a->CompletedIntegratorStep(x->c, fmi2True, &e, &t);)
+CALLER(SetTime, return a->SetTime(x->c, 0.0);)
+CALLER(SetContinuousStates, const fmi2Real v[MAX_STATES] = {0};
+       return a->SetContinuousStates(x->c, v, a->nx);)
+CALLER(GetDerivatives, fmi2Real v[MAX_STATES]; return a->GetDerivatives(x->c, v, a->nx);)
+CALLER(GetEventIndicators, fmi2Real v[MAX_STATES];
+       return a->GetEventIndicators(x->c, v, a->ni < MAX_STATES ? a->ni : MAX_STATES);)
+CALLER(GetContinuousStates, fmi2Real v[MAX_STATES];
+       return a->GetContinuousStates(x->c, v, a->nx);)
+CALLER(GetNominalsOfContinuousStates, fmi2Real v[MAX_STATES];
+       return a->GetNominalsOfContinuousStates(x->c, v, a->nx);)
+
+/* ---- Model Exchange states ------------------------------------------------------------------- */
+
+enum { MS_INST, MS_INIT, MS_EVENT, MS_CONT, MS_TERM, MS_ERR, MS_COUNT };
+static const char *const me_state_names[MS_COUNT] = {"Instantiated", "InitializationMode",
+                                                     "EventMode",    "ContinuousTimeMode",
+                                                     "Terminated",   "Error"};
+#define M_I (1u << MS_INST)
+#define M_IN (1u << MS_INIT)
+#define M_EV (1u << MS_EVENT)
+#define M_CT (1u << MS_CONT)
+#define M_T (1u << MS_TERM)
+#define M_E (1u << MS_ERR)
+#define M_ALL (M_I | M_IN | M_EV | M_CT | M_T | M_E)
+
+/* Put a fresh Model Exchange instance into a state (all six are reachable for both FMUs). */
+static int drive_me(inst *x, int state)
+{
+    const fmu_api *a = x->api;
+    const int is_plant = strcmp(a->id, "rrr_plant") == 0;
+    if (state == MS_INST) {
+        return 0;
+    }
+    if (state == MS_ERR) {
+        CHECK(set1(x, is_plant ? "a2" : "kp[1]", -1.0) == fmi2OK);
+    }
+    CHECK(a->SetupExperiment(x->c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+    CHECK(a->EnterInitializationMode(x->c) == fmi2OK);
+    if (state == MS_INIT) {
+        return 0;
+    }
+    if (state == MS_ERR) {
+        CHECK(a->ExitInitializationMode(x->c) == fmi2Error);
+        return 0;
+    }
+    CHECK(a->ExitInitializationMode(x->c) == fmi2OK); /* -> EventMode */
+    if (state == MS_EVENT) {
+        return 0;
+    }
+    fmi2EventInfo ev;
+    memset(&ev, 0, sizeof ev);
+    CHECK(a->NewDiscreteStates(x->c, &ev) == fmi2OK && ev.newDiscreteStatesNeeded == fmi2False);
+    CHECK(a->EnterContinuousTimeMode(x->c) == fmi2OK);
+    if (state == MS_TERM) {
+        CHECK(a->Terminate(x->c) == fmi2OK);
+    }
+    return 0;
+}
+
+/* Which of four probes are accepted (FMI 2.0.4 section 3.2.3): getReal (not in Instantiated),
+ * setReal (Instantiated to ContinuousTimeMode), setInteger (not in ContinuousTimeMode) and
+ * newDiscreteStates (EventMode only; this FMU has no discrete states, so it changes nothing).
+ * Terminated and Error share a fingerprint; the serialized FMU state tells them apart. */
+static unsigned fingerprint_me(inst *x)
+{
+    const fmu_api *a = x->api;
+    fmi2EventInfo ev;
+    memset(&ev, 0, sizeof ev);
+    unsigned f = 0;
+    f |= (a->GetReal(x->c, NULL, 0, NULL) == fmi2OK) ? 1u : 0u;
+    f |= (a->SetReal(x->c, NULL, 0, NULL) == fmi2OK) ? 2u : 0u;
+    f |= (a->SetInteger(x->c, NULL, 0, NULL) == fmi2OK) ? 4u : 0u;
+    f |= (a->NewDiscreteStates(x->c, &ev) == fmi2OK) ? 8u : 0u;
+    return f;
+}
+
+static const unsigned expected_fingerprint_me[MS_COUNT] = {6u, 7u, 15u, 3u, 1u, 1u};
+
+/* The serialized FMU state of x (malloc'd, *n bytes), or NULL: a byte-exact picture of the
+ * instance (machine state, time, flags, all variables) to show that a refused call changed
+ * nothing. Taking it changes nothing either (get, size, serialize, free). */
+static unsigned char *state_bytes(inst *x, size_t *n)
+{
+    const fmu_api *a = x->api;
+    fmi2FMUstate s = NULL;
+    unsigned char *buf = NULL;
+    *n = 0;
+    if (a->GetFMUstate(x->c, &s) == fmi2OK && a->SerializedFMUstateSize(x->c, s, n) == fmi2OK &&
+        *n > 0) {
+        buf = malloc(*n);
+        if (buf != NULL && a->SerializeFMUstate(x->c, s, (fmi2Byte *)buf, *n) != fmi2OK) {
+            free(buf);
+            buf = NULL;
+        }
+    }
+    if (s != NULL) {
+        a->FreeFMUstate(x->c, &s);
+    }
+    return buf;
+}
+
+static int same_state(inst *x, const unsigned char *before, size_t n)
+{
+    size_t m = 0;
+    unsigned char *now = state_bytes(x, &m);
+    const int same = before != NULL && now != NULL && m == n && memcmp(before, now, n) == 0;
+    free(now);
+    return same;
+}
+
+/* The first state name of FMI 2.0 that a message mentions as a word, or "": the state the
+ * message reports the instance to be in (an illegal-call message names it before any list of
+ * allowed states; "EventMode" inside "fmi2EnterEventMode" is not a word). */
+static const char *first_state_named(const char *msg)
+{
+    static const char *const names[] = {"StartAndEnd",  "Instantiated",   "InitializationMode",
+                                        "EventMode",    "ContinuousTimeMode", "StepComplete",
+                                        "StepInProgress", "StepFailed",   "StepCanceled",
+                                        "Terminated",   "Error",          "Fatal"};
+    const char *best = "";
+    const char *best_at = NULL;
+    for (size_t k = 0; k < sizeof names / sizeof names[0]; ++k) {
+        const size_t len = strlen(names[k]);
+        for (const char *p = strstr(msg, names[k]); p != NULL; p = strstr(p + 1, names[k])) {
+            const int word = (p == msg || !isalnum((unsigned char)p[-1])) &&
+                             !isalnum((unsigned char)p[len]);
+            if (word) {
+                if (best_at == NULL || p < best_at) {
+                    best_at = p;
+                    best = names[k];
+                }
+                break;
+            }
+        }
+    }
+    return best;
+}
+
+/* The allowed states of every function, typed in again from FMI 2.0.4: section 4.2.4
+ * (Co-Simulation, column cs, states S_*) and section 3.2.3 (Model Exchange, column me, states
+ * M_*; "7" of the error column counts as allowed). A function of one interface type is allowed in
+ * no state of the other: the Model Exchange functions are not in the Co-Simulation table and
+ * vice versa. The Model Exchange cells where the 2.0.x releases moved: fmi2GetDerivatives is
+ * allowed in Initialization Mode (x since 2.0), fmi2GetNominalsOfContinuousStates in
+ * Instantiated (since 2.0) and Initialization Mode (since 2.0.3). fmi2CancelStep needs
+ * StepInProgress, which a synchronous FMU never enters. */
 static const struct {
     const char *name;
-    unsigned allowed;
+    unsigned cs, me;
     caller call;
 } functions[] = {
-    {"fmi2SetDebugLogging", S_ALL, call_SetDebugLogging},
-    {"fmi2SetupExperiment", S_I, call_SetupExperiment},
-    {"fmi2EnterInitializationMode", S_I, call_EnterInitializationMode},
-    {"fmi2ExitInitializationMode", S_IN, call_ExitInitializationMode},
-    {"fmi2Terminate", S_SC | S_SF, call_Terminate},
-    {"fmi2Reset", S_ALL, call_Reset},
-    {"fmi2GetReal", S_IN | S_SC | S_SF | S_T | S_E, call_GetReal},
-    {"fmi2GetInteger", S_IN | S_SC | S_SF | S_T | S_E, call_GetInteger},
-    {"fmi2GetBoolean", S_IN | S_SC | S_SF | S_T | S_E, call_GetBoolean},
-    {"fmi2GetString", S_IN | S_SC | S_SF | S_T | S_E, call_GetString},
-    {"fmi2SetReal", S_I | S_IN | S_SC, call_SetReal},
-    {"fmi2SetInteger", S_I | S_IN | S_SC, call_SetInteger},
-    {"fmi2SetBoolean", S_I | S_IN | S_SC, call_SetBoolean},
-    {"fmi2SetString", S_I | S_IN | S_SC, call_SetString},
-    {"fmi2GetFMUstate", S_ALL, call_GetFMUstate},
-    {"fmi2FreeFMUstate", S_ALL, call_FreeFMUstate},
-    {"fmi2GetDirectionalDerivative", S_IN | S_SC | S_SF | S_T | S_E, call_GetDirectionalDerivative},
-    {"fmi2SetRealInputDerivatives", S_I | S_IN | S_SC, call_SetRealInputDerivatives},
-    {"fmi2GetRealOutputDerivatives", S_SC | S_SF | S_T | S_E, call_GetRealOutputDerivatives},
-    {"fmi2DoStep", S_SC, call_DoStep},
-    {"fmi2CancelStep", 0u, call_CancelStep},
-    {"fmi2GetStatus", S_SC | S_SF | S_T, call_GetStatus},
-    {"fmi2GetRealStatus", S_SC | S_SF | S_T, call_GetRealStatus},
-    {"fmi2GetIntegerStatus", S_SC | S_SF | S_T, call_GetIntegerStatus},
-    {"fmi2GetBooleanStatus", S_SC | S_SF | S_T, call_GetBooleanStatus},
-    {"fmi2GetStringStatus", S_SC | S_SF | S_T, call_GetStringStatus},
+    {"fmi2SetDebugLogging", S_ALL, M_ALL, call_SetDebugLogging},
+    {"fmi2SetupExperiment", S_I, M_I, call_SetupExperiment},
+    {"fmi2EnterInitializationMode", S_I, M_I, call_EnterInitializationMode},
+    {"fmi2ExitInitializationMode", S_IN, M_IN, call_ExitInitializationMode},
+    {"fmi2Terminate", S_SC | S_SF, M_EV | M_CT, call_Terminate},
+    {"fmi2Reset", S_ALL, M_ALL, call_Reset},
+    {"fmi2GetReal", S_IN | S_SC | S_SF | S_T | S_E, M_IN | M_EV | M_CT | M_T | M_E, call_GetReal},
+    {"fmi2GetInteger", S_IN | S_SC | S_SF | S_T | S_E, M_IN | M_EV | M_CT | M_T | M_E,
+     call_GetInteger},
+    {"fmi2GetBoolean", S_IN | S_SC | S_SF | S_T | S_E, M_IN | M_EV | M_CT | M_T | M_E,
+     call_GetBoolean},
+    {"fmi2GetString", S_IN | S_SC | S_SF | S_T | S_E, M_IN | M_EV | M_CT | M_T | M_E,
+     call_GetString},
+    {"fmi2SetReal", S_I | S_IN | S_SC, M_I | M_IN | M_EV | M_CT, call_SetReal},
+    {"fmi2SetInteger", S_I | S_IN | S_SC, M_I | M_IN | M_EV, call_SetInteger},
+    {"fmi2SetBoolean", S_I | S_IN | S_SC, M_I | M_IN | M_EV, call_SetBoolean},
+    {"fmi2SetString", S_I | S_IN | S_SC, M_I | M_IN | M_EV, call_SetString},
+    {"fmi2GetFMUstate", S_ALL, M_ALL, call_GetFMUstate},
+    {"fmi2SetFMUstate", S_ALL, M_ALL, call_SetFMUstate},
+    {"fmi2FreeFMUstate", S_ALL, M_ALL, call_FreeFMUstate},
+    {"fmi2SerializedFMUstateSize", S_ALL, M_ALL, call_SerializedFMUstateSize},
+    {"fmi2SerializeFMUstate", S_ALL, M_ALL, call_SerializeFMUstate},
+    {"fmi2DeSerializeFMUstate", S_ALL, M_ALL, call_DeSerializeFMUstate},
+    {"fmi2GetDirectionalDerivative", S_IN | S_SC | S_SF | S_T | S_E,
+     M_IN | M_EV | M_CT | M_T | M_E, call_GetDirectionalDerivative},
+    /* Co-Simulation only */
+    {"fmi2SetRealInputDerivatives", S_I | S_IN | S_SC, 0u, call_SetRealInputDerivatives},
+    {"fmi2GetRealOutputDerivatives", S_SC | S_SF | S_T | S_E, 0u, call_GetRealOutputDerivatives},
+    {"fmi2DoStep", S_SC, 0u, call_DoStep},
+    {"fmi2CancelStep", 0u, 0u, call_CancelStep},
+    {"fmi2GetStatus", S_SC | S_SF | S_T, 0u, call_GetStatus},
+    {"fmi2GetRealStatus", S_SC | S_SF | S_T, 0u, call_GetRealStatus},
+    {"fmi2GetIntegerStatus", S_SC | S_SF | S_T, 0u, call_GetIntegerStatus},
+    {"fmi2GetBooleanStatus", S_SC | S_SF | S_T, 0u, call_GetBooleanStatus},
+    {"fmi2GetStringStatus", S_SC | S_SF | S_T, 0u, call_GetStringStatus},
+    /* Model Exchange only */
+    {"fmi2EnterEventMode", 0u, M_EV | M_CT, call_EnterEventMode},
+    {"fmi2NewDiscreteStates", 0u, M_EV, call_NewDiscreteStates},
+    {"fmi2EnterContinuousTimeMode", 0u, M_EV, call_EnterContinuousTimeMode},
+    {"fmi2CompletedIntegratorStep", 0u, M_CT, call_CompletedIntegratorStep},
+    {"fmi2SetTime", 0u, M_EV | M_CT, call_SetTime},
+    {"fmi2SetContinuousStates", 0u, M_CT, call_SetContinuousStates},
+    {"fmi2GetEventIndicators", 0u, M_IN | M_EV | M_CT | M_T | M_E, call_GetEventIndicators},
+    {"fmi2GetContinuousStates", 0u, M_IN | M_EV | M_CT | M_T | M_E, call_GetContinuousStates},
+    {"fmi2GetDerivatives", 0u, M_IN | M_EV | M_CT | M_T | M_E, call_GetDerivatives},
+    {"fmi2GetNominalsOfContinuousStates", 0u, M_I | M_IN | M_EV | M_CT | M_T | M_E,
+     call_GetNominalsOfContinuousStates},
 };
 
-static void test_illegal_sequences(const fmu_api *api)
+/* One state machine of the harness: its states, how to reach them and how to recognise them. */
+typedef struct machine {
+    const char *what;                 /* "Co-Simulation" or "Model Exchange" */
+    fmi2Type type;
+    int is_me;                        /* use column me of functions[] */
+    int n_states;
+    const char *const *names;
+    int (*drive)(inst *x, int state); /* 1: state not reachable for this FMU */
+    unsigned (*fingerprint)(inst *x);
+    const unsigned *expected;
+} machine;
+
+static const machine cs_machine = {"Co-Simulation", fmi2CoSimulation, 0, ST_COUNT, state_names,
+                                   drive, fingerprint, expected_fingerprint};
+static const machine me_machine = {"Model Exchange", fmi2ModelExchange, 1, MS_COUNT,
+                                   me_state_names, drive_me, fingerprint_me,
+                                   expected_fingerprint_me};
+
+/* Every function from every reachable state: where the standard does not allow it, fmi2Error,
+ * one error message naming the function and the state, and nothing changed (the serialized FMU
+ * state is byte-identical and the probes still recognise the state); where it allows it, no
+ * illegal-call-sequence message (the call may still refuse its arguments or say "not
+ * provided"). */
+static void test_illegal_sequences(const fmu_api *api, const machine *m)
 {
     int tried = 0;
-    for (int st = 0; st < ST_COUNT; ++st) {
+    int accepted = 0;
+    for (int st = 0; st < m->n_states; ++st) {
         for (size_t f = 0; f < sizeof functions / sizeof functions[0]; ++f) {
-            if (functions[f].allowed & (1u << st)) {
-                continue;
-            }
+            const unsigned allowed = m->is_me ? functions[f].me : functions[f].cs;
             inst x;
-            if (inst_new(&x, api, "illegal")) {
+            if (inst_new_type(&x, api, "illegal", m->type)) {
                 return;
             }
-            if (drive(&x, st)) {
+            if (m->drive(&x, st)) {
                 inst_free(&x);
                 continue;
             }
+            size_t nb = 0;
+            unsigned char *before = state_bytes(&x, &nb);
+            CHECK(before != NULL);
             log_clear(&x);
             const fmi2Status s = functions[f].call(&x);
-            const int ok = s == fmi2Error && x.log.count[fmi2Error] == 1 && x.log.illegal == 1 &&
-                           strstr(x.log.last_error, functions[f].name) != NULL &&
-                           strstr(x.log.last_error, state_names[st]) != NULL;
-            const unsigned fp = fingerprint(&x);
-            if (!ok || fp != expected_fingerprint[st]) {
-                fprintf(stderr,
-                        "%s: %s in state %s returned %d, %d error message(s) \"%s\"; state "
-                        "fingerprint %u, expected %u\n",
-                        api->id, functions[f].name, state_names[st], (int)s,
-                        x.log.count[fmi2Error], x.log.last_error, fp, expected_fingerprint[st]);
-                rrr_test_failures++;
+            if (allowed & (1u << st)) {
+                if (x.log.illegal != 0) {
+                    fprintf(stderr, "%s %s: %s is allowed in state %s but was refused: \"%s\"\n",
+                            api->id, m->what, functions[f].name, m->names[st],
+                            x.log.last_error);
+                    rrr_test_failures++;
+                }
+                ++accepted;
+            } else {
+                const int ok = s == fmi2Error && x.log.count[fmi2Error] == 1 &&
+                               x.log.illegal == 1 &&
+                               strstr(x.log.last_error, functions[f].name) != NULL &&
+                               strcmp(first_state_named(x.log.last_error), m->names[st]) == 0;
+                const log_sink seen = x.log; /* before the probes add their messages */
+                const int unchanged = same_state(&x, before, nb);
+                const unsigned fp = m->fingerprint(&x);
+                if (!ok || !unchanged || fp != m->expected[st]) {
+                    fprintf(stderr,
+                            "%s %s: %s in state %s returned %d, %d error message(s) \"%s\"; "
+                            "FMU state %s; state fingerprint %u, expected %u\n",
+                            api->id, m->what, functions[f].name, m->names[st], (int)s,
+                            seen.count[fmi2Error], seen.last_error,
+                            unchanged ? "unchanged" : "CHANGED", fp, m->expected[st]);
+                    rrr_test_failures++;
+                }
+                /* Co-Simulation: Terminated and StepFailed share a fingerprint: only StepFailed
+                 * may terminate */
+                if (!m->is_me && (st == ST_FAILED || st == ST_TERM)) {
+                    CHECK((api->Terminate(x.c) == fmi2OK) == (st == ST_FAILED));
+                }
+                ++tried;
             }
-            /* Terminated and StepFailed share a fingerprint: only StepFailed may terminate */
-            if (st == ST_FAILED || st == ST_TERM) {
-                CHECK((api->Terminate(x.c) == fmi2OK) == (st == ST_FAILED));
-            }
-            ++tried;
+            free(before);
             inst_free(&x);
         }
     }
-    printf("%s: %d illegal (function, state) pairs refused with fmi2Error and a message\n",
-           api->id, tried);
+    printf("%s %s: %d illegal (function, state) pairs refused with fmi2Error and a message, "
+           "FMU state unchanged; %d allowed pairs accepted\n",
+           api->id, m->what, tried, accepted);
     CHECK(tried >= 50);
+    CHECK(accepted >= 50);
 }
+
 
 /* ---- refused values ---------------------------------------------------------------------------- */
 
@@ -1134,6 +1481,700 @@ static void test_logging(const fmu_api *api)
     inst_free(&x);
 }
 
+/* ==== Model Exchange ========================================================================= */
+
+static int bits_equal(const double *a, const double *b, size_t n)
+{
+    return n == 0 || memcmp(a, b, n * sizeof *a) == 0;
+}
+
+/* The fingerprint without its refused probes in the log sink. */
+static unsigned fingerprint_me_quiet(inst *x)
+{
+    const log_sink saved = x->log;
+    const unsigned f = fingerprint_me(x);
+    x->log = saved;
+    return f;
+}
+
+/* A call that must be refused as a bad argument: fmi2Error, one error message naming the function
+ * (and the needle, if any), no illegal-call-sequence message, the serialized FMU state
+ * byte-identical before and after. */
+static void check_refused(inst *x, fmi2Status s, const unsigned char *before, size_t nb,
+                          const char *fn, const char *needle, const char *expr, int line)
+{
+    const int ok = s == fmi2Error && x->log.count[fmi2Error] == 1 && x->log.illegal == 0 &&
+                   strstr(x->log.last_error, fn) != NULL &&
+                   (needle == NULL || strstr(x->log.last_error, needle) != NULL);
+    const int unchanged = same_state(x, before, nb);
+    if (!ok || !unchanged) {
+        fprintf(stderr, "%s:%d: %s: %s returned %d, %d error message(s) \"%s\"; FMU state %s\n",
+                __FILE__, line, x->api->id, expr, (int)s, x->log.count[fmi2Error],
+                x->log.last_error, unchanged ? "unchanged" : "CHANGED");
+        rrr_test_failures++;
+    }
+}
+
+#define REFUSED(X, EXPR, FN, NEEDLE)                                                          \
+    do {                                                                                      \
+        size_t nb_ = 0;                                                                       \
+        unsigned char *before_ = state_bytes((X), &nb_);                                      \
+        log_clear(X);                                                                         \
+        const fmi2Status s_ = (EXPR);                                                         \
+        check_refused((X), s_, before_, nb_, (FN), (NEEDLE), #EXPR, __LINE__);                \
+        free(before_);                                                                        \
+    } while (0)
+
+/* One classic RK4 step of length dt through the Model Exchange interface, from (t, x) to
+ * (t + dt, x): the stages and the order of operations of librrr's rk4 in rrr_plant_step
+ * (rrr_plant.c), over the whole state vector. Returns nonzero on a failed call. */
+static int me_rk4(inst *p, double t, double dt, double x[], size_t nx)
+{
+    const fmu_api *a = p->api;
+    double k1[MAX_STATES], k2[MAX_STATES], k3[MAX_STATES], k4[MAX_STATES], xa[MAX_STATES];
+    int bad = 0;
+    bad |= a->SetTime(p->c, t) != fmi2OK;
+    bad |= a->SetContinuousStates(p->c, x, nx) != fmi2OK;
+    bad |= a->GetDerivatives(p->c, k1, nx) != fmi2OK;
+    for (size_t i = 0; i < nx && !bad; ++i) {
+        xa[i] = x[i] + 0.5 * dt * k1[i];
+    }
+    bad |= a->SetTime(p->c, t + 0.5 * dt) != fmi2OK;
+    bad |= a->SetContinuousStates(p->c, xa, nx) != fmi2OK;
+    bad |= a->GetDerivatives(p->c, k2, nx) != fmi2OK;
+    for (size_t i = 0; i < nx && !bad; ++i) {
+        xa[i] = x[i] + 0.5 * dt * k2[i];
+    }
+    bad |= a->SetContinuousStates(p->c, xa, nx) != fmi2OK;
+    bad |= a->GetDerivatives(p->c, k3, nx) != fmi2OK;
+    for (size_t i = 0; i < nx && !bad; ++i) {
+        xa[i] = x[i] + dt * k3[i];
+    }
+    bad |= a->SetTime(p->c, t + dt) != fmi2OK;
+    bad |= a->SetContinuousStates(p->c, xa, nx) != fmi2OK;
+    bad |= a->GetDerivatives(p->c, k4, nx) != fmi2OK;
+    if (bad) {
+        return 1;
+    }
+    for (size_t i = 0; i < nx; ++i) {
+        x[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+    }
+    fmi2Boolean enter = fmi2True, stop = fmi2True;
+    bad |= a->SetContinuousStates(p->c, x, nx) != fmi2OK;
+    bad |= a->CompletedIntegratorStep(p->c, fmi2True, &enter, &stop) != fmi2OK;
+    bad |= enter != fmi2False || stop != fmi2False;
+    return bad;
+}
+
+/* The lifecycle of FMI 2.0.4 section 3.2.3, with the values each call must give. */
+static void test_me_lifecycle(const fmu_api *api)
+{
+    const int is_plant = strcmp(api->id, "rrr_plant") == 0;
+    const long blocks_before = n_live_blocks;
+    /* the state vector the XML declares: (q, qd) with derivatives (qd, qdd); none for the
+     * controller; no event indicators */
+    CHECK(api->nx == (is_plant ? 6u : 0u));
+    CHECK(api->ni == 0u);
+    if (is_plant && api->nx == 6u) {
+        static const char *const xn[6] = {"q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]"};
+        static const char *const dxn[6] = {"qd[1]",  "qd[2]",  "qd[3]",
+                                           "qdd[1]", "qdd[2]", "qdd[3]"};
+        for (size_t i = 0; i < 6; ++i) {
+            CHECK(strcmp(api->x_name[i], xn[i]) == 0 && strcmp(api->dx_name[i], dxn[i]) == 0);
+        }
+    }
+    const size_t nx = api->nx;
+    inst x;
+    if (inst_new_me(&x, api, "me_lifecycle")) {
+        return;
+    }
+    CHECK(fingerprint_me_quiet(&x) == expected_fingerprint_me[MS_INST]);
+
+    /* Instantiated: the nominals, all > 0 */
+    double nom[MAX_STATES], xs0[MAX_STATES] = {0}, xv[MAX_STATES] = {0}, dx[MAX_STATES] = {0};
+    double ref[MAX_STATES] = {0}, v3[3] = {0};
+    for (size_t i = 0; i < MAX_STATES; ++i) {
+        nom[i] = -1.0;
+    }
+    CHECK(api->GetNominalsOfContinuousStates(x.c, nom, nx) == fmi2OK);
+    for (size_t i = 0; i < nx; ++i) {
+        CHECK(isfinite(nom[i]) && nom[i] > 0.0);
+    }
+
+    rrr_model m;
+    CHECK(rrr_model_default(&m) == RRR_OK);
+    const double q0[3] = {0.3, -0.4, 0.9}, qd0[3] = {0.5, -1.0, 0.25}, u[3] = {1.5, -2.0, 0.7};
+    fmi2ValueReference vq0[3], vqd0[3], vu[3], vq[3], vqd[3], vqdd[3];
+    rrr_plant_state ps;
+    if (is_plant) {
+        vrs3(api, "q0", vq0);
+        vrs3(api, "qd0", vqd0);
+        vrs3(api, "u", vu);
+        vrs3(api, "q", vq);
+        vrs3(api, "qd", vqd);
+        vrs3(api, "qdd", vqdd);
+        CHECK(api->SetReal(x.c, vq0, 3, q0) == fmi2OK);
+        CHECK(api->SetReal(x.c, vqd0, 3, qd0) == fmi2OK);
+        CHECK(api->SetReal(x.c, vu, 3, u) == fmi2OK);
+        memcpy(xs0, q0, sizeof q0);
+        memcpy(xs0 + 3, qd0, sizeof qd0);
+        memcpy(ps.q, q0, sizeof q0);
+        memcpy(ps.qd, qd0, sizeof qd0);
+        memcpy(ref, qd0, sizeof qd0);
+        CHECK(rrr_plant_accel(&m, &ps, u, ref + 3) == RRR_OK);
+    }
+    CHECK(api->SetupExperiment(x.c, fmi2False, 0.0, 0.25, fmi2False, 0.0) == fmi2OK);
+    CHECK(api->EnterInitializationMode(x.c) == fmi2OK);
+    CHECK(fingerprint_me_quiet(&x) == expected_fingerprint_me[MS_INIT]);
+    /* initialization mode: the states are the start values q0, qd0, and so are the derivatives */
+    CHECK(api->GetContinuousStates(x.c, xv, nx) == fmi2OK && bits_equal(xv, xs0, nx));
+    CHECK(api->GetDerivatives(x.c, dx, nx) == fmi2OK && bits_equal(dx, ref, nx));
+    CHECK(api->GetEventIndicators(x.c, NULL, 0) == fmi2OK);
+    CHECK(api->GetNominalsOfContinuousStates(x.c, nom, nx) == fmi2OK);
+    CHECK(api->ExitInitializationMode(x.c) == fmi2OK);
+    CHECK(fingerprint_me_quiet(&x) == expected_fingerprint_me[MS_EVENT]);
+
+    /* event mode: the initial states; no discrete states, no event, no time event */
+    CHECK(api->GetContinuousStates(x.c, xv, nx) == fmi2OK && bits_equal(xv, xs0, nx));
+    fmi2EventInfo ev;
+    ev.newDiscreteStatesNeeded = fmi2True;
+    ev.terminateSimulation = fmi2True;
+    ev.nominalsOfContinuousStatesChanged = fmi2True;
+    ev.valuesOfContinuousStatesChanged = fmi2True;
+    ev.nextEventTimeDefined = fmi2True;
+    ev.nextEventTime = -1.0;
+    CHECK(api->NewDiscreteStates(x.c, &ev) == fmi2OK);
+    CHECK(ev.newDiscreteStatesNeeded == fmi2False && ev.terminateSimulation == fmi2False &&
+          ev.nominalsOfContinuousStatesChanged == fmi2False &&
+          ev.valuesOfContinuousStatesChanged == fmi2False && ev.nextEventTimeDefined == fmi2False);
+    CHECK(api->EnterContinuousTimeMode(x.c) == fmi2OK);
+    CHECK(fingerprint_me_quiet(&x) == expected_fingerprint_me[MS_CONT]);
+
+    /* continuous-time mode: time, states and derivatives (FMI 2 cannot read the time back:
+     * the XML of FMI 2 lists no independent variable) */
+    CHECK(api->SetTime(x.c, 0.3) == fmi2OK);
+    const double x1[6] = {-0.2, 0.6, -1.1, 0.8, 0.3, -0.6};
+    CHECK(api->SetContinuousStates(x.c, x1, nx) == fmi2OK);
+    CHECK(api->GetContinuousStates(x.c, xv, nx) == fmi2OK && bits_equal(xv, x1, nx));
+    CHECK(api->GetDerivatives(x.c, dx, nx) == fmi2OK);
+    if (is_plant) {
+        /* the state variables and their derivatives are the outputs q, qd, qdd */
+        CHECK(api->GetReal(x.c, vq, 3, v3) == fmi2OK && bits_equal(v3, x1, 3));
+        CHECK(api->GetReal(x.c, vqd, 3, v3) == fmi2OK && bits_equal(v3, x1 + 3, 3));
+        CHECK(bits_equal(dx, x1 + 3, 3)); /* dq/dt = qd */
+        memcpy(ps.q, x1, sizeof ps.q);
+        memcpy(ps.qd, x1 + 3, sizeof ps.qd);
+        CHECK(rrr_plant_accel(&m, &ps, u, ref + 3) == RRR_OK);
+        CHECK(bits_equal(dx + 3, ref + 3, 3));
+        CHECK(api->GetReal(x.c, vqdd, 3, v3) == fmi2OK && bits_equal(v3, dx + 3, 3));
+    }
+    CHECK(api->GetEventIndicators(x.c, NULL, 0) == fmi2OK);
+    fmi2Boolean enter = fmi2True, stop = fmi2True;
+    CHECK(api->CompletedIntegratorStep(x.c, fmi2True, &enter, &stop) == fmi2OK);
+    CHECK(enter == fmi2False && stop == fmi2False);
+
+    /* an external event: event mode and back; the states do not jump */
+    CHECK(api->EnterEventMode(x.c) == fmi2OK);
+    CHECK(fingerprint_me_quiet(&x) == expected_fingerprint_me[MS_EVENT]);
+    CHECK(api->SetTime(x.c, 0.35) == fmi2OK);
+    CHECK(api->GetContinuousStates(x.c, xv, nx) == fmi2OK && bits_equal(xv, x1, nx));
+    CHECK(api->NewDiscreteStates(x.c, &ev) == fmi2OK && ev.valuesOfContinuousStatesChanged ==
+                                                            fmi2False);
+    CHECK(api->EnterContinuousTimeMode(x.c) == fmi2OK);
+
+    /* terminated: the final values can still be read */
+    CHECK(api->Terminate(x.c) == fmi2OK);
+    CHECK(fingerprint_me_quiet(&x) == expected_fingerprint_me[MS_TERM]);
+    double dx2[MAX_STATES] = {0};
+    CHECK(api->GetContinuousStates(x.c, xv, nx) == fmi2OK && bits_equal(xv, x1, nx));
+    CHECK(api->GetDerivatives(x.c, dx2, nx) == fmi2OK && bits_equal(dx2, dx, nx));
+    CHECK(api->GetNominalsOfContinuousStates(x.c, nom, nx) == fmi2OK);
+    CHECK(x.log.count[fmi2Error] == 0 && x.log.count[fmi2Warning] == 0 &&
+          x.log.count[fmi2Discard] == 0);
+
+    /* reset: Instantiated again, and a second run initializes from the start values */
+    CHECK(api->Reset(x.c) == fmi2OK);
+    CHECK(fingerprint_me_quiet(&x) == expected_fingerprint_me[MS_INST]);
+    CHECK(drive_me(&x, MS_EVENT) == 0);
+    if (is_plant) {
+        CHECK(api->GetContinuousStates(x.c, xv, nx) == fmi2OK);
+        for (size_t i = 0; i < nx; ++i) {
+            CHECK(xv[i] == 0.0); /* q0 = qd0 = 0 after reset */
+        }
+    }
+    inst_free(&x);
+    CHECK(n_live_blocks == blocks_before);
+}
+
+/* The derivatives are librrr's rrr_plant_accel, bit for bit: the FMU links the same object code
+ * of librrr as this harness (rrr_obj), and fmi2GetDerivatives hands the state and the input
+ * unchanged to rrr_plant_accel, so the same operations on the same doubles give the same bits
+ * (C11 mode: no contraction into FMA). */
+static void test_me_derivatives(const fmu_api *api)
+{
+    enum { N = 2000 };
+    if (api->nx != 6u) {
+        CHECK(!"the plant declares 6 continuous states");
+        return;
+    }
+    int n_diff = 0, n_dq = 0, n_sat = 0, total = 0;
+    double max_rel = 0.0;
+    fmi2ValueReference vu[3];
+    vrs3(api, "u", vu);
+    for (int cfg = 0; cfg < 2; ++cfg) {
+        rrr_model m;
+        CHECK(rrr_model_default(&m) == RRR_OK);
+        inst x;
+        if (inst_new_me(&x, api, "me_derivatives")) {
+            return;
+        }
+        if (cfg == 1) {
+            /* other parameters reach the derivatives as well */
+            m.g = 3.71;
+            m.kt[1] *= 1.25;
+            m.b[2] *= 2.0;
+            CHECK(set1(&x, "g", m.g) == fmi2OK);
+            CHECK(set1(&x, "kt[2]", m.kt[1]) == fmi2OK);
+            CHECK(set1(&x, "b[3]", m.b[2]) == fmi2OK);
+        }
+        CHECK(drive_me(&x, MS_CONT) == 0);
+        rrr_rng rng = {cfg == 0 ? UINT64_C(0x9E3779B97F4A7C15) : UINT64_C(0x2545F4914F6CDD1D)};
+        for (int k = 0; k < N; ++k) {
+            double xv[6], u[3], dx[6], qdd[3];
+            for (int i = 0; i < 3; ++i) {
+                xv[i] = rrr_rng_uniform(&rng, -3.141592653589793, 3.141592653589793);
+                xv[3 + i] = rrr_rng_uniform(&rng, -4.0, 4.0);
+                u[i] = rrr_rng_uniform(&rng, -1.5 * m.u_max, 1.5 * m.u_max);
+                n_sat += fabs(u[i]) > m.u_max;
+            }
+            if (api->SetReal(x.c, vu, 3, u) != fmi2OK ||
+                api->SetContinuousStates(x.c, xv, 6) != fmi2OK ||
+                api->GetDerivatives(x.c, dx, 6) != fmi2OK) {
+                CHECK(!"SetReal/SetContinuousStates/GetDerivatives failed");
+                break;
+            }
+            rrr_plant_state ps;
+            memcpy(ps.q, xv, sizeof ps.q);
+            memcpy(ps.qd, xv + 3, sizeof ps.qd);
+            CHECK(rrr_plant_accel(&m, &ps, u, qdd) == RRR_OK);
+            n_dq += !bits_equal(dx, xv + 3, 3);
+            for (int i = 0; i < 3; ++i) {
+                n_diff += !bits_equal(dx + 3 + i, qdd + i, 1);
+                max_rel = fmax(max_rel, fabs(dx[3 + i] - qdd[i]) / fmax(1.0, fabs(qdd[i])));
+            }
+            ++total;
+        }
+        CHECK(x.log.count[fmi2Error] == 0);
+        inst_free(&x);
+    }
+    printf("rrr_plant Model Exchange derivatives vs librrr rrr_plant_accel: %d random states and "
+           "inputs (2 parameter sets, %d saturated voltages): %d of %d qdd values differ "
+           "(max relative difference %.3g), dq/dt differs from qd in %d\n",
+           total, n_sat, n_diff, 3 * total, max_rel, n_dq);
+    CHECK(total == 2 * N);
+    CHECK(n_diff == 0 && n_dq == 0);
+    CHECK(n_sat > 0 && n_sat < 3 * total);
+}
+
+/* Explicit RK4 through the Model Exchange interface (h = 1e-4 s, 0.5 s, constant voltages)
+ * against the Co-Simulation plant (h_int = 1e-4 s, doStep of 1 ms = 10 RK4 substeps of
+ * 1e-3 / 10 s): the same method on the same right-hand side. */
+static void test_me_rk4_vs_cs(const fmu_api *api)
+{
+    enum { STEPS = 500, SUB = 10 };
+    const double dt = H / SUB;
+    const double q0[3] = {0.1, 0.3, -0.8}, qd0[3] = {0.0, 0.2, -0.1}, u[3] = {2.0, -1.5, 1.0};
+    inst me, cs;
+    if (inst_new_me(&me, api, "me_rk4") || inst_new(&cs, api, "cs_rk4")) {
+        return;
+    }
+    fmi2ValueReference vq0[3], vqd0[3], vu[3], vq[3], vqd[3];
+    vrs3(api, "q0", vq0);
+    vrs3(api, "qd0", vqd0);
+    vrs3(api, "u", vu);
+    vrs3(api, "q", vq);
+    vrs3(api, "qd", vqd);
+    inst *both[2] = {&me, &cs};
+    for (int k = 0; k < 2; ++k) {
+        CHECK(api->SetReal(both[k]->c, vq0, 3, q0) == fmi2OK);
+        CHECK(api->SetReal(both[k]->c, vqd0, 3, qd0) == fmi2OK);
+        CHECK(api->SetReal(both[k]->c, vu, 3, u) == fmi2OK);
+    }
+    CHECK(set1(&cs, "h_int", 1e-4) == fmi2OK);
+    CHECK(drive_me(&me, MS_CONT) == 0);
+    CHECK(drive(&cs, ST_INIT) == 0);
+    CHECK(api->ExitInitializationMode(cs.c) == fmi2OK);
+    double x[6] = {0}, x0[6] = {0};
+    CHECK(api->GetContinuousStates(me.c, x, 6) == fmi2OK);
+    memcpy(x0, x, sizeof x);
+    double max_diff = 0.0, moved = 0.0;
+    int n_bits = 0, n_cmp = 0;
+    for (int k = 0; k < STEPS; ++k) {
+        for (int j = 0; j < SUB; ++j) {
+            if (me_rk4(&me, (double)(k * SUB + j) * dt, dt, x, 6)) {
+                CHECK(!"RK4 step through Model Exchange failed");
+                k = STEPS;
+                break;
+            }
+        }
+        double y[6];
+        if (api->DoStep(cs.c, k * H, H, fmi2True) != fmi2OK ||
+            api->GetReal(cs.c, vq, 3, y) != fmi2OK || api->GetReal(cs.c, vqd, 3, y + 3) != fmi2OK) {
+            CHECK(!"Co-Simulation step failed");
+            break;
+        }
+        for (int i = 0; i < 6; ++i) {
+            max_diff = fmax(max_diff, fabs(x[i] - y[i]));
+            n_bits += !bits_equal(x + i, y + i, 1);
+            moved = fmax(moved, fabs(x[i] - x0[i]));
+            ++n_cmp;
+        }
+    }
+    printf("rrr_plant RK4 through Model Exchange (h = %g s) vs Co-Simulation (h_int = 1e-4 s, "
+           "1 ms steps), 0.5 s: max |x_ME - x_CS| = %.3g over %d values, %d differ in any bit "
+           "(the state moved by up to %.3g)\n",
+           dt, max_diff, n_cmp, n_bits, moved);
+    CHECK(n_cmp == STEPS * 6);
+    CHECK(n_bits == 0 && max_diff == 0.0);
+    CHECK(moved > 0.1);
+    CHECK(me.log.count[fmi2Error] == 0 && cs.log.count[fmi2Error] == 0);
+    inst_free(&me);
+    inst_free(&cs);
+}
+
+/* The controller (no states, direct feedthrough) gives the same outputs in Model Exchange
+ * (event and continuous-time mode) as in Co-Simulation and as librrr's rrr_ctc. */
+static void test_me_controller(const fmu_api *api)
+{
+    enum { N = 400 };
+    fmi2ValueReference in[15], out[9];
+    vrs3(api, "q_ref", in);
+    vrs3(api, "qd_ref", in + 3);
+    vrs3(api, "qdd_ref", in + 6);
+    vrs3(api, "q", in + 9);
+    vrs3(api, "qd", in + 12);
+    vrs3(api, "u", out);
+    vrs3(api, "u_n", out + 3);
+    vrs3(api, "u_c", out + 6);
+    const fmi2ValueReference vff = vr_of(api, "feedforward");
+    int n_diff = 0, n_lib = 0, n_sat = 0, total = 0, in_ct = 0;
+    for (int cfg = 0; cfg < 2; ++cfg) {
+        rrr_model m;
+        rrr_ctc_gains g;
+        CHECK(rrr_model_default(&m) == RRR_OK && rrr_ctc_gains_default(&g) == RRR_OK);
+        inst me, cs;
+        if (inst_new_me(&me, api, "me_ctrl") || inst_new(&cs, api, "cs_ctrl")) {
+            return;
+        }
+        if (cfg == 1) {
+            const fmi2Boolean off = fmi2False;
+            g.feedforward = 0;
+            g.kp[1] = 7.5;
+            g.kd[2] = 0.4;
+            inst *both[2] = {&me, &cs};
+            for (int k = 0; k < 2; ++k) {
+                CHECK(api->SetBoolean(both[k]->c, &vff, 1, &off) == fmi2OK);
+                CHECK(set1(both[k], "kp[2]", g.kp[1]) == fmi2OK);
+                CHECK(set1(both[k], "kd[3]", g.kd[2]) == fmi2OK);
+            }
+        }
+        CHECK(drive_me(&me, MS_EVENT) == 0);
+        CHECK(drive(&cs, ST_INIT) == 0);
+        CHECK(api->ExitInitializationMode(cs.c) == fmi2OK);
+        rrr_rng rng = {cfg == 0 ? UINT64_C(0xC0FFEE) : UINT64_C(0xBADC0DE)};
+        for (int k = 0; k < N; ++k) {
+            if (k == N / 2) { /* the second half in continuous-time mode */
+                fmi2EventInfo ev;
+                CHECK(api->NewDiscreteStates(me.c, &ev) == fmi2OK);
+                CHECK(api->EnterContinuousTimeMode(me.c) == fmi2OK);
+                CHECK(fingerprint_me_quiet(&me) == expected_fingerprint_me[MS_CONT]);
+            }
+            double v[15], a[9], b[9], r[9];
+            for (int i = 0; i < 3; ++i) {
+                v[i] = rrr_rng_uniform(&rng, -2.0, 2.0);
+                v[3 + i] = rrr_rng_uniform(&rng, -3.0, 3.0);
+                v[6 + i] = rrr_rng_uniform(&rng, -4.0, 4.0);
+                v[9 + i] = v[i] + rrr_rng_uniform(&rng, -0.2, 0.2);
+                v[12 + i] = v[3 + i] + rrr_rng_uniform(&rng, -0.5, 0.5);
+            }
+            if (api->SetReal(me.c, in, 15, v) != fmi2OK ||
+                api->GetReal(me.c, out, 9, a) != fmi2OK ||
+                api->SetReal(cs.c, in, 15, v) != fmi2OK ||
+                api->GetReal(cs.c, out, 9, b) != fmi2OK) {
+                CHECK(!"controller set/get failed");
+                break;
+            }
+            rrr_ctc_output o;
+            CHECK(rrr_ctc(&m, &g, v, v + 3, v + 6, v + 9, v + 12, &o) == RRR_OK);
+            memcpy(r, o.u, sizeof o.u);
+            memcpy(r + 3, o.u_n, sizeof o.u_n);
+            memcpy(r + 6, o.u_c, sizeof o.u_c);
+            n_diff += !bits_equal(a, b, 9);
+            n_lib += !bits_equal(a, r, 9);
+            n_sat += o.saturated != 0u;
+            in_ct += k >= N / 2;
+            ++total;
+        }
+        CHECK(me.log.count[fmi2Error] == 0 && cs.log.count[fmi2Error] == 0);
+        inst_free(&me);
+        inst_free(&cs);
+    }
+    printf("rrr_controller Model Exchange vs Co-Simulation: %d random input sets (%d in "
+           "ContinuousTimeMode, 2 parameter sets, %d saturated): u, u_n, u_c differ in %d sets, "
+           "differ from librrr rrr_ctc in %d (bit for bit)\n",
+           total, in_ct, n_sat, n_diff, n_lib);
+    CHECK(total == 2 * N);
+    CHECK(n_diff == 0 && n_lib == 0);
+    CHECK(n_sat > 0 && n_sat < total);
+}
+
+/* Refused Model Exchange arguments: nothing changes. */
+static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
+{
+    inst p, c;
+    if (inst_new_me(&p, plant, "me_bad_plant") || inst_new_me(&c, ctrl, "me_bad_ctrl")) {
+        return;
+    }
+    CHECK(set1(&p, "u[1]", 1.0) == fmi2OK);
+    CHECK(drive_me(&p, MS_CONT) == 0 && drive_me(&c, MS_CONT) == 0);
+    double x0[6] = {0}, dx0[6] = {0}, xb[6], buf[6];
+    CHECK(plant->SetContinuousStates(p.c, (const double[6]){0.2, -0.3, 0.4, 0.5, -0.6, 0.7}, 6) ==
+          fmi2OK);
+    CHECK(plant->GetContinuousStates(p.c, x0, 6) == fmi2OK);
+    CHECK(plant->GetDerivatives(p.c, dx0, 6) == fmi2OK);
+
+    /* non-finite states: refused as a whole (every other element changed too) */
+    const struct {
+        size_t i;
+        double v;
+    } bad_x[] = {{0, NAN}, {4, INFINITY}, {5, -INFINITY}};
+    for (size_t k = 0; k < sizeof bad_x / sizeof bad_x[0]; ++k) {
+        for (size_t i = 0; i < 6; ++i) {
+            xb[i] = x0[i] + 0.5;
+        }
+        xb[bad_x[k].i] = bad_x[k].v;
+        REFUSED(&p, plant->SetContinuousStates(p.c, xb, 6), "fmi2SetContinuousStates",
+                plant->x_name[bad_x[k].i]);
+        CHECK(plant->GetContinuousStates(p.c, buf, 6) == fmi2OK && bits_equal(buf, x0, 6));
+        CHECK(plant->GetDerivatives(p.c, buf, 6) == fmi2OK && bits_equal(buf, dx0, 6));
+    }
+    /* non-finite time (the serialized FMU state holds the time: unchanged) */
+    REFUSED(&p, plant->SetTime(p.c, NAN), "fmi2SetTime", NULL);
+    REFUSED(&p, plant->SetTime(p.c, INFINITY), "fmi2SetTime", NULL);
+    REFUSED(&p, plant->SetTime(p.c, -INFINITY), "fmi2SetTime", NULL);
+
+    /* wrong nx and ni: refused before any element is read or written (the arrays hold 6) */
+    for (size_t i = 0; i < 6; ++i) {
+        buf[i] = -7.0;
+    }
+    REFUSED(&p, plant->SetContinuousStates(p.c, x0, 5), "fmi2SetContinuousStates", NULL);
+    REFUSED(&p, plant->SetContinuousStates(p.c, x0, 0), "fmi2SetContinuousStates", NULL);
+    REFUSED(&p, plant->GetContinuousStates(p.c, buf, 7), "fmi2GetContinuousStates", NULL);
+    REFUSED(&p, plant->GetDerivatives(p.c, buf, 5), "fmi2GetDerivatives", NULL);
+    REFUSED(&p, plant->GetDerivatives(p.c, buf, 7), "fmi2GetDerivatives", NULL);
+    REFUSED(&p, plant->GetNominalsOfContinuousStates(p.c, buf, 5),
+            "fmi2GetNominalsOfContinuousStates", NULL);
+    REFUSED(&p, plant->GetEventIndicators(p.c, buf, 1), "fmi2GetEventIndicators", NULL);
+    for (size_t i = 0; i < 6; ++i) {
+        CHECK(buf[i] == -7.0);
+    }
+    /* NULL arrays */
+    fmi2Boolean flag = fmi2False;
+    REFUSED(&p, plant->SetContinuousStates(p.c, NULL, 6), "fmi2SetContinuousStates", "NULL");
+    REFUSED(&p, plant->GetContinuousStates(p.c, NULL, 6), "fmi2GetContinuousStates", "NULL");
+    REFUSED(&p, plant->GetDerivatives(p.c, NULL, 6), "fmi2GetDerivatives", "NULL");
+    REFUSED(&p, plant->GetNominalsOfContinuousStates(p.c, NULL, 6),
+            "fmi2GetNominalsOfContinuousStates", "NULL");
+    REFUSED(&p, plant->CompletedIntegratorStep(p.c, fmi2True, NULL, &flag),
+            "fmi2CompletedIntegratorStep", "NULL");
+    REFUSED(&p, plant->CompletedIntegratorStep(p.c, fmi2True, &flag, NULL),
+            "fmi2CompletedIntegratorStep", "NULL");
+    CHECK(plant->GetEventIndicators(p.c, NULL, 0) == fmi2OK); /* no indicators, no array */
+
+    /* outputs are never set; inputs in continuous-time mode, finite only */
+    expect_refused(&p, "q[1]", 1.0, "q[1]");
+    expect_refused(&p, "qdd[2]", 0.0, "qdd[2]");
+    expect_refused(&p, "tip.x", 0.0, "tip.x");
+    expect_refused(&p, "u[2]", INFINITY, "u[2]");
+    expect_refused(&p, "kt[1]", 0.5, "ContinuousTimeMode"); /* a fixed parameter */
+    CHECK(set1(&p, "u[2]", -2.5) == fmi2OK);
+    CHECK(plant->GetDerivatives(p.c, buf, 6) == fmi2OK);
+    CHECK(bits_equal(buf, dx0, 3) && !bits_equal(buf + 3, dx0 + 3, 3)); /* qdd follows u */
+
+    /* event mode: fixed parameters are refused, naming the state */
+    CHECK(plant->EnterEventMode(p.c) == fmi2OK);
+    fmi2EventInfo *no_info = NULL;
+    REFUSED(&p, plant->NewDiscreteStates(p.c, no_info), "fmi2NewDiscreteStates", "NULL");
+    expect_refused(&p, "a2", 0.5, "EventMode");
+    expect_refused(&p, "q0[1]", 0.5, "EventMode");
+    expect_refused(&p, "h_int", 1e-3, "EventMode");
+    expect_refused(&p, "p[3]", 1.0, "EventMode");
+    expect_refused(&p, "qd[3]", 0.0, "qd[3]"); /* a state, but an output */
+    CHECK(fingerprint_me_quiet(&p) == expected_fingerprint_me[MS_EVENT]);
+    CHECK(plant->GetContinuousStates(p.c, buf, 6) == fmi2OK && bits_equal(buf, x0, 6));
+
+    /* the controller: no states, no indicators */
+    double one[1] = {0.0};
+    CHECK(ctrl->SetContinuousStates(c.c, NULL, 0) == fmi2OK);
+    CHECK(ctrl->GetDerivatives(c.c, NULL, 0) == fmi2OK);
+    CHECK(ctrl->GetNominalsOfContinuousStates(c.c, NULL, 0) == fmi2OK);
+    REFUSED(&c, ctrl->SetContinuousStates(c.c, one, 1), "fmi2SetContinuousStates", NULL);
+    REFUSED(&c, ctrl->GetContinuousStates(c.c, one, 1), "fmi2GetContinuousStates", NULL);
+    REFUSED(&c, ctrl->GetDerivatives(c.c, one, 1), "fmi2GetDerivatives", NULL);
+    REFUSED(&c, ctrl->GetEventIndicators(c.c, one, 1), "fmi2GetEventIndicators", NULL);
+    REFUSED(&c, ctrl->SetTime(c.c, NAN), "fmi2SetTime", NULL);
+    expect_refused(&c, "u_c[3]", 1.0, "u_c[3]");
+    expect_refused(&c, "q_ref[1]", NAN, "q_ref[1]");
+    CHECK(ctrl->EnterEventMode(c.c) == fmi2OK);
+    expect_refused(&c, "kp[1]", 5.0, "EventMode");
+    expect_refused(&c, "g", 9.0, "EventMode");
+    {
+        const fmi2ValueReference ff = vr_of(ctrl, "feedforward");
+        const fmi2Boolean off = fmi2False;
+        fmi2Boolean b = fmi2False;
+        REFUSED(&c, ctrl->SetBoolean(c.c, &ff, 1, &off), "fmi2SetBoolean", "EventMode");
+        CHECK(ctrl->GetBoolean(c.c, &ff, 1, &b) == fmi2OK && b == fmi2True);
+    }
+    CHECK(fingerprint_me_quiet(&c) == expected_fingerprint_me[MS_EVENT]);
+    CHECK(plant->Terminate(p.c) == fmi2OK && ctrl->Terminate(c.c) == fmi2OK);
+    inst_free(&p);
+    inst_free(&c);
+}
+
+/* Run n RK4 steps of dt from time t and the instance's own states, recording the states. */
+static void me_run(inst *p, double t, int n, double dt, double (*rec)[6])
+{
+    double x[6];
+    if (p->api->GetContinuousStates(p->c, x, 6) != fmi2OK) {
+        CHECK(!"GetContinuousStates failed");
+        return;
+    }
+    for (int k = 0; k < n; ++k) {
+        if (me_rk4(p, t + k * dt, dt, x, 6)) {
+            CHECK(!"RK4 step through Model Exchange failed");
+            return;
+        }
+        memcpy(rec[k], x, sizeof x);
+    }
+}
+
+/* FMU state of Model Exchange instances: a bit-identical continuation after set and after
+ * serialize/deserialize; Model Exchange and Co-Simulation snapshots do not mix. */
+static void test_me_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
+{
+    enum { N = 300 };
+    const double dt = 1e-4;
+    static double rec1[N][6], rec2[N][6], rec3[N][6];
+    inst p, cs, c;
+    if (inst_new_me(&p, plant, "me_state") || inst_new(&cs, plant, "cs_state") ||
+        inst_new_me(&c, ctrl, "me_state_ctrl")) {
+        return;
+    }
+    CHECK(set1(&p, "u[1]", 2.0) == fmi2OK && set1(&p, "u[3]", -1.0) == fmi2OK);
+    CHECK(set1(&p, "q0[2]", 0.4) == fmi2OK);
+    CHECK(drive_me(&p, MS_CONT) == 0);
+    me_run(&p, 0.0, 100, dt, rec1);
+    const double t1 = 100 * dt;
+    fmi2FMUstate s = NULL;
+    CHECK(plant->GetFMUstate(p.c, &s) == fmi2OK && s != NULL);
+    size_t n = 0;
+    CHECK(plant->SerializedFMUstateSize(p.c, s, &n) == fmi2OK && n > 0);
+    fmi2Byte *bytes = malloc(n);
+    if (bytes == NULL) {
+        CHECK(!"out of memory");
+        return;
+    }
+    CHECK(plant->SerializeFMUstate(p.c, s, bytes, n) == fmi2OK);
+    me_run(&p, t1, N, dt, rec1);
+    CHECK(!same_state(&p, (unsigned char *)bytes, n)); /* it moved on */
+
+    /* set back: the instance serializes to the snapshot's bytes (time, states, mode); rerun:
+     * bit-identical */
+    CHECK(plant->SetFMUstate(p.c, s) == fmi2OK);
+    CHECK(same_state(&p, (unsigned char *)bytes, n));
+    CHECK(fingerprint_me_quiet(&p) == expected_fingerprint_me[MS_CONT]);
+    me_run(&p, t1, N, dt, rec2);
+    CHECK(memcmp(rec1, rec2, sizeof rec1) == 0);
+
+    /* free, deserialize, set, rerun: bit-identical */
+    CHECK(plant->FreeFMUstate(p.c, &s) == fmi2OK && s == NULL);
+    CHECK(plant->DeSerializeFMUstate(p.c, bytes, n, &s) == fmi2OK && s != NULL);
+    CHECK(plant->SetFMUstate(p.c, s) == fmi2OK);
+    CHECK(same_state(&p, (unsigned char *)bytes, n));
+    me_run(&p, t1, N, dt, rec3);
+    CHECK(memcmp(rec1, rec3, sizeof rec1) == 0);
+
+    /* a snapshot taken in event mode brings event mode back */
+    fmi2FMUstate s_event = NULL;
+    fmi2EventInfo ev;
+    CHECK(plant->EnterEventMode(p.c) == fmi2OK);
+    CHECK(plant->GetFMUstate(p.c, &s_event) == fmi2OK);
+    CHECK(plant->NewDiscreteStates(p.c, &ev) == fmi2OK);
+    CHECK(plant->EnterContinuousTimeMode(p.c) == fmi2OK);
+    CHECK(plant->SetFMUstate(p.c, s_event) == fmi2OK);
+    CHECK(fingerprint_me_quiet(&p) == expected_fingerprint_me[MS_EVENT]);
+    CHECK(plant->FreeFMUstate(p.c, &s_event) == fmi2OK);
+
+    /* Co-Simulation and Model Exchange snapshots of the same binary do not mix */
+    CHECK(drive(&cs, ST_DONE) == 0);
+    fmi2FMUstate s_cs = NULL, junk = NULL;
+    size_t n_cs = 0, size = 0;
+    CHECK(plant->GetFMUstate(cs.c, &s_cs) == fmi2OK && s_cs != NULL);
+    CHECK(plant->SerializedFMUstateSize(cs.c, s_cs, &n_cs) == fmi2OK);
+    fmi2Byte *bytes_cs = malloc(n_cs > 0 ? n_cs : 1);
+    if (bytes_cs == NULL) {
+        CHECK(!"out of memory");
+        return;
+    }
+    CHECK(plant->SerializeFMUstate(cs.c, s_cs, bytes_cs, n_cs) == fmi2OK);
+    REFUSED(&p, plant->SetFMUstate(p.c, s_cs), "fmi2SetFMUstate", "interface");
+    REFUSED(&p, plant->DeSerializeFMUstate(p.c, bytes_cs, n_cs, &junk), "fmi2DeSerializeFMUstate",
+            "interface");
+    CHECK(junk == NULL);
+    if (junk != NULL) {
+        plant->FreeFMUstate(p.c, &junk);
+    }
+    REFUSED(&p, plant->SerializedFMUstateSize(p.c, s_cs, &size), "fmi2SerializedFMUstateSize",
+            "interface");
+    REFUSED(&p, plant->FreeFMUstate(p.c, &s_cs), "fmi2FreeFMUstate", NULL);
+    CHECK(s_cs != NULL); /* not freed by the wrong instance */
+    CHECK(fingerprint_me_quiet(&p) == expected_fingerprint_me[MS_EVENT]);
+    /* ... and the other way round */
+    REFUSED(&cs, plant->SetFMUstate(cs.c, s), "fmi2SetFMUstate", "interface");
+    REFUSED(&cs, plant->DeSerializeFMUstate(cs.c, bytes, n, &junk), "fmi2DeSerializeFMUstate",
+            "interface");
+    CHECK(junk == NULL);
+    if (junk != NULL) {
+        plant->FreeFMUstate(cs.c, &junk);
+    }
+    CHECK(fingerprint(&cs) == expected_fingerprint[ST_DONE]);
+    CHECK(plant->FreeFMUstate(cs.c, &s_cs) == fmi2OK && s_cs == NULL);
+    CHECK(plant->FreeFMUstate(p.c, &s) == fmi2OK && s == NULL);
+
+    /* the controller: a snapshot restores inputs and outputs */
+    fmi2ValueReference vin[3], vout[3];
+    vrs3(ctrl, "q_ref", vin);
+    vrs3(ctrl, "u", vout);
+    const double ra[3] = {0.2, -0.1, 0.4}, rb[3] = {-0.5, 0.3, 0.1};
+    double ua[3], ub[3], uc[3];
+    CHECK(drive_me(&c, MS_CONT) == 0);
+    CHECK(ctrl->SetReal(c.c, vin, 3, ra) == fmi2OK && ctrl->GetReal(c.c, vout, 3, ua) == fmi2OK);
+    fmi2FMUstate sc = NULL;
+    CHECK(ctrl->GetFMUstate(c.c, &sc) == fmi2OK);
+    CHECK(ctrl->SetReal(c.c, vin, 3, rb) == fmi2OK && ctrl->GetReal(c.c, vout, 3, ub) == fmi2OK);
+    CHECK(!bits_equal(ua, ub, 3));
+    CHECK(ctrl->SetFMUstate(c.c, sc) == fmi2OK && ctrl->GetReal(c.c, vout, 3, uc) == fmi2OK);
+    CHECK(bits_equal(ua, uc, 3));
+    REFUSED(&c, ctrl->SetFMUstate(c.c, NULL), "fmi2SetFMUstate", NULL);
+    CHECK(ctrl->FreeFMUstate(c.c, &sc) == fmi2OK && sc == NULL);
+
+    free(bytes);
+    free(bytes_cs);
+    inst_free(&p);
+    inst_free(&cs);
+    inst_free(&c);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3) {
@@ -1151,8 +2192,8 @@ int main(int argc, char **argv)
     test_instantiate(&ctrl);
     test_defaults(&plant, &ctrl);
     test_closed_loop(&plant, &ctrl);
-    test_illegal_sequences(&plant);
-    test_illegal_sequences(&ctrl);
+    test_illegal_sequences(&plant, &cs_machine);
+    test_illegal_sequences(&ctrl, &cs_machine);
     test_bad_values(&plant, &ctrl);
     test_validation(&plant, &ctrl);
     test_discard(&plant);
@@ -1160,6 +2201,17 @@ int main(int argc, char **argv)
     test_two_instances(&plant);
     test_logging(&plant);
     test_logging(&ctrl);
+
+    /* Model Exchange */
+    test_me_lifecycle(&plant);
+    test_me_lifecycle(&ctrl);
+    test_me_derivatives(&plant);
+    test_me_rk4_vs_cs(&plant);
+    test_me_controller(&ctrl);
+    test_illegal_sequences(&plant, &me_machine);
+    test_illegal_sequences(&ctrl, &me_machine);
+    test_me_bad_values(&plant, &ctrl);
+    test_me_fmu_state(&plant, &ctrl);
 
     if (n_live_blocks != 0) {
         fprintf(stderr, "%ld block(s) allocated through the callbacks were not freed\n",

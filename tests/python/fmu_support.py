@@ -10,23 +10,16 @@ from __future__ import annotations
 import atexit
 import itertools
 import shutil
-from collections.abc import Iterable, Mapping
-from ctypes import byref
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 
-from fmpy import calloc, extract, free, read_model_description
+from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
-from fmpy.logging import addLoggerProxy
+from fmpy.fmi2 import FMU2Slave
 from fmpy.model_description import ModelDescription
+from rrr_robot._fmi_log import fmi2_callbacks
 
 FMU_NAMES = ("plant", "controller")
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -46,7 +39,8 @@ def fmu_file(which: str) -> Path:
 
 # ---- log capture ------------------------------------------------------------------------------
 # FMPy's addLoggerProxy (which formats the printf-style message) keeps ONE Python logger per
-# process, so a single logger dispatches to the slave by its (unique) instance name.
+# process: rrr_robot._fmi_log owns it (a permanent dispatcher) and routes each instance's messages
+# to its receiver, here the list of the slave's (unique) instance name.
 
 
 @dataclass(frozen=True)
@@ -61,26 +55,11 @@ class LogRecord:
 _LOGS: dict[str, list[LogRecord]] = {}
 
 
-def _text(value: bytes | None) -> str:
-    return value.decode(errors="replace") if value is not None else ""
+def _receiver(name: str) -> Callable[[int, str, str], None]:
+    def receive(status: int, category: str, message: str) -> None:
+        _LOGS.setdefault(name, []).append(LogRecord(status, category, message))
+    return receive
 
-
-def _logger(
-    env: int | None,
-    instance: bytes | None,
-    status: int,
-    category: bytes | None,
-    message: bytes | None,
-) -> None:
-    record = LogRecord(int(status), _text(category), _text(message))
-    _LOGS.setdefault(_text(instance), []).append(record)
-
-
-_CALLBACKS = fmi2CallbackFunctions()
-_CALLBACKS.logger = fmi2CallbackLoggerTYPE(_logger)
-_CALLBACKS.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-_CALLBACKS.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-addLoggerProxy(byref(_CALLBACKS))
 
 # ---- slaves ---------------------------------------------------------------------------------
 
@@ -121,7 +100,9 @@ class Slave:
         self._alive = False
 
     def instantiate(self) -> Slave:
-        self.fmu.instantiate(callbacks=_CALLBACKS)
+        # the package's routing of FMI 2 log messages (one permanent native proxy callback)
+        self._callbacks = fmi2_callbacks(_receiver(self.name))
+        self.fmu.instantiate(callbacks=self._callbacks)
         self._alive = True
         return self
 

@@ -18,7 +18,7 @@ import time
 
 def run(label, cmd):
     start = time.monotonic()
-    proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, check=False)
+    proc = subprocess.run(cmd, capture_output=True, check=False)
     seconds = time.monotonic() - start
     err = proc.stderr.decode("utf-8", "replace").strip()
     if proc.returncode != 0:
@@ -60,7 +60,7 @@ def main():
     scenario_max = {}  # max difference per scenario
     rows = {}  # data rows per scenario (first field)
     header = None  # the last header line: "scenario,t,<names>"
-    for i, (la, lb) in enumerate(zip(lines_a, lines_b), start=1):
+    for i, (la, lb) in enumerate(zip(lines_a, lines_b, strict=True), start=1):
         fa, fb = la.split(","), lb.split(",")
         if len(fa) != len(fb):
             print(f"FAIL: line {i}: {len(fa)} fields against {len(fb)}")
