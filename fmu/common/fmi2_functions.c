@@ -11,7 +11,7 @@
  *  - a failure of the model (CALL of a model hook): the worst status is kept; fmi2Discard from
  *    doStep moves to StepFailed, fmi2Error to the Error state, fmi2Fatal to the Fatal state.
  */
-#include "fmu_internal.h" /* first: see fmu_model.h */
+#include "fmu_adapter.h" /* first: see fmu_model.h */
 #include "fmi2Functions.h"
 
 #include <math.h>
@@ -29,9 +29,6 @@ _Static_assert(sizeof(fmi2Boolean) == sizeof(int), "fmi2Boolean is an int");
  * Terminated and Error are shared, so a function of one interface type is masked out in an
  * instance of the other (ME_ONLY, CS_ONLY: each table lists only its own functions).
  */
-
-#define ME_ONLY(mask) FMU_ME_ONLY(S, mask)
-#define CS_ONLY(mask) FMU_CS_ONLY(S, mask)
 
 #define MASK_ANY_INSTANCE                                                                     \
     (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE |  \
@@ -96,70 +93,10 @@ _Static_assert(sizeof(fmi2Boolean) == sizeof(int), "fmi2Boolean is an int");
 #define MASK_fmi2GetBooleanStatus MASK_fmi2GetStatus
 #define MASK_fmi2GetStringStatus MASK_fmi2GetStatus
 
-/* ---- the adapter macros ---------------------------------------------------------------------- */
+/* ---- the adapter macros (fmu_adapter.h) ------------------------------------------------------ */
 
-#define BEGIN_FUNCTION(F)                                                                     \
-    fmu_status status = FMU_OK;                                                               \
-    fmu_instance *S = (fmu_instance *)c;                                                      \
-    if (S == NULL) {                                                                          \
-        return fmi2Error;                                                                     \
-    }                                                                                         \
-    if (!fmu_allowed_state(S, MASK_fmi2##F, "fmi2" #F)) {                                     \
-        status = FMU_ERROR;                                                                   \
-        goto END;                                                                             \
-    }
-
-#define END_FUNCTION()                                                                        \
-    END:                                                                                      \
-    return (fmi2Status)status;
-
-/* Trace an accepted call with its arguments (category logCalls, off by default). */
-#define TRACE(...) fmu_log(S, FMU_OK, FMU_LOG_CALLS, __VA_ARGS__)
-
-/* Refuse the call (nothing changes) with an error message naming the function. */
-#define REFUSE(...)                                                                           \
-    do {                                                                                      \
-        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, __VA_ARGS__);                                    \
-        status = FMU_ERROR;                                                                   \
-        goto END;                                                                             \
-    } while (0)
-
-/* A pointer argument that must not be NULL (when n values are passed). */
-#define ASSERT_NOT_NULL(F, p)                                                                 \
-    do {                                                                                      \
-        if ((p) == NULL) {                                                                    \
-            REFUSE("fmi2" #F ": argument " #p " must not be NULL");                           \
-        }                                                                                     \
-    } while (0)
-
-/* An instance-level operation that refuses on error: status, no state change. */
-#define CHECKED(x)                                                                            \
-    do {                                                                                      \
-        const fmu_status s_ = (x);                                                            \
-        if (s_ > status) {                                                                    \
-            status = s_;                                                                      \
-        }                                                                                     \
-        if (status > FMU_WARNING) {                                                           \
-            goto END;                                                                         \
-        }                                                                                     \
-    } while (0)
-
-/* A model hook: keep the worst status; Error and Fatal move the state machine. */
-#define CALL(x)                                                                               \
-    do {                                                                                      \
-        const fmu_status s_ = (x);                                                            \
-        if (s_ > status) {                                                                    \
-            status = s_;                                                                      \
-        }                                                                                     \
-        if (status == FMU_ERROR) {                                                            \
-            S->state = FMU_ERROR_STATE;                                                       \
-        } else if (status == FMU_FATAL) {                                                     \
-            S->state = FMU_FATAL_STATE;                                                       \
-        }                                                                                     \
-        if (status > FMU_WARNING) {                                                           \
-            goto END;                                                                         \
-        }                                                                                     \
-    } while (0)
+#define BEGIN_FUNCTION(F) FMU_BEGIN(c, MASK_fmi2##F, "fmi2" #F, fmi2Error)
+#define END_FUNCTION() FMU_END(fmi2Status)
 
 /* ---- inquire platform and version ------------------------------------------------------------ */
 
@@ -289,11 +226,11 @@ fmi2Status fmi2Reset(fmi2Component c)
 /* ---- getting and setting variable values ----------------------------------------------------- */
 
 /* A Get/Set of a type the models do not use: refused unless empty. */
-#define NO_VARIABLES_OF_TYPE(F, TYPE)                                                         \
+#define NO_VARIABLES_OF_TYPE(TYPE)                                                            \
     do {                                                                                      \
         if (nvr > 0) {                                                                        \
-            ASSERT_NOT_NULL(F, vr);                                                           \
-            REFUSE("fmi2" #F ": %s has no " TYPE " variables (vr %u requested)",             \
+            ASSERT_NOT_NULL(vr);                                                              \
+            REFUSE("%s: %s has no " TYPE " variables (vr %u requested)", fn_,                 \
                    S->model->identifier, (unsigned)vr[0]);                                    \
         }                                                                                     \
     } while (0)
@@ -304,8 +241,8 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     BEGIN_FUNCTION(GetReal)
     TRACE("fmi2GetReal(nvr=%zu)", nvr);
     if (nvr > 0) {
-        ASSERT_NOT_NULL(GetReal, vr);
-        ASSERT_NOT_NULL(GetReal, value);
+        ASSERT_NOT_NULL(vr);
+        ASSERT_NOT_NULL(value);
     }
     if (fmu_needs_update(S, vr, nvr)) {
         CALL(fmu_update(S));
@@ -320,7 +257,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     BEGIN_FUNCTION(GetInteger)
     TRACE("fmi2GetInteger(nvr=%zu)", nvr);
     (void)value;
-    NO_VARIABLES_OF_TYPE(GetInteger, "Integer");
+    NO_VARIABLES_OF_TYPE("Integer");
     END_FUNCTION()
 }
 
@@ -330,8 +267,8 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     BEGIN_FUNCTION(GetBoolean)
     TRACE("fmi2GetBoolean(nvr=%zu)", nvr);
     if (nvr > 0) {
-        ASSERT_NOT_NULL(GetBoolean, vr);
-        ASSERT_NOT_NULL(GetBoolean, value);
+        ASSERT_NOT_NULL(vr);
+        ASSERT_NOT_NULL(value);
     }
     if (fmu_needs_update(S, vr, nvr)) {
         CALL(fmu_update(S));
@@ -346,7 +283,7 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     BEGIN_FUNCTION(GetString)
     TRACE("fmi2GetString(nvr=%zu)", nvr);
     (void)value;
-    NO_VARIABLES_OF_TYPE(GetString, "String");
+    NO_VARIABLES_OF_TYPE("String");
     END_FUNCTION()
 }
 
@@ -356,8 +293,8 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     BEGIN_FUNCTION(SetReal)
     TRACE("fmi2SetReal(nvr=%zu)", nvr);
     if (nvr > 0) {
-        ASSERT_NOT_NULL(SetReal, vr);
-        ASSERT_NOT_NULL(SetReal, value);
+        ASSERT_NOT_NULL(vr);
+        ASSERT_NOT_NULL(value);
     }
     CHECKED(fmu_set_values(S, "fmi2SetReal", FMU_REAL, vr, nvr, value, FMU_BOOL_INT));
     END_FUNCTION()
@@ -369,7 +306,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     BEGIN_FUNCTION(SetInteger)
     TRACE("fmi2SetInteger(nvr=%zu)", nvr);
     (void)value;
-    NO_VARIABLES_OF_TYPE(SetInteger, "Integer");
+    NO_VARIABLES_OF_TYPE("Integer");
     END_FUNCTION()
 }
 
@@ -379,8 +316,8 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
     BEGIN_FUNCTION(SetBoolean)
     TRACE("fmi2SetBoolean(nvr=%zu)", nvr);
     if (nvr > 0) {
-        ASSERT_NOT_NULL(SetBoolean, vr);
-        ASSERT_NOT_NULL(SetBoolean, value);
+        ASSERT_NOT_NULL(vr);
+        ASSERT_NOT_NULL(value);
     }
     CHECKED(fmu_set_values(S, "fmi2SetBoolean", FMU_BOOLEAN, vr, nvr, value, FMU_BOOL_INT));
     END_FUNCTION()
@@ -392,7 +329,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
     BEGIN_FUNCTION(SetString)
     TRACE("fmi2SetString(nvr=%zu)", nvr);
     (void)value;
-    NO_VARIABLES_OF_TYPE(SetString, "String");
+    NO_VARIABLES_OF_TYPE("String");
     END_FUNCTION()
 }
 
@@ -402,7 +339,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     BEGIN_FUNCTION(GetFMUstate)
     TRACE("fmi2GetFMUstate()");
-    ASSERT_NOT_NULL(GetFMUstate, FMUstate);
+    ASSERT_NOT_NULL(FMUstate);
     CHECKED(fmu_snapshot_get(S, "fmi2GetFMUstate", FMUstate));
     END_FUNCTION()
 }
@@ -419,7 +356,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
     BEGIN_FUNCTION(FreeFMUstate)
     TRACE("fmi2FreeFMUstate()");
-    ASSERT_NOT_NULL(FreeFMUstate, FMUstate);
+    ASSERT_NOT_NULL(FMUstate);
     CHECKED(fmu_snapshot_free(S, "fmi2FreeFMUstate", FMUstate));
     END_FUNCTION()
 }
@@ -428,7 +365,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
 {
     BEGIN_FUNCTION(SerializedFMUstateSize)
     TRACE("fmi2SerializedFMUstateSize(FMUstate=%p)", FMUstate);
-    ASSERT_NOT_NULL(SerializedFMUstateSize, size);
+    ASSERT_NOT_NULL(size);
     CHECKED(fmu_snapshot_size(S, "fmi2SerializedFMUstateSize", FMUstate, size));
     END_FUNCTION()
 }
@@ -438,7 +375,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
 {
     BEGIN_FUNCTION(SerializeFMUstate)
     TRACE("fmi2SerializeFMUstate(FMUstate=%p, size=%zu)", FMUstate, size);
-    ASSERT_NOT_NULL(SerializeFMUstate, serializedState);
+    ASSERT_NOT_NULL(serializedState);
     CHECKED(fmu_snapshot_serialize(S, "fmi2SerializeFMUstate", FMUstate,
                                    (unsigned char *)serializedState, size));
     END_FUNCTION()
@@ -449,8 +386,8 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 {
     BEGIN_FUNCTION(DeSerializeFMUstate)
     TRACE("fmi2DeSerializeFMUstate(size=%zu)", size);
-    ASSERT_NOT_NULL(DeSerializeFMUstate, serializedState);
-    ASSERT_NOT_NULL(DeSerializeFMUstate, FMUstate);
+    ASSERT_NOT_NULL(serializedState);
+    ASSERT_NOT_NULL(FMUstate);
     CHECKED(fmu_snapshot_deserialize(S, "fmi2DeSerializeFMUstate",
                                      (const unsigned char *)serializedState, size, FMUstate));
     END_FUNCTION()
@@ -511,7 +448,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo)
 {
     BEGIN_FUNCTION(NewDiscreteStates)
     TRACE("fmi2NewDiscreteStates()");
-    ASSERT_NOT_NULL(NewDiscreteStates, eventInfo);
+    ASSERT_NOT_NULL(eventInfo);
     /* no discrete states, no time events, no state events */
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
@@ -536,8 +473,8 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
     BEGIN_FUNCTION(CompletedIntegratorStep)
     TRACE("fmi2CompletedIntegratorStep(noSetFMUStatePriorToCurrentPoint=%d)",
           (int)noSetFMUStatePriorToCurrentPoint);
-    ASSERT_NOT_NULL(CompletedIntegratorStep, enterEventMode);
-    ASSERT_NOT_NULL(CompletedIntegratorStep, terminateSimulation);
+    ASSERT_NOT_NULL(enterEventMode);
+    ASSERT_NOT_NULL(terminateSimulation);
     *enterEventMode = fmi2False;
     *terminateSimulation = fmi2False;
     END_FUNCTION()
@@ -556,7 +493,7 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
     BEGIN_FUNCTION(SetContinuousStates)
     TRACE("fmi2SetContinuousStates(nx=%zu)", nx);
     if (nx > 0) {
-        ASSERT_NOT_NULL(SetContinuousStates, x);
+        ASSERT_NOT_NULL(x);
     }
     CHECKED(fmu_me_set_states(S, "fmi2SetContinuousStates", x, nx));
     END_FUNCTION()
@@ -567,7 +504,7 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
     BEGIN_FUNCTION(GetDerivatives)
     TRACE("fmi2GetDerivatives(nx=%zu)", nx);
     if (nx > 0) {
-        ASSERT_NOT_NULL(GetDerivatives, derivatives);
+        ASSERT_NOT_NULL(derivatives);
     }
     CHECKED(fmu_me_check_count(S, "fmi2GetDerivatives", nx));
     CALL(fmu_me_get_derivatives(S, derivatives, nx));
@@ -588,7 +525,7 @@ fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx)
     BEGIN_FUNCTION(GetContinuousStates)
     TRACE("fmi2GetContinuousStates(nx=%zu)", nx);
     if (nx > 0) {
-        ASSERT_NOT_NULL(GetContinuousStates, x);
+        ASSERT_NOT_NULL(x);
     }
     CHECKED(fmu_me_get_states(S, "fmi2GetContinuousStates", x, nx));
     END_FUNCTION()
@@ -599,7 +536,7 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal
     BEGIN_FUNCTION(GetNominalsOfContinuousStates)
     TRACE("fmi2GetNominalsOfContinuousStates(nx=%zu)", nx);
     if (nx > 0) {
-        ASSERT_NOT_NULL(GetNominalsOfContinuousStates, x_nominal);
+        ASSERT_NOT_NULL(x_nominal);
     }
     CHECKED(fmu_me_get_nominals(S, "fmi2GetNominalsOfContinuousStates", x_nominal, nx));
     END_FUNCTION()
@@ -641,7 +578,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 {
     BEGIN_FUNCTION(GetRealStatus)
     TRACE("fmi2GetRealStatus(s=%d)", (int)s);
-    ASSERT_NOT_NULL(GetRealStatus, value);
+    ASSERT_NOT_NULL(value);
     if (s != fmi2LastSuccessfulTime) {
         REFUSE("fmi2GetRealStatus: status kind %d not provided (only fmi2LastSuccessfulTime = %d)",
                (int)s, (int)fmi2LastSuccessfulTime);
@@ -663,7 +600,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 {
     BEGIN_FUNCTION(GetBooleanStatus)
     TRACE("fmi2GetBooleanStatus(s=%d)", (int)s);
-    ASSERT_NOT_NULL(GetBooleanStatus, value);
+    ASSERT_NOT_NULL(value);
     if (s != fmi2Terminated) {
         REFUSE("fmi2GetBooleanStatus: status kind %d not provided (only fmi2Terminated = %d)",
                (int)s, (int)fmi2Terminated);

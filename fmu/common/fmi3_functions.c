@@ -14,7 +14,7 @@
  * derivatives, output derivatives, per-element dependencies, fmi3EvaluateDiscreteStates, and
  * variables of any type other than Float64 and Boolean. Each refuses with fmi3Error and says so.
  */
-#include "fmu_internal.h" /* first: see fmu_model.h */
+#include "fmu_adapter.h" /* first: see fmu_model.h */
 #include "fmi3Functions.h"
 
 #include <math.h>
@@ -33,9 +33,6 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
  * is "not allowed in Model Exchange" (FMI 3.0, 2.3): ME_ONLY and CS_ONLY clear their masks for an
  * instance of the other interface type (evaluated in BEGIN_FUNCTION, where S is the instance).
  */
-
-#define ME_ONLY(MASK) FMU_ME_ONLY(S, MASK)
-#define CS_ONLY(MASK) FMU_CS_ONLY(S, MASK)
 
 #define MASK_ANY_INSTANCE                                                                     \
     (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE |  \
@@ -100,74 +97,12 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
 /* scheduled execution */
 #define MASK_fmi3ActivateModelPartition 0u
 
-/* ---- the adapter macros ---------------------------------------------------------------------- */
+/* ---- the adapter macros (fmu_adapter.h) ------------------------------------------------------ */
 
 /* MASK names the state mask; FN the function name in messages. */
-#define BEGIN_FUNCTION_MASK(MASK, FN)                                                         \
-    fmu_status status = FMU_OK;                                                               \
-    fmu_instance *S = (fmu_instance *)instance;                                               \
-    const char *const fn_ = (FN);                                                             \
-    if (S == NULL) {                                                                          \
-        return fmi3Error;                                                                     \
-    }                                                                                         \
-    if (!fmu_allowed_state(S, (MASK), fn_)) {                                                 \
-        status = FMU_ERROR;                                                                   \
-        goto END;                                                                             \
-    }
-
+#define BEGIN_FUNCTION_MASK(MASK, FN) FMU_BEGIN(instance, MASK, FN, fmi3Error)
 #define BEGIN_FUNCTION(F) BEGIN_FUNCTION_MASK(MASK_fmi3##F, "fmi3" #F)
-
-#define END_FUNCTION()                                                                        \
-    END:                                                                                      \
-    return (fmi3Status)status;
-
-/* Trace an accepted call with its arguments (category logCalls, off by default). */
-#define TRACE(...) fmu_log(S, FMU_OK, FMU_LOG_CALLS, __VA_ARGS__)
-
-/* Refuse the call (nothing changes) with an error message naming the function. */
-#define REFUSE(...)                                                                           \
-    do {                                                                                      \
-        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, __VA_ARGS__);                                    \
-        status = FMU_ERROR;                                                                   \
-        goto END;                                                                             \
-    } while (0)
-
-/* A pointer argument that must not be NULL. */
-#define ASSERT_NOT_NULL(p)                                                                    \
-    do {                                                                                      \
-        if ((p) == NULL) {                                                                    \
-            REFUSE("%s: argument " #p " must not be NULL", fn_);                              \
-        }                                                                                     \
-    } while (0)
-
-/* An instance-level operation that refuses on error: status, no state change. */
-#define CHECKED(x)                                                                            \
-    do {                                                                                      \
-        const fmu_status s_ = (x);                                                            \
-        if (s_ > status) {                                                                    \
-            status = s_;                                                                      \
-        }                                                                                     \
-        if (status > FMU_WARNING) {                                                           \
-            goto END;                                                                         \
-        }                                                                                     \
-    } while (0)
-
-/* A model hook: keep the worst status; Error and Fatal move the state machine. */
-#define CALL(x)                                                                               \
-    do {                                                                                      \
-        const fmu_status s_ = (x);                                                            \
-        if (s_ > status) {                                                                    \
-            status = s_;                                                                      \
-        }                                                                                     \
-        if (status == FMU_ERROR) {                                                            \
-            S->state = FMU_ERROR_STATE;                                                       \
-        } else if (status == FMU_FATAL) {                                                     \
-            S->state = FMU_FATAL_STATE;                                                       \
-        }                                                                                     \
-        if (status > FMU_WARNING) {                                                           \
-            goto END;                                                                         \
-        }                                                                                     \
-    } while (0)
+#define END_FUNCTION() FMU_END(fmi3Status)
 
 /* Every variable is a scalar: nValues must equal nValueReferences. */
 #define ASSERT_SCALARS(nvr, nValues)                                                          \
