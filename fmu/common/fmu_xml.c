@@ -150,6 +150,32 @@ static void write_dependencies(const fmu_model *m, const fmu_variable *u, int fm
     fprintf(f, "\"");
 }
 
+/* unit, start, nominal (continuous states) and derivative (state derivatives) of row v; the
+ * derivative names its state by 1-based index (FMI 2) or value reference (FMI 3). */
+static void write_value_attributes(const fmu_model *m, const fmu_variable *v, const void *data,
+                                   int fmi_version, FILE *f)
+{
+    if (v->unit != NULL) {
+        fprintf(f, " unit=\"%s\"", v->unit);
+    }
+    char buf[40];
+    start_text(v, data, buf, sizeof buf);
+    if (buf[0] != '\0') {
+        fprintf(f, " start=\"%s\"", buf);
+    }
+    const int xs = fmu_state_index(m, v->vr);
+    if (xs >= 0) {
+        fmt_real(buf, sizeof buf, m->states[xs].nominal);
+        fprintf(f, " nominal=\"%s\"", buf);
+    }
+    const int xd = fmu_derivative_index(m, v->vr);
+    if (xd >= 0) {
+        /* value references are the row indices: index = vr + 1 */
+        const unsigned state = (unsigned)m->states[xd].state;
+        fprintf(f, " derivative=\"%u\"", fmi_version == 3 ? state : state + 1u);
+    }
+}
+
 /* ---- FMI 2.0 -------------------------------------------------------------------------------- */
 
 static void write_sources2(fmu_sources src, FILE *f)
@@ -210,23 +236,7 @@ static void write_variables2(const fmu_model *m, const void *data, FILE *f)
         }
         fprintf(f, "\n      description=\"%s\">\n", v->description);
         fprintf(f, "      <%s", fmu_type_name(v->type));
-        if (v->unit != NULL) {
-            fprintf(f, " unit=\"%s\"", v->unit);
-        }
-        char buf[40];
-        start_text(v, data, buf, sizeof buf);
-        if (buf[0] != '\0') {
-            fprintf(f, " start=\"%s\"", buf);
-        }
-        const int xs = fmu_state_index(m, v->vr);
-        if (xs >= 0) {
-            fmt_real(buf, sizeof buf, m->states[xs].nominal);
-            fprintf(f, " nominal=\"%s\"", buf);
-        }
-        const int xd = fmu_derivative_index(m, v->vr);
-        if (xd >= 0) {
-            fprintf(f, " derivative=\"%u\"", (unsigned)m->states[xd].state + 1u);
-        }
+        write_value_attributes(m, v, data, 2, f);
         fprintf(f, "/>\n    </ScalarVariable>\n");
     }
     fprintf(f, "  </ModelVariables>\n");
@@ -300,23 +310,7 @@ static void write_variables3(const fmu_model *m, const void *data, FILE *f)
             fprintf(f, " initial=\"calculated\"");
         }
         fprintf(f, "\n      description=\"%s\"", v->description);
-        if (v->unit != NULL) {
-            fprintf(f, " unit=\"%s\"", v->unit);
-        }
-        char buf[40];
-        start_text(v, data, buf, sizeof buf);
-        if (buf[0] != '\0') {
-            fprintf(f, " start=\"%s\"", buf);
-        }
-        const int xs = fmu_state_index(m, v->vr);
-        if (xs >= 0) {
-            fmt_real(buf, sizeof buf, m->states[xs].nominal);
-            fprintf(f, " nominal=\"%s\"", buf);
-        }
-        const int xd = fmu_derivative_index(m, v->vr);
-        if (xd >= 0) {
-            fprintf(f, " derivative=\"%u\"", (unsigned)m->states[xd].state);
-        }
+        write_value_attributes(m, v, data, 3, f);
         fprintf(f, "/>\n");
     }
     fprintf(f, "  </ModelVariables>\n");
