@@ -39,6 +39,7 @@
 #include "fmi2FunctionTypes.h"
 #include "fmi3FunctionTypes.h"
 #include "rrr/rrr.h"
+#include "fmu_test_io.h"
 #include "rrr_test.h"
 
 #define H 1e-3          /* communication step, s */
@@ -46,29 +47,6 @@
 #define MAX_STATES 8    /* continuous states per FMU */
 
 /* ---- modelDescription.xml: just enough of a reader ------------------------------------------- */
-
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        return NULL;
-    }
-    char *buf = NULL;
-    if (fseek(f, 0, SEEK_END) == 0) {
-        const long n = ftell(f);
-        if (n > 0 && fseek(f, 0, SEEK_SET) == 0) {
-            buf = malloc((size_t)n + 1);
-            if (buf != NULL && fread(buf, 1, (size_t)n, f) == (size_t)n) {
-                buf[n] = '\0';
-            } else {
-                free(buf);
-                buf = NULL;
-            }
-        }
-    }
-    fclose(f);
-    return buf;
-}
 
 /* Value of attribute attr of the element that starts at elem ('<'); 0 when found. Walks the
  * attributes one by one (descriptions may hold '>', never '"'). */

@@ -38,6 +38,7 @@
 
 #include "fmi2FunctionTypes.h"
 #include "rrr/rrr.h"
+#include "fmu_test_io.h"
 #include "rrr_test.h"
 
 #define H 1e-3 /* communication step, s */
@@ -124,29 +125,6 @@ typedef struct fmu_api {
     fmi2ValueReference x_vr[MAX_STATES];
     fmi2ValueReference dx_vr[MAX_STATES];
 } fmu_api;
-
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        return NULL;
-    }
-    char *buf = NULL;
-    if (fseek(f, 0, SEEK_END) == 0) {
-        const long n = ftell(f);
-        if (n > 0 && fseek(f, 0, SEEK_SET) == 0) {
-            buf = malloc((size_t)n + 1);
-            if (buf != NULL && fread(buf, 1, (size_t)n, f) == (size_t)n) {
-                buf[n] = '\0';
-            } else {
-                free(buf);
-                buf = NULL;
-            }
-        }
-    }
-    fclose(f);
-    return buf;
-}
 
 /* Value of the first attribute `attr="..."` at or after from. */
 static int xml_attr(const char *from, const char *attr, char *out, size_t n)

@@ -43,6 +43,7 @@
 
 #include "fmi2FunctionTypes.h"
 #include "fmi3FunctionTypes.h"
+#include "../fmu_test_io.h"
 
 /* ---- platform: binaries/<folder>/<id><ext>, chosen at compile time --------------------------- */
 
@@ -156,30 +157,9 @@ static int lib_sym(lib_handle h, const char *name, void *dst, size_t size)
 
 static char *read_text(const char *path)
 {
-    FILE *f = fopen(path, "rb");
-    if (f == NULL) {
-        fprintf(stderr, "fmu_run: cannot open %s\n", path);
-        return NULL;
-    }
-    char *buf = NULL;
-    if (fseek(f, 0, SEEK_END) == 0) {
-        const long n = ftell(f);
-        if (n > 0 && fseek(f, 0, SEEK_SET) == 0) {
-            buf = malloc((size_t)n + 1);
-            if (buf != NULL && fread(buf, 1, (size_t)n, f) == (size_t)n) {
-                buf[n] = '\0';
-            } else {
-                free(buf);
-                buf = NULL;
-            }
-        }
-    }
-    fclose(f);
+    char *buf = read_file(path);
     if (buf == NULL) {
-        fprintf(stderr, "fmu_run: cannot read %s\n", path);
-    } else if (strlen(buf) == 0) {
-        free(buf);
-        buf = NULL;
+        fprintf(stderr, "fmu_run: cannot read %s (missing or empty)\n", path);
     }
     return buf;
 }
