@@ -3,7 +3,9 @@ FMPy loop ceiling measured in the same run, and where the time goes.
 
 The ceiling is the same FMI call sequence per communication step (controller set/get, plant
 set, two doSteps, plant get) on the same FMUs with no master work around it (no reference copy,
-no recording, no progress). The breakdown times each FMI call kind alone in a loop.
+no recording, no progress). The breakdown times each FMI call kind alone in a loop. The last
+table compares the FMI 3.0 FMUs with the FMI 2.0 ones under the same master, measured in
+alternating blocks (FMI 2, FMI 3, FMI 2, ...) on the same reference: min / median / max.
 
 Run:  python bench/bench_cosim.py [--repeats 3]
 """
@@ -73,6 +75,17 @@ def per_call(n: int, step: float) -> dict[str, float]:
     return out
 
 
+def fmi_versions(ref: object, step: float, blocks: int) -> tuple[list[float], list[float]]:
+    """Wall times of run_cosim with the FMI 2.0 and the FMI 3.0 FMUs, in alternating blocks."""
+    walls: dict[int, list[float]] = {2: [], 3: []}
+    for _ in range(blocks):
+        for version in (2, 3):
+            opts = CosimOptions(step=step, fmi_version=version)
+            res = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, opts)  # type: ignore[attr-defined]
+            walls[version].append(res.wall_time)
+    return walls[2], walls[3]
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="best of this many runs")
@@ -98,6 +111,15 @@ def main() -> int:
     print("|---|---|")
     for name, us in per_call(5000, step).items():
         print(f"| {name} | {us:.2f} |")
+    w2, w3 = fmi_versions(ref, step, max(3, args.repeats))
+    ratio = np.array(w3) / np.array(w2)
+    print(f"\n| FMUs (alternating blocks, {len(w2)} each) | real-time factor min / median / max |")
+    print("|---|---|")
+    for name, w in (("FMI 2.0", w2), ("FMI 3.0", w3)):
+        rtf = sim_time / np.array(w)
+        print(f"| {name} | {rtf.min():.1f}x / {np.median(rtf):.1f}x / {rtf.max():.1f}x |")
+    print(f"| wall time FMI 3.0 / FMI 2.0 | {ratio.min():.2f} / {np.median(ratio):.2f} / "
+          f"{ratio.max():.2f} |")
     return 0
 
 
