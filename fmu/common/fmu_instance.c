@@ -495,9 +495,19 @@ fmu_status fmu_check_step(fmu_instance *S, const char *fn, double t, double h)
                 fn, t, S->time, tol);
         return FMU_ERROR;
     }
-    if (S->stop_time_defined && t + h > S->stop_time + FMU_TIME_RTOL * fmax(1.0, S->stop_time)) {
+    const double end = t + h;
+    if (!isfinite(end) || !(end > S->time)) {
+        /* a communication point at the low end of the tolerance with a step shorter than the
+         * gap would move the clock backwards; an overflow would make it infinite */
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the step from %.17g over %.17g ends at %.17g, which is not a finite time "
+                "after the FMU time %.17g",
+                fn, t, h, end, S->time);
+        return FMU_ERROR;
+    }
+    if (S->stop_time_defined && end > S->stop_time + FMU_TIME_RTOL * fmax(1.0, S->stop_time)) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: the step to %.17g goes past stopTime %.17g", fn,
-                t + h, S->stop_time);
+                end, S->stop_time);
         return FMU_ERROR;
     }
     return FMU_OK;

@@ -1671,6 +1671,9 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
                      "doStep with eventHandlingNeeded NULL", "NULL", NULL);
         expect_error(&p, plant->DoStep(p.c, H, H, true, &b[0], &b[1], &b[2], NULL),
                      "doStep with lastSuccessfulTime NULL", "NULL", NULL);
+        /* a point at the low end of the tolerance with a shorter step would move time back */
+        expect_error(&p, do_step(&p, H * (1.0 - 5e-10), H * 1e-10, NULL), "doStep backwards",
+                     "not a finite time after the FMU time", NULL);
         CHECK(get1(&p, "time") == H);
         check_state(&p, ST_STEP, "after refused doStep arguments");
         CHECK(do_step(&p, H * (1.0 + 1e-12), H, &last) == fmi3OK); /* within tolerance */

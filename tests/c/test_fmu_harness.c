@@ -1213,7 +1213,13 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     CHECK(plant->DoStep(p.c, 0.5, H, fmi2True) == fmi2Error);
     CHECK(strstr(p.log.last_error, "currentCommunicationPoint") != NULL);
     CHECK(plant->DoStep(p.c, NAN, H, fmi2True) == fmi2Error);
+    /* a point at the low end of the tolerance with a shorter step would move time backwards */
+    CHECK(plant->DoStep(p.c, H * (1.0 - 5e-10), H * 1e-10, fmi2True) == fmi2Error);
+    CHECK(strstr(p.log.last_error, "not a finite time after the FMU time") != NULL);
     CHECK(plant->DoStep(p.c, H * (1.0 + 1e-12), H, fmi2True) == fmi2OK); /* within tolerance */
+    fmi2Real now = 0.0;
+    CHECK(plant->GetRealStatus(p.c, fmi2LastSuccessfulTime, &now) == fmi2OK);
+    CHECK(now == H * (1.0 + 1e-12) + H);
     CHECK(fingerprint(&p) == expected_fingerprint[ST_DONE]);
     inst_free(&p);
     inst_free(&c);
@@ -1255,6 +1261,26 @@ static void test_validation(const fmu_api *plant, const fmu_api *ctrl)
     expect_invalid(ctrl, "kp[2]", -1.0, "kp[2]");
     expect_invalid(ctrl, "kd[3]", -1.0, "kd[3]");
     expect_invalid(ctrl, "g", -9.81, "g");
+}
+
+/* The FMU time stays finite: a step whose end overflows is refused and changes nothing. */
+static void test_time_overflow(const fmu_api *plant)
+{
+    inst p;
+    if (inst_new(&p, plant, "overflow")) {
+        return;
+    }
+    const double t0 = 1.5e308;
+    CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, INFINITY, fmi2False, 0.0) == fmi2Error);
+    CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, t0, fmi2False, 0.0) == fmi2OK);
+    CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
+    CHECK(plant->ExitInitializationMode(p.c) == fmi2OK);
+    log_clear(&p);
+    CHECK(plant->DoStep(p.c, t0, t0, fmi2True) == fmi2Error);
+    CHECK(strstr(p.log.last_error, "not a finite time") != NULL);
+    fmi2Real now = 0.0;
+    CHECK(plant->GetRealStatus(p.c, fmi2LastSuccessfulTime, &now) == fmi2OK && now == t0);
+    inst_free(&p);
 }
 
 /* A step that cannot be taken (here 1e8 substeps) is discarded with a message naming the cause:
@@ -2175,6 +2201,7 @@ int main(int argc, char **argv)
     test_bad_values(&plant, &ctrl);
     test_validation(&plant, &ctrl);
     test_discard(&plant);
+    test_time_overflow(&plant);
     test_fmu_state(&plant, &ctrl);
     test_two_instances(&plant);
     test_logging(&plant);
