@@ -7,6 +7,7 @@
 #include <string.h>
 
 #define T controller_data
+#define RRR_MV_BASE vr_model
 
 #define JOINT_INPUTS(VR, N, WHAT, UNIT, M)                                                     \
     FMU_ROW((VR) + 0, FMU_REAL, FMU_INPUT, FMU_CONTINUOUS, N "[1]", WHAT " of joint 1", UNIT, T, \
@@ -43,7 +44,7 @@ static const fmu_variable controller_vars[] = {
     FMU_ROW(vr_feedforward, FMU_BOOLEAN, FMU_PARAMETER, FMU_FIXED, "feedforward",
             "add the model feedforward u_n (computed-torque); false: PD only", NULL, T,
             gains.feedforward),
-    RRR_MODEL_VARS(T, model, vr_model),
+    RRR_MODEL_VARS
     FMU_TIME_ROW(vr_time),
 };
 

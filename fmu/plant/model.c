@@ -7,6 +7,7 @@
 #include <string.h>
 
 #define T plant_data
+#define RRR_MV_BASE vr_model
 
 #define INPUT(VR, NAME, JOINT, MEMBER)                                                         \
     FMU_ROW(VR, FMU_REAL, FMU_INPUT, FMU_CONTINUOUS, NAME,                                     \
@@ -33,7 +34,7 @@ static const fmu_variable plant_vars[] = {
     OUTPUT(vr_tip + 0, "tip.x", "tip position x in the base frame", "m", tip[0]),
     OUTPUT(vr_tip + 1, "tip.y", "tip position y in the base frame", "m", tip[1]),
     OUTPUT(vr_tip + 2, "tip.z", "tip position z in the base frame (z0 up)", "m", tip[2]),
-    RRR_MODEL_VARS(T, model, vr_model),
+    RRR_MODEL_VARS
     JOINT_PARAMS(vr_q0, "q0", "initial position", "rad", q0),
     JOINT_PARAMS(vr_qd0, "qd0", "initial velocity", "rad/s", qd0),
     FMU_PARAM(vr_h_int, "h_int",

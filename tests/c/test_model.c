@@ -144,11 +144,55 @@ static void test_validate(void)
     CHECK(strcmp(rrr_status_str((rrr_status)99), "RRR_UNKNOWN_STATUS") == 0);
 }
 
+/* The parameter table: one row per scalar of rrr_model, in the struct's order (the FMUs derive
+ * their value references from it), names and ranges that lookup, get/set and validation share. */
+static void test_param_table(void)
+{
+    size_t n = 0;
+    const rrr_param_info *t = rrr_param_table(&n);
+    CHECK(n == RRR_N_PARAMS && sizeof(rrr_model) == RRR_N_PARAMS * sizeof(double));
+    for (size_t i = 0; i < n; ++i) {
+        CHECK(t[i].offset == i * sizeof(double));
+        CHECK(rrr_param_index(t[i].name) == (int)i);
+        CHECK(strlen(t[i].description) > 10 && strlen(t[i].unit) > 0);
+    }
+    CHECK(strcmp(t[0].name, "d1") == 0 && strcmp(t[6].name, "p[1]") == 0);
+    CHECK(strcmp(t[21].name, "p[16]") == 0 && strcmp(t[22].name, "kt[1]") == 0);
+    CHECK(strcmp(t[25].name, "f[1,1]") == 0 && strcmp(t[33].name, "f[3,3]") == 0);
+    CHECK(strcmp(t[34].name, "w[1,1]") == 0 && strcmp(t[43].name, "b[1]") == 0);
+    CHECK(strcmp(t[46].name, "u_max") == 0);
+    CHECK(rrr_param_index("p[17]") == -1 && rrr_param_index("p") == -1);
+    CHECK(rrr_param_index(NULL) == -1 && rrr_param_index("") == -1);
+
+    rrr_model m;
+    CHECK(rrr_model_default(&m) == RRR_OK);
+    const int f23 = rrr_param_index("f[2,3]");
+    CHECK(f23 >= 0 && rrr_param_get(&m, (size_t)f23) == m.f[1][2]);
+    CHECK(rrr_param_set(&m, (size_t)f23, 0.125) == RRR_OK && m.f[1][2] == 0.125);
+    CHECK(rrr_param_set(&m, (size_t)f23, NAN) == RRR_BAD_INPUT && m.f[1][2] == 0.125);
+    CHECK(rrr_param_set(&m, n, 1.0) == RRR_BAD_INPUT && rrr_param_set(NULL, 0, 1.0) == RRR_BAD_INPUT);
+    CHECK(isnan(rrr_param_get(&m, n)) && isnan(rrr_param_get(NULL, 0)));
+
+    const int a2 = rrr_param_index("a2"), g = rrr_param_index("g"), d1 = rrr_param_index("d1");
+    CHECK(!rrr_param_in_range((size_t)a2, 0.0) && rrr_param_in_range((size_t)a2, 1e-9));
+    CHECK(rrr_param_in_range((size_t)g, 0.0) && !rrr_param_in_range((size_t)g, -1e-9));
+    CHECK(rrr_param_in_range((size_t)d1, -5.0) && !rrr_param_in_range((size_t)d1, INFINITY));
+    /* validation names the row, for every row */
+    for (size_t i = 0; i < n; ++i) {
+        rrr_model bad = m;
+        const char *field = NULL;
+        memcpy((char *)&bad + t[i].offset, &(double){NAN}, sizeof(double));
+        CHECK(rrr_model_validate(&bad, &field) == RRR_BAD_MODEL);
+        CHECK(field != NULL && strcmp(field, t[i].name) == 0);
+    }
+}
+
 int main(void)
 {
     test_default();
     test_bps_point_mass();
     test_bps_bad();
     test_validate();
+    test_param_table();
     return rrr_test_report("test_model");
 }

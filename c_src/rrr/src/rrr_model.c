@@ -168,18 +168,6 @@ rrr_status rrr_bps_from_inertia(const rrr_model *m, const rrr_inertial *in, doub
     return RRR_OK;
 }
 
-/* Names of model fields, for the validation report (static strings: reentrant). Arrays of
- * characters, not of pointers, so that they live in read-only data without relocations. */
-static const char kt_names[RRR_NJ][8] = {"kt[1]", "kt[2]", "kt[3]"};
-static const char b_names[RRR_NJ][8] = {"b[1]", "b[2]", "b[3]"};
-static const char f_names[RRR_NJ][RRR_NF][8] = {
-    {"f[1,1]", "f[1,2]", "f[1,3]"}, {"f[2,1]", "f[2,2]", "f[2,3]"}, {"f[3,1]", "f[3,2]", "f[3,3]"}};
-static const char w_names[RRR_NJ][RRR_NF][8] = {
-    {"w[1,1]", "w[1,2]", "w[1,3]"}, {"w[2,1]", "w[2,2]", "w[2,3]"}, {"w[3,1]", "w[3,2]", "w[3,3]"}};
-static const char p_names[RRR_NP][8] = {"p[1]",  "p[2]",  "p[3]",  "p[4]",  "p[5]",  "p[6]",
-                                            "p[7]",  "p[8]",  "p[9]",  "p[10]", "p[11]", "p[12]",
-                                            "p[13]", "p[14]", "p[15]", "p[16]"};
-
 static rrr_status fail(const char **field, const char *name, rrr_status st)
 {
     if (field != NULL) {
@@ -276,42 +264,11 @@ rrr_status rrr_model_validate(const rrr_model *m, const char **field)
     if (m == NULL) {
         return fail(field, "model", RRR_BAD_INPUT);
     }
-    const struct {
-        const char *name;
-        double v;
-        double lo; /* value must be > lo (strict) or >= lo; see strict */
-        int strict;
-    } scalars[] = {
-        {"d1", m->d1, -INFINITY, 0}, {"a2", m->a2, 0.0, 1}, {"a3", m->a3, 0.0, 1},
-        {"d2", m->d2, -INFINITY, 0}, {"d3", m->d3, -INFINITY, 0}, {"g", m->g, 0.0, 0},
-        {"u_max", m->u_max, 0.0, 1},
-    };
-    for (size_t i = 0; i < sizeof scalars / sizeof scalars[0]; ++i) {
-        const double v = scalars[i].v;
-        const int ok = isfinite(v) && (scalars[i].strict ? v > scalars[i].lo : v >= scalars[i].lo);
-        if (!ok) {
-            return fail(field, scalars[i].name, RRR_BAD_MODEL);
-        }
-    }
-    for (int i = 0; i < RRR_NP; ++i) {
-        if (!isfinite(m->p[i])) {
-            return fail(field, p_names[i], RRR_BAD_MODEL);
-        }
-    }
-    for (int i = 0; i < RRR_NJ; ++i) {
-        if (!(isfinite(m->kt[i]) && m->kt[i] > 0.0)) {
-            return fail(field, kt_names[i], RRR_BAD_MODEL);
-        }
-        if (!(isfinite(m->b[i]) && m->b[i] >= 0.0)) {
-            return fail(field, b_names[i], RRR_BAD_MODEL);
-        }
-        for (int k = 0; k < RRR_NF; ++k) {
-            if (!isfinite(m->f[i][k])) {
-                return fail(field, f_names[i][k], RRR_BAD_MODEL);
-            }
-            if (!(isfinite(m->w[i][k]) && m->w[i][k] >= 0.0)) {
-                return fail(field, w_names[i][k], RRR_BAD_MODEL);
-            }
+    size_t n = 0;
+    const rrr_param_info *table = rrr_param_table(&n);
+    for (size_t i = 0; i < n; ++i) {
+        if (!rrr_param_in_range(i, rrr_param_get(m, i))) {
+            return fail(field, table[i].name, RRR_BAD_MODEL);
         }
     }
     if (!mass_matrix_pd_everywhere(m)) {

@@ -6,6 +6,7 @@
 #define RRR_H
 #include "rrr_status.h"
 #include "rrr_model.h"
+#include "rrr_params.h"
 #include "rrr_kinematics.h"
 #include "rrr_dynamics.h"
 #include "rrr_actuator.h"

@@ -78,7 +78,8 @@ RRR_API rrr_status rrr_inertial_default(rrr_inertial *in);
 /**
  * @brief Check a model for use.
  *
- * Rejects non-finite values, a2 <= 0, a3 <= 0, g < 0, k_t <= 0, u_max <= 0, b < 0, w < 0, and a
+ * Rejects a value outside its range in the parameter table (rrr_params.h: non-finite values,
+ * a2 <= 0, a3 <= 0, g < 0, k_t <= 0, u_max <= 0, b < 0, w < 0; the first such row is named), and a
  * base parameter vector whose inertia matrix D(q) is not positive definite somewhere: D does
  * not depend on q1, and its smallest Cholesky pivot is checked on a 64 x 64 grid of (q2, q3)
  * and minimised by a pattern search from every grid point lower than its neighbours (so a dip
