@@ -20,9 +20,9 @@ from collections.abc import Callable
 
 import numpy as np
 import rrr_robot as rr
-from rrr_robot.cosim import CTRL_IN, CTRL_OUT, PLANT_IN, PLANT_OUT, CosimOptions, run_cosim
-from rrr_robot.fmu_slave import FmuSlave
-from rrr_robot.trajectory import make_reference
+from rrr_robot.sim.cosim import CTRL_IN, CTRL_OUT, PLANT_IN, PLANT_OUT, CosimOptions, run_cosim
+from rrr_robot.sim.fmu_slave import FmuSlave
+from rrr_robot.writing.trajectory import make_reference
 
 
 def bare_loop(n: int, step: float, q0: np.ndarray) -> float:

@@ -24,8 +24,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from rrr_robot import hil
-from rrr_robot.writing import WritingJob, prepare
+from rrr_robot.hil.nodes import export_reference, start_controller, start_plant
+from rrr_robot.writing.job import WritingJob, prepare
 
 
 def reference(duration: float) -> tuple[np.ndarray, ...]:
@@ -50,11 +50,11 @@ def main() -> int:
     rt = ["--realtime"] + (["--fifo", str(args.fifo)] if args.fifo else []) + \
         (["--mlock"] if args.mlock else [])
     with tempfile.TemporaryDirectory(prefix="rrr_hil_rt_") as tmp:
-        ref_csv = hil.export_reference(t, q, qd, qdd, Path(tmp) / "reference.csv")
-        with hil.start_plant(q0=q[0], qd0=qd[0],
-                             extra=[*rt, "--duration", f"{args.duration + 5:.3f}"]) as plant, \
-                hil.start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
-                                     extra=rt) as ctrl:
+        ref_csv = export_reference(t, q, qd, qdd, Path(tmp) / "reference.csv")
+        with start_plant(q0=q[0], qd0=qd[0],
+                         extra=[*rt, "--duration", f"{args.duration + 5:.3f}"]) as plant, \
+                start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
+                                 extra=rt) as ctrl:
             cs = ctrl.wait(args.duration + 60)
             ps = plant.wait(args.duration + 60)
     print(f"CAN bench, real-time mode, {args.duration:.0f} s at 1 kHz (socketcand over TCP "

@@ -15,11 +15,11 @@ import time
 from pathlib import Path
 
 import numpy as np
+from rrr_robot.core.model import Model
 from rrr_robot.identify import experiments as ex
 from rrr_robot.identify.base_params import estimate_base_params
 from rrr_robot.identify.excitation import design_excitation
 from rrr_robot.identify.logs import read_log
-from rrr_robot.model import Model
 
 
 def main() -> int:

@@ -130,8 +130,8 @@ def default_inertial(lib: ct.CDLL, raw_type: type[ct.Structure]) -> Any:
 def python_side(args: argparse.Namespace) -> PyResults:
     import roboticstoolbox as rtb
     import rrr_robot as rr
-    from rrr_robot import _lib
-    from rrr_robot._arrays import ptr
+    from rrr_robot.core import _lib
+    from rrr_robot.core._arrays import ptr
 
     res = PyResults()
     model = rr.Model.default()

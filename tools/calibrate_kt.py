@@ -18,8 +18,8 @@ import math
 
 import numpy as np
 import rrr_robot as rr
-from rrr_robot.trajectory import make_reference
-from rrr_robot.writing import PAPER_RMS_U_N
+from rrr_robot.writing.job import PAPER_RMS_U_N
+from rrr_robot.writing.trajectory import make_reference
 from scipy.optimize import brentq
 
 

@@ -2,10 +2,16 @@
 
 The model is computed by the C core librrr; this package binds it, builds and runs the FMUs,
 and provides the writing task, identification, HIL bench and the ``rrr`` command line.
+
+Subpackages, each importing only from those below it: ``cli`` (the ``rrr`` command line) above
+``hil`` (CAN bench) and ``identify`` (identification), above ``writing`` (the writing task), above
+``sim`` (FMUs and co-simulation), above ``core`` (the binding of librrr and the model);
+``errors`` (the exceptions) is below them all.
 """
 
 from __future__ import annotations
 
+from .core.model import CtcOutput, Model, Singularity, bps_from_inertia
 from .errors import (
     BadInputError,
     CosimError,
@@ -15,8 +21,7 @@ from .errors import (
     SingularError,
     UnreachableError,
 )
-from .fmus import fmu_path
-from .model import CtcOutput, Model, Singularity, bps_from_inertia
+from .sim.fmus import fmu_path
 
 __version__ = "0.1.0"
 

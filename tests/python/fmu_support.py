@@ -19,7 +19,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.model_description import ModelDescription
-from rrr_robot._fmi_log import fmi2_callbacks
+from rrr_robot.sim._fmi_log import fmi2_callbacks
 
 FMU_NAMES = ("plant", "controller")
 REPO_ROOT = Path(__file__).resolve().parents[2]
@@ -39,8 +39,8 @@ def fmu_file(which: str) -> Path:
 
 # ---- log capture ------------------------------------------------------------------------------
 # FMPy's addLoggerProxy (which formats the printf-style message) keeps ONE Python logger per
-# process: rrr_robot._fmi_log owns it (a permanent dispatcher) and routes each instance's messages
-# to its receiver, here the list of the slave's (unique) instance name.
+# process: rrr_robot.sim._fmi_log owns it (a permanent dispatcher) and routes each instance's
+# messages to its receiver, here the list of the slave's (unique) instance name.
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import rrr_robot as rr
-from rrr_robot.model import DEFAULT_ROBOT_TOML
+from rrr_robot.core.model import DEFAULT_ROBOT_TOML
 
 
 def test_toml_equals_c_defaults() -> None:

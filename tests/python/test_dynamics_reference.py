@@ -21,8 +21,8 @@ import numpy.typing as npt
 import pinocchio as pin
 import pytest
 import rrr_robot as rr
-from rrr_robot.references import Inertial
-from rrr_robot.references import pinocchio_model as pinocchio_model_of
+from rrr_robot.writing.references import Inertial
+from rrr_robot.writing.references import pinocchio_model as pinocchio_model_of
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -25,8 +25,8 @@ import pytest
 import rrr_robot as rr
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
-from rrr_robot.fmu_slave import FmuSlave
-from rrr_robot.fmus import variants
+from rrr_robot.sim.fmu_slave import FmuSlave
+from rrr_robot.sim.fmus import variants
 
 VERSIONS = (2, 3)
 NAMES = ("plant", "controller")
@@ -112,7 +112,7 @@ def test_fmi3_cosimulation_equals_fmi2_bit_for_bit() -> None:
 
 
 def test_writing_task_fmi3_equals_fmi2(tmp_path: Path) -> None:
-    from rrr_robot.writing import WritingJob, run_writing
+    from rrr_robot.writing.job import WritingJob, run_writing
 
     out = {}
     for version in VERSIONS:

@@ -16,9 +16,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rrr_robot import hil
-from rrr_robot.cosim import CosimOptions, run_cosim
-from rrr_robot.writing import WritingJob, controller_fmu_values, model_fmu_values, prepare
+from rrr_robot.core.param_names import model_fmu_values
+from rrr_robot.hil.bench import BenchRun, quantised_cosim, run_c_bench, run_fmu_controller
+from rrr_robot.hil.nodes import controller_node_args, open_bus, start_plant
+from rrr_robot.hil.protocol import HilError
+from rrr_robot.sim.cosim import CosimOptions, run_cosim
+from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
 
 
 @pytest.fixture(scope="module")
@@ -29,18 +32,18 @@ def writing(tmp_path_factory: pytest.TempPathFactory):
 
 
 @pytest.fixture(scope="module")
-def c_bench(writing, tmp_path_factory: pytest.TempPathFactory) -> hil.BenchRun:
+def c_bench(writing, tmp_path_factory: pytest.TempPathFactory) -> BenchRun:
     ref = writing[3]
-    return hil.run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=tmp_path_factory.mktemp("b"))
+    return run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=tmp_path_factory.mktemp("b"))
 
 
-def test_c_bench_equals_quantised_fmpy_loop(writing, c_bench: hil.BenchRun) -> None:
+def test_c_bench_equals_quantised_fmpy_loop(writing, c_bench: BenchRun) -> None:
     ref = writing[3]
     assert c_bench.q.shape == ref.q.shape
     assert c_bench.plant_summary["faults"] == 0 and c_bench.plant_summary["fault_events"] == 0
     assert c_bench.plant_summary["periods"] == ref.t.size - 1
     assert c_bench.controller_summary["states"] == ref.t.size
-    qc = hil.quantised_cosim(ref.t, ref.q, ref.qd, ref.qdd)
+    qc = quantised_cosim(ref.t, ref.q, ref.qd, ref.qdd)
     assert np.abs(c_bench.q - qc.q).max() < 1e-9
     assert np.abs(c_bench.qd - qc.qd).max() < 1e-9
     assert np.abs(c_bench.u - qc.u).max() < 1e-9
@@ -70,15 +73,15 @@ def test_python_can_controller_fmu_against_c_plant(writing, tmp_path: Path) -> N
     ref = writing[3]
     n = 1500
     t, q, qd, qdd = ref.t[:n], ref.q[:n], ref.qd[:n], ref.qdd[:n]
-    with hil.start_plant(q0=q[0], qd0=qd[0], log_csv=tmp_path / "plant.csv") as plant:
-        with hil.open_bus("socketcand", port=plant.port) as bus:
-            run = hil.run_fmu_controller(bus, t, q, qd, qdd)
+    with start_plant(q0=q[0], qd0=qd[0], log_csv=tmp_path / "plant.csv") as plant:
+        with open_bus("socketcand", port=plant.port) as bus:
+            run = run_fmu_controller(bus, t, q, qd, qdd)
         summary = plant.wait(60)
     assert summary["exit"] == 0 and summary["faults"] == 0 and summary["periods"] == n - 1
     assert summary["rx_bad_crc"] == 0 and summary["rx_malformed"] == 0
     assert run.controller_summary["rejected"] == {}
     log = np.loadtxt(tmp_path / "plant.csv", delimiter=",", skiprows=1)
-    qc = hil.quantised_cosim(t, q, qd, qdd)
+    qc = quantised_cosim(t, q, qd, qdd)
     assert np.abs(log[:, 2:5] - qc.q).max() < 1e-9
     # what the controller received is the plant state quantised by the DBC
     assert np.abs(run.q - qc.q).max() <= 0.5e-6 + 1e-12
@@ -88,15 +91,15 @@ def test_c_controller_takes_a_scenario_model(writing, tmp_path: Path) -> None:
     """The mismatch scenario on the bench: the C controller node runs with the perturbed model
     and PD gains of the scenario (--set, --kp, --kd), and again equals the quantised FMPy loop
     with the same controller FMU values."""
-    from rrr_robot.scenarios import load_scenario
+    from rrr_robot.writing.scenarios import load_scenario
 
     model, tables, _, ref = writing
     values = controller_fmu_values(load_scenario("mismatch"), model, tables["control"])
     n = 1500
     t, q, qd, qdd = ref.t[:n], ref.q[:n], ref.qd[:n], ref.qdd[:n]
-    bench = hil.run_c_bench(t, q, qd, qdd, workdir=tmp_path, controller_values=values)
-    qc = hil.quantised_cosim(t, q, qd, qdd, controller_values=values)
-    exact = hil.quantised_cosim(t, q, qd, qdd)
+    bench = run_c_bench(t, q, qd, qdd, workdir=tmp_path, controller_values=values)
+    qc = quantised_cosim(t, q, qd, qdd, controller_values=values)
+    exact = quantised_cosim(t, q, qd, qdd)
     assert np.abs(bench.q - qc.q).max() < 1e-9
     assert np.abs(bench.u - qc.u).max() < 1e-9
     assert np.abs(bench.u - exact.u).max() > 1e-3  # the perturbed model does change u
@@ -104,8 +107,8 @@ def test_c_controller_takes_a_scenario_model(writing, tmp_path: Path) -> None:
 
 def test_controller_node_rejects_bad_model_values(writing, tmp_path: Path) -> None:
     ref = writing[3]
-    with pytest.raises(hil.HilError, match=r"parameter kt\[2\]"):
-        hil.run_c_bench(ref.t[:10], ref.q[:10], ref.qd[:10], ref.qdd[:10], workdir=tmp_path,
-                        controller_values={"kt[2]": -1.0})
+    with pytest.raises(HilError, match=r"parameter kt\[2\]"):
+        run_c_bench(ref.t[:10], ref.q[:10], ref.qd[:10], ref.qdd[:10], workdir=tmp_path,
+                    controller_values={"kt[2]": -1.0})
     with pytest.raises(ValueError, match="give all three"):
-        hil.controller_node_args({"kp[1]": 1.0})
+        controller_node_args({"kp[1]": 1.0})

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import can
 import pytest
-from rrr_robot import hil
+from rrr_robot.hil.protocol import DBC_PATH, FrameError, database, decode, encode
 
 REPO = Path(__file__).resolve().parents[2]
 GEN = REPO / "c_src" / "hil" / "gen"
@@ -22,17 +22,17 @@ def _strip_timestamp(text: str) -> list[str]:
 
 def test_generated_c_code_is_up_to_date(tmp_path: Path) -> None:
     subprocess.run([sys.executable, "-m", "cantools", "generate_c_source", "--use-round",
-                    "-o", str(tmp_path), str(hil.DBC_PATH)], check=True, capture_output=True)
+                    "-o", str(tmp_path), str(DBC_PATH)], check=True, capture_output=True)
     for name in ("rrr_bench.c", "rrr_bench.h"):
         fresh = _strip_timestamp((tmp_path / name).read_text())
         committed = _strip_timestamp((GEN / name).read_text())
         assert fresh == committed, (
-            f"c_src/hil/gen/{name} is not what cantools generates from {hil.DBC_PATH.name}: "
+            f"c_src/hil/gen/{name} is not what cantools generates from {DBC_PATH.name}: "
             "run 'cmake --build <build> --target rrr_hil_regen_codec'")
 
 
 def test_dbc_is_shipped_and_complete() -> None:
-    db = hil.database()
+    db = database()
     names = {m.name for m in db.messages}
     assert names == {"Sync", "VoltageCmd", "JointState1", "JointState2", "JointState3",
                      "PlantStatus", "HeartbeatCtrl", "HeartbeatPlant"}
@@ -50,26 +50,26 @@ def test_e2e_crc_matches_the_c_vector() -> None:
 
 
 def test_roundtrip_and_rejects() -> None:
-    msg = hil.encode("VoltageCmd", {"AliveCounter": 7, "Enable": 1, "ResetFault": 0,
-                                    "U1": 1.2344, "U2": -9.9996, "U3": 0.0})
-    name, sig = hil.decode(msg)
+    msg = encode("VoltageCmd", {"AliveCounter": 7, "Enable": 1, "ResetFault": 0,
+                                "U1": 1.2344, "U2": -9.9996, "U3": 0.0})
+    name, sig = decode(msg)
     assert name == "VoltageCmd" and sig["AliveCounter"] == 7
     assert sig["U1"] == pytest.approx(1.234, abs=1e-12) and sig["U2"] == pytest.approx(-10.0)
     bad = can.Message(arbitration_id=msg.arbitration_id, data=bytes(msg.data), is_extended_id=False)
     bad.data[3] ^= 0x10
-    with pytest.raises(hil.FrameError) as exc:
-        hil.decode(bad)
+    with pytest.raises(FrameError) as exc:
+        decode(bad)
     assert exc.value.reason == "E2E CRC mismatch"
-    with pytest.raises(hil.FrameError, match="7 bytes"):
-        hil.decode(can.Message(arbitration_id=0x100, data=bytes(7), is_extended_id=False))
-    with pytest.raises(hil.FrameError) as exc:
-        hil.decode(can.Message(arbitration_id=0x123, data=bytes(8), is_extended_id=False))
+    with pytest.raises(FrameError, match="7 bytes"):
+        decode(can.Message(arbitration_id=0x100, data=bytes(7), is_extended_id=False))
+    with pytest.raises(FrameError) as exc:
+        decode(can.Message(arbitration_id=0x123, data=bytes(8), is_extended_id=False))
     assert exc.value.reason == "unknown id"
-    with pytest.raises(hil.FrameError):
-        hil.decode(hil.encode("VoltageCmd", {"AliveCounter": 0, "Enable": 1, "ResetFault": 0,
-                                             "U1": 1, "U2": 0, "U3": 0}, corrupt_crc=True))
+    with pytest.raises(FrameError):
+        decode(encode("VoltageCmd", {"AliveCounter": 0, "Enable": 1, "ResetFault": 0,
+                                     "U1": 1, "U2": 0, "U3": 0}, corrupt_crc=True))
     import cantools
 
     with pytest.raises(cantools.database.EncodeError):  # strict: saturate before encoding
-        hil.encode("VoltageCmd", {"AliveCounter": 0, "Enable": 1, "ResetFault": 0,
-                                  "U1": 30.5, "U2": 0, "U3": 0})
+        encode("VoltageCmd", {"AliveCounter": 0, "Enable": 1, "ResetFault": 0,
+                              "U1": 30.5, "U2": 0, "U3": 0})

@@ -16,11 +16,20 @@ from typing import Any
 import can
 import numpy as np
 import pytest
-from rrr_robot import hil
+from rrr_robot.hil.nodes import open_bus, start_plant
+from rrr_robot.hil.protocol import (
+    DATA_IDS,
+    FAULT_BITS,
+    NMT_OPERATIONAL,
+    NMT_STOPPED,
+    database,
+    decode,
+    encode,
+)
 
 Q0 = (0.2, 0.8, -1.2)
 U = (1.0, -0.5, 0.25)
-F = hil.FAULT_BITS
+F = FAULT_BITS
 
 
 class Rig:
@@ -28,37 +37,37 @@ class Rig:
 
     def __init__(self, tmp_path: Path, extra: tuple[str, ...] = ()) -> None:
         self.log_path = tmp_path / "plant.csv"
-        self.plant = hil.start_plant(q0=Q0, log_csv=self.log_path, extra=extra)
-        self.bus = hil.open_bus("socketcand", port=self.plant.port)
+        self.plant = start_plant(q0=Q0, log_csv=self.log_path, extra=extra)
+        self.bus = open_bus("socketcand", port=self.plant.port)
         self.k = 0
-        self.bus.send(hil.encode("HeartbeatCtrl", {"NmtState": hil.NMT_OPERATIONAL, "Counter": 0}))
+        self.bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_OPERATIONAL, "Counter": 0}))
         self.status = self.read_status(0)
 
     def read_status(self, k: int) -> dict[str, float]:
         while True:
             msg = self.bus.recv(timeout=5.0)
             assert msg is not None, f"no PlantStatus for period {k}"
-            name, sig = hil.decode(msg)
+            name, sig = decode(msg)
             if name == "PlantStatus" and sig["AliveCounter"] == k & 15:
                 return sig
 
     def cmd(self, u: tuple[float, ...] = U, counter: int | None = None, **kw: Any) -> can.Message:
         sig = {"AliveCounter": self.k & 15 if counter is None else counter, "Enable": 1,
                "ResetFault": 0, **{f"U{i + 1}": v for i, v in enumerate(u)}}
-        return hil.encode("VoltageCmd", sig | {k: v for k, v in kw.items() if k != "corrupt_crc"},
-                          corrupt_crc=kw.get("corrupt_crc", False))
+        return encode("VoltageCmd", sig | {k: v for k, v in kw.items() if k != "corrupt_crc"},
+                      corrupt_crc=kw.get("corrupt_crc", False))
 
     def period(self, *frames: can.Message) -> dict[str, float]:
         """Send frames (default: a valid command), then Sync(k); the status after period k."""
         for f in frames or (self.cmd(),):
             self.bus.send(f)
-        self.bus.send(hil.encode("Sync", {"Cycle": self.k}))
+        self.bus.send(encode("Sync", {"Cycle": self.k}))
         self.k += 1
         self.status = self.read_status(self.k)
         return self.status
 
     def finish(self) -> tuple[dict[str, Any], np.ndarray]:
-        self.bus.send(hil.encode("HeartbeatCtrl", {"NmtState": hil.NMT_STOPPED, "Counter": 1}))
+        self.bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
         self.bus.shutdown()
         summary = self.plant.wait(30)
         return summary, np.loadtxt(self.log_path, delimiter=",", skiprows=1, ndmin=2)
@@ -79,7 +88,7 @@ def applied(log: np.ndarray, k: int) -> np.ndarray:
 def test_normal_run_and_one_dropped_frame(rig: Rig) -> None:
     for _ in range(5):
         assert rig.period()["Faults"] == 0
-    st = rig.period(hil.encode("HeartbeatCtrl", {"NmtState": 5, "Counter": 2}))  # no command
+    st = rig.period(encode("HeartbeatCtrl", {"NmtState": 5, "Counter": 2}))  # no command
     assert st["Faults"] == 0 and st["ZeroVoltage"] == 0 and st["CmdMissed"] == 1
     st = rig.period()  # counter jumps by 2: accepted
     assert st["Faults"] == 0
@@ -92,7 +101,7 @@ def test_normal_run_and_one_dropped_frame(rig: Rig) -> None:
 def test_silent_controller_zero_volts_within_three_periods(rig: Rig) -> None:
     for _ in range(3):
         rig.period()
-    sync_only = hil.encode("HeartbeatCtrl", {"NmtState": 5, "Counter": 3})
+    sync_only = encode("HeartbeatCtrl", {"NmtState": 5, "Counter": 3})
     statuses = [rig.period(sync_only) for _ in range(6)]
     assert [s["ZeroVoltage"] for s in statuses] == [0, 0, 1, 1, 1, 1]
     assert all(s["Faults"] == F["timeout"] for s in statuses[2:])
@@ -116,13 +125,13 @@ def test_bad_command_latches_at_once(rig: Rig, fault: str) -> None:
     elif fault == "counter":
         bad = rig.cmd(counter=(rig.k - 1) & 15)  # repeated
     elif fault == "range":
-        msg = hil.database().get_message_by_name("VoltageCmd")
+        msg = database().get_message_by_name("VoltageCmd")
         data = bytearray(msg.encode({"Crc": 0, "AliveCounter": rig.k & 15, "Enable": 1,
                                      "ResetFault": 0, "U1": 31.0, "U2": 0, "U3": 0},
                                     strict=False))
         from cantools.autosar.end_to_end import compute_profile2_crc
 
-        data[0] = compute_profile2_crc(bytes(data), hil.DATA_IDS["VoltageCmd"])
+        data[0] = compute_profile2_crc(bytes(data), DATA_IDS["VoltageCmd"])
         bad = can.Message(arbitration_id=0x100, data=data, is_extended_id=False)
     else:
         good = rig.cmd()
@@ -150,7 +159,7 @@ def test_unknown_ids_and_extended_frames_are_counted_not_faults(rig: Rig) -> Non
 
 
 def test_malformed_socketcand_input_and_disconnect(tmp_path: Path) -> None:
-    with hil.start_plant(q0=Q0) as plant:
+    with start_plant(q0=Q0) as plant:
         s = socket.create_connection(("127.0.0.1", plant.port), timeout=5)
         assert s.recv(64) == b"< hi >"
         s.sendall(b"< open wrongbus >")
@@ -181,4 +190,4 @@ def test_socketcan_interface_fails_clearly_where_it_cannot_open() -> None:
     except (AttributeError, OSError):
         pass
     with pytest.raises((OSError, can.CanError)):
-        hil.open_bus("socketcan", channel=channel)
+        open_bus("socketcan", channel=channel)

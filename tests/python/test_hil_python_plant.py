@@ -1,4 +1,4 @@
-"""The plant side of the CAN bench from Python (rrr_robot.hil_plant) against the C controller node.
+"""The plant side of the CAN bench from Python (rrr_robot.hil.plant) against the C controller node.
 
 - The C controller (--listen, socketcand server) and the Python plant (plant FMU under FMPy,
   python-can socketcand client, the C supervisor through ctypes) in lockstep reproduce the
@@ -21,8 +21,18 @@ from typing import Any
 import can
 import numpy as np
 import pytest
-from rrr_robot import _hil_lib, hil, hil_plant
-from rrr_robot.writing import WritingJob, prepare
+from rrr_robot.hil import _hil_lib
+from rrr_robot.hil.bench import quantised_cosim
+from rrr_robot.hil.nodes import export_reference, open_bus, start_listening_controller
+from rrr_robot.hil.plant import (
+    VOLTAGE_CMD_ID,
+    PythonPlant,
+    RxFilter,
+    drop_commands_from,
+    run_python_plant_bench,
+)
+from rrr_robot.hil.protocol import FAULT_BITS
+from rrr_robot.writing.job import WritingJob, prepare
 
 K0 = 200  # first faulty period
 N_FAULT = 300  # periods of the fault runs
@@ -44,14 +54,14 @@ def test_supervisor_library_layout() -> None:
 
 
 def test_c_controller_python_plant_equals_quantised_fmpy_loop(ref, tmp_path: Path) -> None:
-    run, plant = hil_plant.run_python_plant_bench(ref.t, ref.q, ref.qd, ref.qdd,
-                                                  workdir=tmp_path)
+    run, plant = run_python_plant_bench(ref.t, ref.q, ref.qd, ref.qdd,
+                                        workdir=tmp_path)
     s, cs = plant.summary, run.controller_summary
     assert s["exit"] == 0 and s["periods"] == ref.t.size - 1
     assert s["faults"] == 0 and s["fault_events"] == 0 and s["cmd_missed"] == 0
     assert s["rx_bad_crc"] == 0 and s["rx_bad_dlc"] == 0 and s["state_out_of_range"] == 0
     assert cs["states"] == ref.t.size and cs["plant_faults"] == 0 and cs["rx_bad_crc"] == 0
-    qc = hil.quantised_cosim(ref.t, ref.q, ref.qd, ref.qdd)
+    qc = quantised_cosim(ref.t, ref.q, ref.qd, ref.qdd)
     dq, dqd, du = (np.abs(a - b).max() for a, b in ((run.q, qc.q), (run.qd, qc.qd),
                                                       (run.u, qc.u)))
     print(f"C controller + Python plant vs quantised FMPy loop ({ref.t.size} periods): "
@@ -61,9 +71,9 @@ def test_c_controller_python_plant_equals_quantised_fmpy_loop(ref, tmp_path: Pat
     assert np.abs(plant.u[1:] - qc.u[:-1]).max() <= 0.5e-3 + 1e-12
 
 
-def _corrupt_crc_at(k0: int) -> hil_plant.RxFilter:
+def _corrupt_crc_at(k0: int) -> RxFilter:
     def rx_filter(k: int, msg: Any) -> Any:
-        if k == k0 and msg.arbitration_id == hil_plant.VOLTAGE_CMD_ID:
+        if k == k0 and msg.arbitration_id == VOLTAGE_CMD_ID:
             data = bytearray(msg.data)
             data[3] ^= 0x01
             return can.Message(arbitration_id=msg.arbitration_id, data=data,
@@ -77,11 +87,11 @@ def _corrupt_crc_at(k0: int) -> hil_plant.RxFilter:
                          [("commands stop", K0 + 2, "timeout"), ("corrupted CRC", K0, "crc")])
 def test_faults_go_through_the_c_supervisor(ref, case: str, first_zero: int,
                                             fault: str) -> None:
-    rx_filter = (hil_plant.drop_commands_from(K0) if case == "commands stop"
-                 else _corrupt_crc_at(K0))
+    rx_filter = (drop_commands_from(K0) if case == "commands stop"
+       else _corrupt_crc_at(K0))
     n = N_FAULT
-    run, plant = hil_plant.run_python_plant_bench(ref.t[:n], ref.q[:n], ref.qd[:n],
-                                                  ref.qdd[:n], rx_filter=rx_filter)
+    run, plant = run_python_plant_bench(ref.t[:n], ref.q[:n], ref.qd[:n],
+                                        ref.qdd[:n], rx_filter=rx_filter)
     s, u, log = plant.summary, plant.u, plant.log
     # before the fault: the commands; a missing command is held for 2 periods
     assert np.all(log[1:K0 + 1, 11] == 0) and np.abs(u[1:K0 + 1]).min(axis=1).max() > 0
@@ -90,7 +100,7 @@ def test_faults_go_through_the_c_supervisor(ref, case: str, first_zero: int,
     # from first_zero on: 0 V, fault latched until the end (no ResetFault)
     assert first_zero <= K0 + 2
     assert np.all(u[first_zero + 1:] == 0.0) and np.all(log[first_zero + 1:, 11] == 1)
-    bit = hil.FAULT_BITS[fault]
+    bit = FAULT_BITS[fault]
     assert np.all(log[first_zero + 1:, 12] == bit) and np.all(log[:first_zero + 1, 12] == 0)
     assert s["faults"] == bit and s[fault] == 1 and s["fault_events"] == 1
     assert s["zero_periods"] == n - 1 - first_zero and s["exit"] == 0
@@ -99,17 +109,17 @@ def test_faults_go_through_the_c_supervisor(ref, case: str, first_zero: int,
 
 
 def test_controller_lost_latches_bus_fault(ref, tmp_path: Path) -> None:
-    ref_csv = hil.export_reference(ref.t, ref.q, ref.qd, ref.qdd, tmp_path / "reference.csv")
-    with hil_plant.start_listening_controller(ref_csv) as ctrl:
+    ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, tmp_path / "reference.csv")
+    with start_listening_controller(ref_csv) as ctrl:
         def kill_at(k: int, msg: Any) -> Any:
             if k == 50 and ctrl._proc.poll() is None:
                 ctrl._proc.kill()  # the controller process dies mid-run (SIGKILL)
             return msg
 
-        with hil.open_bus("socketcand", port=ctrl.port or 0) as bus:
-            plant = hil_plant.PythonPlant(bus, q0=ref.q[0], qd0=ref.qd[0], timeout=0.5,
-                                          rx_filter=kill_at)
+        with open_bus("socketcand", port=ctrl.port or 0) as bus:
+            plant = PythonPlant(bus, q0=ref.q[0], qd0=ref.qd[0], timeout=0.5,
+                                rx_filter=kill_at)
             run = plant.run()
     s = run.summary
-    assert s["exit"] == 3 and s["faults"] == hil.FAULT_BITS["bus"] and s["bus"] == 1
+    assert s["exit"] == 3 and s["faults"] == FAULT_BITS["bus"] and s["bus"] == 1
     assert 50 <= s["periods"] <= 52

@@ -6,11 +6,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rrr_robot.core.model import Model
 from rrr_robot.errors import BadInputError
 from rrr_robot.identify.base_params import estimate_base_params
 from rrr_robot.identify.friction import CurvePoints, fit_nls
 from rrr_robot.identify.logs import Log, read_log
-from rrr_robot.model import Model
 
 MODEL = Model.default()
 

@@ -10,9 +10,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from rrr_robot.cli.identify import register_cli
+from rrr_robot.core.model import DEFAULT_ROBOT_TOML, Model
 from rrr_robot.identify import experiments as ex
 from rrr_robot.identify.base_params import estimate_base_params
-from rrr_robot.identify.cli import register_cli
 from rrr_robot.identify.excitation import (
     ExcitationLimits,
     FourierTrajectory,
@@ -21,7 +22,6 @@ from rrr_robot.identify.excitation import (
 )
 from rrr_robot.identify.pipeline import Settings, identify, write_robot
 from rrr_robot.identify.validation import validate_writing
-from rrr_robot.model import DEFAULT_ROBOT_TOML, Model
 
 TRUE = Model.default()
 #: a prior that is wrong in p and friction: only kinematics, g, k_t, u_max are taken from it

@@ -10,9 +10,9 @@ import tomllib
 import numpy as np
 import pytest
 import rrr_robot as rr
-from rrr_robot import trajectory as tr
-from rrr_robot.letters import join_strokes, text_strokes
-from rrr_robot.model import DEFAULT_ROBOT_TOML
+from rrr_robot.core.model import DEFAULT_ROBOT_TOML
+from rrr_robot.writing import trajectory as tr
+from rrr_robot.writing.letters import join_strokes, text_strokes
 
 
 def wrap(a: np.ndarray) -> np.ndarray:

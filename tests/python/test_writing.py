@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import rrr_robot as rr
-from rrr_robot.cosim import CosimOptions, run_cosim
-from rrr_robot.writing import PAPER_RMS_U_N, WritingJob, run_writing
+from rrr_robot.sim.cosim import CosimOptions, run_cosim
+from rrr_robot.writing.job import PAPER_RMS_U_N, WritingJob, run_writing
 
 FIGURES = [
     "fig2_reference.png", "fig3_joint_positions.png", "fig4_joint_velocities.png",

@@ -1,4 +1,5 @@
-"""``rrr identify`` and ``rrr identify-experiment`` (registered by rrr_robot.cli)."""
+"""``rrr identify`` and ``rrr identify-experiment`` (registered by :mod:`rrr_robot.cli.app`; the
+library is :mod:`rrr_robot.identify`)."""
 
 from __future__ import annotations
 
@@ -12,15 +13,15 @@ from typing import Any
 
 import numpy as np
 
+from ..core.model import DEFAULT_ROBOT_TOML, Model
 from ..errors import BadInputError
-from ..model import DEFAULT_ROBOT_TOML, Model
 
 log = logging.getLogger(__name__)
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
-    from .logs import read_log
-    from .pipeline import Settings, identify, write_robot
+    from ..identify.logs import read_log
+    from ..identify.pipeline import Settings, identify, write_robot
 
     prior_file = Path(args.robot) if args.robot else DEFAULT_ROBOT_TOML
     prior = Model.from_toml(prior_file)
@@ -39,7 +40,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     for k, (p, s) in enumerate(zip(est.p, est.std, strict=True)):
         print(f"  p{k + 1:<2} = {p: .6g} +/- {1.96 * s:.2g} (95 %)")
     if args.validate:
-        from .validation import validate_writing
+        from ..identify.validation import validate_writing
 
         tables = tomllib.loads(prior_file.read_text())
         report["writing"] = validate_writing(prior, result.model, tables["control"],
@@ -53,8 +54,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
-    from . import experiments as ex
-    from .excitation import design_excitation
+    from ..identify import experiments as ex
+    from ..identify.excitation import design_excitation
 
     model = Model.from_toml(args.robot) if args.robot else Model.default()
     sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)

@@ -11,7 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from .errors import (
+from ..errors import (
     BadInputError,
     ModelError,
     NumericError,
@@ -19,6 +19,7 @@ from .errors import (
     SingularError,
     UnreachableError,
 )
+from ._package import PACKAGE_DIR
 
 NP = 16
 D3 = ct.c_double * 3
@@ -159,11 +160,11 @@ _MEANING = {
 
 
 def library_path() -> Path:
-    """Path of librrr: $RRR_LIBRARY if set, else the copy installed beside this package."""
+    """Path of librrr: $RRR_LIBRARY if set, else the copy CMake installed in the package."""
     env = os.environ.get("RRR_LIBRARY")
     if env:
         return Path(env)
-    return Path(__file__).with_name("librrr.so")
+    return PACKAGE_DIR / "librrr.so"
 
 
 def _load() -> ct.CDLL:

@@ -16,14 +16,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..errors import BadInputError, ModelError
 from . import _lib
 from ._arrays import FloatArray, as_rows, broadcast_rows, ptr, rows_of
-from .errors import BadInputError, ModelError
+from ._package import DATA_DIR
+from .robot_file import raw_model_from_dict, write_toml
 
 DH_KEYS = ("d1", "a2", "a3", "d2", "d3")
 SHOULDER = {"front": 0, "back": 1}
 ELBOW = {"up": 0, "down": 1}
-DEFAULT_ROBOT_TOML = Path(__file__).with_name("data") / "default_robot.toml"
+DEFAULT_ROBOT_TOML = DATA_DIR / "default_robot.toml"
 
 
 @dataclass(frozen=True)
@@ -126,8 +128,6 @@ class Model:
         A ``[base_parameters] p = [...]`` table, if present, is used as is; otherwise p is
         computed from ``[link1..3]`` and ``[motors] rotor_inertia`` by eq 12.
         """
-        from .robot_file import raw_model_from_dict
-
         return cls(raw_model_from_dict(data, source))
 
     def copy(self) -> Model:
@@ -201,14 +201,16 @@ class Model:
 
     def to_dict(self) -> dict[str, Any]:
         """Parameters as the nested mapping of a robot TOML file (with base_parameters)."""
-        from .robot_file import model_to_dict
-
-        return model_to_dict(self)
+        return {
+            "kinematics": self.dh,
+            "gravity": {"g": self.g},
+            "base_parameters": {"p": self.p.tolist()},
+            "motors": {"kt": self.kt.tolist(), "u_max": self.u_max},
+            "friction": {"f": self.f.tolist(), "w": self.w.tolist(), "b": self.b.tolist()},
+        }
 
     def to_toml(self, path: str | Path) -> None:
         """Write the parameters as a robot TOML file readable by :meth:`from_toml`."""
-        from .robot_file import write_toml
-
         write_toml(self.to_dict(), Path(path))
 
     # ---- kinematics -----------------------------------------------------------------------

@@ -8,15 +8,12 @@ from __future__ import annotations
 import ctypes as ct
 from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from ..errors import ModelError, RrrError
 from . import _lib
-from .errors import ModelError, RrrError
-
-if TYPE_CHECKING:
-    from .model import Model
 
 
 def _all_numbers(value: Any) -> bool:
@@ -83,18 +80,6 @@ def raw_model_from_dict(data: Mapping[str, Any], src: str) -> _lib.RawModel:
         except RrrError as exc:
             raise ModelError(f"{src}: inertial parameters rejected ({exc})") from exc
     return raw
-
-
-def model_to_dict(model: Model) -> dict[str, Any]:
-    """The model as a robot mapping, with the base parameters written out."""
-    dh = model.dh
-    return {
-        "kinematics": dh,
-        "gravity": {"g": model.g},
-        "base_parameters": {"p": model.p.tolist()},
-        "motors": {"kt": model.kt.tolist(), "u_max": model.u_max},
-        "friction": {"f": model.f.tolist(), "w": model.w.tolist(), "b": model.b.tolist()},
-    }
 
 
 def _fmt(value: Any) -> str:

@@ -1,12 +1,13 @@
 """ctypes binding of the CAN bench's command supervisor and frame decoder (C, hil_supervisor.h and
-hil_codec.h), for the Python plant (:mod:`rrr_robot.hil_plant`).
+hil_codec.h), for the Python plant (:mod:`rrr_robot.hil.plant`).
 
 The safety policy (hold, timeout to 0 V, CRC / counter / range / DLC faults, latch, reset)
 exists once, in C: this module only mirrors the structures and forwards calls. The library is
 ``librrr_hil_supervisor.so`` (CMake target ``rrr_hil_supervisor``), found in
-``$RRR_HIL_LIBRARY``, else ``$RRR_HIL_BIN_DIR`` (a CMake build's ``c_src/hil``), else beside this
-package (``pip install``). The structure mirrors are checked against the library when it is
-loaded (:func:`library`), so a layout change in C fails loudly instead of misreading memory.
+``$RRR_HIL_LIBRARY``, else ``$RRR_HIL_BIN_DIR`` (a CMake build's ``c_src/hil``), else in the
+package folder ``rrr_robot/`` (``pip install``). The structure mirrors are checked against the
+library when it is loaded (:func:`library`), so a layout change in C fails loudly instead of
+misreading memory.
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from .errors import RrrError
+from ..core._package import PACKAGE_DIR
+from ..errors import RrrError
 
 LIB_NAME = "librrr_hil_supervisor.so"
 
@@ -109,7 +111,7 @@ def library_path() -> Path:
     bin_dir = os.environ.get("RRR_HIL_BIN_DIR")
     if bin_dir and (Path(bin_dir) / LIB_NAME).exists():
         return Path(bin_dir) / LIB_NAME
-    return Path(__file__).with_name(LIB_NAME)
+    return PACKAGE_DIR / LIB_NAME
 
 
 @functools.cache

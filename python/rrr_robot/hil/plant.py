@@ -1,13 +1,13 @@
-"""The plant side of the CAN bench from Python (``rrr hil plant``).
+"""The plant side of the CAN bench from Python (run by ``rrr hil plant``).
 
-The plant FMU runs under FMPy (:class:`~rrr_robot.fmu_slave.FmuSlave`) and speaks the lockstep
+The plant FMU runs under FMPy (:class:`~rrr_robot.sim.fmu_slave.FmuSlave`) and speaks the lockstep
 protocol of ``c_src/hil/rrr_hil_plant.c`` over a python-can bus: ``socketcand`` as client of the
 C controller node started with ``--listen``, or ``socketcan`` where the kernel has AF_CAN.
 Outgoing frames (JointState1..3, PlantStatus, HeartbeatPlant) are encoded with cantools from the
 shipped DBC; Sync and HeartbeatCtrl are decoded with cantools.
 
 The safety policy is NOT implemented here: every VoltageCmd frame goes to the C decoder and the
-C supervisor (``hil_supervisor.c`` through :mod:`rrr_robot._hil_lib`), exactly the calls the C
+C supervisor (``hil_supervisor.c`` through :mod:`rrr_robot.hil._hil_lib`), exactly the calls the C
 plant node makes, so CRC, alive-counter, range and DLC checks, the hold / timeout / 0 V rule,
 the latch and the reset are the C code's. Python only moves frames and steps the FMU.
 
@@ -20,7 +20,6 @@ exactly one period and the plant publishes the state of k + 1; the controller's 
 
 from __future__ import annotations
 
-import errno
 import logging
 import shutil
 import tempfile
@@ -32,30 +31,28 @@ from typing import Any
 
 import numpy as np
 
+from ..core._arrays import FloatArray
+from ..sim.cosim import PLANT_IN
+from ..sim.fmu_slave import FmuSlave
+from ..sim.fmus import fmu_path
 from . import _hil_lib as hl
-from ._arrays import FloatArray
-from .fmus import fmu_path
-from .hil import (
+from .bench import BenchRun
+from .nodes import export_reference, open_bus, start_listening_controller
+from .protocol import (
     NMT_BOOT,
     NMT_OPERATIONAL,
     NMT_STOPPED,
     PERIOD,
-    BenchRun,
     FrameError,
     HilError,
-    NodeProcess,
-    controller_node_args,
     decode,
     encode,
-    export_reference,
-    node_executable,
-    open_bus,
 )
 
 log = logging.getLogger(__name__)
 
 __all__ = ["LOG_HEADER", "PlantRun", "PythonPlant", "drop_commands_from",
-           "run_python_plant_bench", "start_listening_controller"]
+           "run_python_plant_bench"]
 
 VOLTAGE_CMD_ID = 0x100
 HEARTBEAT_PERIODS = 100
@@ -241,9 +238,6 @@ class PythonPlant:
     def run(self, log_csv: Path | None = None) -> PlantRun:
         """Run until the controller's heartbeat "stopped" (exit 0) or until it is lost (exit 3,
         bus fault latched); optionally write the log as the C node's --log does."""
-        from .cosim import PLANT_IN
-        from .fmu_slave import FmuSlave
-
         with FmuSlave(self.fmu_path, "plant") as slave:
             slave.initialize(0.0, self.values)
             p_in = slave.real_block(PLANT_IN)
@@ -273,18 +267,6 @@ class PythonPlant:
 # ---- with the C controller node ---------------------------------------------------------------
 
 
-def start_listening_controller(reference_csv: Path, *, listen: str = "127.0.0.1:0",
-                               log_csv: Path | None = None,
-                               extra: Sequence[str] = ()) -> NodeProcess:
-    """Start the C controller node as socketcand server on ``listen`` (port 0: any free port,
-    read back in ``.port``); it waits for the plant's boot-up heartbeat."""
-    args = [str(node_executable("controller")), "--reference", str(reference_csv),
-            "--listen", listen]
-    if log_csv is not None:
-        args += ["--log", str(log_csv)]
-    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=True)
-
-
 def run_python_plant_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                            qdd_ref: FloatArray, workdir: Path | None = None, *,
                            rx_filter: RxFilter | None = None, timeout: float = 120.0,
@@ -311,54 +293,3 @@ def run_python_plant_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     finally:
         if own:
             shutil.rmtree(work, ignore_errors=True)
-
-
-# ---- command line (``rrr hil plant``, wired in hil.register_cli) ------------------------------
-
-
-def _open(interface: str, host: str, port: int, channel: str) -> Any:
-    try:
-        return open_bus(interface, host=host, port=port, channel=channel)
-    except OSError as exc:
-        hint = (" (this kernel has no AF_CAN: use --interface socketcand)"
-                if exc.errno == errno.EAFNOSUPPORT else "")
-        raise HilError(f"cannot open the {interface} bus {channel or ''}: {exc}{hint}") from exc
-
-
-def cmd_plant(args: Any, ref: Any, out: Path,
-              controller_values: Mapping[str, float | bool] = {}) -> int:
-    """``rrr hil plant``: the Python plant against the C controller node along ``ref``. Without
-    --connect (socketcand) the controller is started here with --listen; with --connect it is a
-    running ``rrr_hil_controller --listen HOST:PORT``; with --interface socketcan it is a running
-    ``rrr_hil_controller --socketcan IF`` started after this plant."""
-    rx_filter = None if args.drop_commands_from is None else drop_commands_from(
-        args.drop_commands_from)
-    ctrl = None
-    try:
-        if args.connect or args.interface == "socketcan":
-            host, _, port = (args.connect or "127.0.0.1:0").rpartition(":")
-        else:
-            ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, out / "reference.csv")
-            ctrl = start_listening_controller(ref_csv, log_csv=out / "controller.csv",
-                                              extra=controller_node_args(controller_values))
-            host, port = "127.0.0.1", str(ctrl.port)
-        with _open(args.interface, host, int(port), args.channel) as bus:
-            if args.interface == "socketcan":
-                print(f"python plant on {args.channel}: start rrr_hil_controller --socketcan "
-                      f"{args.channel} now", flush=True)
-            run = PythonPlant(bus, q0=ref.q[0], qd0=ref.qd[0], rx_filter=rx_filter,
-                              start_timeout=120.0).run(out / "plant.csv")
-        s = run.summary
-        err = np.abs(run.q[: ref.q.shape[0]] - ref.q[: run.q.shape[0]]).max()
-        print(f"python plant: exit {s['exit']}, {s['periods']} periods, max |q - q_ref| "
-              f"{err:.3e} rad, faults latched {s['faults']} (events {s['fault_events']}, "
-              f"timeout {s['timeout']}, crc {s['crc']}, counter {s['counter']}, "
-              f"range {s['range']}, bus {s['bus']}), periods at 0 V {s['zero_periods']}; "
-              f"log {out / 'plant.csv'}")
-        if ctrl is not None:
-            cs = ctrl.wait()
-            print(f"controller node: exit {cs['exit']}, plant faults seen {cs['plant_faults']}")
-        return 0 if s["exit"] == 0 else 3
-    finally:
-        if ctrl is not None:
-            ctrl.close()

@@ -2,7 +2,7 @@
 
 logs (CSV format), signals (zero-phase derivatives), friction, excitation, base_params,
 experiments (simulated logs on the plant FMU), pipeline (end to end), validation (writing
-task), cli (``rrr identify``).
+task). The command line (``rrr identify``) is in :mod:`rrr_robot.cli.identify`.
 """
 
 from .base_params import BaseParamResult, estimate_base_params

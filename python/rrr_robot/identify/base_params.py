@@ -21,9 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from .._arrays import FloatArray
+from ..core._arrays import FloatArray
+from ..core.model import Model
 from ..errors import BadInputError
-from ..model import Model
 from .logs import Log
 from .signals import derivatives
 

@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 from scipy.optimize import minimize
 
-from .._arrays import FloatArray
+from ..core._arrays import FloatArray
+from ..core.model import Model
 from ..errors import BadInputError
-from ..model import Model
 
 log = logging.getLogger(__name__)
 

@@ -21,11 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from .._arrays import FloatArray
-from ..fmu_slave import FmuSlave
-from ..fmus import fmu_path
-from ..model import Model
-from ..writing import model_fmu_values
+from ..core._arrays import FloatArray
+from ..core.model import Model
+from ..core.param_names import model_fmu_values
+from ..sim.fmu_slave import FmuSlave
+from ..sim.fmus import fmu_path
 from .excitation import FourierTrajectory
 from .logs import Log
 

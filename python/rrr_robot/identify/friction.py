@@ -35,9 +35,9 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import least_squares
 
-from .._arrays import FloatArray
+from ..core._arrays import FloatArray
+from ..core.model import Model
 from ..errors import BadInputError
-from ..model import Model
 from .logs import Log
 from .signals import derivatives
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._arrays import FloatArray
+from ..core._arrays import FloatArray
 from ..errors import BadInputError
 
 log = logging.getLogger(__name__)

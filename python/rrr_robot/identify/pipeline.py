@@ -2,8 +2,8 @@
 
 The prior robot file supplies what is not identified (kinematics, g, k_t, u_max, [control],
 [writing]); the written file has the identified ``[base_parameters] p`` and ``[friction]``
-tables, readable by Model.from_toml, the core and both FMUs (writing.model_fmu_values), plus an
-``[identification]`` table with the standard deviations and figures of merit.
+tables, readable by Model.from_toml, the core and both FMUs (core.param_names.model_fmu_values),
+plus an ``[identification]`` table with the standard deviations and figures of merit.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
+from ..core.model import Model
+from ..core.robot_file import write_toml
 from ..errors import BadInputError, ModelError
-from ..model import Model
-from ..robot_file import write_toml
 from .base_params import BaseParamResult, estimate_base_params
 from .friction import FrictionFit, curve_points, fit_ls, fit_nls
 from .logs import Log

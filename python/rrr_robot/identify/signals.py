@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import butter, filtfilt, savgol_filter
 
-from .._arrays import FloatArray
+from ..core._arrays import FloatArray
 from ..errors import BadInputError
 from .logs import Log
 

@@ -10,11 +10,12 @@ from typing import Any
 
 import numpy as np
 
-from ..cosim import CosimOptions, run_cosim
-from ..model import Model
-from ..scenarios import load_scenario
-from ..trajectory import WritingSpec, make_reference
-from ..writing import controller_fmu_values, metrics, model_fmu_values
+from ..core.model import Model
+from ..core.param_names import model_fmu_values
+from ..sim.cosim import CosimOptions, run_cosim
+from ..writing.job import controller_fmu_values, metrics
+from ..writing.scenarios import load_scenario
+from ..writing.trajectory import WritingSpec, make_reference
 
 log = logging.getLogger(__name__)
 

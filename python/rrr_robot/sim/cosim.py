@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._arrays import FloatArray
-from .errors import BadInputError
+from ..core._arrays import FloatArray
+from ..errors import BadInputError
 from .fmu_slave import FmuSlave
 from .fmus import fmu_path
 
@@ -42,8 +42,8 @@ class CosimOptions:
     fmi_version: int = 2                                 # of the packaged FMUs: 2 or 3
     progress: Callable[[int, int], None] | None = None  # called as progress(k, n) now and then
     # what the controller measures of the plant's (q, qd) (6,), and what the plant receives of
-    # the controller's u (3,): e.g. the quantisation of a CAN bench (rrr_robot.hil); identity
-    # when None
+    # the controller's u (3,): e.g. the quantisation of a CAN bench (rrr_robot.hil.protocol);
+    # identity when None
     measure: Callable[[FloatArray], FloatArray] | None = None
     actuate: Callable[[FloatArray], FloatArray] | None = None
 

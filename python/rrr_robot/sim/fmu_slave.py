@@ -25,8 +25,9 @@ import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 
-from ._arrays import FloatArray
-from .errors import BadInputError, CosimError
+from ..core._arrays import FloatArray
+from ..errors import BadInputError, CosimError
+from . import _fmi_log
 
 log = logging.getLogger(__name__)
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
@@ -54,16 +55,12 @@ class _Fmi2:
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
 
     def instantiate(self, logger: Callable[[int, str, str], None]) -> None:
-        from ._fmi_log import fmi2_callbacks
-
-        self._callbacks = fmi2_callbacks(logger)  # kept as long as the instance
+        self._callbacks = _fmi_log.fmi2_callbacks(logger)  # kept as long as the instance
         self.fmu.instantiate(callbacks=self._callbacks, loggingOn=False)
 
     def release(self) -> None:
-        from ._fmi_log import release
-
         if hasattr(self, "_callbacks"):
-            release(self._callbacks)
+            _fmi_log.release(self._callbacks)
 
     def vr_array(self, vrs: Sequence[int]) -> ct.Array[Any]:
         from fmpy.fmi2 import fmi2ValueReference

@@ -13,7 +13,8 @@ import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import BadInputError, RrrError
+from ..core._package import PACKAGE_DIR
+from ..errors import BadInputError, RrrError
 
 FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu"}
 FMI_VERSIONS = (2, 3)
@@ -22,7 +23,7 @@ FMI_VERSIONS = (2, 3)
 def fmu_dir() -> Path:
     """The folder of the FMUs: $RRR_FMU_DIR, else the copies installed with the package."""
     env = os.environ.get("RRR_FMU_DIR")
-    return Path(env) if env else Path(__file__).with_name("fmus")
+    return Path(env) if env else PACKAGE_DIR / "fmus"
 
 
 def fmu_path(which: str, fmi_version: int = 2) -> Path:

@@ -17,9 +17,10 @@ from typing import Any
 
 import numpy as np
 
-from .cosim import CosimOptions, CosimResult, run_cosim
-from .errors import BadInputError, ModelError
-from .model import DEFAULT_ROBOT_TOML, Model
+from ..core.model import DEFAULT_ROBOT_TOML, Model
+from ..core.param_names import model_fmu_values
+from ..errors import BadInputError, ModelError
+from ..sim.cosim import CosimOptions, CosimResult, run_cosim
 from .scenarios import BUILTIN, Scenario, load_scenario
 from .trajectory import Reference, WritingSpec, make_reference
 
@@ -41,20 +42,6 @@ class WritingJob:
     scale: float = 1.0
     figures: bool = True
     fmi_version: int = 2   # of the FMUs the job co-simulates: 2 or 3 (identical results)
-
-
-def model_fmu_values(model: Model) -> dict[str, float]:
-    """The model's parameters under the FMUs' variable names (same for plant and controller)."""
-    values: dict[str, float] = {k: v for k, v in model.dh.items()}
-    values["g"] = model.g
-    values["u_max"] = model.u_max
-    values |= {f"p[{k + 1}]": float(v) for k, v in enumerate(model.p)}
-    values |= {f"kt[{i + 1}]": float(v) for i, v in enumerate(model.kt)}
-    values |= {f"b[{i + 1}]": float(v) for i, v in enumerate(model.b)}
-    for name, arr in (("f", model.f), ("w", model.w)):
-        values |= {f"{name}[{i + 1},{k + 1}]": float(arr[i, k])
-                   for i in range(3) for k in range(3)}
-    return values
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,

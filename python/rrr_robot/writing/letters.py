@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from ._arrays import FloatArray
-from .errors import BadInputError
+from ..core._arrays import FloatArray
+from ..errors import BadInputError
 
 __all__ = ["GREEK_KEYS", "join_strokes", "text_strokes"]
 

@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from ._arrays import FloatArray
-from .cosim import CosimResult
-from .model import Model
+from ..core._arrays import FloatArray
+from ..core.model import Model
+from ..sim.cosim import CosimResult
 from .references import inertial_from_robot_dict, pinocchio_inverse_dynamics
 from .trajectory import Reference, numeric_ik_path
 

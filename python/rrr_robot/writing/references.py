@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ._arrays import FloatArray
+from ..core._arrays import FloatArray
 
 
 @dataclass(frozen=True)

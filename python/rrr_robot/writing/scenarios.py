@@ -15,10 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from .errors import BadInputError, ModelError
-from .model import Model
+from ..core._package import DATA_DIR
+from ..core.model import Model
+from ..errors import BadInputError, ModelError
 
-SCENARIO_DIR = Path(__file__).with_name("data") / "scenarios"
+SCENARIO_DIR = DATA_DIR / "scenarios"
 BUILTIN = ("pd", "ctc", "mismatch")
 _ALLOWED = {
     "scenario": {"name", "description", "feedforward"},

@@ -3,8 +3,8 @@
 The tip writes a text in the vertical plane y = ``plane_y`` (x to the right, z up; the text reads
 left to right along +x as plotted in the x-z plane) and lifts the pen by ``lift`` in y between
 strokes, towards the robot (the paper lies on the far side of the plane). The path is the C2
-curve of :mod:`rrr_robot.writing_path` through the strokes of :mod:`rrr_robot.letters`; the
-timing law s(t) along it is built in four steps:
+curve of :mod:`rrr_robot.writing.writing_path` through the strokes of
+:mod:`rrr_robot.writing.letters`; the timing law s(t) along it is built in four steps:
 
 1. a limit of s_dot along the path: the tip speed target is ``peak_speed`` on straight parts and
    sqrt(``lateral_acc`` / curvature) in curves, never below ``min_speed``; on top of it the
@@ -39,10 +39,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.interpolate import BSpline, make_interp_spline
 
-from ._arrays import FloatArray
-from .errors import BadInputError, NumericError
+from ..core._arrays import FloatArray
+from ..core.model import Model
+from ..errors import BadInputError, NumericError
 from .letters import text_strokes
-from .model import Model
 from .writing_path import PathOptions, WritingPath, build_path
 
 __all__ = [

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.interpolate import BSpline, make_interp_spline, splprep
 
-from ._arrays import FloatArray
+from ..core._arrays import FloatArray
 
 __all__ = ["PathOptions", "WritingPath", "build_path"]
 

@@ -1,0 +1,227 @@
+"""The C nodes of the CAN bench as processes, and the python-can buses that talk to them.
+
+The C nodes (``rrr_hil_plant``, ``rrr_hil_controller``) are installed with the package in
+``rrr_robot/bin`` (or found in ``$RRR_HIL_BIN_DIR``). The plant node is the socketcand server;
+python-can's built-in ``socketcand`` interface connects to it (``socketcan`` where the kernel has
+AF_CAN). The controller node can also listen (``--listen``) for the Python plant.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import re
+import shutil
+import subprocess
+import warnings
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+
+from ..core._arrays import FloatArray
+from ..core._package import PACKAGE_DIR
+from ..sim.fmus import fmu_path
+from .protocol import HilError
+
+log = logging.getLogger(__name__)
+
+__all__ = [
+    "NodeProcess",
+    "controller_node_args",
+    "export_reference",
+    "node_executable",
+    "open_bus",
+    "start_controller",
+    "start_listening_controller",
+    "start_plant",
+]
+
+_REF_HEADER = ["t"] + [f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref") for i in (1, 2, 3)]
+
+
+def node_executable(which: str) -> Path:
+    """Path of the C node 'plant' or 'controller' ($RRR_HIL_BIN_DIR first, then the package)."""
+    if which not in ("plant", "controller"):
+        raise ValueError(f"unknown node {which!r}: expected 'plant' or 'controller'")
+    env = os.environ.get("RRR_HIL_BIN_DIR")
+    folder = Path(env) if env else PACKAGE_DIR / "bin"
+    path = folder / f"rrr_hil_{which}"
+    if not path.exists():
+        raise HilError(f"C node {path} not found: install with 'pip install .' or set "
+                       "RRR_HIL_BIN_DIR to a CMake build's c_src/hil folder")
+    return path
+
+
+def export_reference(t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray,
+                     path: Path) -> Path:
+    """Write the reference table the C controller reads (every double exactly, %.17g)."""
+    rows = np.column_stack([t, q, qd, qdd])
+    with Path(path).open("w") as fh:
+        fh.write(",".join(_REF_HEADER) + "\n")
+        for row in rows:
+            fh.write(",".join(f"{v:.17g}" for v in row) + "\n")
+    return Path(path)
+
+
+class NodeProcess:
+    """A running C node (context manager; ``close()`` is idempotent and stops it)."""
+
+    def __init__(self, name: str, args: Sequence[str], *, listening: bool,
+                 cleanup: Path | None = None) -> None:
+        self.name = name
+        self.args = [str(a) for a in args]
+        self.port: int | None = None
+        self._cleanup = cleanup
+        self._closed = False
+        self.stdout = ""
+        self.stderr = ""
+        log.debug("starting %s", " ".join(self.args))
+        self._proc = subprocess.Popen(self.args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                      text=True)
+        if listening:
+            line = self._proc.stdout.readline() if self._proc.stdout else ""
+            m = re.search(r"listening on [\d.]+:(\d+)", line)
+            if m is None:
+                self.close()
+                raise HilError(f"{name} did not start listening: {line.strip()} "
+                               f"{self.stderr.strip()}")
+            self.port = int(m.group(1))
+
+    def wait(self, timeout: float = 120.0) -> dict[str, Any]:
+        """Wait for the exit; returns the node's summary (``RRR_HIL_SUMMARY`` JSON) with
+        'exit' and, in real-time mode, the timing statistics under 'rt'."""
+        try:
+            out, err = self._proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.close()
+            raise HilError(f"{self.name} did not finish within {timeout} s") from None
+        self.stdout += out
+        self.stderr += err
+        summary: dict[str, Any] = {"exit": self._proc.returncode}
+        for line in self.stdout.splitlines():
+            if line.startswith("RRR_HIL_SUMMARY "):
+                summary |= json.loads(line[len("RRR_HIL_SUMMARY "):])
+            elif line.startswith("RRR_HIL_RT "):
+                summary["rt"] = json.loads(line[len("RRR_HIL_RT "):])
+        summary["exit"] = self._proc.returncode
+        self._closed = True
+        self._remove_cleanup()
+        return summary
+
+    def _remove_cleanup(self) -> None:
+        if self._cleanup is not None:
+            shutil.rmtree(self._cleanup, ignore_errors=True)
+            self._cleanup = None
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        if self._proc.poll() is None:
+            self._proc.terminate()
+            try:
+                out, err = self._proc.communicate(timeout=5)
+            except subprocess.TimeoutExpired:
+                self._proc.kill()
+                out, err = self._proc.communicate()
+        else:
+            out, err = self._proc.communicate()
+        self.stdout += out or ""
+        self.stderr += err or ""
+        self._remove_cleanup()
+
+    def __enter__(self) -> NodeProcess:
+        return self
+
+    def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        if not getattr(self, "_closed", True):
+            warnings.warn(f"{self.name} node was not closed", ResourceWarning, stacklevel=2)
+            self.close()
+
+
+def _vec(v: Sequence[float]) -> str:
+    return ",".join(f"{float(x):.17g}" for x in v)
+
+
+def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0, 0.0),
+                qd0: Sequence[float] = (0.0, 0.0, 0.0), values: Mapping[str, float] = {},
+                log_csv: Path | None = None, extra: Sequence[str] = (),
+                fmu: Path | None = None) -> NodeProcess:
+    """Start the C plant node as socketcand server on ``listen`` (port 0: any free port, read
+    back in ``.port``), on the plant FMU (default: the packaged one, unzipped to a temp dir)."""
+    from fmpy import extract
+
+    unzip = Path(extract(str(fmu or fmu_path("plant"))))
+    args: list[str] = [str(node_executable("plant")), "--fmu", str(unzip), "--listen", listen,
+                       "--q0", _vec(q0), "--qd0", _vec(qd0)]
+    for name, v in values.items():
+        args += ["--set", f"{name}={float(v):.17g}"]
+    if log_csv is not None:
+        args += ["--log", str(log_csv)]
+    try:
+        return NodeProcess("rrr_hil_plant", [*args, *extra], listening=True, cleanup=unzip)
+    except BaseException:
+        shutil.rmtree(unzip, ignore_errors=True)
+        raise
+
+
+def start_controller(reference_csv: Path, *, connect: str, log_csv: Path | None = None,
+                     extra: Sequence[str] = ()) -> NodeProcess:
+    """Start the C controller node as socketcand client of ``connect`` (HOST:PORT)."""
+    args = [str(node_executable("controller")), "--reference", str(reference_csv),
+            "--connect", connect]
+    if log_csv is not None:
+        args += ["--log", str(log_csv)]
+    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=False)
+
+
+def start_listening_controller(reference_csv: Path, *, listen: str = "127.0.0.1:0",
+                               log_csv: Path | None = None,
+                               extra: Sequence[str] = ()) -> NodeProcess:
+    """Start the C controller node as socketcand server on ``listen`` (port 0: any free port,
+    read back in ``.port``); it waits for the plant's boot-up heartbeat."""
+    args = [str(node_executable("controller")), "--reference", str(reference_csv),
+            "--listen", listen]
+    if log_csv is not None:
+        args += ["--log", str(log_csv)]
+    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=True)
+
+
+def controller_node_args(values: Mapping[str, float | bool]) -> list[str]:
+    """rrr_hil_controller arguments for controller FMU start values (the same names): kp[i],
+    kd[i] -> --kp/--kd, feedforward false -> --no-feedforward, model parameters -> --set."""
+    args: list[str] = []
+    for gain in ("kp", "kd"):
+        names = [f"{gain}[{i}]" for i in (1, 2, 3)]
+        given = [n for n in names if n in values]
+        if given and len(given) != 3:
+            raise ValueError(f"{gain}: give all three of {names} or none")
+        if given:
+            args += [f"--{gain}", _vec([float(values[n]) for n in names])]
+    if "feedforward" in values and not values["feedforward"]:
+        args.append("--no-feedforward")
+    for name, v in values.items():
+        if name != "feedforward" and not name.startswith(("kp[", "kd[")):
+            args += ["--set", f"{name}={float(v):.17g}"]
+    return args
+
+
+def open_bus(interface: str = "socketcand", *, host: str = "127.0.0.1", port: int = 29536,
+             channel: str = "bench0") -> Any:
+    """A python-can bus: ``socketcand`` (TCP, to the C node) or ``socketcan`` (channel = vcan0)."""
+    import can
+
+    if interface == "socketcand":
+        return can.Bus(interface="socketcand", host=host, port=port, channel=channel,
+                       tcp_tune=True)
+    if interface == "socketcan":
+        return can.Bus(interface="socketcan", channel=channel)
+    raise ValueError(f"interface must be 'socketcand' or 'socketcan', got {interface!r}")
