@@ -26,6 +26,12 @@ static uint8_t e2e_crc(const uint8_t data[8], uint8_t data_id)
     return rrr_hil_crc8_e2e(data + 1, 7u, data_id);
 }
 
+/* The same over bytes 1..len-1 of a shorter message (StopCmd: len 2). */
+static uint8_t e2e_crc_len(const uint8_t *data, size_t len, uint8_t data_id)
+{
+    return rrr_hil_crc8_e2e(data + 1, len - 1u, data_id);
+}
+
 static void frame_init(rrr_hil_frame *f, uint32_t id, uint8_t dlc)
 {
     memset(f, 0, sizeof *f);
@@ -152,6 +158,39 @@ int rrr_hil_encode_heartbeat(const rrr_hil_heartbeat *m, rrr_hil_frame *f)
     return 0;
 }
 
+int rrr_hil_encode_stop_cmd(const rrr_hil_stop_cmd *m, rrr_hil_frame *f)
+{
+    if (m->counter > 15u || m->reason >= (unsigned)RRR_HIL_STOP_REASON_COUNT) {
+        return -1;
+    }
+    struct rrr_bench_stop_cmd_t s = {.crc = 0, .alive_counter = m->counter, .reason = m->reason};
+    rrr_hil_frame g;
+    frame_init(&g, RRR_BENCH_STOP_CMD_FRAME_ID, RRR_BENCH_STOP_CMD_LENGTH);
+    if (rrr_bench_stop_cmd_pack(g.data, &s, sizeof g.data) != (int)RRR_BENCH_STOP_CMD_LENGTH) {
+        return -1;
+    }
+    g.data[0] = e2e_crc_len(g.data, RRR_BENCH_STOP_CMD_LENGTH, RRR_HIL_DATA_ID_STOP_CMD);
+    *f = g;
+    return 0;
+}
+
+static rrr_hil_rx decode_stop_cmd(const rrr_hil_frame *f, rrr_hil_msg *out)
+{
+    struct rrr_bench_stop_cmd_t s;
+    if (rrr_bench_stop_cmd_unpack(&s, f->data, f->dlc) != 0) {
+        return RRR_HIL_RX_BAD_DLC;
+    }
+    if (s.crc != e2e_crc_len(f->data, RRR_BENCH_STOP_CMD_LENGTH, RRR_HIL_DATA_ID_STOP_CMD)) {
+        return RRR_HIL_RX_BAD_CRC;
+    }
+    if (!rrr_bench_stop_cmd_reason_is_in_range(s.reason)) {
+        return RRR_HIL_RX_OUT_OF_RANGE;
+    }
+    out->u.stop.counter = s.alive_counter;
+    out->u.stop.reason = s.reason;
+    return RRR_HIL_RX_OK;
+}
+
 static rrr_hil_rx decode_voltage_cmd(const rrr_hil_frame *f, rrr_hil_msg *out)
 {
     struct rrr_bench_voltage_cmd_t s;
@@ -224,6 +263,10 @@ static int lookup(uint32_t id, rrr_hil_kind *kind, uint8_t *len)
         *kind = RRR_HIL_VOLTAGE_CMD;
         *len = RRR_BENCH_VOLTAGE_CMD_LENGTH;
         return 1;
+    case RRR_BENCH_STOP_CMD_FRAME_ID:
+        *kind = RRR_HIL_STOP_CMD;
+        *len = RRR_BENCH_STOP_CMD_LENGTH;
+        return 1;
     case RRR_BENCH_JOINT_STATE1_FRAME_ID:
     case RRR_BENCH_JOINT_STATE2_FRAME_ID:
     case RRR_BENCH_JOINT_STATE3_FRAME_ID:
@@ -276,6 +319,9 @@ rrr_hil_rx rrr_hil_decode(const rrr_hil_frame *f, rrr_hil_msg *out)
     case RRR_HIL_PLANT_STATUS:
         rx = decode_plant_status(f, &m);
         break;
+    case RRR_HIL_STOP_CMD:
+        rx = decode_stop_cmd(f, &m);
+        break;
     case RRR_HIL_HEARTBEAT:
         m.u.heartbeat.node = (uint8_t)(f->id - 0x700u);
         m.u.heartbeat.nmt_state = f->data[0];
@@ -307,5 +353,21 @@ const char *rrr_hil_rx_str(rrr_hil_rx rx)
     case RRR_HIL_RX_COUNT:
     default:
         return "invalid rrr_hil_rx";
+    }
+}
+
+const char *rrr_hil_stop_reason_str(unsigned reason)
+{
+    switch (reason) {
+    case RRR_HIL_STOP_END_OF_RUN:
+        return "end of run";
+    case RRR_HIL_STOP_INTERRUPTED:
+        return "interrupted";
+    case RRR_HIL_STOP_FAULT:
+        return "fault";
+    case RRR_HIL_STOP_PLANT_LOST:
+        return "plant lost";
+    default:
+        return "invalid stop reason";
     }
 }

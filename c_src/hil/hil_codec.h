@@ -22,6 +22,7 @@
 
 /** E2E DataIDs, mixed into the CRC (one per protected message; see the DBC comment). */
 #define RRR_HIL_DATA_ID_VOLTAGE_CMD 0x10u
+#define RRR_HIL_DATA_ID_STOP_CMD 0x11u
 #define RRR_HIL_DATA_ID_JOINT_STATE1 0x21u  ///< + joint index 0..2
 #define RRR_HIL_DATA_ID_PLANT_STATUS 0x30u
 
@@ -43,7 +44,21 @@ enum {
 };
 
 /** PlantStatus.State values. */
-enum { RRR_HIL_PLANT_INIT = 0, RRR_HIL_PLANT_RUNNING = 1, RRR_HIL_PLANT_FAULT = 2 };
+enum {
+    RRR_HIL_PLANT_INIT = 0,    ///< not started
+    RRR_HIL_PLANT_RUNNING = 1, ///< no fault latched
+    RRR_HIL_PLANT_FAULT = 2,   ///< a fault is latched: 0 V
+    RRR_HIL_PLANT_RESET = 3    ///< a fault is latched (0 V) and a fault reset is armed
+};
+
+/** StopCmd.Reason values: why the controller ends the run. */
+typedef enum rrr_hil_stop_reason {
+    RRR_HIL_STOP_END_OF_RUN = 0,  ///< the reference is complete
+    RRR_HIL_STOP_INTERRUPTED = 1, ///< SIGINT or SIGTERM
+    RRR_HIL_STOP_FAULT = 2,       ///< the controller cannot go on (e.g. a command it cannot encode)
+    RRR_HIL_STOP_PLANT_LOST = 3,  ///< no joint state from the plant in time
+    RRR_HIL_STOP_REASON_COUNT
+} rrr_hil_stop_reason;
 
 /** A classical CAN frame as the transports carry it. */
 typedef struct rrr_hil_frame {
@@ -60,6 +75,7 @@ typedef enum rrr_hil_kind {
     RRR_HIL_JOINT_STATE,
     RRR_HIL_PLANT_STATUS,
     RRR_HIL_HEARTBEAT,
+    RRR_HIL_STOP_CMD, ///< appended: the values above are mirrored by the Python binding
     RRR_HIL_KIND_COUNT
 } rrr_hil_kind;
 
@@ -85,6 +101,16 @@ typedef struct rrr_hil_voltage_cmd {
     uint8_t reset_fault; ///< 1 with enable = 0: clear latched faults
     double u_V[3];       ///< voltages, V, within [-30, 30]; quantised to 1 mV
 } rrr_hil_voltage_cmd;
+
+/**
+ * StopCmd (controller -> plant): end the run. E2E protected like VoltageCmd (CRC-8 with its own
+ * DataID), and its alive counter continues the VoltageCmd sequence, so the supervisor honours it
+ * only as the next command of that sequence (rrr_hil_sup_on_stop).
+ */
+typedef struct rrr_hil_stop_cmd {
+    uint8_t counter; ///< alive counter 0..15: the one after the last VoltageCmd's
+    uint8_t reason;  ///< rrr_hil_stop_reason
+} rrr_hil_stop_cmd;
 
 /** JointState1..3 (plant -> controller). */
 typedef struct rrr_hil_joint_state {
@@ -120,6 +146,7 @@ typedef struct rrr_hil_msg {
         rrr_hil_joint_state joint;
         rrr_hil_plant_status status;
         rrr_hil_heartbeat heartbeat;
+        rrr_hil_stop_cmd stop;
     } u;
 } rrr_hil_msg;
 
@@ -143,8 +170,12 @@ int rrr_hil_encode_voltage_cmd(const rrr_hil_voltage_cmd *m, rrr_hil_frame *f);
 int rrr_hil_encode_joint_state(const rrr_hil_joint_state *m, rrr_hil_frame *f);
 int rrr_hil_encode_plant_status(const rrr_hil_plant_status *m, rrr_hil_frame *f);
 int rrr_hil_encode_heartbeat(const rrr_hil_heartbeat *m, rrr_hil_frame *f);
+int rrr_hil_encode_stop_cmd(const rrr_hil_stop_cmd *m, rrr_hil_frame *f);
 
 /** Static name of a decode result ("ok", "unknown id", ...). */
 const char *rrr_hil_rx_str(rrr_hil_rx rx);
+
+/** Static name of a stop reason ("end of run", "interrupted", "fault", "plant lost"). */
+const char *rrr_hil_stop_reason_str(unsigned reason);
 
 #endif /* RRR_HIL_CODEC_H */

@@ -1,4 +1,5 @@
-/* The bench codec: E2E CRC against the cantools/crccheck vector, round trips of every message,
+/* The bench codec: E2E CRC against the cantools/crccheck vector, round trips of every message
+ * (StopCmd: every counter and reason, every bit error, every DLC),
  * quantisation bounds, refused values, and the decoder's verdict on wrong DLC, unknown ids,
  * extended ids, every single-bit corruption and out-of-range voltages. */
 #include <string.h>
@@ -116,6 +117,57 @@ static void test_other_messages(void)
     CHECK(rrr_hil_encode_heartbeat(&bad, &f) == -1);
 }
 
+static void test_stop_cmd(void)
+{
+    rrr_hil_frame f;
+    rrr_hil_msg m;
+    for (uint8_t counter = 0; counter < 16u; ++counter) {
+        for (uint8_t reason = 0; reason < (uint8_t)RRR_HIL_STOP_REASON_COUNT; ++reason) {
+            const rrr_hil_stop_cmd s = {counter, reason};
+            CHECK(rrr_hil_encode_stop_cmd(&s, &f) == 0);
+            CHECK(f.id == 0x090u && f.dlc == 2u && !f.extended);
+            CHECK(f.data[1] == (uint8_t)(counter | (reason << 4)));
+            CHECK(f.data[0] == rrr_hil_crc8_e2e(f.data + 1, 1, RRR_HIL_DATA_ID_STOP_CMD));
+            CHECK(rrr_hil_decode(&f, &m) == RRR_HIL_RX_OK && m.kind == RRR_HIL_STOP_CMD);
+            CHECK(m.u.stop.counter == counter && m.u.stop.reason == reason);
+            for (int bit = 0; bit < 16; ++bit) { /* every single-bit error is caught */
+                rrr_hil_frame g = f;
+                g.data[bit / 8] ^= (uint8_t)(1u << (bit % 8));
+                CHECK(rrr_hil_decode(&g, &m) == RRR_HIL_RX_BAD_CRC);
+            }
+            for (uint8_t dlc = 0; dlc <= 15u; ++dlc) {
+                rrr_hil_frame g = f;
+                g.dlc = dlc;
+                m.kind = RRR_HIL_KIND_COUNT;
+                CHECK(rrr_hil_decode(&g, &m) == (dlc == 2u ? RRR_HIL_RX_OK : RRR_HIL_RX_BAD_DLC));
+                CHECK(m.kind == RRR_HIL_STOP_CMD);
+            }
+        }
+    }
+    /* the vector of cantools: encode({AliveCounter 5, Reason 1}) = 00 15, compute_profile2_crc
+     * with DataID 0x11 = 0xDF */
+    const rrr_hil_stop_cmd vec = {5, RRR_HIL_STOP_INTERRUPTED};
+    CHECK(rrr_hil_encode_stop_cmd(&vec, &f) == 0 && f.data[0] == 0xDF && f.data[1] == 0x15);
+    /* the DataID is its own: a StopCmd payload with VoltageCmd's DataID fails */
+    f.data[0] = rrr_hil_crc8_e2e(f.data + 1, 1, RRR_HIL_DATA_ID_VOLTAGE_CMD);
+    CHECK(rrr_hil_decode(&f, &m) == RRR_HIL_RX_BAD_CRC);
+    /* reasons 4..15 with a valid CRC: out of the DBC range, not a stop */
+    f.data[1] = (uint8_t)(3u | (7u << 4));
+    f.data[0] = rrr_hil_crc8_e2e(f.data + 1, 1, RRR_HIL_DATA_ID_STOP_CMD);
+    CHECK(rrr_hil_decode(&f, &m) == RRR_HIL_RX_OUT_OF_RANGE && m.kind == RRR_HIL_STOP_CMD);
+    const rrr_hil_stop_cmd bad_reason = {0, 4}, bad_counter = {16, 0};
+    memset(&f, 0xAB, sizeof f);
+    CHECK(rrr_hil_encode_stop_cmd(&bad_reason, &f) == -1);
+    CHECK(rrr_hil_encode_stop_cmd(&bad_counter, &f) == -1);
+    CHECK(f.id == 0xABABABABu); /* untouched */
+    CHECK(strcmp(rrr_hil_stop_reason_str(RRR_HIL_STOP_END_OF_RUN), "end of run") == 0);
+    CHECK(strcmp(rrr_hil_stop_reason_str(99), "invalid stop reason") == 0);
+    /* PlantStatus carries the reset state */
+    const rrr_hil_plant_status st = {1, RRR_HIL_PLANT_RESET, 2, 1, 1, 0};
+    CHECK(rrr_hil_encode_plant_status(&st, &f) == 0);
+    CHECK(rrr_hil_decode(&f, &m) == RRR_HIL_RX_OK && m.u.status.state == RRR_HIL_PLANT_RESET);
+}
+
 static void test_rejects(void)
 {
     rrr_hil_frame f;
@@ -143,6 +195,7 @@ int main(void)
     test_voltage_out_of_range();
     test_joint_state();
     test_other_messages();
+    test_stop_cmd();
     test_rejects();
     return rrr_test_report("test_hil_codec");
 }
