@@ -8,6 +8,7 @@
 
 #include <arpa/inet.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
@@ -171,23 +172,103 @@ static int64_t now_us(void)
     return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
 }
 
-static int write_all(rrr_hil_scd *t, const char *s, size_t n)
+/* poll() wait in ms until `until_us` (-1: forever), rounded up; 0 once it is past. */
+static int wait_ms_until(int64_t until_us, int64_t now)
+{
+    if (until_us < 0) {
+        return -1;
+    }
+    if (until_us <= now) {
+        return 0;
+    }
+    const int64_t ms = (until_us - now + 999) / 1000;
+    return ms > RRR_HIL_SCD_TIMEOUT_MAX_MS ? RRR_HIL_SCD_TIMEOUT_MAX_MS : (int)ms;
+}
+
+/* The earlier of two deadlines, -1 meaning none. */
+static int64_t earlier(int64_t a, int64_t b)
+{
+    if (a < 0) {
+        return b;
+    }
+    return (b < 0 || a < b) ? a : b;
+}
+
+/* Write all n bytes to fd; a peer that accepts nothing for timeout_ms (0: not at all) fails the
+ * write with ETIMEDOUT. Never blocks longer. 0, or -1 with the errno value in *err. */
+static int write_fd(int fd, const char *s, size_t n, int timeout_ms, int *err)
 {
     while (n > 0u) {
-        const ssize_t w = send(t->fd, s, n, MSG_NOSIGNAL);
-        if (w < 0) {
-            if (errno == EINTR) {
-                continue;
-            }
-            set_error(t, "send", errno);
+        const ssize_t w = send(fd, s, n, MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (w >= 0) {
+            s += w;
+            n -= (size_t)w;
+            continue;
+        }
+        if (errno == EINTR) {
+            continue;
+        }
+        if (errno != EAGAIN && errno != EWOULDBLOCK) {
+            *err = errno;
             return -1;
         }
-        s += w;
-        n -= (size_t)w;
+        struct pollfd pfd = {.fd = fd, .events = POLLOUT};
+        const int pr = timeout_ms > 0 ? poll(&pfd, 1, timeout_ms) : 0;
+        if (pr < 0 && errno == EINTR) {
+            continue;
+        }
+        if (pr <= 0) {
+            *err = pr == 0 ? ETIMEDOUT : errno;
+            return -1;
+        }
     }
     return 0;
 }
 
+/* Write to the connection; a peer that reads nothing for the idle timeout is lost. */
+static int write_all(rrr_hil_scd *t, const char *s, size_t n)
+{
+    int e = 0;
+    if (write_fd(t->fd, s, n, t->idle_timeout_ms, &e) == 0) {
+        return 0;
+    }
+    if (e == ETIMEDOUT) {
+        snprintf(t->base.last_error, sizeof t->base.last_error,
+                 "socketcand: send: the peer read nothing for %d ms (idle timeout)",
+                 t->idle_timeout_ms);
+    } else {
+        set_error(t, "send", e);
+    }
+    return -1;
+}
+
+/* Close a connection after a last message, best effort and without blocking: the message, a
+ * FIN, then whatever the peer had sent is read away so that close() does not turn into a reset
+ * that could destroy the message before the peer reads it. */
+static void close_with(int fd, const char *msg)
+{
+    int e = 0;
+    if (msg != NULL) {
+        (void)write_fd(fd, msg, strlen(msg), 0, &e);
+    }
+    (void)shutdown(fd, SHUT_WR);
+    char sink[256];
+    for (int i = 0; i < 16 && recv(fd, sink, sizeof sink, MSG_DONTWAIT) > 0; ++i) {
+    }
+    close(fd);
+}
+
+static void refuse(rrr_hil_scd *t, int fd, const char *msg)
+{
+    close_with(fd, msg);
+    ++t->base.err.refused;
+}
+
+static const char REFUSE_IN_USE[] = "< error session in use: one client at a time >";
+static const char REFUSE_OVER[] = "< error session over >";
+static const char REFUSE_BUSY[] = "< error too many clients in handshake >";
+
+/* The connection is gone. A server's one session is then over for good. */
 static void drop_peer(rrr_hil_scd *t)
 {
     if (t->fd >= 0) {
@@ -197,6 +278,9 @@ static void drop_peer(rrr_hil_scd *t)
     }
     t->len = 0;
     t->phase = 0;
+    if (t->server && t->session == RRR_HIL_SCD_SESSION_ACTIVE) {
+        t->session = RRR_HIL_SCD_SESSION_OVER;
+    }
 }
 
 static void tune(int fd)
@@ -205,65 +289,50 @@ static void tune(int fd)
     (void)setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
 }
 
-/* Server side of the handshake; 0 on a handled message, -1 on a protocol error. */
-static int server_control(rrr_hil_scd *t, const char *word, const char *line, unsigned n)
+/* Find the next "< ... >" in buf[0..*len): its start and length; garbage before it is counted
+ * and dropped. 1 found, 0 incomplete (buf compacted; an over-long message is dropped). */
+static int next_message(rrr_hil_scd *t, char *buf, unsigned *len, unsigned cap, unsigned *start,
+                        unsigned *n)
 {
-    char open_msg[64];
-    const int k = snprintf(open_msg, sizeof open_msg, "< open %s >", t->channel);
-    if (t->phase == 0 && strcmp(word, "open") == 0) {
-        if (k > 0 && (unsigned)k == n && memcmp(open_msg, line, n) == 0) {
-            t->phase = 1;
-            return write_all(t, "< ok >", 6);
+    unsigned s = 0;
+    while (s < *len && buf[s] != '<') {
+        if (buf[s] != ' ' && buf[s] != '\n' && buf[s] != '\r') {
+            ++t->base.err.rx_malformed; /* garbage outside < > */
         }
+        ++s;
+    }
+    unsigned e = s;
+    while (e < *len && buf[e] != '>') {
+        ++e;
+    }
+    if (e < *len) {
+        *start = s;
+        *n = e - s + 1u;
+        return 1;
+    }
+    if (s > 0u) {
+        memmove(buf, buf + s, *len - s);
+        *len -= s;
+    }
+    if (*len >= cap || *len > RRR_HIL_SCD_MAX_LINE) {
         ++t->base.err.rx_malformed;
         snprintf(t->base.last_error, sizeof t->base.last_error,
-                 "socketcand: client asked for a bus other than '%s': %.*s", t->channel, (int)n,
-                 line);
-        return write_all(t, "< error could not open bus >", 28);
+                 "socketcand: message longer than %d bytes discarded", RRR_HIL_SCD_MAX_LINE);
+        *len = 0;
     }
-    if (t->phase == 1 && strcmp(word, "rawmode") == 0) {
-        t->phase = 2;
-        return write_all(t, "< ok >", 6);
-    }
-    ++t->base.err.rx_malformed;
-    snprintf(t->base.last_error, sizeof t->base.last_error,
-             "socketcand: unexpected message in handshake phase %d: %.*s", t->phase, (int)n, line);
     return 0;
 }
 
-/* Take one complete message out of buf: 1 frame, 0 none (need more bytes), -1 connection error. */
+/* Take one complete message out of the session's (or the client's) buffer: 1 frame, 0 none
+ * (need more bytes). */
 static int take_message(rrr_hil_scd *t, rrr_hil_frame *f)
 {
-    for (;;) {
-        unsigned start = 0;
-        while (start < t->len && t->buf[start] != '<') {
-            if (t->buf[start] != ' ' && t->buf[start] != '\n' && t->buf[start] != '\r') {
-                ++t->base.err.rx_malformed; /* garbage outside < > */
-            }
-            ++start;
-        }
-        unsigned end = start;
-        while (end < t->len && t->buf[end] != '>') {
-            ++end;
-        }
-        if (end >= t->len) { /* incomplete */
-            if (start > 0u) {
-                memmove(t->buf, t->buf + start, t->len - start);
-                t->len -= start;
-            }
-            if (t->len >= sizeof t->buf || t->len > RRR_HIL_SCD_MAX_LINE) {
-                ++t->base.err.rx_malformed;
-                snprintf(t->base.last_error, sizeof t->base.last_error,
-                         "socketcand: message longer than %d bytes discarded", RRR_HIL_SCD_MAX_LINE);
-                t->len = 0;
-            }
-            return 0;
-        }
-        const unsigned n = end - start + 1u;
+    unsigned start, n;
+    while (next_message(t, t->buf, &t->len, (unsigned)sizeof t->buf, &start, &n)) {
         char line[sizeof t->buf];
         memcpy(line, t->buf + start, n);
-        memmove(t->buf, t->buf + end + 1, t->len - end - 1u);
-        t->len -= end + 1u;
+        memmove(t->buf, t->buf + start + n, t->len - start - n);
+        t->len -= start + n;
         char word[16];
         const int r = rrr_hil_scd_parse(line, n, f, word);
         if (r < 0) {
@@ -272,89 +341,337 @@ static int take_message(rrr_hil_scd *t, rrr_hil_frame *f)
                      "socketcand: malformed message: %.*s", (int)(n > 120u ? 120u : n), line);
             continue;
         }
-        if (r == 1) {
-            if (t->server && strcmp(word, "send") != 0) {
-                ++t->base.err.rx_malformed;
-                continue;
-            }
-            if (t->server && t->phase < 2) {
-                ++t->base.err.rx_malformed;
-                snprintf(t->base.last_error, sizeof t->base.last_error,
-                         "socketcand: frame before the handshake finished");
-                continue;
-            }
-            if (!t->server && strcmp(word, "frame") != 0) {
-                ++t->base.err.rx_malformed;
-                continue;
-            }
-            if (t->server) {
-                t->phase = 3;
-            }
-            return 1;
-        }
         if (t->server) {
-            if (server_control(t, word, line, n) != 0) {
-                return -1;
+            t->last_rx_us = now_us(); /* a well-formed message: the client is alive */
+            if (r == 1 && strcmp(word, "send") == 0) {
+                t->phase = 3;
+                return 1;
             }
+            ++t->base.err.rx_malformed;
+            snprintf(t->base.last_error, sizeof t->base.last_error,
+                     "socketcand: unexpected message in the session: %.*s",
+                     (int)(n > 120u ? 120u : n), line);
+            continue;
+        }
+        if (r == 1) {
+            if (strcmp(word, "frame") == 0) {
+                return 1;
+            }
+            ++t->base.err.rx_malformed;
         } else if (strcmp(word, "error") == 0) {
             ++t->base.err.bus_errors;
             snprintf(t->base.last_error, sizeof t->base.last_error, "socketcand: server: %.*s",
-                     (int)n, line);
+                     (int)(n > 120u ? 120u : n), line);
         } else if (strcmp(word, "ok") != 0 && strcmp(word, "hi") != 0) {
             ++t->base.err.rx_malformed;
         }
     }
+    return 0;
 }
 
-/* Accept a client if one is waiting (server without a peer). */
-static int try_accept(rrr_hil_scd *t)
+/* ---- server: handshakes and the one session ------------------------------------------------ */
+
+static void pending_close(rrr_hil_scd_pending *p)
 {
-    const int fd = accept(t->listen_fd, NULL, NULL);
-    if (fd < 0) {
-        if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR || errno == ECONNABORTED) {
-            return 0;
-        }
-        set_error(t, "accept", errno);
-        return -1;
+    if (p->fd >= 0) {
+        close(p->fd);
     }
-    tune(fd);
-    t->fd = fd;
-    t->len = 0;
-    t->phase = 0;
+    p->fd = -1;
+    p->len = 0;
+    p->phase = 0;
+}
+
+/* Every handshake in progress is refused (a session started, or the server's session is over). */
+static void refuse_pending(rrr_hil_scd *t, const char *msg)
+{
+    for (unsigned i = 0; i < RRR_HIL_SCD_MAX_PENDING; ++i) {
+        rrr_hil_scd_pending *p = &t->pending[i];
+        if (p->fd >= 0) {
+            refuse(t, p->fd, msg);
+            p->fd = -1;
+            pending_close(p);
+        }
+    }
+}
+
+/* A handshake completed: its connection becomes the session, with the bytes that followed
+ * `< rawmode >`; every other handshake is refused. */
+static void start_session(rrr_hil_scd *t, rrr_hil_scd_pending *p)
+{
+    t->fd = p->fd;
+    memcpy(t->buf, p->buf, p->len);
+    t->len = p->len;
+    t->phase = 2;
+    t->session = RRR_HIL_SCD_SESSION_ACTIVE;
+    t->last_rx_us = now_us();
     ++t->base.err.connects;
-    if (write_all(t, "< hi >", 6) != 0) {
-        drop_peer(t);
+    p->fd = -1;
+    pending_close(p);
+    refuse_pending(t, REFUSE_IN_USE);
+}
+
+/* Reply to a handshaking connection; 0, or -1 when it cannot take even that (then closed). */
+static int pending_reply(rrr_hil_scd_pending *p, const char *msg)
+{
+    int e = 0;
+    if (write_fd(p->fd, msg, strlen(msg), 0, &e) != 0) {
+        pending_close(p);
+        return -1;
     }
     return 0;
 }
 
-static rrr_hil_io scd_recv(rrr_hil_transport *base, rrr_hil_frame *f, int timeout_us)
+/* Parse what a handshaking connection sent: `< open CHANNEL >` then `< rawmode >`; anything else
+ * is counted and ignored. Returns 1 when the handshake is complete. */
+static int pending_input(rrr_hil_scd *t, rrr_hil_scd_pending *p)
 {
-    rrr_hil_scd *t = (rrr_hil_scd *)base;
-    const int64_t deadline = timeout_us < 0 ? -1 : now_us() + timeout_us;
+    unsigned start, n;
+    while (p->fd >= 0 && next_message(t, p->buf, &p->len, (unsigned)sizeof p->buf, &start, &n)) {
+        char line[sizeof p->buf];
+        memcpy(line, p->buf + start, n);
+        memmove(p->buf, p->buf + start + n, p->len - start - n);
+        p->len -= start + n;
+        rrr_hil_frame f;
+        char word[16];
+        const int r = rrr_hil_scd_parse(line, n, &f, word);
+        const int shown = (int)(n > 120u ? 120u : n);
+        if (r == 0 && p->phase == 0 && strcmp(word, "open") == 0) {
+            char open_msg[64];
+            const int k = snprintf(open_msg, sizeof open_msg, "< open %s >", t->channel);
+            if (k > 0 && (unsigned)k == n && memcmp(open_msg, line, n) == 0) {
+                p->phase = 1;
+                (void)pending_reply(p, "< ok >");
+                continue;
+            }
+            ++t->base.err.rx_malformed;
+            snprintf(t->base.last_error, sizeof t->base.last_error,
+                     "socketcand: client asked for a bus other than '%s': %.*s", t->channel, shown,
+                     line);
+            (void)pending_reply(p, "< error could not open bus >");
+            continue;
+        }
+        if (r == 0 && p->phase == 1 && strcmp(word, "rawmode") == 0) {
+            return pending_reply(p, "< ok >") == 0 ? 1 : 0;
+        }
+        ++t->base.err.rx_malformed;
+        if (r == 1) {
+            snprintf(t->base.last_error, sizeof t->base.last_error,
+                     "socketcand: frame before the handshake finished: %.*s", shown, line);
+        } else {
+            snprintf(t->base.last_error, sizeof t->base.last_error,
+                     "socketcand: unexpected message in handshake phase %d: %.*s", p->phase,
+                     shown, line);
+        }
+    }
+    return 0;
+}
+
+/* Accept every waiting connection: a handshake slot for it while no session exists, else the
+ * protocol's error. 0, or -1 when accept fails for a reason other than "nothing waiting". */
+static int accept_clients(rrr_hil_scd *t)
+{
     for (;;) {
+        const int fd = accept(t->listen_fd, NULL, NULL);
+        if (fd < 0) {
+            if (errno == EAGAIN || errno == EWOULDBLOCK) {
+                return 0;
+            }
+            if (errno == EINTR || errno == ECONNABORTED) {
+                continue;
+            }
+            set_error(t, "accept", errno);
+            return -1;
+        }
+        tune(fd);
+        if (t->session != RRR_HIL_SCD_NO_SESSION) {
+            refuse(t, fd, t->session == RRR_HIL_SCD_SESSION_ACTIVE ? REFUSE_IN_USE : REFUSE_OVER);
+            continue;
+        }
+        /* a free slot, else the oldest handshake makes room: a burst of silent connections
+         * cannot keep out a client that handshakes at once */
+        rrr_hil_scd_pending *p = &t->pending[0];
+        for (unsigned i = 0; i < RRR_HIL_SCD_MAX_PENDING && p->fd >= 0; ++i) {
+            if (t->pending[i].fd < 0 || t->pending[i].deadline_us < p->deadline_us) {
+                p = &t->pending[i];
+            }
+        }
+        if (p->fd >= 0) {
+            refuse(t, p->fd, REFUSE_BUSY);
+            p->fd = -1;
+            pending_close(p);
+        }
+        p->fd = fd;
+        p->phase = 0;
+        p->len = 0;
+        p->deadline_us = now_us() + (int64_t)t->handshake_timeout_ms * 1000;
+        (void)pending_reply(p, "< hi >");
+    }
+}
+
+/* Close the handshakes past their deadline. */
+static void expire_handshakes(rrr_hil_scd *t, int64_t now)
+{
+    for (unsigned i = 0; i < RRR_HIL_SCD_MAX_PENDING; ++i) {
+        rrr_hil_scd_pending *p = &t->pending[i];
+        if (p->fd >= 0 && now >= p->deadline_us) {
+            close_with(p->fd, "< error handshake timeout >");
+            p->fd = -1;
+            pending_close(p);
+            ++t->base.err.handshake_timeouts;
+            snprintf(t->base.last_error, sizeof t->base.last_error,
+                     "socketcand: a client did not finish the handshake within %d ms: closed",
+                     t->handshake_timeout_ms);
+        }
+    }
+}
+
+/* Read what a connection sent into buf. 1 bytes read, 0 nothing now, -1 closed or failed. */
+static int read_into(int fd, char *buf, unsigned *len, unsigned cap, int *err)
+{
+    const ssize_t got = read(fd, buf + *len, cap - *len);
+    if (got < 0 && (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK)) {
+        return 0;
+    }
+    if (got <= 0) {
+        *err = got < 0 ? errno : 0;
+        return -1;
+    }
+    *len += (unsigned)got;
+    return 1;
+}
+
+/* The session is lost (hang-up, read error, idle timeout): it is over for good. */
+static rrr_hil_io session_lost(rrr_hil_scd *t)
+{
+    drop_peer(t);
+    refuse_pending(t, REFUSE_OVER);
+    return RRR_HIL_IO_DISCONNECTED;
+}
+
+static rrr_hil_io server_recv(rrr_hil_scd *t, rrr_hil_frame *f, int timeout_us)
+{
+    const int64_t deadline = timeout_us < 0 ? -1 : now_us() + timeout_us;
+    for (int polled = 0;; polled = 1) {
+        if (t->session == RRR_HIL_SCD_SESSION_OVER) {
+            (void)accept_clients(t); /* newcomers get the protocol's error, not a hang */
+            return RRR_HIL_IO_DISCONNECTED;
+        }
+        if (t->fd >= 0 && take_message(t, f) == 1) {
+            ++t->base.err.rx_frames;
+            return RRR_HIL_IO_OK;
+        }
+        const int64_t now = now_us();
+        expire_handshakes(t, now);
+        int64_t wake = deadline;
         if (t->fd >= 0) {
-            const int r = take_message(t, f);
-            if (r == 1) {
-                ++t->base.err.rx_frames;
-                return RRR_HIL_IO_OK;
+            int64_t idle_end = t->last_rx_us + (int64_t)t->idle_timeout_ms * 1000;
+            if (now >= idle_end) {
+                /* bytes may wait unread (the caller was busy): read them before judging */
+                struct pollfd q = {.fd = t->fd, .events = POLLIN};
+                int e = 0;
+                if (poll(&q, 1, 0) > 0 &&
+                    read_into(t->fd, t->buf, &t->len, (unsigned)sizeof t->buf, &e) < 0) {
+                    snprintf(t->base.last_error, sizeof t->base.last_error,
+                             "socketcand: the client closed the connection");
+                    return session_lost(t);
+                }
+                if (take_message(t, f) == 1) {
+                    ++t->base.err.rx_frames;
+                    return RRR_HIL_IO_OK;
+                }
+                idle_end = t->last_rx_us + (int64_t)t->idle_timeout_ms * 1000;
             }
-            if (r < 0) {
-                drop_peer(t);
-                return RRR_HIL_IO_DISCONNECTED;
+            if (now >= idle_end) {
+                close_with(t->fd, "< error idle timeout >");
+                t->fd = -1;
+                ++t->base.err.disconnects;
+                ++t->base.err.idle_timeouts;
+                snprintf(t->base.last_error, sizeof t->base.last_error,
+                         "socketcand: the client sent nothing for %d ms (idle timeout): session "
+                         "closed", t->idle_timeout_ms);
+                return session_lost(t);
+            }
+            wake = earlier(wake, idle_end);
+        }
+        if (polled && deadline >= 0 && now >= deadline) {
+            return RRR_HIL_IO_TIMEOUT;
+        }
+        struct pollfd pfd[2 + RRR_HIL_SCD_MAX_PENDING];
+        rrr_hil_scd_pending *who[2 + RRR_HIL_SCD_MAX_PENDING];
+        nfds_t nfd = 0;
+        pfd[nfd] = (struct pollfd){.fd = t->listen_fd, .events = POLLIN};
+        who[nfd++] = NULL;
+        if (t->fd >= 0) {
+            pfd[nfd] = (struct pollfd){.fd = t->fd, .events = POLLIN};
+            who[nfd++] = NULL;
+        }
+        for (unsigned i = 0; i < RRR_HIL_SCD_MAX_PENDING; ++i) {
+            if (t->pending[i].fd >= 0) {
+                pfd[nfd] = (struct pollfd){.fd = t->pending[i].fd, .events = POLLIN};
+                who[nfd++] = &t->pending[i];
+                wake = earlier(wake, t->pending[i].deadline_us);
             }
         }
-        int wait_ms = -1;
-        if (deadline >= 0) {
-            const int64_t left = deadline - now_us();
-            wait_ms = left <= 0 ? 0 : (int)((left + 999) / 1000);
-        }
-        struct pollfd pfd = {.fd = t->fd >= 0 ? t->fd : t->listen_fd, .events = POLLIN};
-        if (pfd.fd < 0) {
-            snprintf(t->base.last_error, sizeof t->base.last_error, "socketcand: not connected");
+        const int pr = poll(pfd, nfd, wait_ms_until(wake, now));
+        if (pr < 0) {
+            if (errno == EINTR) {
+                continue;
+            }
+            set_error(t, "poll", errno);
             return RRR_HIL_IO_ERROR;
         }
-        const int pr = poll(&pfd, 1, wait_ms);
+        for (nfds_t i = 1; i < nfd && pr > 0; ++i) {
+            if ((pfd[i].revents & (POLLIN | POLLHUP | POLLERR)) == 0) {
+                continue;
+            }
+            int e = 0;
+            if (who[i] == NULL) { /* the session */
+                if (t->fd >= 0 && read_into(t->fd, t->buf, &t->len, (unsigned)sizeof t->buf, &e) < 0) {
+                    if (e != 0) {
+                        set_error(t, "read", e);
+                    } else {
+                        snprintf(t->base.last_error, sizeof t->base.last_error,
+                                 "socketcand: the client closed the connection");
+                    }
+                    return session_lost(t);
+                }
+                continue;
+            }
+            rrr_hil_scd_pending *p = who[i];
+            if (p->fd < 0) {
+                continue; /* refused meanwhile: another handshake finished first */
+            }
+            if (read_into(p->fd, p->buf, &p->len, (unsigned)sizeof p->buf, &e) < 0) {
+                pending_close(p); /* left during the handshake: not a session */
+                continue;
+            }
+            if (pending_input(t, p) == 1 && t->session == RRR_HIL_SCD_NO_SESSION) {
+                start_session(t, p);
+            }
+        }
+        if (pr > 0 && (pfd[0].revents & POLLIN) != 0 && accept_clients(t) != 0) {
+            return RRR_HIL_IO_ERROR;
+        }
+    }
+}
+
+/* ---- client ---------------------------------------------------------------------------------- */
+
+static rrr_hil_io client_recv(rrr_hil_scd *t, rrr_hil_frame *f, int timeout_us)
+{
+    const int64_t deadline = timeout_us < 0 ? -1 : now_us() + timeout_us;
+    for (;;) {
+        if (t->fd < 0) {
+            snprintf(t->base.last_error, sizeof t->base.last_error, "socketcand: not connected");
+            return RRR_HIL_IO_DISCONNECTED;
+        }
+        if (take_message(t, f) == 1) {
+            ++t->base.err.rx_frames;
+            return RRR_HIL_IO_OK;
+        }
+        const int64_t now = now_us();
+        struct pollfd pfd = {.fd = t->fd, .events = POLLIN};
+        const int pr = poll(&pfd, 1, wait_ms_until(deadline, now));
         if (pr < 0) {
             if (errno == EINTR) {
                 continue;
@@ -368,28 +685,30 @@ static rrr_hil_io scd_recv(rrr_hil_transport *base, rrr_hil_frame *f, int timeou
             }
             continue;
         }
-        if (t->fd < 0) {
-            if (try_accept(t) != 0) {
-                return RRR_HIL_IO_ERROR;
-            }
-            continue;
-        }
-        const ssize_t got = read(t->fd, t->buf + t->len, sizeof t->buf - t->len);
-        if (got < 0 && errno == EINTR) {
-            continue;
-        }
-        if (got <= 0) {
-            if (got < 0) {
-                set_error(t, "read", errno);
+        int e = 0;
+        if (read_into(t->fd, t->buf, &t->len, (unsigned)sizeof t->buf, &e) < 0) {
+            if (e != 0) {
+                set_error(t, "read", e);
+            } else if (strncmp(t->base.last_error, "socketcand: server: ", 20) == 0) {
+                char said[120];
+                snprintf(said, sizeof said, "%s", t->base.last_error + 20);
+                snprintf(t->base.last_error, sizeof t->base.last_error,
+                         "socketcand: the server closed the connection after '%.*s'",
+                         (int)(sizeof said - 1u), said);
             } else {
                 snprintf(t->base.last_error, sizeof t->base.last_error,
-                         "socketcand: the peer closed the connection");
+                         "socketcand: the server closed the connection");
             }
             drop_peer(t);
             return RRR_HIL_IO_DISCONNECTED;
         }
-        t->len += (unsigned)got;
     }
+}
+
+static rrr_hil_io scd_recv(rrr_hil_transport *base, rrr_hil_frame *f, int timeout_us)
+{
+    rrr_hil_scd *t = (rrr_hil_scd *)base;
+    return t->server ? server_recv(t, f, timeout_us) : client_recv(t, f, timeout_us);
 }
 
 static rrr_hil_io scd_send(rrr_hil_transport *base, const rrr_hil_frame *f)
@@ -430,7 +749,11 @@ static rrr_hil_io scd_send(rrr_hil_transport *base, const rrr_hil_frame *f)
     }
     if (write_all(t, msg, (size_t)n) != 0) {
         ++t->base.err.tx_failed;
-        drop_peer(t);
+        if (t->server) {
+            (void)session_lost(t);
+        } else {
+            drop_peer(t);
+        }
         return RRR_HIL_IO_DISCONNECTED;
     }
     ++t->base.err.tx_frames;
@@ -443,6 +766,9 @@ static void scd_close(rrr_hil_transport *base)
     if (t->fd >= 0) {
         close(t->fd);
         t->fd = -1;
+    }
+    for (unsigned i = 0; i < RRR_HIL_SCD_MAX_PENDING; ++i) {
+        pending_close(&t->pending[i]);
     }
     if (t->listen_fd >= 0) {
         close(t->listen_fd);
@@ -460,6 +786,11 @@ static int init_common(rrr_hil_scd *t, int server, const char *channel)
     t->server = server;
     t->listen_fd = -1;
     t->fd = -1;
+    for (unsigned i = 0; i < RRR_HIL_SCD_MAX_PENDING; ++i) {
+        t->pending[i].fd = -1;
+    }
+    t->handshake_timeout_ms = RRR_HIL_SCD_HANDSHAKE_TIMEOUT_MS;
+    t->idle_timeout_ms = RRR_HIL_SCD_IDLE_TIMEOUT_MS;
     const size_t n = strlen(channel);
     if (n == 0u || n >= sizeof t->channel || strpbrk(channel, " <>") != NULL) {
         snprintf(t->base.last_error, sizeof t->base.last_error,
@@ -468,6 +799,20 @@ static int init_common(rrr_hil_scd *t, int server, const char *channel)
         return -1;
     }
     memcpy(t->channel, channel, n + 1u);
+    return 0;
+}
+
+int rrr_hil_scd_set_timeouts(rrr_hil_scd *t, int handshake_timeout_ms, int idle_timeout_ms)
+{
+    if (handshake_timeout_ms < 1 || handshake_timeout_ms > RRR_HIL_SCD_TIMEOUT_MAX_MS ||
+        idle_timeout_ms < 1 || idle_timeout_ms > RRR_HIL_SCD_TIMEOUT_MAX_MS) {
+        snprintf(t->base.last_error, sizeof t->base.last_error,
+                 "socketcand: timeouts must be 1..%d ms, got handshake %d, idle %d",
+                 RRR_HIL_SCD_TIMEOUT_MAX_MS, handshake_timeout_ms, idle_timeout_ms);
+        return -1;
+    }
+    t->handshake_timeout_ms = handshake_timeout_ms;
+    t->idle_timeout_ms = idle_timeout_ms;
     return 0;
 }
 
@@ -505,7 +850,10 @@ int rrr_hil_scd_listen(rrr_hil_scd *t, const char *host, uint16_t port, const ch
         scd_close(&t->base);
         return -1;
     }
-    if (listen(t->listen_fd, 1) != 0 || getsockname(t->listen_fd, (struct sockaddr *)&a, &alen) != 0) {
+    /* non-blocking: a connection reset between poll() and accept() must not block the bench */
+    const int fl = fcntl(t->listen_fd, F_GETFL);
+    if (fl < 0 || fcntl(t->listen_fd, F_SETFL, fl | O_NONBLOCK) != 0 ||
+        listen(t->listen_fd, 8) != 0 || getsockname(t->listen_fd, (struct sockaddr *)&a, &alen) != 0) {
         set_error(t, "listen", errno);
         scd_close(&t->base);
         return -1;
@@ -514,7 +862,6 @@ int rrr_hil_scd_listen(rrr_hil_scd *t, const char *host, uint16_t port, const ch
     t->base.vt = &scd_vt;
     return 0;
 }
-
 /* Client: wait for one control message and check its word. */
 static int expect(rrr_hil_scd *t, const char *want, int wait_ms)
 {

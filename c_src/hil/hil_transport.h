@@ -23,7 +23,8 @@
 typedef enum rrr_hil_io {
     RRR_HIL_IO_OK = 0,       ///< a frame was sent / received
     RRR_HIL_IO_TIMEOUT,      ///< nothing received before the timeout
-    RRR_HIL_IO_DISCONNECTED, ///< the peer closed the connection (TCP); the server accepts again
+    RRR_HIL_IO_DISCONNECTED, ///< the peer is gone (TCP: closed, reset, idle timeout; a server's
+                             ///< one session is over: it never accepts another)
     RRR_HIL_IO_BUS_OFF,      ///< the CAN controller went bus-off (SocketCAN error frame)
     RRR_HIL_IO_ERROR         ///< a system call failed: see last_error
 } rrr_hil_io;
@@ -38,7 +39,11 @@ typedef struct rrr_hil_transport_err {
     uint32_t bus_off;      ///< bus-off error frames
     uint32_t bus_errors;   ///< other error frames (controller, protocol, restarted)
     uint32_t disconnects;  ///< peers lost
-    uint32_t connects;     ///< peers accepted or connected
+    uint32_t connects;     ///< sessions started (server: handshakes completed; client: connected)
+    uint32_t refused;      ///< server: connections refused with "< error ... >" (a session exists
+                           ///< or is over, too many handshakes at once, another client won)
+    uint32_t handshake_timeouts; ///< server: connections closed for not finishing the handshake
+    uint32_t idle_timeouts; ///< server: sessions ended because the client stopped talking
 } rrr_hil_transport_err;
 
 typedef struct rrr_hil_transport rrr_hil_transport;
@@ -89,29 +94,79 @@ int rrr_hil_socketcan_open(rrr_hil_socketcan *t, const char *ifname, const uint3
 
 /** Maximum length of one socketcand message "< ... >" we accept. */
 #define RRR_HIL_SCD_MAX_LINE 256
+/** Default handshake timeout of a server, ms: a connection must complete `< open CHANNEL >` and
+ *  `< rawmode >` within this time after it was accepted, else it gets `< error handshake
+ *  timeout >` and is closed. */
+#define RRR_HIL_SCD_HANDSHAKE_TIMEOUT_MS 2000
+/** Default idle timeout, ms. Server: a session whose client sent no well-formed message for
+ *  this long gets `< error idle timeout >` and is closed (the session is then over). Both roles:
+ *  a send that makes no progress for this long (the peer stopped reading) loses the peer. */
+#define RRR_HIL_SCD_IDLE_TIMEOUT_MS 5000
+/** Largest accepted timeout, ms (one hour). */
+#define RRR_HIL_SCD_TIMEOUT_MAX_MS 3600000
+/** Connections a server handshakes with at the same time; the first to finish gets the session. */
+#define RRR_HIL_SCD_MAX_PENDING 4
 
-/** A socketcand-protocol endpoint (server: one client at a time; or client). */
+/** A server's connection that has not finished the handshake yet. */
+typedef struct rrr_hil_scd_pending {
+    int fd;              ///< socket, -1 when the slot is free
+    int phase;           ///< 0 wait `< open CHANNEL >`, 1 wait `< rawmode >`
+    int64_t deadline_us; ///< CLOCK_MONOTONIC time by which the handshake must be complete, us
+    unsigned len;        ///< bytes in buf
+    char buf[2 * RRR_HIL_SCD_MAX_LINE]; ///< received bytes not yet parsed
+} rrr_hil_scd_pending;
+
+/** The session of a socketcand server: at most one in its lifetime. */
+typedef enum rrr_hil_scd_session {
+    RRR_HIL_SCD_NO_SESSION = 0, ///< no client finished the handshake yet
+    RRR_HIL_SCD_SESSION_ACTIVE, ///< one client holds the session; every other one is refused
+    RRR_HIL_SCD_SESSION_OVER    ///< the session ended: every client is refused
+} rrr_hil_scd_session;
+
+/** A socketcand-protocol endpoint (server: exactly one session; or client). */
 typedef struct rrr_hil_scd {
     rrr_hil_transport base;   ///< must be first
     int server;               ///< 1: server (listens), 0: client
     int listen_fd;            ///< server: listening socket, -1 otherwise
-    int fd;                   ///< connection, -1 when none
-    int phase;                ///< server handshake: 0 wait open, 1 wait rawmode, 2 raw, 3 peer sent a frame
+    int fd;                   ///< connection (server: the session's client), -1 when none
+    int phase;                ///< server session: 2 raw, 3 peer sent a frame (client: 3)
     uint16_t port;            ///< bound port (server: the real one when 0 was asked)
     char channel[32];         ///< bus name ("bench0")
     char buf[4 * RRR_HIL_SCD_MAX_LINE]; ///< received bytes not yet parsed
     unsigned len;             ///< bytes in buf
+    int handshake_timeout_ms; ///< server: see RRR_HIL_SCD_HANDSHAKE_TIMEOUT_MS
+    int idle_timeout_ms;      ///< see RRR_HIL_SCD_IDLE_TIMEOUT_MS
+    rrr_hil_scd_session session; ///< server: state of its one session
+    int64_t last_rx_us;       ///< server: CLOCK_MONOTONIC time of the session's last message, us
+    rrr_hil_scd_pending pending[RRR_HIL_SCD_MAX_PENDING]; ///< server: handshakes in progress
 } rrr_hil_scd;
 
 /**
  * @brief Listen on host:port (port 0: any free port, read back in t->port) as a socketcand
- *        server serving bus @p channel. A client is accepted inside recv (one at a time); the
- *        server sends `< hi >`, accepts `< open CHANNEL >` and `< rawmode >` with `< ok >`, and
- *        sends no frame before the client's first `< send >` (python-can's handshake reads a
- *        single recv() and fails if a frame follows the last `< ok >` in the same segment).
+ *        server serving bus @p channel, with the default timeouts.
+ *
+ * Connections are accepted inside recv. Each gets `< hi >`; `< open CHANNEL >` and `< rawmode >`
+ * are answered with `< ok >` (a wrong bus with `< error could not open bus >`). Up to
+ * RRR_HIL_SCD_MAX_PENDING connections may handshake at once, each within the handshake timeout
+ * (one more evicts the oldest with `< error too many clients in handshake >`, so a burst of
+ * silent connections cannot keep out a client that handshakes at once); the first to finish
+ * gets the server's one session, and from then on every other connection,
+ * pending or new, gets `< error ... >` and is closed: an extra client never replaces the first,
+ * and a silent one never blocks the bench. The session ends when its client hangs up or sends
+ * no message for the idle timeout; after that recv returns RRR_HIL_IO_DISCONNECTED and every
+ * newcomer is refused. The server sends no frame before the session's first `< send >`
+ * (python-can's handshake reads a single recv() and fails if a frame follows the last `< ok >`
+ * in the same segment).
  * @return 0, or -1 with last_error set.
  */
 int rrr_hil_scd_listen(rrr_hil_scd *t, const char *host, uint16_t port, const char *channel);
+
+/**
+ * @brief Set the handshake and idle timeouts (ms, 1..RRR_HIL_SCD_TIMEOUT_MAX_MS); the client role
+ *        uses only the idle timeout (for sends).
+ * @return 0, or -1 with last_error set (nothing changed).
+ */
+int rrr_hil_scd_set_timeouts(rrr_hil_scd *t, int handshake_timeout_ms, int idle_timeout_ms);
 
 /**
  * @brief Connect to a socketcand server at host:port, retrying for up to @p wait_ms, and do the
