@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Sets up everything and runs every test: C tests (core, FMUs, CAN bench) under AddressSanitizer
 # and UndefinedBehaviorSanitizer via CTest (with the FMUs' Windows binaries run under wine), ruff,
-# the Python package's import layers (lint-imports), pytest (including the generated-code checks),
-# and a short libFuzzer run on the CAN frame decoders. mingw-w64, wine and clang are installed
-# with apt-get when missing and root.
+# the Python package's import layers (lint-imports) and types (mypy), pytest (including the
+# generated-code checks), and a short libFuzzer run on the CAN frame decoders. mingw-w64, wine and
+# clang are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -34,11 +34,12 @@ cmake -S . -B build-asan -DRRR_SANITIZE=ON -DCMAKE_BUILD_TYPE=Debug -DPython3_EX
 cmake --build build-asan -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$JOBS"
-echo "== ruff, lint-imports =="
+echo "== ruff, lint-imports, mypy =="
 ruff check python tests bench tools c_src/rrr/gen
 # the layers of the Python package (pyproject.toml [tool.importlinter]), checked on the rrr_robot
 # that setup_env.sh has just installed from this tree
 lint-imports
+mypy python/rrr_robot
 echo "== pytest =="
 python -m pytest -q tests/python
 echo "== libFuzzer on the CAN frame decoders (short run; c_src/hil/README.md has the long one) =="
@@ -65,4 +66,4 @@ cmake --build build-fuzz --target fuzz_hil_decode -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus 2>&1 | tail -n 12
-echo "== all test stages passed (CTest, ruff, lint-imports, pytest, libFuzzer) =="
+echo "== all test stages passed (CTest, ruff, lint-imports, mypy, pytest, libFuzzer) =="

@@ -270,7 +270,7 @@ class Model:
         for i in range(xs.shape[0]):
             status = fn(self._ref, xb + i * xs_, SHOULDER[shoulder], ELBOW[elbow], qb + i * qs_)
             if status:
-                _lib.raise_for("rrr_ik_branch", status, lambda i=i: f"x = {xs[i].tolist()}")
+                _lib.raise_for("rrr_ik_branch", status, f"x = {xs[i].tolist()}")
         return q if batch else q[0]
 
     def ik_nearest(self, x: ArrayLike, q_prev: ArrayLike) -> FloatArray:
@@ -289,8 +289,7 @@ class Model:
         for i in range(xs.shape[0]):
             status = fn(self._ref, xb + i * xs_, prev_addr, qb + i * qs_, None)
             if status:
-                _lib.raise_for("rrr_ik_nearest", status,
-                               lambda i=i: f"target {i}, x = {xs[i].tolist()}")
+                _lib.raise_for("rrr_ik_nearest", status, f"target {i}, x = {xs[i].tolist()}")
             prev_addr = qb + i * qs_
         return q if batch else q[0]
 
@@ -314,7 +313,7 @@ class Model:
         for i in range(xs.shape[0]):
             status = fn(self._ref, xb + i * xs_, ob + i * os_, None)
             if status:
-                _lib.raise_for("rrr_workspace_margin", status, lambda i=i: f"x = {xs[i]}")
+                _lib.raise_for("rrr_workspace_margin", status, f"x = {xs[i]}")
         return out if batch else float(out[0])
 
     # ---- dynamics -------------------------------------------------------------------------

@@ -37,12 +37,15 @@ class SupConfig(ct.Structure):
     _fields_ = [("max_missed", ct.c_uint), ("max_delta_counter", ct.c_uint)]
 
 
+#: The event counters of ``rrr_hil_sup_err``, in order.
+SUP_ERR_NAMES = ("crc", "counter", "range", "format", "sync", "bus", "timeout", "cmd_missed",
+                 "fault_events", "resets", "zero_periods")
+
+
 class SupErr(ct.Structure):
     """Mirror of ``rrr_hil_sup_err`` (event counters, only grow)."""
 
-    _fields_ = [(n, ct.c_uint32) for n in (
-        "crc", "counter", "range", "format", "sync", "bus", "timeout", "cmd_missed",
-        "fault_events", "resets", "zero_periods")]
+    _fields_ = [(n, ct.c_uint32) for n in SUP_ERR_NAMES]
 
 
 class VoltageCmd(ct.Structure):
@@ -208,4 +211,4 @@ class Supervisor:
 
     def counters(self) -> dict[str, int]:
         """The event counters (``rrr_hil_sup_err``)."""
-        return {name: int(getattr(self._s.err, name)) for name, _ in SupErr._fields_}
+        return {name: int(getattr(self._s.err, name)) for name in SUP_ERR_NAMES}

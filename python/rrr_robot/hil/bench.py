@@ -60,7 +60,8 @@ class _StateWaiter:
         self.rejected: dict[str, int] = {}
 
     def wait(self, counter: int) -> tuple[FloatArray, FloatArray]:
-        q, qd, have = np.zeros(3), np.zeros(3), set()
+        q, qd = np.zeros(3), np.zeros(3)
+        have: set[int] = set()
         deadline = time.monotonic() + self.timeout
         while len(have) < 3:
             msg = self.bus.recv(timeout=max(0.0, deadline - time.monotonic()))

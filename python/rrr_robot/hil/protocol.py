@@ -79,7 +79,10 @@ def database() -> Any:
 def _crc(payload: bytes, name: str) -> int:
     from cantools.autosar.end_to_end import compute_profile2_crc
 
-    return int(compute_profile2_crc(payload, DATA_IDS[name]))
+    crc = compute_profile2_crc(payload, DATA_IDS[name])
+    if crc is None:  # cantools: payload too short for profile 2
+        raise FrameError(f"{name}: no E2E CRC for {len(payload)} bytes", "wrong DLC")
+    return crc
 
 
 def encode(name: str, signals: Mapping[str, float], *, corrupt_crc: bool = False) -> Any:
@@ -122,7 +125,9 @@ def decode(message: Any) -> tuple[str, dict[str, float]]:
 
 def _quantise(name: str, signals: Mapping[str, float]) -> dict[str, float]:
     msg = database().get_message_by_name(name)
-    return msg.decode(msg.encode({"Crc": 0, **signals}, strict=True), decode_choices=False)
+    values: dict[str, float] = msg.decode(msg.encode({"Crc": 0, **signals}, strict=True),
+                                          decode_choices=False)
+    return values
 
 
 def quantise_state(q_qd: FloatArray) -> FloatArray:

@@ -100,7 +100,7 @@ def excitation_experiment(model: Model, traj: FourierTrajectory, periods: int = 
                           step: float = 1e-3, sensors: Sensors = IDEAL,
                           gains: Gains = Gains()) -> Log:
     """Run the periodic excitation for whole periods; the plant starts on the reference."""
-    t = np.arange(round(periods * traj.period / step)) * step
+    t = np.arange(round(periods * traj.period / step), dtype=np.float64) * step
     q, qd, _ = traj.evaluate(t)
     return simulate(model, t, q, qd, sensors, gains)
 
@@ -153,7 +153,7 @@ def friction_reference(design: SweepDesign = SweepDesign(), step: float = 1e-3,
     qd_parts.append(np.zeros((round(design.hold / step), 3)))
     tags.append(np.zeros(qd_parts[-1].shape[0], dtype=int))
     qd = np.concatenate(qd_parts)
-    t = np.arange(qd.shape[0]) * step
+    t = np.arange(qd.shape[0], dtype=np.float64) * step
     q = np.asarray(design.pose) + cumulative_trapezoid(qd, t, axis=0, initial=0.0)
     return t, q, qd, np.concatenate(tags)
 

@@ -65,7 +65,8 @@ class FrictionFit:
     points: CurvePoints
 
     def predict(self, v: FloatArray) -> FloatArray:
-        return _basis(np.asarray(v, dtype=float), self.w) @ np.append(self.f, self.b)
+        u: FloatArray = _basis(np.asarray(v, dtype=float), self.w) @ np.append(self.f, self.b)
+        return u
 
 
 def _basis(v: FloatArray, w: FloatArray) -> FloatArray:
@@ -141,7 +142,8 @@ def _result(coef: FloatArray, w: FloatArray, points: CurvePoints, method: str) -
 
 def _projected(log_w: FloatArray, points: CurvePoints) -> FloatArray:
     a = _basis(points.v, np.exp(log_w))
-    return points.F - a @ sla.lstsq(a, points.F)[0]
+    residual: FloatArray = points.F - a @ sla.lstsq(a, points.F)[0]
+    return residual
 
 
 def fit_nls(points: CurvePoints, w_starts: FloatArray | None = None) -> FrictionFit:

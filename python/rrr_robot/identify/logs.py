@@ -58,9 +58,12 @@ class Log:
 
     def select(self, mask: np.ndarray) -> Log:
         """The rows where mask is true (sampling becomes non-uniform only if mask has gaps)."""
-        pick = (lambda a: None if a is None else a[mask])  # noqa: E731
+        def pick(a: FloatArray | None) -> FloatArray | None:
+            return None if a is None else a[mask]
+
+        joint = None if self.joint is None else self.joint[mask]
         return Log(self.t[mask], self.q[mask], self.u[mask], pick(self.qd), pick(self.qdd),
-                   pick(self.joint), self.source)
+                   joint, self.source)
 
     def to_csv(self, path: str | Path, comment: str = "") -> None:
         """Write in the documented format (optional columns only if present)."""
@@ -117,10 +120,15 @@ def read_log(path: str | Path, *, friction: bool = False) -> Log:
     if data.shape[1] != len(names):
         raise BadInputError(f"{path}: {data.shape[1]} values per row but {len(names)} columns")
     col = {n: data[:, k] for k, n in enumerate(names)}
-    stack = (lambda s: np.column_stack([col[f"{s}[{i}]"] for i in J])  # noqa: E731
-             if all(f"{s}[{i}]" in col for i in J) else None)
+
+    def stack(s: str) -> FloatArray:
+        return np.column_stack([col[f"{s}[{i}]"] for i in J])
+
+    def optional(s: str) -> FloatArray | None:
+        return stack(s) if all(f"{s}[{i}]" in col for i in J) else None
+
     joint = col["joint"].astype(int) if "joint" in col else None
-    return validate(Log(col["t"], stack("q"), stack("u"), stack("qd"), stack("qdd"), joint,
+    return validate(Log(col["t"], stack("q"), stack("u"), optional("qd"), optional("qdd"), joint,
                         str(path)))
 
 

@@ -59,7 +59,7 @@ def fmi2_callbacks(receiver: Receiver) -> fmi2CallbackFunctions:
     """
     key = next(_KEYS)
     try:
-        _RECEIVERS[key] = weakref.WeakMethod(receiver)  # type: ignore[arg-type]
+        _RECEIVERS[key] = weakref.WeakMethod(receiver)
     except TypeError:
         _RECEIVERS[key] = lambda: receiver
     cb = fmi2CallbackFunctions()

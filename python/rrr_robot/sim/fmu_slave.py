@@ -65,7 +65,8 @@ class _Fmi2:
     def vr_array(self, vrs: Sequence[int]) -> ct.Array[Any]:
         from fmpy.fmi2 import fmi2ValueReference
 
-        return (fmi2ValueReference * len(vrs))(*vrs)
+        arr: ct.Array[Any] = (fmi2ValueReference * len(vrs))(*vrs)
+        return arr
 
     def setup(self, start_time: float) -> None:
         self.fmu.setupExperiment(startTime=start_time)
@@ -112,7 +113,8 @@ class _Fmi3:
     def vr_array(self, vrs: Sequence[int]) -> ct.Array[Any]:
         from fmpy.fmi3 import fmi3ValueReference
 
-        return (fmi3ValueReference * len(vrs))(*vrs)
+        arr: ct.Array[Any] = (fmi3ValueReference * len(vrs))(*vrs)
+        return arr
 
     def setup(self, start_time: float) -> None:
         """FMI 3 takes the start time when initialization begins."""
@@ -135,6 +137,10 @@ class _Fmi3:
                             ct.byref(terminate), ct.byref(early), ct.byref(self._last))
 
 
+#: The calls of each FMI version, by the model description's fmiVersion.
+_CALLS: dict[str, type[_Fmi2] | type[_Fmi3]] = {"2.0": _Fmi2, "3.0": _Fmi3}
+
+
 class FmuSlave:
     """An instantiated co-simulation FMU (see module docstring)."""
 
@@ -147,7 +153,7 @@ class FmuSlave:
         md = read_model_description(str(self.path))
         if md.coSimulation is None:
             raise CosimError(f"{self.path} has no Co-Simulation interface")
-        calls = {"2.0": _Fmi2, "3.0": _Fmi3}.get(md.fmiVersion)
+        calls = _CALLS.get(md.fmiVersion)
         if calls is None:
             raise CosimError(f"{self.path}: FMI version {md.fmiVersion} is not supported "
                              "(2.0 and 3.0 are)")

@@ -44,7 +44,8 @@ def _font(name: str) -> dict[str, Any]:
         raise BadInputError(
             f"unknown Hershey font {name!r}; available: {', '.join(font.default_font_names)}"
         ) from exc
-    return font.all_glyphs
+    glyphs: dict[str, Any] = font.all_glyphs
+    return glyphs
 
 
 def _glyph(ch: str, latin_font: str, greek_font: str) -> Any:

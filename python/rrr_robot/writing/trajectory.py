@@ -234,11 +234,12 @@ def _speed_limit(path: WritingPath, s: FloatArray, spec: WritingSpec) -> FloatAr
     curvature = np.linalg.norm(np.cross(d1, d2), axis=1) / np.maximum(norm1, 1e-12) ** 3
     v_tip = np.sqrt(spec.lateral_acc / np.maximum(curvature, 1e-12))
     v_tip = np.clip(v_tip, spec.min_speed, spec.peak_speed)
-    limit = v_tip / np.maximum(norm1, 1e-12)
+    limit: FloatArray = v_tip / np.maximum(norm1, 1e-12)
     limit = np.minimum(limit, np.sqrt(spec.lift_acc / np.maximum(np.abs(d2[:, 1]), 1e-12)))
     limit = np.minimum(limit, np.sqrt(spec.max_acc / np.maximum(norm2, 1e-12)))
     norm3 = np.linalg.norm(np.gradient(d2, s, axis=0), axis=1)
-    return np.minimum(limit, np.cbrt(spec.max_jerk / np.maximum(norm3, 1e-12)))
+    limit = np.minimum(limit, np.cbrt(spec.max_jerk / np.maximum(norm3, 1e-12)))
+    return limit
 
 
 def _rest_to_rest(limit: FloatArray, ds: float, acc: FloatArray) -> FloatArray:
@@ -344,7 +345,7 @@ def make_reference(model: Model, spec: WritingSpec | None = None) -> Reference:
     path = writing_path(spec)
     margin = check_workspace(model, path, spec)
     law = timing_law(path, spec)
-    t = np.arange(math.floor(law.duration / spec.dt + 1e-9) + 1) * spec.dt
+    t = np.arange(math.floor(law.duration / spec.dt + 1e-9) + 1, dtype=np.float64) * spec.dt
     s, sd, sdd = law.evaluate(t)
     c, c1, c2 = path.evaluate(s)
     x = c
