@@ -19,7 +19,7 @@ from fmu_support import COMMITTED_XML, FMU_NAMES, STEP, Slave, fmu_file, joint
 
 MODEL_PARAMS = (
     [("d1", "m"), ("a2", "m"), ("a3", "m"), ("d2", "m"), ("d3", "m"), ("g", "m/s2")]
-    + [(f"p[{i}]", None) for i in range(1, 17)]
+    + [(f"p[{i}]", "kg.m" if i in (3, 4, 15, 16) else "kg.m2") for i in range(1, 17)]
     + [(n, "N.m/V") for n in joint("kt")]
     + [(f"f[{i},{k}]", "V") for i in (1, 2, 3) for k in (1, 2, 3)]
     + [(f"w[{i},{k}]", "s/rad") for i in (1, 2, 3) for k in (1, 2, 3)]
