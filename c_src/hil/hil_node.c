@@ -4,6 +4,7 @@
 #include "hil_node.h"
 
 #include <errno.h>
+#include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <math.h>
@@ -52,13 +53,54 @@ int rrr_hil_parse_vec3(const char *s, double v[3])
     return 0;
 }
 
-/* The one piece of process state of a node: set from the signal handler. */
+/* ---- exit statuses --------------------------------------------------------------------------- */
+
+const char *rrr_hil_exit_str(int code)
+{
+    switch (code) {
+    case RRR_HIL_EXIT_OK:
+        return "completed";
+    case RRR_HIL_EXIT_USAGE:
+        return "usage";
+    case RRR_HIL_EXIT_SETUP:
+        return "setup failed";
+    case RRR_HIL_EXIT_PEER_LOST:
+        return "peer lost";
+    case RRR_HIL_EXIT_INTERRUPTED:
+        return "interrupted";
+    case RRR_HIL_EXIT_FAULT:
+        return "fault";
+    case RRR_HIL_EXIT_STOPPED_EARLY:
+        return "stopped early by the controller";
+    default:
+        return "unknown";
+    }
+}
+
+int rrr_hil_report_exit(const char *prog, int code, uint32_t period, const char *fmt, ...)
+{
+    char reason[400];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(reason, sizeof reason, fmt, ap);
+    va_end(ap);
+    for (char *c = reason; *c != '\0'; ++c) {
+        if ((unsigned char)*c < 0x20u || (unsigned char)*c == 0x7Fu) {
+            *c = '?';
+        }
+    }
+    fprintf(stderr, "%s: exit %d (%s) at period %u: %s\n", prog, code, rrr_hil_exit_str(code),
+            period, reason);
+    fflush(stderr);
+    return code;
+}
+
+/* The one piece of process state of a node: set from the signal handler (the signal number). */
 static volatile sig_atomic_t stop_flag = 0;
 
 static void on_stop_signal(int sig)
 {
-    (void)sig;
-    stop_flag = 1;
+    stop_flag = sig;
 }
 
 void rrr_hil_install_signals(void)
@@ -71,6 +113,20 @@ void rrr_hil_install_signals(void)
 int rrr_hil_stop_requested(void)
 {
     return stop_flag != 0;
+}
+
+const char *rrr_hil_stop_signal_name(void)
+{
+    switch (stop_flag) {
+    case 0:
+        return "";
+    case SIGINT:
+        return "SIGINT";
+    case SIGTERM:
+        return "SIGTERM";
+    default:
+        return "signal";
+    }
 }
 
 /* 1 when name is exactly fmt ("x[%d]%n" or "x[%d,%d]%n") with indices in 1..max. */
@@ -156,7 +212,9 @@ int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const 
     const int is_connect = strcmp(a, "--connect") == 0;
     const int is_sc = strcmp(a, "--socketcan") == 0;
     const int is_channel = strcmp(a, "--channel") == 0;
-    if (!is_listen && !is_connect && !is_sc && !is_channel) {
+    const int is_handshake = strcmp(a, "--handshake-timeout-ms") == 0;
+    const int is_idle = strcmp(a, "--idle-timeout-ms") == 0;
+    if (!is_listen && !is_connect && !is_sc && !is_channel && !is_handshake && !is_idle) {
         return 0;
     }
     if (*i + 1 >= argc) {
@@ -164,6 +222,18 @@ int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const 
         return -1;
     }
     const char *v = argv[++*i];
+    if (is_handshake || is_idle) {
+        char *end;
+        errno = 0;
+        const long ms = strtol(v, &end, 10);
+        if (end == v || *end != '\0' || errno != 0 || ms < 1 || ms > RRR_HIL_SCD_TIMEOUT_MAX_MS) {
+            fprintf(stderr, "%s: %s: expected milliseconds 1..%d, got '%s'\n", prog, a,
+                    RRR_HIL_SCD_TIMEOUT_MAX_MS, v);
+            return -1;
+        }
+        *(is_idle ? &o->idle_timeout_ms : &o->handshake_timeout_ms) = (int)ms;
+        return 1;
+    }
     if (is_channel) {
         if (strlen(v) == 0u || strlen(v) >= sizeof o->channel) {
             fprintf(stderr, "%s: --channel: 1..31 characters\n", prog);
@@ -198,10 +268,16 @@ int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_
                       unsigned n_rx, const char *prog)
 {
     const char *channel = o->channel[0] ? o->channel : "bench0";
+    const int handshake_ms =
+        o->handshake_timeout_ms > 0 ? o->handshake_timeout_ms : RRR_HIL_SCD_HANDSHAKE_TIMEOUT_MS;
     int rc;
     switch (o->kind) {
     case 1:
         rc = rrr_hil_scd_listen(&l->scd, o->host, o->port, channel);
+        if (rc == 0 && rrr_hil_scd_set_timeouts(&l->scd, handshake_ms, rrr_hil_link_idle_ms(o)) != 0) {
+            rrr_hil_close(&l->base);
+            rc = -1;
+        }
         if (rc == 0) {
             printf("%s: listening on %s:%u (socketcand, bus %s)\n", prog, o->host,
                    (unsigned)l->scd.port, channel);
@@ -211,6 +287,10 @@ int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_
     case 2:
         rc = rrr_hil_scd_connect(&l->scd, o->host, o->port, channel,
                                  o->connect_wait_ms > 0 ? o->connect_wait_ms : 5000);
+        if (rc == 0 && rrr_hil_scd_set_timeouts(&l->scd, handshake_ms, rrr_hil_link_idle_ms(o)) != 0) {
+            rrr_hil_close(&l->base);
+            rc = -1;
+        }
         break;
     case 3:
         rc = rrr_hil_socketcan_open(&l->sc, o->ifname, rx_ids, n_rx);
@@ -227,16 +307,23 @@ int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_
     return 0;
 }
 
+int rrr_hil_link_idle_ms(const rrr_hil_link_opts *o)
+{
+    return o->idle_timeout_ms > 0 ? o->idle_timeout_ms : RRR_HIL_SCD_IDLE_TIMEOUT_MS;
+}
+
 void rrr_hil_link_json(FILE *out, const rrr_hil_transport *t)
 {
     const rrr_hil_transport_err *e = &t->err;
     fprintf(out,
             "\"transport\": \"%s\", \"rx_frames\": %llu, \"tx_frames\": %llu, "
             "\"rx_malformed\": %u, \"tx_dropped\": %u, \"tx_failed\": %u, \"bus_off\": %u, "
-            "\"bus_errors\": %u, \"disconnects\": %u, \"connects\": %u",
+            "\"bus_errors\": %u, \"disconnects\": %u, \"connects\": %u, \"refused\": %u, "
+            "\"handshake_timeouts\": %u, \"idle_timeouts\": %u",
             t->name ? t->name : "", (unsigned long long)e->rx_frames,
             (unsigned long long)e->tx_frames, e->rx_malformed, e->tx_dropped, e->tx_failed,
-            e->bus_off, e->bus_errors, e->disconnects, e->connects);
+            e->bus_off, e->bus_errors, e->disconnects, e->connects, e->refused,
+            e->handshake_timeouts, e->idle_timeouts);
 }
 
 /* ---- real time ------------------------------------------------------------------------------- */

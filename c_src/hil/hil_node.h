@@ -1,7 +1,8 @@
 /**
  * @file hil_node.h
- * @brief What both bench nodes share: command-line pieces, opening the transport they name,
- *        the real-time loop with its statistics, and the reference table of the controller.
+ * @brief What both bench nodes share: exit statuses, command-line pieces, opening the transport
+ *        they name, the real-time loop with its statistics, and the reference table of the
+ *        controller.
  */
 #ifndef RRR_HIL_NODE_H
 #define RRR_HIL_NODE_H
@@ -13,6 +14,40 @@
 #include "hil_transport.h"
 #include "rrr/rrr_model.h"
 
+/* ---- exit statuses --------------------------------------------------------------------------- */
+
+/** Exit status of rrr_hil_plant and rrr_hil_controller. A node that ends before it completes
+ *  never exits 0, and prints why in one line (rrr_hil_report_exit). */
+typedef enum rrr_hil_exit {
+    RRR_HIL_EXIT_OK = 0,          ///< completed: controller: every period of the reference, then
+                                  ///< StopCmd (end of run); plant: the controller's StopCmd (end of
+                                  ///< run), or --duration in real time
+    RRR_HIL_EXIT_USAGE = 1,       ///< bad command line
+    RRR_HIL_EXIT_SETUP = 2,       ///< setup failed (FMU, reference, model, log file, transport)
+    RRR_HIL_EXIT_PEER_LOST = 3,   ///< the peer hung up, stayed silent past the timeout, or the
+                                  ///< transport failed (bus-off, I/O error)
+    RRR_HIL_EXIT_INTERRUPTED = 4, ///< SIGINT or SIGTERM
+    RRR_HIL_EXIT_FAULT = 5,       ///< a fault of the node itself: the FMU failed (plant), a command
+                                  ///< that cannot be encoded (controller)
+    RRR_HIL_EXIT_STOPPED_EARLY = 6 ///< plant: the controller's StopCmd gave a reason other than
+                                   ///< the end of the run (it was interrupted, faulted, lost us)
+} rrr_hil_exit;
+
+/** Static name of an exit status ("completed", "peer lost", ...). */
+const char *rrr_hil_exit_str(int code);
+
+/**
+ * @brief Print the one line that says how the node ended, on stderr:
+ *        "PROG: exit CODE (NAME) at period K: REASON". Control characters in the reason (it may
+ *        quote what a peer sent) are replaced by '?', so it stays one line.
+ * @return code
+ */
+int rrr_hil_report_exit(const char *prog, int code, uint32_t period, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
 /* ---- transport from the command line --------------------------------------------------------- */
 
 /** Which transport, from --listen HOST:PORT, --connect HOST:PORT or --socketcan IF. */
@@ -23,6 +58,9 @@ typedef struct rrr_hil_link_opts {
     char ifname[32];   ///< SocketCAN interface
     char channel[32];  ///< socketcand bus name (--channel, default "bench0")
     int connect_wait_ms; ///< client: how long to retry connecting (5000)
+    int handshake_timeout_ms; ///< socketcand server: --handshake-timeout-ms (0: default, 2000)
+    int idle_timeout_ms;      ///< --idle-timeout-ms (0: default, 5000): socketcand idle timeout,
+                              ///< and the plant's limit on a silent controller
 } rrr_hil_link_opts;
 
 /** Storage for any transport. */
@@ -37,6 +75,8 @@ typedef union rrr_hil_link {
 void rrr_hil_install_signals(void);
 /** 1 once SIGINT or SIGTERM arrived. */
 int rrr_hil_stop_requested(void);
+/** Name of the stop signal that arrived ("SIGINT", "SIGTERM"), "" if none. */
+const char *rrr_hil_stop_signal_name(void);
 
 /** Parse "HOST:PORT". 0 or -1. */
 int rrr_hil_parse_hostport(const char *s, char host[64], uint16_t *port);
@@ -47,13 +87,21 @@ int rrr_hil_parse_vec3(const char *s, double v[3]);
  *  model is not validated here (call rrr_model_validate after the last one). 0, or -1 with a
  *  message in err. */
 int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, size_t err_len);
-/** Handle a transport option (argv[*i] and its value); 1 consumed, 0 not a transport option,
+/** Handle a transport option (argv[*i] and its value: --listen, --connect, --socketcan,
+ *  --channel, --handshake-timeout-ms, --idle-timeout-ms); 1 consumed, 0 not a transport option,
  *  -1 bad value (message printed). */
 int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog);
 /** Open the transport; SocketCAN receives only @p rx_ids. Prints "PROG: listening on H:P" for a
  *  server. 0 or -1 (message printed to stderr). */
 int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_t *rx_ids,
                       unsigned n_rx, const char *prog);
+/** The idle timeout in effect, ms (--idle-timeout-ms or RRR_HIL_SCD_IDLE_TIMEOUT_MS). */
+int rrr_hil_link_idle_ms(const rrr_hil_link_opts *o);
+/** Usage lines of the transport options. */
+#define RRR_HIL_LINK_USAGE                                                                        \
+    "       [--channel NAME] [--handshake-timeout-ms N] [--idle-timeout-ms N]\n"                \
+    "  socketcand server: one session; a client must finish the handshake within\n"            \
+    "  --handshake-timeout-ms (2000) and may stay silent at most --idle-timeout-ms (5000)\n"
 /** Print the transport's counters as JSON members (no braces). */
 void rrr_hil_link_json(FILE *out, const rrr_hil_transport *t);
 

@@ -278,6 +278,7 @@ static void drop_peer(rrr_hil_scd *t)
     }
     t->len = 0;
     t->phase = 0;
+    t->tx_broken = 0;
     if (t->server && t->session == RRR_HIL_SCD_SESSION_ACTIVE) {
         t->session = RRR_HIL_SCD_SESSION_OVER;
     }
@@ -548,6 +549,24 @@ static rrr_hil_io session_lost(rrr_hil_scd *t)
     return RRR_HIL_IO_DISCONNECTED;
 }
 
+/* The client stopped taking our frames: deliver what it had sent already (its last frames, a
+ * StopCmd among them, may still be queued), then the session is over. */
+static rrr_hil_io drain_broken_session(rrr_hil_scd *t, rrr_hil_frame *f)
+{
+    for (;;) {
+        if (take_message(t, f) == 1) {
+            ++t->base.err.rx_frames;
+            return RRR_HIL_IO_OK;
+        }
+        struct pollfd q = {.fd = t->fd, .events = POLLIN};
+        int e = 0;
+        if (poll(&q, 1, 0) <= 0 ||
+            read_into(t->fd, t->buf, &t->len, (unsigned)sizeof t->buf, &e) <= 0) {
+            return session_lost(t); /* last_error still says why the send failed */
+        }
+    }
+}
+
 static rrr_hil_io server_recv(rrr_hil_scd *t, rrr_hil_frame *f, int timeout_us)
 {
     const int64_t deadline = timeout_us < 0 ? -1 : now_us() + timeout_us;
@@ -555,6 +574,9 @@ static rrr_hil_io server_recv(rrr_hil_scd *t, rrr_hil_frame *f, int timeout_us)
         if (t->session == RRR_HIL_SCD_SESSION_OVER) {
             (void)accept_clients(t); /* newcomers get the protocol's error, not a hang */
             return RRR_HIL_IO_DISCONNECTED;
+        }
+        if (t->fd >= 0 && t->tx_broken) {
+            return drain_broken_session(t, f);
         }
         if (t->fd >= 0 && take_message(t, f) == 1) {
             ++t->base.err.rx_frames;
@@ -714,7 +736,7 @@ static rrr_hil_io scd_recv(rrr_hil_transport *base, rrr_hil_frame *f, int timeou
 static rrr_hil_io scd_send(rrr_hil_transport *base, const rrr_hil_frame *f)
 {
     rrr_hil_scd *t = (rrr_hil_scd *)base;
-    if (t->fd < 0) {
+    if (t->fd < 0 || t->tx_broken) {
         ++t->base.err.tx_dropped;
         return RRR_HIL_IO_DISCONNECTED;
     }
@@ -750,7 +772,7 @@ static rrr_hil_io scd_send(rrr_hil_transport *base, const rrr_hil_frame *f)
     if (write_all(t, msg, (size_t)n) != 0) {
         ++t->base.err.tx_failed;
         if (t->server) {
-            (void)session_lost(t);
+            t->tx_broken = 1; /* recv still delivers what the client had sent, then ends it */
         } else {
             drop_peer(t);
         }
@@ -760,11 +782,30 @@ static rrr_hil_io scd_send(rrr_hil_transport *base, const rrr_hil_frame *f)
     return RRR_HIL_IO_OK;
 }
 
+/* Close without a reset: our FIN, then the peer's frames are read away until it closes too
+ * (at most wait_ms), so that it reads everything we sent (a StopCmd last of all) instead of
+ * losing it to the reset that closing with unread data would cause. */
+static void linger_close(int fd, int wait_ms)
+{
+    (void)shutdown(fd, SHUT_WR);
+    const int64_t end = now_us() + (int64_t)wait_ms * 1000;
+    char sink[512];
+    for (;;) {
+        const int64_t now = now_us();
+        struct pollfd q = {.fd = fd, .events = POLLIN};
+        if (now >= end || poll(&q, 1, wait_ms_until(end, now)) <= 0 ||
+            read(fd, sink, sizeof sink) <= 0) {
+            break;
+        }
+    }
+    close(fd);
+}
+
 static void scd_close(rrr_hil_transport *base)
 {
     rrr_hil_scd *t = (rrr_hil_scd *)base;
     if (t->fd >= 0) {
-        close(t->fd);
+        linger_close(t->fd, t->idle_timeout_ms < 500 ? t->idle_timeout_ms : 500);
         t->fd = -1;
     }
     for (unsigned i = 0; i < RRR_HIL_SCD_MAX_PENDING; ++i) {

@@ -67,7 +67,8 @@ struct rrr_hil_transport {
 rrr_hil_io rrr_hil_send(rrr_hil_transport *t, const rrr_hil_frame *f);
 /** Receive one frame; timeout_us < 0 blocks, 0 polls. */
 rrr_hil_io rrr_hil_recv(rrr_hil_transport *t, rrr_hil_frame *f, int timeout_us);
-/** Close (idempotent). */
+/** Close (idempotent). socketcand: a lingering close (our FIN, then the peer's data is read away
+ *  until it closes, at most 500 ms), so the peer reads our last frames rather than a reset. */
 void rrr_hil_close(rrr_hil_transport *t);
 /** Static name of an io code. */
 const char *rrr_hil_io_str(rrr_hil_io io);
@@ -138,6 +139,8 @@ typedef struct rrr_hil_scd {
     int idle_timeout_ms;      ///< see RRR_HIL_SCD_IDLE_TIMEOUT_MS
     rrr_hil_scd_session session; ///< server: state of its one session
     int64_t last_rx_us;       ///< server: CLOCK_MONOTONIC time of the session's last message, us
+    int tx_broken;            ///< server: a send to the session failed; recv delivers what the
+                              ///< client had sent, then the session is over
     rrr_hil_scd_pending pending[RRR_HIL_SCD_MAX_PENDING]; ///< server: handshakes in progress
 } rrr_hil_scd;
 

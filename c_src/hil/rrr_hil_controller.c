@@ -7,22 +7,29 @@
  *
  * Lockstep (default): heartbeat "operational" first; then for k = 0 .. n-1: wait for the three
  * JointState frames of period k (alive counter k mod 16), compute u_k, send VoltageCmd(k) and,
- * for k < n-1, Sync(k). At the end: heartbeat "stopped". Same sequence as the FMPy master
- * (cosim.run_cosim): the controller sees the plant's state at t_k, the plant integrates over
- * [t_k, t_k+1] with u_k held.
+ * for k < n-1, Sync(k). At the end: StopCmd (E2E protected, the next alive counter of the
+ * command sequence, reason "end of run"), then the heartbeat "stopped" (informational). Same
+ * sequence as the FMPy master (cosim.run_cosim): the controller sees the plant's state at t_k,
+ * the plant integrates over [t_k, t_k+1] with u_k held. A run that ends early (signal, fault,
+ * plant lost) still sends StopCmd, with the reason, when it can.
  * Real time: every 1 ms of CLOCK_MONOTONIC (clock_nanosleep TIMER_ABSTIME) with the newest
  * complete joint state; a state older than 3 periods is stale: the controller then sends
  * Enable = 0 (0 V). Jitter and deadline misses are printed at exit.
  *
- * Output: a summary on stderr and "RRR_HIL_SUMMARY {json}" on stdout; with --log, one CSV row per
- * period (k, t, measured q and qd, u, u_n, u_c).
- * Exit status: 0 finished; 1 usage; 2 setup failed; 3 the plant was lost or stayed silent.
+ * Output: a summary on stderr and "RRR_HIL_SUMMARY {json}" on stdout, then one line on stderr
+ * that says how the run ended ("rrr_hil_controller: exit 4 (interrupted) at period 17: SIGINT");
+ * with --log, one CSV row per period (k, t, measured q and qd, u, u_n, u_c).
+ * Exit status (rrr_hil_exit, hil_node.h): 0 every period done and StopCmd sent; 1 usage; 2 setup
+ * failed; 3 the plant was lost (hang-up, no joint state within --timeout-ms, transport error);
+ * 4 SIGINT/SIGTERM; 5 a fault of the controller (a command it cannot encode).
  */
 #define _POSIX_C_SOURCE 200809L
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "hil_codec.h"
 #include "hil_node.h"
@@ -61,6 +68,10 @@ typedef struct ctrl {
     rrr_hil_plant_status status; /* newest PlantStatus */
     uint32_t status_faulty;  /* PlantStatus frames with a fault */
     uint8_t hb_counter;
+    uint8_t last_cmd_counter; /* alive counter of the last VoltageCmd sent */
+    uint32_t cmds_sent;     /* VoltageCmd frames sent */
+    uint32_t k;             /* current period (for the exit line) */
+    char why[320];          /* how the run ended (the exit line) */
     FILE *log;
 } ctrl;
 
@@ -68,13 +79,15 @@ static void usage(void)
 {
     fprintf(stderr,
             "usage: " PROG " --reference REF.csv (--connect HOST:PORT | --listen HOST:PORT |\n"
-            "       --socketcan IF) [--channel NAME] [--realtime [--fifo PRIO] [--mlock]]\n"
+            "       --socketcan IF)\n" RRR_HIL_LINK_USAGE
+            "       [--realtime [--fifo PRIO] [--mlock]]\n"
             "       [--kp a,b,c] [--kd a,b,c] [--no-feedforward] [--set NAME=VALUE]...\n"
             "       [--timeout-ms N] [--log FILE.csv]\n"
             "  the model is the default robot (rrr_model_default) with the --set parameters\n"
             "  (named as in the FMUs: d1, a2, a3, d2, d3, g, u_max, p[k], kt[i], b[i], f[i,k],\n"
             "  w[i,k]), so the controller's model may differ from the plant's; gains default\n"
-            "  to rrr_ctc_gains_default\n");
+            "  to rrr_ctc_gains_default; --timeout-ms (5000): longest wait for a joint state\n"
+            "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault\n");
 }
 
 static int parse_args(int argc, char **argv, opts *o)
@@ -142,21 +155,54 @@ static int parse_args(int argc, char **argv, opts *o)
     return 0;
 }
 
-static int send_frame(ctrl *c, const rrr_hil_frame *f)
+static int64_t now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
+}
+
+/* Record how the run ends; returns code. */
+static int end_run(ctrl *c, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static int end_run(ctrl *c, int code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(c->why, sizeof c->why, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+static int interrupted(ctrl *c)
+{
+    return end_run(c, RRR_HIL_EXIT_INTERRUPTED, "%s", rrr_hil_stop_signal_name());
+}
+
+static int plant_lost(ctrl *c, const char *what, rrr_hil_io io)
+{
+    return end_run(c, RRR_HIL_EXIT_PEER_LOST, "plant lost: %s: %s%s%s", what, rrr_hil_io_str(io),
+                   c->tr->last_error[0] ? ": " : "", c->tr->last_error);
+}
+
+/* Send one frame; 0, or RRR_HIL_EXIT_PEER_LOST with why set. */
+static int send_frame(ctrl *c, const rrr_hil_frame *f, const char *what)
 {
     const rrr_hil_io io = rrr_hil_send(c->tr, f);
-    if (io != RRR_HIL_IO_OK) {
-        fprintf(stderr, PROG ": send: %s: %s\n", rrr_hil_io_str(io), c->tr->last_error);
-        return -1;
-    }
-    return 0;
+    return io == RRR_HIL_IO_OK ? 0 : plant_lost(c, what, io);
 }
 
 static int send_heartbeat(ctrl *c, uint8_t nmt)
 {
     rrr_hil_frame f;
     const rrr_hil_heartbeat hb = {1u, nmt, c->hb_counter++};
-    return rrr_hil_encode_heartbeat(&hb, &f) == 0 ? send_frame(c, &f) : -1;
+    if (rrr_hil_encode_heartbeat(&hb, &f) != 0) {
+        return end_run(c, RRR_HIL_EXIT_FAULT, "heartbeat cannot be encoded");
+    }
+    return send_frame(c, &f, "send heartbeat");
 }
 
 /* Feed one frame; returns 1 when it completed the state with alive counter `counter`. */
@@ -229,80 +275,141 @@ static void command(ctrl *c, const opts *o, size_t k, int enable, rrr_hil_voltag
     }
 }
 
+/* VoltageCmd(k) and, with_sync, Sync(k): 0, or an exit status with why set. */
 static int send_period(ctrl *c, const rrr_hil_voltage_cmd *cmd, uint32_t k, int with_sync)
 {
     rrr_hil_frame f;
-    if (rrr_hil_encode_voltage_cmd(cmd, &f) != 0 || send_frame(c, &f) != 0) {
-        return -1;
+    if (rrr_hil_encode_voltage_cmd(cmd, &f) != 0) {
+        return end_run(c, RRR_HIL_EXIT_FAULT,
+                       "VoltageCmd cannot be encoded: u = (%.6g, %.6g, %.6g) V outside the DBC "
+                       "range [-30, 30] V (is u_max above 30 V?)",
+                       cmd->u_V[0], cmd->u_V[1], cmd->u_V[2]);
     }
+    int rc = send_frame(c, &f, "send VoltageCmd");
+    if (rc != 0) {
+        return rc;
+    }
+    c->last_cmd_counter = cmd->counter;
+    ++c->cmds_sent;
     const rrr_hil_sync s = {k};
-    if (with_sync && (rrr_hil_encode_sync(&s, &f) != 0 || send_frame(c, &f) != 0)) {
-        return -1;
+    if (with_sync) {
+        if (rrr_hil_encode_sync(&s, &f) != 0) {
+            return end_run(c, RRR_HIL_EXIT_FAULT, "Sync cannot be encoded");
+        }
+        rc = send_frame(c, &f, "send Sync");
     }
-    if (k % RRR_HIL_HEARTBEAT_PERIODS == 0u && k > 0u) {
-        return send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL);
+    if (rc == 0 && k % RRR_HIL_HEARTBEAT_PERIODS == 0u && k > 0u) {
+        rc = send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL);
     }
-    return 0;
+    return rc;
+}
+
+/* The end of every run that got a transport: StopCmd (the next alive counter of the command
+ * sequence, the reason from the exit status), then the heartbeat "stopped". After a complete run
+ * a StopCmd that cannot be sent loses the plant; otherwise both are best effort. */
+static int finish(ctrl *c, int rc)
+{
+    rrr_hil_stop_reason reason = RRR_HIL_STOP_PLANT_LOST;
+    if (rc == RRR_HIL_EXIT_OK) {
+        reason = RRR_HIL_STOP_END_OF_RUN;
+    } else if (rc == RRR_HIL_EXIT_INTERRUPTED) {
+        reason = RRR_HIL_STOP_INTERRUPTED;
+    } else if (rc == RRR_HIL_EXIT_FAULT) {
+        reason = RRR_HIL_STOP_FAULT;
+    }
+    const rrr_hil_stop_cmd stop = {
+        (uint8_t)(c->cmds_sent > 0u ? (c->last_cmd_counter + 1u) & 15u : 0u), (uint8_t)reason};
+    rrr_hil_frame f;
+    if (rrr_hil_encode_stop_cmd(&stop, &f) != 0) {
+        return rc == RRR_HIL_EXIT_OK ? end_run(c, RRR_HIL_EXIT_FAULT, "StopCmd cannot be encoded")
+                                     : rc;
+    }
+    const rrr_hil_io io = rrr_hil_send(c->tr, &f);
+    if (io != RRR_HIL_IO_OK && rc == RRR_HIL_EXIT_OK) {
+        rc = plant_lost(c, "send StopCmd", io);
+    }
+    const rrr_hil_heartbeat hb = {1u, RRR_HIL_NMT_STOPPED, c->hb_counter++};
+    if (rrr_hil_encode_heartbeat(&hb, &f) == 0) {
+        (void)rrr_hil_send(c->tr, &f); /* informational: the plant may be gone already */
+    }
+    return rc;
+}
+
+/* Wait up to --timeout-ms for a frame, in slices so that SIGINT/SIGTERM end the wait at once.
+ * want < 0: any frame of the bench; else the complete joint state with alive counter `want`.
+ * 0, or an exit status with why set. */
+static int wait_frames(ctrl *c, const opts *o, int want, const char *what)
+{
+    const int64_t deadline = now_ms() + o->timeout_ms;
+    for (;;) {
+        if (rrr_hil_stop_requested()) {
+            return interrupted(c);
+        }
+        const int64_t left = deadline - now_ms();
+        if (left <= 0) {
+            return end_run(c, RRR_HIL_EXIT_PEER_LOST, "plant lost: no %s within %d ms (--timeout-ms)",
+                           what, o->timeout_ms);
+        }
+        rrr_hil_frame f;
+        const rrr_hil_io io = rrr_hil_recv(c->tr, &f, (int)(left < 100 ? left : 100) * 1000);
+        if (io == RRR_HIL_IO_TIMEOUT) {
+            continue;
+        }
+        if (io != RRR_HIL_IO_OK) {
+            return plant_lost(c, what, io);
+        }
+        if (handle(c, &f) ? (want < 0 || c->pending == (uint8_t)want) : want < 0) {
+            return 0;
+        }
+    }
 }
 
 /* As a socketcand server, the controller may send nothing before the client's first frame (the
  * plant's boot-up heartbeat): wait for it. */
 static int wait_for_peer(ctrl *c, const opts *o)
 {
-    if (o->link.kind != 1) {
-        return 0;
-    }
-    rrr_hil_frame f;
-    for (;;) {
-        const rrr_hil_io io = rrr_hil_recv(c->tr, &f, o->timeout_ms * 1000);
-        if (io == RRR_HIL_IO_OK) {
-            (void)handle(c, &f);
-            return 0;
-        }
-        if (io != RRR_HIL_IO_DISCONNECTED) {
-            fprintf(stderr, PROG ": no plant connected within %d ms (%s)\n", o->timeout_ms,
-                    rrr_hil_io_str(io));
-            return -1;
-        }
-    }
+    return o->link.kind == 1 ? wait_frames(c, o, -1, "plant connected") : 0;
 }
 
 static int run_lockstep(ctrl *c, const opts *o)
 {
-    if (wait_for_peer(c, o) != 0 || send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL) != 0) {
-        return 3;
+    int rc = wait_for_peer(c, o);
+    if (rc == 0) {
+        rc = send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL);
     }
-    for (size_t k = 0; k < c->ref.n && !rrr_hil_stop_requested(); ++k) {
-        const uint8_t want = (uint8_t)(k & 15u);
-        int complete = 0;
-        while (!complete) {
-            rrr_hil_frame f;
-            const rrr_hil_io io = rrr_hil_recv(c->tr, &f, o->timeout_ms * 1000);
-            if (io != RRR_HIL_IO_OK) {
-                fprintf(stderr, PROG ": period %zu: waiting for the joint state: %s%s%s\n", k,
-                        rrr_hil_io_str(io), c->tr->last_error[0] ? ": " : "", c->tr->last_error);
-                return 3;
-            }
-            complete = handle(c, &f) && c->pending == want;
-        }
-        rrr_hil_voltage_cmd cmd;
-        command(c, o, k, 1, &cmd);
-        if (send_period(c, &cmd, (uint32_t)k, k + 1u < c->ref.n) != 0) {
-            return 3;
+    for (size_t k = 0; k < c->ref.n && rc == 0; ++k) {
+        c->k = (uint32_t)k;
+        rc = wait_frames(c, o, (int)(k & 15u), "joint state");
+        if (rc == 0) {
+            rrr_hil_voltage_cmd cmd;
+            command(c, o, k, 1, &cmd);
+            rc = send_period(c, &cmd, (uint32_t)k, k + 1u < c->ref.n);
         }
     }
-    return send_heartbeat(c, RRR_HIL_NMT_STOPPED) == 0 ? 0 : 3;
+    if (rc == 0) {
+        c->k = (uint32_t)c->ref.n;
+        rc = end_run(c, RRR_HIL_EXIT_OK, "all %zu periods of the reference", c->ref.n);
+    }
+    return finish(c, rc);
 }
 
 static int run_realtime(ctrl *c, const opts *o)
 {
     rrr_hil_rt rt;
     if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, (uint32_t)c->ref.n, o->fifo_prio, o->mlock) != 0) {
-        return 2;
+        return end_run(c, RRR_HIL_EXIT_SETUP, "out of memory");
     }
-    int rc = (wait_for_peer(c, o) == 0 && send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL) == 0) ? 0 : 3;
+    int rc = wait_for_peer(c, o);
+    if (rc == 0) {
+        rc = send_heartbeat(c, RRR_HIL_NMT_OPERATIONAL);
+    }
     c->state_age = STALE_PERIODS + 1u; /* no state yet */
-    for (size_t k = 0; k < c->ref.n && rc == 0 && !rrr_hil_stop_requested(); ++k) {
+    for (size_t k = 0; k < c->ref.n && rc == 0; ++k) {
+        c->k = (uint32_t)k;
+        if (rrr_hil_stop_requested()) {
+            rc = interrupted(c);
+            break;
+        }
         rrr_hil_rt_wait(&rt);
         rrr_hil_frame f;
         rrr_hil_io io;
@@ -311,9 +418,7 @@ static int run_realtime(ctrl *c, const opts *o)
             fresh |= handle(c, &f);
         }
         if (io != RRR_HIL_IO_TIMEOUT) {
-            fprintf(stderr, PROG ": period %zu: transport %s: %s\n", k, rrr_hil_io_str(io),
-                    c->tr->last_error);
-            rc = 3;
+            rc = plant_lost(c, "receive", io);
             break;
         }
         c->state_age = fresh ? 0u : c->state_age + 1u;
@@ -323,14 +428,14 @@ static int run_realtime(ctrl *c, const opts *o)
         }
         rrr_hil_voltage_cmd cmd;
         command(c, o, k, ok, &cmd);
-        if (send_period(c, &cmd, (uint32_t)k, 1) != 0) {
-            rc = 3;
-        }
+        rc = send_period(c, &cmd, (uint32_t)k, 1);
         rrr_hil_rt_done(&rt);
     }
-    if (rc == 0 && send_heartbeat(c, RRR_HIL_NMT_STOPPED) != 0) {
-        rc = 3;
+    if (rc == 0) {
+        c->k = (uint32_t)c->ref.n;
+        rc = end_run(c, RRR_HIL_EXIT_OK, "all %zu periods of the reference", c->ref.n);
     }
+    rc = finish(c, rc);
     printf("RRR_HIL_RT {");
     rrr_hil_rt_report(&rt, stdout, PROG);
     printf("}\n");
@@ -363,7 +468,7 @@ int main(int argc, char **argv)
     opts o;
     if (parse_args(argc, argv, &o) != 0) {
         usage();
-        return 1;
+        return RRR_HIL_EXIT_USAGE;
     }
     rrr_hil_install_signals();
     static ctrl c;
@@ -372,27 +477,25 @@ int main(int argc, char **argv)
     (void)rrr_model_default(&c.model);
     for (int i = 0; i < o.n_sets; ++i) {
         if (rrr_hil_set_model_param(&c.model, o.sets[i], err, sizeof err) != 0) {
-            fprintf(stderr, PROG ": --set: %s\n", err);
-            return 2;
+            return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "--set: %s", err);
         }
     }
     const char *field = "";
     const rrr_status valid = rrr_model_validate(&c.model, &field);
     if (valid != RRR_OK) {
-        fprintf(stderr, PROG ": the controller's model is invalid: parameter %s (%s)\n", field,
-                rrr_status_str(valid));
-        return 2;
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0,
+                                   "the controller's model is invalid: parameter %s (%s)", field,
+                                   rrr_status_str(valid));
     }
     if (rrr_hil_reference_load(o.ref_path, &c.ref, err, sizeof err) != 0) {
-        fprintf(stderr, PROG ": %s\n", err);
-        return 2;
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "%s", err);
     }
     if (o.log_path != NULL) {
         c.log = fopen(o.log_path, "w");
         if (c.log == NULL) {
-            fprintf(stderr, PROG ": cannot write %s\n", o.log_path);
             rrr_hil_reference_free(&c.ref);
-            return 2;
+            return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
+                                       o.log_path);
         }
         fprintf(c.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u_n[1],u_c[1],u[2],u_n[2],"
                        "u_c[2],u[3],u_n[3],u_c[3],enable\n");
@@ -401,7 +504,7 @@ int main(int argc, char **argv)
     const uint32_t rx_ids[] = {RRR_BENCH_JOINT_STATE1_FRAME_ID, RRR_BENCH_JOINT_STATE2_FRAME_ID,
                                RRR_BENCH_JOINT_STATE3_FRAME_ID, RRR_BENCH_PLANT_STATUS_FRAME_ID,
                                RRR_BENCH_HEARTBEAT_PLANT_FRAME_ID};
-    int rc = 2;
+    int rc = end_run(&c, RRR_HIL_EXIT_SETUP, "the transport did not open");
     if (rrr_hil_link_open(&o.link, &link, rx_ids, 5u, PROG) == 0) {
         c.tr = &link.base;
         rc = o.realtime ? run_realtime(&c, &o) : run_lockstep(&c, &o);
@@ -412,5 +515,5 @@ int main(int argc, char **argv)
         fclose(c.log);
     }
     rrr_hil_reference_free(&c.ref);
-    return rc;
+    return rrr_hil_report_exit(PROG, rc, c.k, "%s", c.why);
 }

@@ -7,21 +7,29 @@
  * Lockstep (default): the plant publishes its state (JointState1..3, PlantStatus) at period 0
  * after the controller's first frame, then advances exactly one period per Sync frame, applying
  * the voltage its supervisor decides from the VoltageCmd frames received since the previous
- * Sync, and publishes the new state. The run ends with the controller's heartbeat "stopped".
+ * Sync, and publishes the new state. The run ends with the controller's StopCmd, honoured only
+ * with its E2E protection (hil_supervisor.h); the heartbeat "stopped" is informational.
  * Real time: the same every 1 ms of CLOCK_MONOTONIC (clock_nanosleep TIMER_ABSTIME), half a
  * period out of phase with the controller's loop (which starts with its first frame); Sync
- * frames are ignored; the run lasts --duration seconds or until the controller stops.
+ * frames are ignored; the run lasts --duration seconds or until the controller's StopCmd.
+ * Either mode: a controller that hangs up, or sends nothing for --idle-timeout-ms after its
+ * first frame, is lost (bus fault latched).
  *
- * Output: a summary on stderr and one line "RRR_HIL_SUMMARY {json}" on stdout at exit; with
- * --log, one CSV row per period (k, t, q, qd, applied u, zero, faults).
- * Exit status: 0 finished; 1 usage; 2 setup failed (FMU, transport); 3 the controller was lost
- * (lockstep) or the FMU failed.
+ * Output: a summary on stderr and one line "RRR_HIL_SUMMARY {json}" on stdout at exit, then one
+ * line on stderr that says how the run ended ("rrr_hil_plant: exit 3 (peer lost) at period 57:
+ * ..."); with --log, one CSV row per period (k, t, q, qd, applied u, zero, faults).
+ * Exit status (rrr_hil_exit, hil_node.h): 0 the controller's StopCmd "end of run" (or --duration
+ * in real time); 1 usage; 2 setup failed (FMU, transport); 3 the controller was lost (hang-up,
+ * silence, transport error); 4 SIGINT/SIGTERM; 5 the FMU failed; 6 the controller's StopCmd
+ * gave another reason (interrupted, fault, plant lost).
  */
 #define _POSIX_C_SOURCE 200809L
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "hil_codec.h"
 #include "hil_fmu.h"
@@ -60,19 +68,27 @@ typedef struct plant {
     uint8_t hb_counter;
     uint8_t ctrl_nmt;     /* last NMT state of the controller heartbeat, 255 before any */
     int started;          /* the controller's first frame arrived (lockstep) */
+    int64_t last_rx_ms;   /* CLOCK_MONOTONIC time of the last frame received, ms */
+    char why[320];        /* how the run ended (the exit line) */
     uint32_t rx_bad[RRR_HIL_RX_COUNT]; /* decode results of all frames */
     uint32_t rx_ignored;  /* frames of the bench not meant for the plant */
     FILE *log;
 } plant;
 
+/* What handle() made of a frame. */
+enum { EV_NONE = 0, EV_SYNC, EV_STOP };
+
 static void usage(void)
 {
     fprintf(stderr,
             "usage: " PROG " --fmu DIR (--listen HOST:PORT | --connect HOST:PORT | --socketcan IF)\n"
-            "       [--channel NAME] [--realtime --duration S [--fifo PRIO] [--mlock]]\n"
+            RRR_HIL_LINK_USAGE
+            "       [--realtime --duration S [--fifo PRIO] [--mlock]]\n"
             "       [--q0 a,b,c] [--qd0 a,b,c] [--set NAME=VALUE]... [--max-missed N]\n"
             "       [--max-delta-counter N] [--log FILE.csv]\n"
-            "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n");
+            "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n"
+            "  exit: 0 end of run (the controller's StopCmd), 1 usage, 2 setup, 3 controller lost,\n"
+            "  4 SIGINT/SIGTERM, 5 FMU failed, 6 the controller stopped early\n");
 }
 
 static int parse_args(int argc, char **argv, opts *o)
@@ -171,6 +187,66 @@ static int parse_args(int argc, char **argv, opts *o)
     return 0;
 }
 
+static int64_t now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
+}
+
+/* Record how the run ends; returns code. */
+static int end_run(plant *p, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static int end_run(plant *p, int code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(p->why, sizeof p->why, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+/* The controller is gone: latch the bus fault and say why. */
+static int lost(plant *p, const char *what)
+{
+    rrr_hil_sup_raise(&p->sup, RRR_HIL_FAULT_BUS);
+    return end_run(p, RRR_HIL_EXIT_PEER_LOST, "controller lost%s: %s%s",
+                   p->started ? "" : " before its first frame", what,
+                   p->ctrl_nmt == RRR_HIL_NMT_STOPPED
+                       ? " (its heartbeat said 'stopped', but no valid StopCmd arrived)"
+                       : "");
+}
+
+static int transport_lost(plant *p, rrr_hil_io io)
+{
+    char what[260];
+    snprintf(what, sizeof what, "transport %s: %s", rrr_hil_io_str(io), p->tr->last_error);
+    return lost(p, what);
+}
+
+static int silence_lost(plant *p, int idle_ms)
+{
+    char what[96];
+    snprintf(what, sizeof what, "no frame for %d ms (--idle-timeout-ms)", idle_ms);
+    return lost(p, what);
+}
+
+/* The controller's StopCmd was honoured. */
+static int stopped(plant *p)
+{
+    const unsigned r = p->sup.stop_reason;
+    return end_run(p, r == RRR_HIL_STOP_END_OF_RUN ? RRR_HIL_EXIT_OK : RRR_HIL_EXIT_STOPPED_EARLY,
+                   "the controller's StopCmd: %s", rrr_hil_stop_reason_str(r));
+}
+
+static int interrupted(plant *p)
+{
+    return end_run(p, RRR_HIL_EXIT_INTERRUPTED, "%s", rrr_hil_stop_signal_name());
+}
+
 static int setup_fmu(plant *p, const opts *o)
 {
     if (rrr_hil_fmu_open(&p->fmu, o->fmu_dir, "plant") != 0) {
@@ -263,14 +339,14 @@ static void publish(plant *p)
     }
 }
 
-/* Advance one period: supervisor decision, FMU step, new state. 0 or -1 (FMU failed). */
+/* Advance one period: supervisor decision, FMU step, new state. 0 or -1 (FMU failed: why set). */
 static int advance(plant *p)
 {
     (void)rrr_hil_sup_next_period(&p->sup, p->u);
     if (rrr_hil_fmu_set(&p->fmu, p->vr_u, 3, p->u) != 0 ||
         rrr_hil_fmu_step(&p->fmu, RRR_HIL_PERIOD_S) != 0 ||
         rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0) {
-        fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+        (void)end_run(p, RRR_HIL_EXIT_FAULT, "the FMU failed: %s", p->fmu.last_error);
         return -1;
     }
     ++p->k;
@@ -278,71 +354,75 @@ static int advance(plant *p)
     return 0;
 }
 
-/* Handle one received frame. Returns 1 when it is a lockstep Sync (period to advance). */
+/* Handle one received frame: EV_SYNC for a lockstep Sync (period to advance), EV_STOP for an
+ * honoured StopCmd, else EV_NONE. */
 static int handle(plant *p, const rrr_hil_frame *f, int lockstep)
 {
     rrr_hil_msg m;
     const rrr_hil_rx rx = rrr_hil_decode(f, &m);
     ++p->rx_bad[rx];
+    p->last_rx_ms = now_ms();
     if (rx == RRR_HIL_RX_UNKNOWN_ID) {
-        return 0;
+        return EV_NONE;
     }
     p->started = 1;
     if (m.kind == RRR_HIL_VOLTAGE_CMD) {
         rrr_hil_sup_on_command(&p->sup, rx, rx == RRR_HIL_RX_OK ? &m.u.cmd : NULL);
-        return 0;
+        return EV_NONE;
+    }
+    if (m.kind == RRR_HIL_STOP_CMD) { /* honoured only with its E2E protection */
+        return rrr_hil_sup_on_stop(&p->sup, rx, rx == RRR_HIL_RX_OK ? &m.u.stop : NULL) ? EV_STOP
+                                                                                        : EV_NONE;
     }
     if (rx != RRR_HIL_RX_OK) {
-        return 0;
+        return EV_NONE;
     }
     if (m.kind == RRR_HIL_HEARTBEAT && m.u.heartbeat.node == 1u) {
-        p->ctrl_nmt = m.u.heartbeat.nmt_state;
-        return 0;
+        p->ctrl_nmt = m.u.heartbeat.nmt_state; /* informational: "stopped" stops nothing */
+        return EV_NONE;
     }
     if (m.kind == RRR_HIL_SYNC && lockstep) {
         if (m.u.sync.cycle != p->k) {
             rrr_hil_sup_raise(&p->sup, RRR_HIL_FAULT_SYNC);
         }
-        return 1;
+        return EV_SYNC;
     }
     if (m.kind != RRR_HIL_SYNC) {
         ++p->rx_ignored;
     }
-    return 0;
+    return EV_NONE;
 }
 
-static int run_lockstep(plant *p)
+static int run_lockstep(plant *p, const opts *o)
 {
+    const int idle_ms = rrr_hil_link_idle_ms(&o->link);
     int published0 = 0;
     for (;;) {
         if (rrr_hil_stop_requested()) {
-            return 0;
+            return interrupted(p);
         }
         rrr_hil_frame f;
         const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 200000);
         if (io == RRR_HIL_IO_TIMEOUT) {
-            continue;
+            if (p->started && now_ms() - p->last_rx_ms >= idle_ms) {
+                return silence_lost(p, idle_ms);
+            }
+            continue; /* before the first frame: wait for a controller as long as it takes */
         }
         if (io != RRR_HIL_IO_OK) {
-            if (!p->started && io == RRR_HIL_IO_DISCONNECTED) {
-                continue; /* a client left during the handshake: wait for the next one */
-            }
-            rrr_hil_sup_raise(&p->sup, RRR_HIL_FAULT_BUS);
-            fprintf(stderr, PROG ": period %u: transport %s: %s\n", p->k, rrr_hil_io_str(io),
-                    p->tr->last_error);
-            return 3;
+            return transport_lost(p, io);
         }
-        const int sync = handle(p, &f, 1);
+        const int ev = handle(p, &f, 1);
         if (p->started && !published0) {
             publish(p); /* the state of period 0, after the controller's first frame */
             published0 = 1;
         }
-        if (p->ctrl_nmt == RRR_HIL_NMT_STOPPED) {
-            return 0;
+        if (ev == EV_STOP) {
+            return stopped(p);
         }
-        if (sync) {
+        if (ev == EV_SYNC) {
             if (advance(p) != 0) {
-                return 3;
+                return RRR_HIL_EXIT_FAULT;
             }
             publish(p);
         }
@@ -352,50 +432,57 @@ static int run_lockstep(plant *p)
 static int run_realtime(plant *p, const opts *o)
 {
     const uint32_t n = (uint32_t)(o->duration_s / RRR_HIL_PERIOD_S + 0.5);
+    const int idle_ms = rrr_hil_link_idle_ms(&o->link);
     rrr_hil_rt rt;
-    int rc = 0;
+    int rc = -1;
     /* the plant is held (brakes on, not integrated) until the controller's first frame */
-    for (int waited_ms = 0; !p->started && !rrr_hil_stop_requested(); waited_ms += 200) {
+    for (int waited_ms = 0; !p->started; waited_ms += 200) {
+        if (rrr_hil_stop_requested()) {
+            return interrupted(p);
+        }
         rrr_hil_frame f;
         const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 200000);
         if (io == RRR_HIL_IO_OK) {
-            (void)handle(p, &f, 0);
-        } else if (io == RRR_HIL_IO_ERROR || waited_ms > (int)(o->duration_s * 1000.0)) {
-            fprintf(stderr, PROG ": no controller within %.0f s\n", o->duration_s);
-            return 3;
+            (void)handle(p, &f, 0); /* no StopCmd can be honoured before a command */
+        } else if (io != RRR_HIL_IO_TIMEOUT) {
+            return transport_lost(p, io);
+        } else if (waited_ms > (int)(o->duration_s * 1000.0)) {
+            return lost(p, "no controller within --duration");
         }
     }
     if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, n, o->fifo_prio, o->mlock) != 0) {
-        fprintf(stderr, PROG ": out of memory\n");
-        return 2;
+        return end_run(p, RRR_HIL_EXIT_SETUP, "out of memory");
     }
     /* the controller's loop started when it sent that frame: run half a period out of phase,
      * so that its command reaches us before our release and our state reaches it before its */
     rrr_hil_rt_shift(&rt, 0.5 * RRR_HIL_PERIOD_S);
-    for (uint32_t k = 0;
-         k < n && !rrr_hil_stop_requested() && p->ctrl_nmt != RRR_HIL_NMT_STOPPED; ++k) {
+    for (uint32_t k = 0; k < n && rc < 0; ++k) {
+        if (rrr_hil_stop_requested()) {
+            rc = interrupted(p);
+            break;
+        }
         rrr_hil_rt_wait(&rt);
         rrr_hil_frame f;
-        rrr_hil_io io;
-        while ((io = rrr_hil_recv(p->tr, &f, 0)) == RRR_HIL_IO_OK) {
-            (void)handle(p, &f, 0);
+        rrr_hil_io io = RRR_HIL_IO_TIMEOUT;
+        int ev = EV_NONE;
+        while (ev != EV_STOP && (io = rrr_hil_recv(p->tr, &f, 0)) == RRR_HIL_IO_OK) {
+            ev = handle(p, &f, 0);
         }
-        if (io == RRR_HIL_IO_DISCONNECTED && p->ctrl_nmt == RRR_HIL_NMT_STOPPED) {
-            break; /* the controller said goodbye, then hung up */
+        if (ev == EV_STOP) {
+            rc = stopped(p);
+        } else if (io != RRR_HIL_IO_TIMEOUT) {
+            rc = transport_lost(p, io);
+        } else if (now_ms() - p->last_rx_ms >= idle_ms) {
+            rc = silence_lost(p, idle_ms);
+        } else if (advance(p) != 0) {
+            rc = RRR_HIL_EXIT_FAULT;
+        } else {
+            publish(p);
+            rrr_hil_rt_done(&rt);
         }
-        if (io == RRR_HIL_IO_DISCONNECTED || io == RRR_HIL_IO_BUS_OFF) {
-            rrr_hil_sup_raise(&p->sup, RRR_HIL_FAULT_BUS);
-        } else if (io == RRR_HIL_IO_ERROR) {
-            fprintf(stderr, PROG ": transport error: %s\n", p->tr->last_error);
-            rc = 3;
-            break;
-        }
-        if (advance(p) != 0) {
-            rc = 3;
-            break;
-        }
-        publish(p);
-        rrr_hil_rt_done(&rt);
+    }
+    if (rc < 0) {
+        rc = end_run(p, RRR_HIL_EXIT_OK, "--duration %g s elapsed", o->duration_s);
     }
     printf("RRR_HIL_RT {");
     rrr_hil_rt_report(&rt, stdout, PROG);
@@ -410,18 +497,20 @@ static void summary(const plant *p, int rc)
     fprintf(stderr,
             PROG ": %u periods; faults latched 0x%02X; fault events %u (crc %u, counter %u, "
                  "range %u, format %u, sync %u, bus %u, timeout %u); periods without command %u, "
-                 "at 0 V %u; resets %u; states out of DBC range %u\n",
+                 "at 0 V %u; resets %u; stop requests ignored %u; states out of DBC range %u\n",
             p->k, (unsigned)p->sup.faults, e->fault_events, e->crc, e->counter, e->range,
             e->format, e->sync, e->bus, e->timeout, e->cmd_missed, e->zero_periods, e->resets,
-            p->tx_state_range);
+            e->stop_rejected, p->tx_state_range);
     printf("RRR_HIL_SUMMARY {\"node\": \"plant\", \"exit\": %d, \"periods\": %u, \"faults\": %u, "
            "\"fault_events\": %u, \"crc\": %u, \"counter\": %u, \"range\": %u, \"format\": %u, "
            "\"sync\": %u, \"bus\": %u, \"timeout\": %u, \"cmd_missed\": %u, \"zero_periods\": %u, "
-           "\"resets\": %u, \"state_out_of_range\": %u, \"rx_unknown_id\": %u, \"rx_bad_dlc\": %u, "
+           "\"resets\": %u, \"stop_rejected\": %u, \"stop_reason\": %d, "
+           "\"state_out_of_range\": %u, \"rx_unknown_id\": %u, \"rx_bad_dlc\": %u, "
            "\"rx_bad_crc\": %u, \"rx_out_of_range\": %u, \"rx_ignored\": %u, ",
            rc, p->k, (unsigned)p->sup.faults, e->fault_events, e->crc, e->counter, e->range,
            e->format, e->sync, e->bus, e->timeout, e->cmd_missed, e->zero_periods, e->resets,
-           p->tx_state_range, p->rx_bad[RRR_HIL_RX_UNKNOWN_ID], p->rx_bad[RRR_HIL_RX_BAD_DLC],
+           e->stop_rejected, p->sup.stop ? (int)p->sup.stop_reason : -1, p->tx_state_range,
+           p->rx_bad[RRR_HIL_RX_UNKNOWN_ID], p->rx_bad[RRR_HIL_RX_BAD_DLC],
            p->rx_bad[RRR_HIL_RX_BAD_CRC], p->rx_bad[RRR_HIL_RX_OUT_OF_RANGE], p->rx_ignored);
     rrr_hil_link_json(stdout, p->tr);
     printf("}\n");
@@ -433,7 +522,7 @@ int main(int argc, char **argv)
     opts o;
     if (parse_args(argc, argv, &o) != 0) {
         usage();
-        return 1;
+        return RRR_HIL_EXIT_USAGE;
     }
     rrr_hil_install_signals();
     static plant p;
@@ -441,27 +530,27 @@ int main(int argc, char **argv)
     p.ctrl_nmt = 255u;
     if (rrr_hil_sup_init(&p.sup, &o.sup) != 0 || setup_fmu(&p, &o) != 0) {
         rrr_hil_fmu_close(&p.fmu);
-        return 2;
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "the plant could not be set up");
     }
     if (o.log_path != NULL) {
         p.log = fopen(o.log_path, "w");
         if (p.log == NULL) {
-            fprintf(stderr, PROG ": cannot write %s\n", o.log_path);
             rrr_hil_fmu_close(&p.fmu);
-            return 2;
+            return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
+                                       o.log_path);
         }
         fprintf(p.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u[2],u[3],zero,faults\n");
         log_row(&p);
     }
     static rrr_hil_link link;
     const uint32_t rx_ids[] = {RRR_BENCH_SYNC_FRAME_ID, RRR_BENCH_VOLTAGE_CMD_FRAME_ID,
-                               RRR_BENCH_HEARTBEAT_CTRL_FRAME_ID};
-    if (rrr_hil_link_open(&o.link, &link, rx_ids, 3u, PROG) != 0) {
+                               RRR_BENCH_STOP_CMD_FRAME_ID, RRR_BENCH_HEARTBEAT_CTRL_FRAME_ID};
+    if (rrr_hil_link_open(&o.link, &link, rx_ids, 4u, PROG) != 0) {
         if (p.log) {
             fclose(p.log);
         }
         rrr_hil_fmu_close(&p.fmu);
-        return 2;
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "the transport did not open");
     }
     p.tr = &link.base;
     {   /* CANopen-style boot-up message (dropped by a socketcand server without a client) */
@@ -471,12 +560,13 @@ int main(int argc, char **argv)
             (void)rrr_hil_send(p.tr, &f);
         }
     }
-    const int rc = o.realtime ? run_realtime(&p, &o) : run_lockstep(&p);
+    p.last_rx_ms = now_ms();
+    const int rc = o.realtime ? run_realtime(&p, &o) : run_lockstep(&p, &o);
     summary(&p, rc);
     rrr_hil_close(p.tr);
     if (p.log) {
         fclose(p.log);
     }
     rrr_hil_fmu_close(&p.fmu);
-    return rc;
+    return rrr_hil_report_exit(PROG, rc, p.k, "%s", p.why);
 }

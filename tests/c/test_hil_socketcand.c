@@ -468,8 +468,9 @@ static void test_client_stops_mid_session(void)
     }
     CHECK(io == RRR_HIL_IO_DISCONNECTED && sent > 10u);
     CHECK(strstr(s.base.last_error, "read nothing for 300 ms") != NULL);
-    CHECK(s.base.err.tx_failed == 1 && s.session == RRR_HIL_SCD_SESSION_OVER);
-    CHECK(rrr_hil_recv(&s.base, &g, 0) == RRR_HIL_IO_DISCONNECTED);
+    CHECK(s.base.err.tx_failed == 1 && rrr_hil_send(&s.base, &r) == RRR_HIL_IO_DISCONNECTED);
+    CHECK(rrr_hil_recv(&s.base, &g, 0) == RRR_HIL_IO_DISCONNECTED); /* nothing more queued */
+    CHECK(s.session == RRR_HIL_SCD_SESSION_OVER && s.base.err.tx_failed == 1);
     kill(pid, SIGKILL);
     int status;
     waitpid(pid, &status, 0);
