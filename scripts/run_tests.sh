@@ -65,5 +65,5 @@ cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_BUILD_
 cmake --build build-fuzz --target fuzz_hil_decode -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
-  -print_final_stats=1 build-fuzz/corpus 2>&1 | tail -n 12
+  -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
 echo "== all test stages passed (CTest, ruff, lint-imports, mypy, pytest, libFuzzer) =="
