@@ -204,6 +204,14 @@ static void test_singular_and_bad(const rrr_model *m)
     rrr_fk(m, up, x, NULL);
     CHECK_STATUS(rrr_workspace_margin(m, x, &margin, &flags), RRR_OK);
     CHECK(margin > 0.0 && flags == 0u);
+    /* far but finite targets: a finite margin (no overflow of rxy^2), or RRR_NUMERIC with the
+     * output untouched when even the margin cannot be a finite number */
+    const double huge[3] = {1e154, 1e154, 1e154}, edge[3] = {-1.7e308, 1.7e308, 0.0};
+    CHECK_STATUS(rrr_workspace_margin(m, huge, &margin, &flags), RRR_OK);
+    CHECK(isfinite(margin) && margin < -1e154 && flags == RRR_SING_OUT_OF_REACH);
+    margin = 42.0;
+    CHECK_STATUS(rrr_workspace_margin(m, edge, &margin, &flags), RRR_NUMERIC);
+    CHECK(margin == 42.0);
     const double *bad[] = {far, inner, cyl};
     for (int i = 0; i < 3; ++i) {
         rrr_ik_set keep;

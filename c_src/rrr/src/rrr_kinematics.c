@@ -348,13 +348,17 @@ rrr_status rrr_workspace_margin(const rrr_model *m, const double x[3], double *m
     if (m == NULL || x == NULL || margin == NULL || !kin_ok(m) || !rrr_finite_n(x, 3)) {
         return RRR_BAD_INPUT;
     }
-    const double e = m->d2 + m->d3;
+    const double e = fabs(m->d2 + m->d3);
     const double rxy = hypot(x[0], x[1]);
-    const double r = sqrt(fmax(0.0, rxy * rxy - e * e));
+    /* r = sqrt(rxy^2 - e^2), written so that it cannot overflow for any finite target */
+    const double r = rxy > e ? rxy * sqrt((1.0 - e / rxy) * (1.0 + e / rxy)) : 0.0;
     const double dist = hypot(r, x[2] - m->d1); /* wrist distance from the shoulder joint */
     double mg = m->a2 + m->a3 - dist;
     mg = fmin(mg, dist - fabs(m->a2 - m->a3));
-    mg = fmin(mg, rxy - fabs(e));
+    mg = fmin(mg, rxy - e);
+    if (!isfinite(mg)) {
+        return RRR_NUMERIC; /* a target within a factor 2 of the largest double */
+    }
     *margin = mg;
     if (flags != NULL) {
         *flags = mg < 0.0 ? RRR_SING_OUT_OF_REACH : 0u;

@@ -140,7 +140,7 @@ class Model:
         raw = copy.deepcopy(self._raw)
         for key, value in changes.items():
             if key in (*DH_KEYS, "g", "u_max"):
-                setattr(raw, key, float(value))
+                setattr(raw, key, _finite_scalar(value, key))
             elif key in ("p", "kt", "b", "f", "w"):
                 _set_array(raw, key, value)
             else:
@@ -253,7 +253,9 @@ class Model:
 
     def ik_branches(self, x: ArrayLike) -> list[tuple[str, str]]:
         """The (shoulder, elbow) names of the solutions :meth:`ik` returns, in the same order."""
-        xs, _ = as_rows(x, "x")
+        xs, batch = as_rows(x, "x")
+        if batch:
+            raise BadInputError("ik_branches takes one target (3,), as ik does")
         sol = _lib.RawIkSet()
         _lib.call("rrr_ik", self._ref, ptr(xs[0]), ct.byref(sol), context=f"x = {xs[0].tolist()}")
         names = [("front", "up"), ("front", "down"), ("back", "up"), ("back", "down")]
@@ -270,7 +272,7 @@ class Model:
         for i in range(xs.shape[0]):
             status = fn(self._ref, xb + i * xs_, SHOULDER[shoulder], ELBOW[elbow], qb + i * qs_)
             if status:
-                _lib.raise_for("rrr_ik_branch", status, f"x = {xs[i].tolist()}")
+                _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
         return q if batch else q[0]
 
     def ik_nearest(self, x: ArrayLike, q_prev: ArrayLike) -> FloatArray:
@@ -289,15 +291,20 @@ class Model:
         for i in range(xs.shape[0]):
             status = fn(self._ref, xb + i * xs_, prev_addr, qb + i * qs_, None)
             if status:
-                _lib.raise_for("rrr_ik_nearest", status, f"target {i}, x = {xs[i].tolist()}")
+                _lib.raise_for("rrr_ik_nearest", status, f"sample {i}: x = {xs[i].tolist()}")
             prev_addr = qb + i * qs_
         return q if batch else q[0]
 
     def singularity(self, q: ArrayLike, tol: float = 1e-6) -> Singularity:
-        """Classify one configuration against the singular sets."""
-        qs, _ = as_rows(q, "q")
+        """Classify one configuration (3,) against the singular sets (a batch is refused:
+        classify a path row by row)."""
+        qs, batch = as_rows(q, "q")
+        if batch:
+            raise BadInputError("singularity takes one configuration (3,); classify a path "
+                                "row by row")
         s = _lib.RawSingularity()
-        _lib.call("rrr_singularity_classify", self._ref, ptr(qs[0]), float(tol), ct.byref(s))
+        _lib.call("rrr_singularity_classify", self._ref, ptr(qs[0]), _finite_scalar(tol, "tol"),
+                  ct.byref(s), context=f"q = {qs[0].tolist()}")
         return Singularity(
             stretched=bool(s.flags & 1), folded=bool(s.flags & 2), shoulder=bool(s.flags & 4),
             elbow_margin=s.elbow_margin, shoulder_margin=s.shoulder_margin,
@@ -313,7 +320,7 @@ class Model:
         for i in range(xs.shape[0]):
             status = fn(self._ref, xb + i * xs_, ob + i * os_, None)
             if status:
-                _lib.raise_for("rrr_workspace_margin", status, f"x = {xs[i]}")
+                _lib.raise_for("rrr_workspace_margin", status, f"sample {i}: x = {xs[i].tolist()}")
         return out if batch else float(out[0])
 
     # ---- dynamics -------------------------------------------------------------------------
@@ -341,12 +348,20 @@ class Model:
         """qdd = D^-1 (tau - c - h), rad/s^2."""
         return self._map3("rrr_forward_dynamics", q, qd, tau, (3,), names=("q", "qd", "tau"))
 
-    def energy(self, q: ArrayLike, qd: ArrayLike) -> tuple[float, float]:
-        """Kinetic and potential energy of one state, J."""
-        (qs, qds), _ = broadcast_rows((q, "q"), (qd, "qd"))
-        kin, pot = ct.c_double(), ct.c_double()
-        _lib.call("rrr_energy", self._ref, ptr(qs[0]), ptr(qds[0]), ct.byref(kin), ct.byref(pot))
-        return kin.value, pot.value
+    def energy(self, q: ArrayLike, qd: ArrayLike) -> tuple[Any, Any]:
+        """Kinetic and potential energy, J: two floats for one state, two (n,) arrays for a
+        batch."""
+        (qs, qds), batch = broadcast_rows((q, "q"), (qd, "qd"))
+        n = qs.shape[0]
+        kin, pot = np.empty(n), np.empty(n)
+        k, v = ct.c_double(), ct.c_double()
+        fn = _lib.FUNCS["rrr_energy"]
+        for i in range(n):
+            if status := fn(self._ref, ptr(qs[i]), ptr(qds[i]), ct.byref(k), ct.byref(v)):
+                _lib.raise_for("rrr_energy", status,
+                               f"sample {i}: q = {qs[i].tolist()}, qd = {qds[i].tolist()}")
+            kin[i], pot[i] = k.value, v.value
+        return (kin, pot) if batch else (float(kin[0]), float(pot[0]))
 
     # ---- actuators and control ------------------------------------------------------------
     def friction(self, qd: ArrayLike) -> FloatArray:
@@ -416,6 +431,17 @@ class Model:
 
     def __repr__(self) -> str:
         return f"Model(dh={self.dh}, g={self.g}, kt={self.kt.tolist()})"
+
+
+def _finite_scalar(value: object, name: str) -> float:
+    """A finite float from a number; BadInputError otherwise."""
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise BadInputError(f"{name} must be a finite number, got {value!r}") from exc
+    if not np.isfinite(v):
+        raise BadInputError(f"{name} must be a finite number, got {v}")
+    return v
 
 
 def _set_array(raw: _lib.RawModel, key: str, value: ArrayLike) -> None:

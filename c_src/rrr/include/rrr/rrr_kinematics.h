@@ -121,6 +121,8 @@ RRR_API rrr_status rrr_singularity_classify(const rrr_model *m, const double q[3
  *        |a2 - a3| (about the shoulder) and the shoulder cylinder of radius |d2 + d3|.
  * @param[out] margin distance, m
  * @param[out] flags  if not NULL, RRR_SING_OUT_OF_REACH when margin < 0, else 0
+ * @return RRR_OK, RRR_BAD_INPUT, or RRR_NUMERIC (a finite target so far out that the margin
+ *         is not a finite number)
  */
 RRR_API rrr_status rrr_workspace_margin(const rrr_model *m, const double x[3], double *margin,
                                 unsigned *flags);
