@@ -12,7 +12,7 @@ commands 0 V) and the plant's fault counters (a silent controller: 0 V and a lat
 
 Needs the C nodes (pip install . puts them in rrr_robot/bin; or RRR_HIL_BIN_DIR). Not a test: the
 numbers depend on the machine (a 2-vCPU VM shows multi-millisecond stalls, see
-shared research notes); lockstep mode is what the tests use.
+docs/can.md#lockstep-and-real-time); lockstep mode is what the tests use.
 """
 
 from __future__ import annotations

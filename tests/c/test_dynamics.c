@@ -2,12 +2,13 @@
  * Tests of the closed-form dynamics (rrr_dynamics.h) on random, physically consistent robots:
  *   tau = D qdd + c + h; D column by column from inverse dynamics; D symmetric; h = dV/dq and
  *   dE/dt = qd . tau by central differences; c = tau(q, qd, 0) - h; forward dynamics inverts
- *   inverse dynamics; the regressor equals the clean regressor of NOTES.md typed in by hand (with
- *   double-angle libm calls, independent of the generated product forms) and R p = tau;
+ *   inverse dynamics; the regressor equals the clean regressor of docs/conventions.md#regressor
+ *   typed in by hand (with double-angle libm calls, independent of the generated product forms)
+ *   and R p = tau;
  *   bad inputs give RRR_BAD_INPUT / RRR_NUMERIC / RRR_NOT_POSITIVE_DEFINITE with outputs untouched.
  *
- * Base parameters come from a local copy of eq 12 (corrected per NOTES.md), so this test does not
- * depend on rrr_bps_from_inertia(). Exit status 0 on success; every failure is printed.
+ * Base parameters come from a local copy of eq 12 (corrected:
+ * docs/conventions.md#base-parameter-set), so this test does not depend on rrr_bps_from_inertia(). Exit status 0 on success; every failure is printed.
  */
 #include <math.h>
 #include <stdint.h>
@@ -46,7 +47,8 @@ static double urand(double lo, double hi)
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* Local eq 12 (corrected, NOTES.md) from masses, COMs and inertia tensors about the COM       */
+/* Local eq 12 (corrected: docs/conventions.md#base-parameter-set) from masses, COMs and inertia  */
+/* tensors about the COM                                                                          */
 /* ------------------------------------------------------------------------------------------ */
 typedef struct link_data {
     double m;          /* mass */
@@ -179,7 +181,7 @@ static int close_to(double a, double b, double tol)
 }
 
 /* ------------------------------------------------------------------------------------------ */
-/* The clean regressor of NOTES.md, by hand, with libm double angles                           */
+/* The clean regressor (docs/conventions.md#regressor), by hand, with libm double angles         */
 /* ------------------------------------------------------------------------------------------ */
 static void notes_regressor(double a2, double g, const double q[3], const double qd[3],
                             const double qdd[3], double R[3][RRR_NP])
@@ -300,7 +302,7 @@ static void test_one_state(const rrr_model *m, int robot, int state)
               state, i, tau[i], yp);
     }
 
-    /* regressor = clean regressor of NOTES.md */
+    /* regressor = clean regressor of docs/conventions.md#regressor */
     notes_regressor(m->a2, m->g, q, qd, qdd, Rn);
     double worst = 0.0;
     for (int i = 0; i < 3; ++i) {
@@ -308,7 +310,7 @@ static void test_one_state(const rrr_model *m, int robot, int state)
             worst = fmax(worst, fabs(Y[i][k] - Rn[i][k]) / (1.0 + fabs(Rn[i][k])));
         }
     }
-    CHECK(worst <= 1e-12, "robot %d state %d: regressor vs NOTES.md, max rel diff %.3g", robot,
+    CHECK(worst <= 1e-12, "robot %d state %d: regressor vs docs/conventions.md#regressor, max rel diff %.3g", robot,
           state, worst);
 
     /* D symmetric, and D column by column from inverse dynamics with qd = 0, g = 0 */

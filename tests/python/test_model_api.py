@@ -9,11 +9,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+import rrr_robot as rr
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
-
-import rrr_robot as rr
 
 MODEL = rr.Model.default()
 

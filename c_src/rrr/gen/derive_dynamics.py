@@ -15,11 +15,13 @@ Derivation (all symbolic, nothing numeric):
 3. Every trigonometric polynomial is brought to a canonical normal form on the torus (s_i^2 is
    replaced by 1 - c_i^2 until every s_i has degree <= 1). Two expressions are equal as functions
    of q iff their normal forms are identical, so "difference simplifies to 0" is a proof.
-4. The base parameters p = p(pi) are eq 12 of the paper with the corrections of NOTES.md, written
-   with m_i, x_i, ... and turned into linear functions of pi. K = dp/dpi (16 x 33). With 16 pivot
+4. The base parameters p = p(pi) are eq 12 of the paper with the corrections of
+   docs/conventions.md#typos-in-the-printed-eq-12, written with m_i, x_i, ... and turned into
+   linear functions of pi. K = dp/dpi (16 x 33). With 16 pivot
    columns S (det K_S = -4), R = Y_S K_S^-1; the script then proves Y == R K for all 33 columns,
    that R depends on q2, q3, qd, qdd, a2, g only, and that R equals the clean regressor printed in
-   NOTES.md entry by entry. The potential energy is treated the same way: V(q) = v(q) p with
+   docs/conventions.md#regressor entry by entry. The potential energy is treated the same way:
+   V(q) = v(q) p with
    v = psi_S K_S^-1 (q-independent terms dropped), proven psi == v K, and h = dV/dq is proven
    equal to the gravity part of R p.
 5. For C, each trigonometric coefficient of R is rewritten as the sparsest combination of
@@ -202,10 +204,11 @@ def lagrange_euler() -> Lagrangian:
 
 
 # ---------------------------------------------------------------------------------------------
-# Base parameters (eq 12, corrected as in NOTES.md) and the regressor R = Y_S K_S^-1
+# Base parameters (eq 12, corrected: docs/conventions.md#base-parameter-set) and the regressor
+# R = Y_S K_S^-1
 # ---------------------------------------------------------------------------------------------
 def eq12() -> list[sp.Expr]:
-    """The corrected eq 12, written as in NOTES.md with e = d2 + d3 (p[0] = p1)."""
+    """The corrected eq 12 (docs/conventions.md#base-parameter-set), e = d2 + d3, p[0] = p1."""
     e = d2 + d3
     _, m2_, m3_ = m
     _, x2, x3 = xc
@@ -322,7 +325,7 @@ def derive(log: bool = True) -> Derivation:
         raise AssertionError(f"R depends on {extra}")
     say("  proven: Y - R K == 0 (3 x 33 entries); R depends on q2, q3, qd, qdd, a2, g only")
     compare_with_notes(R)
-    say("  proven: R equals the clean regressor of NOTES.md (all 48 entries)")
+    say("  proven: R equals the clean regressor of docs/conventions.md#regressor (all 48 entries)")
     # potential energy: drop the q-independent part, then V = v . p
     vq = sp.Add(*[t for t in sp.Add.make_args(lag.V) if t.free_symbols & set(TRIG)])
     psi = sp.Matrix([[sp.diff(vq, s) for s in PI]])
@@ -342,7 +345,7 @@ def derive(log: bool = True) -> Derivation:
 
 
 def compare_with_notes(R: sp.Matrix) -> None:
-    """The clean regressor printed in NOTES.md / bps.md, typed in with sum-angle formulas."""
+    """The clean regressor of docs/conventions.md#regressor, typed in with sum-angle formulas."""
     half = sp.Rational(1, 2)
     sin2q2, cos2q2 = 2 * s2 * c2, c2**2 - s2**2
     s223, c223 = s2 * c23 + c2 * s23, c2 * c23 - s2 * s23  # sin/cos(2 q2 + q3)
@@ -391,7 +394,8 @@ def compare_with_notes(R: sp.Matrix) -> None:
         for col in range(NP):
             want = ref.get((k + 1, col + 1), sp.Integer(0))
             if nf4(want - R[k, col]) != 0:
-                raise AssertionError(f"R[{k + 1},{col + 1}] differs from NOTES.md")
+                raise AssertionError(
+                    f"R[{k + 1},{col + 1}] differs from docs/conventions.md#regressor")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -689,7 +693,7 @@ def render(emitted: list[Emitted]) -> tuple[str, str]:
             f"/* {BANNER}.",
             " *",
             " * Closed-form dynamics of the RRR arm (paper eqs 7, 10-13) in the 16 base",
-            " * parameters m->p of eq 12 (corrected per NOTES.md):",
+            " * parameters m->p of eq 12, corrected as docs/conventions.md explains:",
             " * tau = R(q, qd, qdd) p = D qdd + c + h is the MOTOR torque (the rotor",
             " * inertias are inside p7, p12, p14). Written in s2, c2, s3, c3, s23, c23 of",
             " * the caller's rrr_trig: no trig calls. Private to librrr (not installed).",
@@ -721,7 +725,8 @@ def render(emitted: list[Emitted]) -> tuple[str, str]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Why the corrections of NOTES.md are needed (numeric illustration, not part of the proof)
+# Why the corrections of docs/conventions.md#typos-in-the-printed-eq-12 are needed (numeric
+# illustration, not part of the proof)
 # ---------------------------------------------------------------------------------------------
 def printed_eq12_residuals() -> dict[str, float]:
     """Largest distance of a row of Y from the row space of K, per printed typo of eq 12.

@@ -1,4 +1,4 @@
-/* Closed-form kinematics (paper eqs 3-6), IK valid in the whole workspace (NOTES.md). */
+/* Closed-form kinematics (paper eqs 3-6), IK valid in the whole workspace (docs/conventions.md#inverse-kinematics). */
 #include <string.h>
 
 #include "rrr_internal.h"

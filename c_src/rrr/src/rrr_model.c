@@ -142,7 +142,7 @@ rrr_status rrr_bps_from_inertia(const rrr_model *m, const rrr_inertial *in, doub
     const double x3 = in->link[2].com[0], y3 = in->link[2].com[1], z3 = in->link[2].com[2];
     const double *jm = in->rotor_inertia;
     double r[RRR_NP];
-    /* eq 12 with the corrections of NOTES.md (p9: z3, p12: I_zz, p13: I_zz) */
+    /* eq 12 with the corrections of docs/conventions.md#typos-in-the-printed-eq-12 (p9: z3, p12: I_zz, p13: I_zz) */
     r[0] = a2 * a2 * m3 + a2 * m2 * (a2 + 2.0 * x2) - i2.xx + i2.yy;
     r[1] = -2.0 * (a2 * m2 * y2 + i2.xy);
     r[2] = m3 * (a3 + x3);

@@ -26,7 +26,7 @@ extern "C" {
 /**
  * @brief Parameters of the RRR arm.
  *
- * Conventions (see doc/conventions in README): standard DH, alpha = (pi/2, 0, 0),
+ * Conventions (docs/conventions.md#frames-and-dh-table): standard DH, alpha = (pi/2, 0, 0),
  * a = (0, a2, a3), d = (d1, d2, d3); z0 up, gravity g > 0 along -z0. The base parameters p
  * follow the corrected eq 12 of the paper in its order and signs; the rotor inertias J_m,i are
  * inside p7, p12 and p14, so R(q, qd, qdd) p is the motor torque tau + J_m qdd of eq 8.
@@ -93,7 +93,7 @@ RRR_API rrr_status rrr_inertial_default(rrr_inertial *in);
 RRR_API rrr_status rrr_model_validate(const rrr_model *m, const char **field);
 
 /**
- * @brief Base parameter set p of eq 12 (corrected, see NOTES) from full inertial parameters.
+ * @brief Base parameter set p of eq 12 (corrected: docs/conventions.md#typos-in-the-printed-eq-12) from full inertial parameters.
  *
  * Converts each inertia tensor from the centre of mass to the frame origin O_i by the
  * parallel-axis theorem, takes products of inertia as integrals (I_xy = -tensor[0][1]), and
