@@ -28,7 +28,7 @@ static size_t reset_sequence(rrr_rng *rng, uint8_t *buf, size_t cap)
         memset(r, 0, 12);
         r[0] = 0x51; /* VoltageCmd, valid CRC, feed and close the period */
         r[3] = 8;
-        const uint8_t enable = i >= 1u && i <= 3u, reset = i == 0u;
+        const unsigned enable = i >= 1u && i <= 3u ? 1u : 0u, reset = i == 0u ? 1u : 0u;
         r[5] = (uint8_t)(((c0 + i) & 15u) | (enable << 4) | (reset << 5));
         if (i == 4u) { /* then a StopCmd with the next counter */
             r[0] = 0x61;
