@@ -287,7 +287,7 @@ rrr_status rrr_ik_nearest(const rrr_model *m, const double x[3], const double q_
         return st;
     }
     double best[3] = {0.0, 0.0, 0.0};
-    double best_d = INFINITY;
+    double best_d = (double)INFINITY;
     int best_b = 0;
     for (int i = 0; i < set.n; ++i) {
         double cand[3], d = 0.0;

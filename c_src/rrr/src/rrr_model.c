@@ -183,7 +183,7 @@ static double min_pivot(const rrr_model *m, double q2, double q3)
     const double q[3] = {0.0, q2, q3};
     double D[3][3];
     if (rrr_mass_matrix(m, q, D) != RRR_OK) {
-        return -INFINITY;
+        return -(double)INFINITY;
     }
     const double d00 = D[0][0];
     if (!(d00 > 0.0)) {

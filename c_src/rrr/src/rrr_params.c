@@ -34,7 +34,7 @@ int rrr_param_index(const char *name)
 double rrr_param_get(const rrr_model *m, size_t i)
 {
     if (m == NULL || i >= RRR_N_PARAMS) {
-        return NAN;
+        return (double)NAN;
     }
     double v;
     memcpy(&v, (const char *)m + params[i].offset, sizeof v);
