@@ -13,10 +13,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rrr/rrr_control.h" /* RRR_SAMPLE_TIME_DEFAULT (a macro: nothing to link) */
 #include "rrr_bench.h"
 
 /** Period of the bench, s (GenMsgCycleTime 1 ms in the DBC). */
-#define RRR_HIL_PERIOD_S 1e-3
+#define RRR_HIL_PERIOD_S RRR_SAMPLE_TIME_DEFAULT
 /** Controller and plant heartbeat period, in periods. */
 #define RRR_HIL_HEARTBEAT_PERIODS 100u
 

@@ -60,3 +60,8 @@ rrr_status rrr_ctc(const rrr_model *m, const rrr_ctc_gains *gains, const double 
     *out = o;
     return RRR_OK;
 }
+
+double rrr_sample_time_default(void)
+{
+    return RRR_SAMPLE_TIME_DEFAULT;
+}

@@ -11,6 +11,13 @@ extern "C" {
 
 #include "rrr_model.h"
 
+/** Sample period of the control loop, s: the communication step of the FMUs' default experiment,
+ *  the period of the CAN bench and the default `sample_time` of a robot file. */
+#define RRR_SAMPLE_TIME_DEFAULT 1e-3
+
+/** @brief RRR_SAMPLE_TIME_DEFAULT, for bindings that cannot read a macro. */
+RRR_API double rrr_sample_time_default(void);
+
 /** @brief Gains and switches of the computed-torque law. */
 typedef struct rrr_ctc_gains {
     double kp[3];                ///< proportional gains, V/rad, >= 0
