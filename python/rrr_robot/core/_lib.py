@@ -88,6 +88,23 @@ class RawCtcOutput(ct.Structure):
     _fields_ = [("u", D3), ("u_n", D3), ("u_c", D3), ("saturated", ct.c_uint)]
 
 
+class RawParamInfo(ct.Structure):
+    """Mirror of ``rrr_param_info`` (c_src/rrr/include/rrr/rrr_params.h): one row of the C
+    parameter table."""
+
+    _fields_ = [
+        ("name", ct.c_char * 8),
+        ("unit", ct.c_char * 8),
+        ("offset", ct.c_size_t),
+        ("bound", ct.c_int),          # enum rrr_param_bound
+        ("description", ct.c_char * 80),
+    ]
+
+
+#: ``rrr_param_bound`` values: the lower bound of a parameter (every value must be finite).
+PARAM_ANY, PARAM_NONNEG, PARAM_POS = 0, 1, 2
+
+
 class RawPlantState(ct.Structure):
     """Mirror of ``rrr_plant_state``."""
 
@@ -128,6 +145,16 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_ctc": [_M, _P(RawGains), _D, _D, _D, _D, _D, _P(RawCtcOutput)],
     "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
     "rrr_plant_step": [_M, ct.c_double, _D, ct.c_double, _P(RawPlantState), _D],
+    "rrr_param_set": [_M, ct.c_size_t, ct.c_double],
+}
+
+# the parameter table's functions that do not return a status: name -> (argtypes, restype)
+_TABLE_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
+    "rrr_param_table": ([_P(ct.c_size_t)], _P(RawParamInfo)),
+    "rrr_param_index": ([ct.c_char_p], ct.c_int),
+    "rrr_param_get": ([_M, ct.c_size_t], ct.c_double),
+    "rrr_param_in_range": ([ct.c_size_t, ct.c_double], ct.c_int),
+    "rrr_sample_time_default": ([], ct.c_double),
 }
 
 STATUS_NAMES = [
@@ -179,11 +206,54 @@ def _load() -> ct.CDLL:
         fn = getattr(lib, name)
         fn.argtypes = argtypes
         fn.restype = ct.c_int
+    for name, (argtypes, restype) in _TABLE_SIGNATURES.items():
+        fn = getattr(lib, name)
+        fn.argtypes = argtypes
+        fn.restype = restype
     return lib
 
 
 LIB = _load()
 FUNCS: dict[str, Callable[..., int]] = {name: getattr(LIB, name) for name in _SIGNATURES}
+
+
+def sample_time_default() -> float:
+    """RRR_SAMPLE_TIME_DEFAULT (rrr_control.h), s: the control period of the FMUs' default
+    experiment, of the CAN bench and of a robot file without [control] sample_time."""
+    return float(LIB.rrr_sample_time_default())
+
+
+def param_table() -> list[RawParamInfo]:
+    """The rows of the C parameter table ``rrr_param_table`` (copies, in table order)."""
+    n = ct.c_size_t()
+    rows = LIB.rrr_param_table(ct.byref(n))
+    return [RawParamInfo.from_buffer_copy(rows[i]) for i in range(n.value)]
+
+
+def param_index(name: str) -> int:
+    """Row of the parameter called ``name`` in the C table (``rrr_param_index``), -1 if none."""
+    try:
+        encoded = name.encode("ascii")
+    except UnicodeEncodeError:
+        return -1
+    return int(LIB.rrr_param_index(encoded))
+
+
+def param_get(raw: RawModel, row: int) -> float:
+    """Value of row ``row`` of the table in ``raw`` (``rrr_param_get``)."""
+    return float(LIB.rrr_param_get(ct.byref(raw), row))
+
+
+def param_set(raw: RawModel, row: int, value: float) -> None:
+    """Set row ``row`` of the table in ``raw`` (``rrr_param_set``; BadInputError if value is
+    not finite or the row does not exist)."""
+    call("rrr_param_set", ct.byref(raw), row, float(value),
+         context=lambda: f"row {row} = {value!r}")
+
+
+def param_in_range(row: int, value: float) -> bool:
+    """Whether ``value`` satisfies row ``row``'s range (``rrr_param_in_range``)."""
+    return bool(LIB.rrr_param_in_range(row, float(value)))
 
 
 def call(name: str, *args: Any, context: str | Callable[[], str] = "") -> None:
