@@ -12,12 +12,15 @@ Subpackages, each importing only from those below it: ``cli`` (the ``rrr`` comma
 from __future__ import annotations
 
 from .core.model import CtcOutput, Model, Singularity, bps_from_inertia
+from .core.robot import RobotFile, read_robot_file
 from .errors import (
     BadInputError,
     CosimError,
     ModelError,
     NumericError,
+    RobotFileError,
     RrrError,
+    ScenarioError,
     SingularError,
     UnreachableError,
 )
@@ -32,11 +35,15 @@ __all__ = [
     "Model",
     "ModelError",
     "NumericError",
+    "RobotFile",
+    "RobotFileError",
     "RrrError",
+    "ScenarioError",
     "SingularError",
     "Singularity",
     "UnreachableError",
     "__version__",
     "bps_from_inertia",
     "fmu_path",
+    "read_robot_file",
 ]

@@ -7,7 +7,9 @@ __all__ = [
     "CosimError",
     "ModelError",
     "NumericError",
+    "RobotFileError",
     "RrrError",
+    "ScenarioError",
     "SingularError",
     "UnreachableError",
 ]
@@ -31,6 +33,25 @@ class BadInputError(RrrError, ValueError):
 
 class ModelError(RrrError, ValueError):
     """Model parameters are invalid (non-finite, k_t <= 0, D(q) not positive definite...)."""
+
+
+class RobotFileError(ModelError, BadInputError):
+    """A robot file (TOML) that cannot be read or breaks its schema (a ModelError and a
+    BadInputError). The message names the file, the table and the key (and the index in an
+    array); ``source``, ``table`` and ``key`` hold them ("" where they do not apply)."""
+
+    def __init__(self, message: str, source: str = "", table: str = "", key: str = "") -> None:
+        super().__init__(message)
+        self.source, self.table, self.key = source, table, key
+
+
+class ScenarioError(BadInputError):
+    """A scenario file (TOML) of the writing task that cannot be read or breaks its schema, or a
+    set of scenarios whose names collide; named like :class:`RobotFileError`."""
+
+    def __init__(self, message: str, source: str = "", table: str = "", key: str = "") -> None:
+        super().__init__(message)
+        self.source, self.table, self.key = source, table, key
 
 
 class UnreachableError(RrrError, ValueError):

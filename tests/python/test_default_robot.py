@@ -50,11 +50,13 @@ def test_bad_values_name_the_field(tmp_path) -> None:
     src = DEFAULT_ROBOT_TOML.read_text()
     cases = {
         "kt = [12.0, 11.0, 4.7]": ("kt = [12.0, 0.0, 4.7]", "kt\\[2\\]"),
-        "a3 = 0.35": ("a3 = nan", "a3 contains NaN"),
-        "mass = 6.0": ("mass = -6.0", "inertial parameters rejected"),
-        "u_max = 10.0": ("u_max = [1, 2]", "u_max must have shape"),
-        "d1 = 0.50": ("d1 = true", r"\[kinematics\] d1 must be numbers"),
-        "b = [0.02, 0.02, 0.02]": ('b = [0.02, "0.02", 0.02]', r"\[friction\] b must be numbers"),
+        "a3 = 0.35": ("a3 = nan", r"\[kinematics\] a3 must be a finite number > 0.*got nan"),
+        "mass = 6.0": ("mass = -6.0", r"\[link2\] mass must be a finite number > 0"),
+        "u_max = 10.0": ("u_max = [1, 2]", r"\[motors\] u_max must be a finite number > 0.*"
+                         r"got \[1, 2\]"),
+        "d1 = 0.50": ("d1 = true", r"\[kinematics\] d1 must be a finite number.*got true"),
+        "b = [0.02, 0.02, 0.02]": ('b = [0.02, "0.02", 0.02]',
+                                   r'\[friction\] b\[2\] must be a finite number >= 0.*got "0.02"'),
     }
     for old, (new, message) in cases.items():
         assert old in src

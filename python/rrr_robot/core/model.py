@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import copy
 import ctypes as ct
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +19,7 @@ from ..errors import BadInputError, ModelError
 from . import _lib
 from ._arrays import FloatArray, as_rows, broadcast_rows, ptr, rows_of
 from ._package import DATA_DIR
-from .robot_file import raw_model_from_dict, write_toml
+from .robot_file import parse_robot, read_robot_data, write_toml
 
 DH_KEYS = ("d1", "a2", "a3", "d2", "d3")
 SHOULDER = {"front": 0, "back": 1}
@@ -108,27 +107,21 @@ class Model:
 
     @classmethod
     def from_toml(cls, path: str | Path) -> Model:
-        """Read a robot file in the format of data/default_robot.toml."""
-        path = Path(path)
-        try:
-            with path.open("rb") as fh:
-                data = tomllib.load(fh)
-        except FileNotFoundError as exc:
-            raise ModelError(f"robot file {path} does not exist") from exc
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise ModelError(f"robot file {path} is not valid TOML: {exc}") from exc
-        except OSError as exc:
-            raise ModelError(f"cannot read robot file {path}: {exc}") from exc
-        return cls.from_dict(data, source=str(path))
+        """Read a robot file in the format of data/default_robot.toml (every table checked once
+        by :func:`rrr_robot.core.robot_file.read_robot_data`; RobotFileError names the file, the
+        table and the key). :func:`rrr_robot.core.robot.read_robot_file` gives the other tables
+        as well."""
+        return cls(read_robot_data(path).raw_model(), validate=False)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], source: str = "robot data") -> Model:
-        """Build from the nested mapping of a robot TOML file (see data/default_robot.toml).
+        """Build from the nested mapping of a robot TOML file (see data/default_robot.toml),
+        with the same checks as :meth:`from_toml`.
 
         A ``[base_parameters] p = [...]`` table, if present, is used as is; otherwise p is
         computed from ``[link1..3]`` and ``[motors] rotor_inertia`` by eq 12.
         """
-        return cls(raw_model_from_dict(data, source))
+        return cls(parse_robot(data, source).raw_model(), validate=False)
 
     def copy(self) -> Model:
         """An independent copy."""
