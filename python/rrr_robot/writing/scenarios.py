@@ -1,30 +1,61 @@
-"""Scenarios of the writing task, read from TOML files (users add their own).
+"""Scenarios of the writing task, read from TOML files (users add their own); built-in ones live
+in data/scenarios/.
 
-A scenario file has a ``[scenario]`` table (name, description, feedforward), optional ``[gains]``
-(kp, kd: override the robot file's [control]) and optional ``[mismatch]`` (p_rel, kt_rel, f_rel:
-relative errors of the controller's model). Built-in scenarios live in data/scenarios/.
+One schema, every table and key checked (unknown ones are errors that name them), errors
+(:class:`~rrr_robot.errors.ScenarioError`) naming the file, the table and the key:
+
+- ``[scenario]`` (required): ``name`` (required) names the output files (``<name>.csv``,
+  ``fig_letters_<name>.png``), so it must be a safe file name: 1 to 64 characters, letters,
+  digits, ``_``, ``.`` and ``-``, starting with a letter or digit, not ending with ``.``, not a
+  Windows device name (con, nul, com1, ...); ``description`` (optional, at most 200
+  characters); ``feedforward`` (required, true or false);
+- ``[gains]`` (optional): ``kp``, ``kd``, three numbers >= 0 and <= 1e6 each, replacing the
+  robot file's [control] gains;
+- ``[mismatch]`` (optional): ``<group>_rel`` for each group of the C parameter table (p_rel,
+  kt_rel, f_rel, w_rel, b_rel, u_max_rel, g_rel, d1_rel, a2_rel, ...), a relative error of the
+  controller's model, > -1 and <= 10: every value of the group is scaled by (1 + rel), the base
+  parameters with alternating sign, p_k (1 + rel (-1)^k).
+
+The names of one run must differ (ignoring case: they name files) and a run has at most
+:data:`MAX_SCENARIOS` scenarios (:func:`check_run`).
 """
 
 from __future__ import annotations
 
-import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from ..core import _lib
 from ..core._package import DATA_DIR
+from ..core.checked import Document, Field, Flag, Number, Text, Vector, load_toml
 from ..core.model import Model
-from ..errors import BadInputError, ModelError
+from ..core.param_names import GROUPS, PARAMS, set_values
+from ..core.robot_file import GAIN
+from ..errors import ModelError, ScenarioError
 
 SCENARIO_DIR = DATA_DIR / "scenarios"
 BUILTIN = ("pd", "ctc", "mismatch")
-_ALLOWED = {
-    "scenario": {"name", "description", "feedforward"},
-    "gains": {"kp", "kd"},
-    "mismatch": {"p_rel", "kt_rel", "f_rel"},
+#: Scenarios of one run (each is one co-simulation of the whole reference).
+MAX_SCENARIOS = 20
+#: A scenario name: a safe file name (it names output files).
+NAME_PATTERN = r"[A-Za-z0-9](?:[A-Za-z0-9_.-]{0,62}[A-Za-z0-9_-])?"
+_DEVICE_NAMES = frozenset({"con", "prn", "aux", "nul", *(f"com{i}" for i in range(10)),
+                           *(f"lpt{i}" for i in range(10))})
+#: A [mismatch] value: the factor 1 + rel stays positive and at most 11.
+MISMATCH = Number(lo=-1.0, lo_open=True, hi=10.0)
+
+SCHEMA: dict[str, dict[str, Field]] = {
+    "scenario": {
+        "name": Text(max_len=64, pattern=NAME_PATTERN, pattern_text=(
+            "a safe file name: 1 to 64 letters, digits, _ . -, starting with a letter or "
+            "digit and not ending with '.'")),
+        "description": Text(max_len=200),
+        "feedforward": Flag(),
+    },
+    "gains": {"kp": Vector(3, GAIN), "kd": Vector(3, GAIN)},
+    "mismatch": {f"{group}_rel": MISMATCH for group in GROUPS},
 }
 
 
@@ -44,47 +75,40 @@ class Scenario:
         """The model the controller believes in: the true one, perturbed by [mismatch]."""
         if not self.mismatch:
             return true_model
-        signs = np.array([(-1.0) ** k for k in range(1, 17)])
-        p = true_model.p * (1.0 + self.mismatch.get("p_rel", 0.0) * signs)
-        kt = true_model.kt * (1.0 + self.mismatch.get("kt_rel", 0.0))
-        f = true_model.f * (1.0 + self.mismatch.get("f_rel", 0.0))
+        changes: dict[str, float] = {}
+        for info in PARAMS:
+            rel = self.mismatch.get(f"{info.group}_rel")
+            if rel is None:
+                continue
+            sign = (-1.0) ** info.index[0] if info.group == "p" else 1.0
+            changes[info.name] = _lib.param_get(true_model.raw, info.row) * (1.0 + rel * sign)
         try:
-            return true_model.with_params(p=p, kt=kt, f=f)
+            return Model(set_values(true_model.raw, changes))
         except ModelError as exc:
-            raise BadInputError(f"scenario {self.name}: the perturbed model is invalid: {exc}") \
-                from exc
-
-
-def _vector(table: Mapping[str, Any], key: str, src: str) -> tuple[float, float, float]:
-    arr = np.asarray(table[key], dtype=float) if key in table else np.empty(0)
-    if arr.shape != (3,) or not np.all(np.isfinite(arr)) or np.any(arr < 0):
-        raise BadInputError(f"{src}: {key} must be three finite non-negative numbers")
-    return (float(arr[0]), float(arr[1]), float(arr[2]))
+            src = self.source or f"scenario {self.name}"
+            raise ScenarioError(f"{src}: scenario {self.name}: [mismatch] makes the controller's "
+                                f"model invalid: {exc}", src, "mismatch", "") from exc
 
 
 def scenario_from_dict(data: Mapping[str, Any], src: str) -> Scenario:
-    """Validate a parsed scenario file; every error names the file and the key."""
-    for table, entries in data.items():
-        if table not in _ALLOWED or not isinstance(entries, Mapping):
-            raise BadInputError(f"{src}: unknown table [{table}] (allowed: {sorted(_ALLOWED)})")
-        unknown = set(entries) - _ALLOWED[table]
-        if unknown:
-            raise BadInputError(f"{src}: unknown key(s) {sorted(unknown)} in [{table}]")
-    head = data.get("scenario")
-    if head is None or "name" not in head or "feedforward" not in head:
-        raise BadInputError(f"{src}: needs a [scenario] table with name and feedforward")
-    if not isinstance(head["feedforward"], bool) or not isinstance(head["name"], str):
-        raise BadInputError(f"{src}: name must be a string and feedforward true or false")
-    gains = data.get("gains", {})
-    mismatch = {k: float(v) for k, v in data.get("mismatch", {}).items()}
-    if any(not np.isfinite(v) or v <= -1.0 for v in mismatch.values()):
-        raise BadInputError(f"{src}: [mismatch] values must be finite and > -1")
+    """Check a parsed scenario file (see the module doc); every error names the file and the
+    key. Raises ScenarioError."""
+    doc = Document(data, src, "scenario file", ScenarioError)
+    doc.only_tables(SCHEMA)
+    head = doc.table("scenario", SCHEMA["scenario"]) or {}
+    missing = [k for k in ("name", "feedforward") if k not in head]
+    if missing:
+        doc.fail("scenario", missing[0], "needs a [scenario] table with name and feedforward "
+                 f"(missing: {', '.join(missing)})")
+    name = head["name"]
+    if name.split(".")[0].lower() in _DEVICE_NAMES:
+        doc.fail("scenario", "name", f"[scenario] name {name!r} is a Windows device name "
+                 "(con, prn, aux, nul, com0-9, lpt0-9): it cannot name an output file")
+    gains = doc.table("gains", SCHEMA["gains"]) or {}
+    mismatch = doc.table("mismatch", SCHEMA["mismatch"]) or {}
     return Scenario(
-        name=head["name"], description=str(head.get("description", "")),
-        feedforward=head["feedforward"],
-        kp=_vector(gains, "kp", src) if "kp" in gains else None,
-        kd=_vector(gains, "kd", src) if "kd" in gains else None,
-        mismatch=mismatch, source=src,
+        name=name, description=head.get("description", ""), feedforward=head["feedforward"],
+        kp=gains.get("kp"), kd=gains.get("kd"), mismatch=mismatch, source=src,
     )
 
 
@@ -94,14 +118,27 @@ def load_scenario(name_or_path: str) -> Scenario:
     if name_or_path not in BUILTIN:
         path = Path(name_or_path)
         if path.suffix != ".toml" or not path.is_file():
-            raise BadInputError(
+            raise ScenarioError(
                 f"unknown scenario {name_or_path!r}: use one of {', '.join(BUILTIN)} "
-                "or the path of a scenario .toml file"
-            )
-    try:
-        data = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise BadInputError(f"{path}: malformed scenario file: {exc}") from exc
-    except OSError as exc:
-        raise BadInputError(f"cannot read scenario file {path}: {exc}") from exc
-    return scenario_from_dict(data, str(path))
+                "or the path of a scenario .toml file", name_or_path, "", "")
+    return scenario_from_dict(load_toml(path, "scenario file", ScenarioError), str(path))
+
+
+def check_run(scenarios: Sequence[Scenario]) -> None:
+    """The scenarios of one run: at least one, at most MAX_SCENARIOS, names unique (ignoring
+    case: they name output files). Raises ScenarioError."""
+    if not scenarios:
+        raise ScenarioError("no scenario to run: give at least one")
+    if len(scenarios) > MAX_SCENARIOS:
+        raise ScenarioError(f"{len(scenarios)} scenarios in one run: at most {MAX_SCENARIOS} "
+                            "(each co-simulates the whole reference)")
+    seen: dict[str, Scenario] = {}
+    for s in scenarios:
+        other = seen.get(s.name.lower())
+        if other is not None:
+            same = "the same name" if other.name == s.name else "names that differ only in case"
+            raise ScenarioError(
+                f"scenarios {other.name!r} ({other.source}) and {s.name!r} ({s.source}) have "
+                f"{same}: the names of one run must differ, they name the output files",
+                s.source, "scenario", "name")
+        seen[s.name.lower()] = s
