@@ -26,9 +26,9 @@ from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
 
 @pytest.fixture(scope="module")
 def writing(tmp_path_factory: pytest.TempPathFactory):
-    model, tables, scenarios, ref = prepare(
+    model, robot, scenarios, ref = prepare(
         WritingJob(out=tmp_path_factory.mktemp("w"), scenarios=["ctc"]))
-    return model, tables, scenarios[0], ref
+    return model, robot, scenarios[0], ref
 
 
 @pytest.fixture(scope="module")
@@ -50,9 +50,9 @@ def test_c_bench_equals_quantised_fmpy_loop(writing, c_bench: BenchRun) -> None:
 
 
 def test_c_bench_vs_writing_task_differs_by_quantisation_only(writing, c_bench) -> None:
-    model, tables, scn, ref = writing
-    opts = CosimOptions(step=1e-3, plant_values=model_fmu_values(model),
-                        controller_values=controller_fmu_values(scn, model, tables["control"]))
+    model, robot, scn, ref = writing
+    opts = CosimOptions(step=robot.sample_time, plant_values=model_fmu_values(model),
+                        controller_values=controller_fmu_values(scn, model, robot.control))
     r = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, opts)
     dq = np.abs(c_bench.q - r.q).max()
     du = np.abs(c_bench.u - r.u).max()
@@ -93,8 +93,8 @@ def test_c_controller_takes_a_scenario_model(writing, tmp_path: Path) -> None:
     with the same controller FMU values."""
     from rrr_robot.writing.scenarios import load_scenario
 
-    model, tables, _, ref = writing
-    values = controller_fmu_values(load_scenario("mismatch"), model, tables["control"])
+    model, robot, _, ref = writing
+    values = controller_fmu_values(load_scenario("mismatch"), model, robot.control)
     n = 1500
     t, q, qd, qdd = ref.t[:n], ref.q[:n], ref.qd[:n], ref.qdd[:n]
     bench = run_c_bench(t, q, qd, qdd, workdir=tmp_path, controller_values=values)

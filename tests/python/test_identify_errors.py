@@ -70,7 +70,7 @@ def test_not_a_file() -> None:
 
 
 def test_rank_deficient_names_parameters() -> None:
-    with pytest.raises(BadInputError, match=r"not exciting enough.*p1"):
+    with pytest.raises(BadInputError, match=r"not exciting enough.*p\[1\]"):
         estimate_base_params(fake_log(moving=(1, 2)), MODEL)
 
 

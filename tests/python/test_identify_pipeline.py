@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from rrr_robot.cli.identify import register_cli
 from rrr_robot.core.model import DEFAULT_ROBOT_TOML, Model
+from rrr_robot.core.robot import read_robot_file
 from rrr_robot.identify import experiments as ex
 from rrr_robot.identify.base_params import estimate_base_params
 from rrr_robot.identify.excitation import (
@@ -98,8 +99,7 @@ def test_noisy_intervals_and_writing(noisy_logs) -> None:
     assert np.array_equal(res.model.p, est.p)     # the default estimator
     inside = np.abs(est.p - TRUE.p) <= 1.96 * est.std
     assert inside.sum() >= 15, (est.p - TRUE.p) / est.std
-    tables = tomllib.loads(DEFAULT_ROBOT_TOML.read_text())
-    val = validate_writing(TRUE, res.model, tables["control"], tables["writing"])
+    val = validate_writing(TRUE, res.model, read_robot_file(DEFAULT_ROBOT_TOML))
     assert val["tip_error_ratio"] < 2.0
     assert max(val["rms_u_n_error"]) < 0.05 * max(val["rms_u_n_true"])
 

@@ -21,9 +21,9 @@ def _writing_setup(text: str | None, scenario: str) -> tuple[Reference, dict[str
     """The writing reference and the controller values of a scenario (default robot)."""
     from ..writing.job import WritingJob, controller_fmu_values, prepare
 
-    model, tables, scenarios, ref = prepare(WritingJob(out=Path("."), text=text,
-                                                       scenarios=[scenario]))
-    return ref, controller_fmu_values(scenarios[0], model, tables["control"])
+    model, robot, scenarios, ref = prepare(WritingJob(out=Path("."), text=text,
+                                                      scenarios=[scenario]))
+    return ref, controller_fmu_values(scenarios[0], model, robot.require_control())
 
 
 def _cmd_hil(args: argparse.Namespace) -> int:

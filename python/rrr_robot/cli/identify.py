@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import tomllib
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -14,6 +13,9 @@ from typing import Any
 import numpy as np
 
 from ..core.model import DEFAULT_ROBOT_TOML, Model
+from ..core.param_names import group_names
+from ..core.robot import read_robot_file
+from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
 
 log = logging.getLogger(__name__)
@@ -23,8 +25,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from ..identify.logs import read_log
     from ..identify.pipeline import Settings, identify, write_robot
 
-    prior_file = Path(args.robot) if args.robot else DEFAULT_ROBOT_TOML
-    prior = Model.from_toml(prior_file)
+    prior_robot = read_robot_file(Path(args.robot) if args.robot else DEFAULT_ROBOT_TOML)
+    prior = prior_robot.model
+    if args.validate:
+        prior_robot.require_control()
     out_dir = Path(args.out).resolve().parent
     if not out_dir.is_dir():  # fail before the estimation, not after it
         raise BadInputError(f"cannot write {args.out}: the folder {out_dir} does not exist")
@@ -33,18 +37,16 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                         v_min=args.v_min)
     friction = read_log(args.friction_log, friction=True) if args.friction_log else None
     result = identify(read_log(args.log), prior, friction, settings)
-    write_robot(result, Path(args.out), prior_file)
+    write_robot(result, Path(args.out), prior_robot)
     report: dict[str, Any] = result.report()
     est = result.base.wls if settings.weighting == "wls" else result.base.ls
     print(f"cond(W) = {result.base.cond:.1f} from {result.base.rows} rows; {est.method}:")
-    for k, (p, s) in enumerate(zip(est.p, est.std, strict=True)):
-        print(f"  p{k + 1:<2} = {p: .6g} +/- {1.96 * s:.2g} (95 %)")
+    for name, p, s in zip(group_names("p"), est.p, est.std, strict=True):
+        print(f"  {name:<5} = {p: .6g} +/- {1.96 * s:.2g} (95 %)")
     if args.validate:
         from ..identify.validation import validate_writing
 
-        tables = tomllib.loads(prior_file.read_text())
-        report["writing"] = validate_writing(prior, result.model, tables["control"],
-                                             tables.get("writing"))
+        report["writing"] = validate_writing(prior, result.model, prior_robot)
         ratio = report["writing"]["tip_error_ratio"]
         print(f"writing task: tip error ratio identified/prior {ratio:.2f}")
     if args.report:
@@ -57,15 +59,18 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     from ..identify import experiments as ex
     from ..identify.excitation import design_excitation
 
-    model = Model.from_toml(args.robot) if args.robot else Model.default()
+    robot = read_robot_file(args.robot) if args.robot else None
+    model = robot.model if robot is not None else Model.default()
+    step = robot.sample_time if robot is not None else DEFAULT_SAMPLE_TIME
+    ex.check_experiments(args.periods, step)  # the bounds, before anything runs
     sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
     traj.to_json(out / "excitation.json")
     note = f"simulated, sensors: {sensors}"
-    ex.friction_experiment(model, sensors=sensors).to_csv(out / "friction.csv", note)
-    ex.excitation_experiment(model, traj, args.periods, sensors=sensors).to_csv(
+    ex.friction_experiment(model, step=step, sensors=sensors).to_csv(out / "friction.csv", note)
+    ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors).to_csv(
         out / "excitation.csv", f"{note}; cond(W) = {cond:.2f}")
     print(f"cond(W) of the excitation: {cond:.2f}; logs in {out}/ (friction.csv, "
           "excitation.csv, excitation.json)")
@@ -105,5 +110,7 @@ def register_cli(sub: Any) -> None:
     e.add_argument("--robot", help="true robot TOML (default: packaged)")
     e.add_argument("--noise-free", action="store_true", help="ideal sensors (logs qd, qdd)")
     e.add_argument("--seed", type=int, default=1)
-    e.add_argument("--periods", type=int, default=1, help="excitation periods of 10 s")
+    e.add_argument("--periods", type=int, default=1,
+                   help="excitation periods of 10 s (an experiment has at most 1,000,000 "
+                   "samples: 1000 s at 1 ms)")
     e.set_defaults(func=_cmd_experiment)

@@ -23,6 +23,7 @@ import scipy.linalg as sla
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
+from ..core.param_names import group_names
 from ..errors import BadInputError
 from .logs import Log
 from .signals import derivatives
@@ -84,7 +85,8 @@ def build_regression(lg: Log, prior: Model, method: str = "butter", cutoff: floa
 
 def _check_rank(w: FloatArray, source: str) -> float:
     norms = np.linalg.norm(w, axis=0)
-    dead = [f"p{k + 1}" for k in np.flatnonzero(norms < 1e-9 * max(norms.max(), 1e-300))]
+    names = group_names("p")        # "p[1]" ... "p[16]": the C parameter table's names
+    dead = [names[k] for k in np.flatnonzero(norms < 1e-9 * max(norms.max(), 1e-300))]
     if dead:
         raise BadInputError(f"{source}: not exciting enough: the data carry no information on "
                             f"{', '.join(dead)} (rank deficient regressor)")
@@ -95,7 +97,7 @@ def _check_rank(w: FloatArray, source: str) -> float:
         weak = np.argsort(-np.abs(vt[-1]))[:3]
         raise BadInputError(f"{source}: not exciting enough: the regressor is (nearly) rank "
                             f"deficient, condition number {cond:.3g} after column scaling; "
-                            f"the weakest direction mixes {', '.join(f'p{k + 1}' for k in weak)}")
+                            f"the weakest direction mixes {', '.join(names[k] for k in weak)}")
     return float(np.linalg.cond(w))
 
 

@@ -1,7 +1,9 @@
 """Simulated identification experiments on the plant FMU, with encoder quantisation and noise.
 
 The plant FMU is driven directly (FmuSlave) by a PD position controller written here, at the
-communication step of the reference (1 ms). Sensor effects are applied in Python because the
+communication step of the reference (``step``: the robot file's [control] sample_time, default
+1 ms). One experiment is bounded to MAX_EXPERIMENT_SAMPLES samples (checked before it runs,
+:func:`check_experiments`). Sensor effects are applied in Python because the
 plant FMU outputs ideal signals:
 
 - encoder: q is rounded to ``counts_per_rev`` counts per revolution, then white noise
@@ -24,6 +26,8 @@ from scipy.integrate import cumulative_trapezoid
 from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.param_names import model_fmu_values
+from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..errors import BadInputError
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from .excitation import FourierTrajectory
@@ -32,6 +36,11 @@ from .logs import Log
 log = logging.getLogger(__name__)
 
 J = (1, 2, 3)
+#: Samples of one simulated experiment: 1,000,000 (1000 s at 1 ms; the default friction sweep has
+#: about 330,000, one 10 s excitation period 10,000). The loop steps the FMU from Python.
+MAX_EXPERIMENT_SAMPLES = 1_000_000
+#: Period of the excitation (s), design_excitation's default.
+EXCITATION_PERIOD = 10.0
 
 
 @dataclass(frozen=True)
@@ -65,6 +74,7 @@ def simulate(model: Model, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
              sensors: Sensors = IDEAL, gains: Gains = Gains(),
              joint: np.ndarray | None = None) -> Log:
     """Track (q_ref, qd_ref) with PD on the plant FMU (true parameters ``model``); the log."""
+    _check_samples(t.shape[0], "the experiment", float(t[1] - t[0]) if t.shape[0] > 1 else 0.0)
     n, h = t.shape[0], float(t[1] - t[0])
     rng = np.random.default_rng(sensors.seed)
     noise_q = sensors.sigma_q * rng.standard_normal((n, 3))
@@ -96,10 +106,52 @@ def simulate(model: Model, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                rec[:, 9:12] if ideal else None, joint, "simulated experiment")
 
 
+def _check_samples(n: float, what: str, step: float, hint: str = "") -> None:
+    if n < 2:
+        raise BadInputError(f"{what} would have {n:.0f} samples: it needs at least 2")
+    if n > MAX_EXPERIMENT_SAMPLES:
+        raise BadInputError(f"{what} would have {n:,.0f} samples at the sample time {step:g} s; "
+                            f"one experiment is bounded to {MAX_EXPERIMENT_SAMPLES:,} samples "
+                            f"(1000 s at 1 ms){hint}")
+
+
+def excitation_samples(periods: int, step: float = DEFAULT_SAMPLE_TIME,
+                       period: float = EXCITATION_PERIOD) -> int:
+    """Samples of the excitation experiment; BadInputError beyond MAX_EXPERIMENT_SAMPLES."""
+    if not isinstance(periods, int) or isinstance(periods, bool) or periods < 1:
+        raise BadInputError(f"the excitation runs for a whole number of periods >= 1, got "
+                            f"{periods!r}")
+    if not (np.isfinite(step) and step > 0 and np.isfinite(period) and period > 0):
+        raise BadInputError(f"sample time {step!r} s and period {period!r} s must be > 0")
+    n = periods * period / step
+    _check_samples(n, f"the excitation experiment ({periods} period(s) of {period:g} s)", step,
+                   ": use fewer periods or a longer sample time")
+    return round(n)
+
+
+def friction_samples(design: SweepDesign | None = None, step: float = DEFAULT_SAMPLE_TIME) -> int:
+    """Samples of the friction sweep; BadInputError beyond MAX_EXPERIMENT_SAMPLES."""
+    d = SweepDesign() if design is None else design
+    if not (np.isfinite(step) and step > 0):
+        raise BadInputError(f"sample time {step!r} s must be > 0")
+    fixed = (d.hold + 2 * d.ramp + 2 * d.settle) / step
+    n = d.hold / step + 2 * len(J) * sum(fixed + min(d.cruise, 2 * np.pi / abs(v)) / step
+                                         for v in d.speeds)
+    _check_samples(n, "the friction sweep", step, ": use a longer sample time")
+    return round(n)
+
+
+def check_experiments(periods: int, step: float = DEFAULT_SAMPLE_TIME) -> None:
+    """Both experiments of ``rrr identify-experiment`` within the bounds (before anything runs)."""
+    friction_samples(SweepDesign(), step)
+    excitation_samples(periods, step)
+
+
 def excitation_experiment(model: Model, traj: FourierTrajectory, periods: int = 1,
-                          step: float = 1e-3, sensors: Sensors = IDEAL,
+                          step: float = DEFAULT_SAMPLE_TIME, sensors: Sensors = IDEAL,
                           gains: Gains = Gains()) -> Log:
     """Run the periodic excitation for whole periods; the plant starts on the reference."""
+    excitation_samples(periods, step, traj.period)
     t = np.arange(round(periods * traj.period / step), dtype=np.float64) * step
     q, qd, _ = traj.evaluate(t)
     return simulate(model, t, q, qd, sensors, gains)
@@ -134,13 +186,14 @@ def _pass(v: float, d: SweepDesign, step: float) -> tuple[FloatArray, FloatArray
     return np.concatenate(prof), np.concatenate(tag)
 
 
-def friction_reference(design: SweepDesign = SweepDesign(), step: float = 1e-3,
+def friction_reference(design: SweepDesign = SweepDesign(), step: float = DEFAULT_SAMPLE_TIME,
                        ) -> tuple[FloatArray, FloatArray, FloatArray, np.ndarray]:
     """One continuous reference: for joint 1, 2, 3 in turn, at each speed a forward pass and a
     backward pass over the same arc, the other joints held at ``pose``. The backward pass
     retraces the forward one (settle and ramp distances are symmetric), so gravity, which
     depends on position only, is the same on both cruises and separates from the odd friction.
     Returns t, q_ref, qd_ref and the joint tag (0 outside the recorded cruises)."""
+    friction_samples(design, step)
     qd_parts, tags = [], []
     for i in J:
         for v in design.speeds:
@@ -162,7 +215,8 @@ def friction_reference(design: SweepDesign = SweepDesign(), step: float = 1e-3,
 LOCKING_GAINS = Gains(kp=(200.0, 400.0, 200.0), kd=(6.0, 12.0, 3.0))
 
 
-def friction_experiment(model: Model, design: SweepDesign = SweepDesign(), step: float = 1e-3,
+def friction_experiment(model: Model, design: SweepDesign = SweepDesign(),
+                        step: float = DEFAULT_SAMPLE_TIME,
                         sensors: Sensors = IDEAL, gains: Gains = LOCKING_GAINS) -> Log:
     """Simulate the friction sweep; the log has the ``joint`` column."""
     t, q, qd, tag = friction_reference(design, step)

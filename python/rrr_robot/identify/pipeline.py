@@ -9,7 +9,6 @@ plus an ``[identification]`` table with the standard deviations and figures of m
 from __future__ import annotations
 
 import logging
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,8 @@ from typing import Any
 import numpy as np
 
 from ..core.model import Model
+from ..core.param_names import group_names
+from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import write_toml
 from ..errors import BadInputError, ModelError
 from .base_params import BaseParamResult, estimate_base_params
@@ -116,13 +117,15 @@ def identify(excitation: Log, prior: Model, friction: Log | None = None,
     return Identified(model, fits, base)
 
 
-def write_robot(result: Identified, path: Path, prior_file: Path | None = None) -> None:
-    """The identified robot file; tables of the prior file that are not identified (control,
-    writing, ...) are carried over."""
+def write_robot(result: Identified, path: Path,
+                prior: RobotFile | str | Path | None = None) -> None:
+    """The identified robot file; tables of the prior robot file that are not identified
+    (kinematics, motors, control, writing, ...) are carried over. ``prior``: the prior as read
+    (RobotFile) or its path (read and checked here)."""
     tables: dict[str, Any] = {}
-    if prior_file is not None:
-        with Path(prior_file).open("rb") as fh:
-            tables = tomllib.load(fh)
+    if prior is not None:
+        robot = prior if isinstance(prior, RobotFile) else read_robot_file(prior)
+        tables = robot.data.tables()
         for drop in ("link1", "link2", "link3", "base_parameters", "friction", "identification"):
             tables.pop(drop, None)
         tables.get("motors", {}).pop("rotor_inertia", None)
@@ -131,5 +134,6 @@ def write_robot(result: Identified, path: Path, prior_file: Path | None = None) 
         tables[name] = tables.get(name, {}) | table
     tables["identification"] = {k: v for k, v in result.report().items()}
     header = ("Identified by rrr identify: [base_parameters] and [friction] estimated from logs;\n"
-              "[identification] holds p_std (1 sigma) and figures of merit.")
+              "[identification] holds p_std (1 sigma) and figures of merit; the base parameters "
+              f"are {group_names('p')[0]} ... {group_names('p')[-1]} (rrr_params.h).")
     write_toml(tables, Path(path), header=header)

@@ -5,13 +5,13 @@ with the true (or reference) model."""
 from __future__ import annotations
 
 import logging
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from ..core.model import Model
 from ..core.param_names import model_fmu_values
+from ..core.robot import RobotFile
 from ..sim.cosim import CosimOptions, run_cosim
 from ..writing.job import controller_fmu_values, metrics
 from ..writing.scenarios import load_scenario
@@ -20,10 +20,11 @@ from ..writing.trajectory import WritingSpec, make_reference
 log = logging.getLogger(__name__)
 
 
-def validate_writing(true_model: Model, identified: Model, control: Mapping[str, Any],
-                     writing: Mapping[str, Any] | None = None) -> dict[str, Any]:
-    """Voltage prediction error and tip errors of CTC with the identified vs the true model."""
-    ref = make_reference(true_model, WritingSpec.from_toml_table(writing or {}))
+def validate_writing(true_model: Model, identified: Model, robot: RobotFile) -> dict[str, Any]:
+    """Voltage prediction error and tip errors of CTC with the identified vs the true model, on
+    the writing task of the robot file ``robot`` (its [writing], [control] and sample time)."""
+    control = robot.require_control()
+    ref = make_reference(true_model, WritingSpec.from_robot(robot))
     u_true = true_model.nominal_voltage(ref.q, ref.qd, ref.qdd)
     u_id = identified.nominal_voltage(ref.q, ref.qd, ref.qdd)
     out: dict[str, Any] = {
@@ -34,7 +35,7 @@ def validate_writing(true_model: Model, identified: Model, control: Mapping[str,
     ctc = load_scenario("ctc")
     for name, ctrl_model in (("true", true_model), ("identified", identified)):
         options = CosimOptions(
-            step=float(ref.t[1] - ref.t[0]), plant_values=model_fmu_values(true_model),
+            step=robot.sample_time, plant_values=model_fmu_values(true_model),
             controller_values=controller_fmu_values(ctc, ctrl_model, control))
         res = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
         out[name] = metrics(res)

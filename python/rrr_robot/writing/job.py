@@ -9,19 +9,20 @@ from __future__ import annotations
 
 import json
 import logging
-import tomllib
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ..core.model import DEFAULT_ROBOT_TOML, Model
 from ..core.param_names import model_fmu_values
-from ..errors import BadInputError, ModelError
+from ..core.robot import RobotFile, read_robot_file
+from ..core.robot_file import ControlGains
+from ..errors import BadInputError
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
-from .scenarios import BUILTIN, Scenario, load_scenario
+from .scenarios import BUILTIN, Scenario, check_run, load_scenario
 from .trajectory import Reference, WritingSpec, make_reference
 
 log = logging.getLogger(__name__)
@@ -45,11 +46,11 @@ class WritingJob:
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,
-                          control: Mapping[str, Any]) -> dict[str, float | bool]:
+                          control: ControlGains) -> dict[str, float | bool]:
     """Controller start values: its own (possibly perturbed) model, gains, feedforward switch."""
     values: dict[str, float | bool] = dict(model_fmu_values(scenario.controller_model(true_model)))
-    kp = scenario.kp or tuple(control["kp"])
-    kd = scenario.kd or tuple(control["kd"])
+    kp = scenario.kp or control.kp
+    kd = scenario.kd or control.kd
     values |= {f"kp[{i + 1}]": float(kp[i]) for i in range(3)}
     values |= {f"kd[{i + 1}]": float(kd[i]) for i in range(3)}
     values["feedforward"] = scenario.feedforward
@@ -69,35 +70,39 @@ def metrics(result: CosimResult) -> dict[str, Any]:
     }
 
 
-def _robot_tables(path: Path) -> dict[str, Any]:
-    try:
-        return tomllib.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise ModelError(f"cannot read robot file {path}: {exc}") from exc
+class Prepared(NamedTuple):
+    """What :func:`prepare` checked and built: the true model, the robot file it came from, the
+    scenarios and the reference (sampled at the robot file's [control] sample_time)."""
+
+    model: Model
+    robot: RobotFile
+    scenarios: list[Scenario]
+    reference: Reference
 
 
-def prepare(job: WritingJob) -> tuple[Model, dict[str, Any], list[Scenario], Reference]:
-    """Everything that can fail before a simulation: scenarios, robot, reference, workspace."""
+def prepare(job: WritingJob) -> Prepared:
+    """Everything that can fail before a simulation: scenarios (each file checked, names unique),
+    the robot file (read and checked once, [control] required), the reference (its bounds) and
+    the workspace."""
     scenarios = [load_scenario(s) for s in job.scenarios]
-    tables = _robot_tables(job.robot)
-    model = Model.from_dict(tables, source=str(job.robot))
-    if "control" not in tables:
-        raise ModelError(f"{job.robot}: missing table [control] (kp, kd)")
-    spec = WritingSpec.from_toml_table(tables.get("writing", {}))
+    check_run(scenarios)
+    robot = read_robot_file(job.robot)
+    robot.require_control()
+    spec = WritingSpec.from_robot(robot)
     if job.text is not None:
         spec = replace(spec, text=job.text)
     if job.scale != 1.0:
         spec = replace(spec, letter_height=spec.letter_height * job.scale)
-    reference = make_reference(model, spec)
+    reference = make_reference(robot.model, spec)
     for s in scenarios:
-        s.controller_model(model)  # a perturbed model that is invalid fails here, not later
-    return model, tables, scenarios, reference
+        s.controller_model(robot.model)  # a perturbed model that is invalid fails here
+    return Prepared(robot.model, robot, scenarios, reference)
 
 
 def run_writing(job: WritingJob,
                 progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
     """Run the job and write its outputs; returns the summary written to summary.json."""
-    model, tables, scenarios, ref = prepare(job)
+    model, robot, scenarios, ref = prepare(job)
     try:
         job.out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -113,7 +118,7 @@ def run_writing(job: WritingJob,
         options = CosimOptions(
             step=float(ref.t[1] - ref.t[0]),
             plant_values=model_fmu_values(model),
-            controller_values=controller_fmu_values(scn, model, tables["control"]),
+            controller_values=controller_fmu_values(scn, model, robot.require_control()),
             progress=report,
             fmi_version=job.fmi_version,
         )
@@ -136,5 +141,5 @@ def run_writing(job: WritingJob,
     if job.figures:
         from .plots import write_figures
 
-        write_figures(job.out, model, tables, ref, results)
+        write_figures(job.out, model, robot, ref, results)
     return summary

@@ -5,15 +5,15 @@ from __future__ import annotations
 import logging
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
+from ..core.robot import RobotFile
 from ..sim.cosim import CosimResult
-from .references import inertial_from_robot_dict, pinocchio_inverse_dynamics
+from .references import inertial_from_robot, pinocchio_inverse_dynamics
 from .trajectory import Reference, numeric_ik_path
 
 log = logging.getLogger(__name__)
@@ -58,7 +58,7 @@ def fig_joints(out: Path, ref: Reference) -> None:
         _save(fig, out / name)
 
 
-def fig_differences(out: Path, model: Model, tables: Mapping[str, Any], ref: Reference) -> None:
+def fig_differences(out: Path, model: Model, robot: RobotFile, ref: Reference) -> None:
     """Figs 5 and 6: closed form against the Robotics Toolbox IK and Pinocchio's rnea."""
     try:
         numeric = numeric_ik_path(model, ref.x, ref.q[0])
@@ -68,7 +68,7 @@ def fig_differences(out: Path, model: Model, tables: Mapping[str, Any], ref: Ref
     else:
         _diff_plot(out / "fig5_ik_difference.png", ref.t, ref.q - numeric, "rad",
                    "Closed-form minus numeric (Robotics Toolbox ik_LM) inverse kinematics")
-    inertial = inertial_from_robot_dict(tables)
+    inertial = inertial_from_robot(robot)
     if inertial is None:
         log.warning("Fig 6 skipped: the robot file gives base parameters, not link inertias")
         return
@@ -133,12 +133,12 @@ def fig_tip_error(out: Path, results: Mapping[str, CosimResult]) -> None:
     _save(fig, out / "fig_tip_error.png")
 
 
-def write_figures(out: Path, model: Model, tables: Mapping[str, Any], ref: Reference,
+def write_figures(out: Path, model: Model, robot: RobotFile, ref: Reference,
                   results: Mapping[str, CosimResult]) -> None:
     """Every figure of one writing-task run."""
     fig_reference(out, ref)
     fig_joints(out, ref)
-    fig_differences(out, model, tables, ref)
+    fig_differences(out, model, robot, ref)
     fig_letters(out, ref, results)
     fig_controls(out, results)
     fig_tip_error(out, results)

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.robot import RobotFile
 
 
 @dataclass(frozen=True)
@@ -27,16 +28,15 @@ class Inertial:
     rotor: FloatArray
 
 
-def inertial_from_robot_dict(data: Mapping[str, Any]) -> Inertial | None:
-    """The link tables of a robot file, or None when it only gives base parameters."""
-    if "base_parameters" in data or any(f"link{i}" not in data for i in (1, 2, 3)):
+def inertial_from_robot(robot: RobotFile) -> Inertial | None:
+    """The link tables of a checked robot file, or None when it gives base parameters."""
+    if robot.links is None or robot.rotor_inertia is None:
         return None
-    links = [data[f"link{i}"] for i in (1, 2, 3)]
     return Inertial(
-        masses=np.array([float(lk["mass"]) for lk in links]),
-        coms=np.array([lk["com"] for lk in links], dtype=float),
-        inertias_com=np.array([np.diag(lk["inertia_com"]) for lk in links], dtype=float),
-        rotor=np.asarray(data["motors"]["rotor_inertia"], dtype=float),
+        masses=np.array([link.mass for link in robot.links]),
+        coms=np.array([link.com for link in robot.links], dtype=float),
+        inertias_com=np.array([np.diag(link.inertia_com) for link in robot.links], dtype=float),
+        rotor=np.asarray(robot.rotor_inertia, dtype=float),
     )
 
 

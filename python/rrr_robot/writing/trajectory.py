@@ -24,6 +24,11 @@ qdd through the Jacobian (``Model.joint_motion``). Before the timing law and the
 is checked: it must fit the writing area and every point of the path (pen lifts included) must
 keep ``min_workspace_margin`` from the workspace boundary; a violation raises BadInputError. The
 joint path must then keep |sin q3| >= ``min_elbow_margin`` on one posture branch.
+
+The reference is sampled at ``dt``, the robot file's [control] sample_time
+(:meth:`WritingSpec.from_robot`). One run is bounded (checked before the reference is sampled):
+at most MAX_TEXT characters, a path of at most MAX_PATH_LENGTH m, a reference of at most
+MAX_REFERENCE_DURATION s and MAX_REFERENCE_SAMPLES samples.
 """
 
 from __future__ import annotations
@@ -40,13 +45,26 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import BSpline, make_interp_spline
 
 from ..core._arrays import FloatArray
+from ..core.checked import Invalid, show
 from ..core.model import Model
-from ..errors import BadInputError, NumericError
+from ..core.robot import RobotFile
+from ..core.robot_file import (
+    DEFAULT_SAMPLE_TIME,
+    MAX_TEXT,
+    SAMPLE_TIME,
+    WRITING_FIELDS,
+    writing_values,
+)
+from ..errors import BadInputError, NumericError, RobotFileError
 from .letters import text_strokes
 from .writing_path import PathOptions, WritingPath, build_path
 
 __all__ = [
     "DEFAULT_TEXT",
+    "MAX_PATH_LENGTH",
+    "MAX_REFERENCE_DURATION",
+    "MAX_REFERENCE_SAMPLES",
+    "MAX_TEXT",
     "Reference",
     "TimingLaw",
     "WritingSpec",
@@ -59,7 +77,14 @@ logger = logging.getLogger(__name__)
 
 #: Omega, m and gamma of the paper (where its PD corrections peak) between cursive latin letters.
 DEFAULT_TEXT = "a\u03c9m\u03b3"  # "a omega m gamma"
-MAX_TEXT = 200              # characters per run; joining strokes costs O(n^2) in the text
+#: Bounds of one run, checked before the reference is sampled (and so before any simulation):
+#: the path (pen lifts included) at most 100 m long, so the planning grids (0.1 mm) have at most
+#: 1e6 points; the reference at most 1000 s long (the timing law's 0.5 ms spline grid: 2e6
+#: points) and at most 1,000,000 samples (1000 s at 1 ms; the co-simulation of one scenario
+#: then takes about half a minute). MAX_TEXT (200 characters) bounds the text.
+MAX_PATH_LENGTH = 100.0
+MAX_REFERENCE_DURATION = 1000.0
+MAX_REFERENCE_SAMPLES = 1_000_000
 _TIME_GRID = 5e-4            # s, grid of the timing law's quintic spline
 _PATH_GRID = 1e-4            # m, grid of s for the speed limit
 _TOML_IGNORED = ("duration_hint",)
@@ -86,7 +111,7 @@ class WritingSpec:
     lift_acc: float = 2.0                  # bound on the y acceleration of a pen lift
     max_jerk: float = 200.0                # m/s^3, bound on the geometric part |C'''| s_dot^3
     tangential_acc: float = 3.0
-    dt: float = 1e-3
+    dt: float = DEFAULT_SAMPLE_TIME        # s, set from the robot file's [control] sample_time
     lift: float = 0.02                     # pen lift in y, towards the robot (away from paper)
     corner_radius: float = 0.002           # blend half-width at sharp corners
     lift_radius: float = 0.01              # blend length at the ends of a pen-up move
@@ -102,55 +127,47 @@ class WritingSpec:
     elbow: str = "up"
 
     def __post_init__(self) -> None:
-        for name in ("x_range", "z_range"):
-            lo, hi = (float(v) for v in getattr(self, name))
-            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-                raise BadInputError(f"WritingSpec.{name} must be [low, high], got {(lo, hi)}")
-            object.__setattr__(self, name, (lo, hi))
-        positive = (
-            "letter_height", "peak_speed", "min_speed", "lateral_acc", "max_acc", "lift_acc",
-            "max_jerk", "tangential_acc", "dt", "corner_radius", "lift_radius",
-            "corner_angle_deg", "smoothing", "line_spacing",
-        )
-        for name in positive:
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0.0):
-                raise BadInputError(f"WritingSpec.{name} must be > 0, got {value}")
-        for name in ("plane_y", "lift", "rest", "min_workspace_margin", "min_elbow_margin"):
-            if not math.isfinite(getattr(self, name)):
-                raise BadInputError(f"WritingSpec.{name} must be finite")
-        if self.min_speed >= self.peak_speed:
-            raise BadInputError("WritingSpec.min_speed must be below peak_speed")
-        if self.rest < 0.0 or self.dt > 0.01:
-            raise BadInputError("WritingSpec.rest must be >= 0 and dt at most 10 ms")
+        # the checks of a robot file's [writing] table (rrr_robot.core.robot_file), and dt
+        # those of [control] sample_time
         if isinstance(self.text, str) and len(self.text) > MAX_TEXT:
             raise BadInputError(
                 f"text has {len(self.text)} characters ({short_text(self.text)}); at most "
                 f"{MAX_TEXT} per run (planning grows faster than the text): split it"
             )
-        if not isinstance(self.text, str) or not self.text.strip():
-            raise BadInputError(
-                f"WritingSpec.text must be a non-empty string, got {short_text(str(self.text))}"
-            )
-        if self.shoulder not in ("front", "back") or self.elbow not in ("up", "down"):
-            raise BadInputError(
-                f"WritingSpec posture must be front|back and up|down, got {self.shoulder}, "
-                f"{self.elbow}"
-            )
+        for f in fields(self):
+            check = SAMPLE_TIME if f.name == "dt" else WRITING_FIELDS[f.name]
+            try:
+                value = check.check(getattr(self, f.name))
+            except Invalid as exc:
+                raise BadInputError(f"WritingSpec.{f.name}{exc.index} {exc.requirement}, got "
+                                    f"{show(exc.value)}") from None
+            object.__setattr__(self, f.name, value)
+        if self.min_speed >= self.peak_speed:
+            raise BadInputError(f"WritingSpec.min_speed ({self.min_speed}) must be below "
+                                f"peak_speed ({self.peak_speed})")
 
     @classmethod
-    def from_toml_table(cls, table: Mapping[str, Any], **overrides: Any) -> WritingSpec:
-        """Spec from the [writing] table of a robot file (unknown keys raise BadInputError)."""
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(table) - names - set(_TOML_IGNORED))
-        if unknown:
-            raise BadInputError(f"unknown keys in the [writing] table: {', '.join(unknown)}")
-        values = {k: v for k, v in table.items() if k in names}
-        for key in ("x_range", "z_range"):
-            if key in values:
-                values[key] = tuple(values[key])
-        values.update(overrides)
-        return cls(**values)
+    def from_toml_table(cls, table: Mapping[str, Any], source: str = "robot file",
+                        **overrides: Any) -> WritingSpec:
+        """Spec from a [writing] table of a robot file, checked as the robot file reader checks
+        it (unknown keys raise RobotFileError, a BadInputError); ``overrides`` replace fields."""
+        values = writing_values(table, source)
+        return cls._from_values(values, source, **overrides)
+
+    @classmethod
+    def from_robot(cls, robot: RobotFile) -> WritingSpec:
+        """Spec of a checked robot file: its [writing] values, sampled at its [control]
+        sample_time (the one sample period of the writing task)."""
+        return cls._from_values(robot.writing, robot.source, dt=robot.sample_time)
+
+    @classmethod
+    def _from_values(cls, values: Mapping[str, Any], source: str,
+                     **overrides: Any) -> WritingSpec:
+        kwargs = {k: v for k, v in values.items() if k not in _TOML_IGNORED}
+        try:
+            return cls(**(kwargs | overrides))
+        except BadInputError as exc:  # what only the fields together decide (min_speed)
+            raise RobotFileError(f"{source}: [writing] {exc}", source, "writing") from exc
 
 
 @dataclass(frozen=True, eq=False)
@@ -287,8 +304,38 @@ class TimingLaw:
         return out[0], out[1], out[2]
 
 
+def check_reference_size(duration: float, spec: WritingSpec) -> None:
+    """Refuse a reference longer than MAX_REFERENCE_DURATION or with more than
+    MAX_REFERENCE_SAMPLES samples at ``spec.dt`` (BadInputError saying what to change)."""
+    samples = duration / spec.dt + 1 if math.isfinite(duration) else math.inf
+    if samples <= MAX_REFERENCE_SAMPLES and duration <= MAX_REFERENCE_DURATION:
+        return
+    what = (f"{samples:,.0f} samples at the sample time {spec.dt:g} s" if math.isfinite(samples)
+            else "no finite duration")
+    raise BadInputError(
+        f"text {short_text(spec.text)}: the reference would last {duration:.1f} s ({what}); "
+        f"one run is bounded to {MAX_REFERENCE_DURATION:g} s and {MAX_REFERENCE_SAMPLES:,} "
+        "samples: write a shorter text or smaller letters, faster (peak_speed, min_speed), or "
+        "with a longer sample time ([control] sample_time)"
+    )
+
+
+def check_path_length(path: WritingPath, spec: WritingSpec) -> None:
+    """Refuse a path longer than MAX_PATH_LENGTH (BadInputError)."""
+    if path.length <= MAX_PATH_LENGTH:
+        return
+    raise BadInputError(
+        f"text {short_text(spec.text)}: the tip path (pen lifts included) would be "
+        f"{path.length:.1f} m long at letter_height {spec.letter_height} m; one run is bounded "
+        f"to {MAX_PATH_LENGTH:g} m (the planning grids have 0.1 mm steps): write a shorter text "
+        "or smaller letters"
+    )
+
+
 def timing_law(path: WritingPath, spec: WritingSpec) -> TimingLaw:
-    """The timing law along a path (steps 1-3 of the module doc)."""
+    """The timing law along a path (steps 1-3 of the module doc); refuses a path or a duration
+    beyond the bounds of one run before the expensive steps."""
+    check_path_length(path, spec)
     n = max(3, math.ceil(path.length / _PATH_GRID) + 1)
     s = np.linspace(0.0, path.length, n)
     ds = float(s[1] - s[0])
@@ -298,6 +345,7 @@ def timing_law(path: WritingPath, spec: WritingSpec) -> TimingLaw:
     t = np.concatenate([[0.0], np.cumsum(2.0 * ds / (v[1:] + v[:-1]))])
     half = math.ceil(spec.smoothing / _TIME_GRID)
     pad = half + math.ceil(spec.rest / _TIME_GRID) + 8
+    check_reference_size(float(t[-1]) + 2 * pad * _TIME_GRID, spec)
     tau = np.arange(-pad, math.ceil(t[-1] / _TIME_GRID) + pad + 1) * _TIME_GRID
     s_smooth = _hann_smooth(np.interp(tau, t, s), half)
     still_before = tau <= -half * _TIME_GRID           # the window sees s0 = 0 only
@@ -343,8 +391,10 @@ def make_reference(model: Model, spec: WritingSpec | None = None) -> Reference:
     spec = WritingSpec() if spec is None else spec
     start = time.perf_counter()
     path = writing_path(spec)
+    check_path_length(path, spec)
     margin = check_workspace(model, path, spec)
     law = timing_law(path, spec)
+    check_reference_size(law.duration, spec)
     t = np.arange(math.floor(law.duration / spec.dt + 1e-9) + 1, dtype=np.float64) * spec.dt
     s, sd, sdd = law.evaluate(t)
     c, c1, c2 = path.evaluate(s)
