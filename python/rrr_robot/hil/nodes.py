@@ -24,8 +24,9 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
+from ..core.param_names import param_index
 from ..sim.fmus import fmu_path
-from .protocol import HilError
+from .protocol import PERIOD, HilError
 
 log = logging.getLogger(__name__)
 
@@ -35,6 +36,7 @@ __all__ = [
     "export_reference",
     "node_executable",
     "open_bus",
+    "set_args",
     "start_controller",
     "start_listening_controller",
     "start_plant",
@@ -58,7 +60,12 @@ def node_executable(which: str) -> Path:
 
 def export_reference(t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray,
                      path: Path) -> Path:
-    """Write the reference table the C controller reads (every double exactly, %.17g)."""
+    """Write the reference table the C controller reads (every double exactly, %.17g); it must
+    be sampled at the bench's period PERIOD (HilError otherwise)."""
+    steps = np.diff(np.asarray(t, dtype=float))
+    if steps.size and not np.allclose(steps, PERIOD, rtol=1e-9, atol=1e-12):
+        raise HilError(f"the CAN bench's nodes run at {PERIOD:g} s: the reference is sampled at "
+                       f"{float(steps[0]):g} s (the robot file's [control] sample_time)")
     rows = np.column_stack([t, q, qd, qdd])
     with Path(path).open("w") as fh:
         fh.write(",".join(_REF_HEADER) + "\n")
@@ -151,6 +158,19 @@ def _vec(v: Sequence[float]) -> str:
     return ",".join(f"{float(x):.17g}" for x in v)
 
 
+def set_args(values: Mapping[str, float | bool]) -> list[str]:
+    """``--set NAME=VALUE`` arguments of a C node for model parameters; the names must be rows of
+    the C parameter table (rrr_params.h), as the nodes' --set expects (HilError otherwise)."""
+    args: list[str] = []
+    for name, v in values.items():
+        if param_index(name) < 0:
+            raise HilError(f"--set {name}: not a model parameter of the C parameter table "
+                           "(rrr_params.h: d1, a2, a3, d2, d3, g, p[k], kt[i], f[i,k], w[i,k], "
+                           "b[i], u_max)")
+        args += ["--set", f"{name}={float(v):.17g}"]
+    return args
+
+
 def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0, 0.0),
                 qd0: Sequence[float] = (0.0, 0.0, 0.0), values: Mapping[str, float] = {},
                 log_csv: Path | None = None, extra: Sequence[str] = (),
@@ -162,8 +182,7 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
     unzip = Path(extract(str(fmu or fmu_path("plant"))))
     args: list[str] = [str(node_executable("plant")), "--fmu", str(unzip), "--listen", listen,
                        "--q0", _vec(q0), "--qd0", _vec(qd0)]
-    for name, v in values.items():
-        args += ["--set", f"{name}={float(v):.17g}"]
+    args += set_args(values)
     if log_csv is not None:
         args += ["--log", str(log_csv)]
     try:
@@ -197,7 +216,8 @@ def start_listening_controller(reference_csv: Path, *, listen: str = "127.0.0.1:
 
 def controller_node_args(values: Mapping[str, float | bool]) -> list[str]:
     """rrr_hil_controller arguments for controller FMU start values (the same names): kp[i],
-    kd[i] -> --kp/--kd, feedforward false -> --no-feedforward, model parameters -> --set."""
+    kd[i] -> --kp/--kd, feedforward false -> --no-feedforward, model parameters (names of the C
+    parameter table) -> --set; any other name raises HilError."""
     args: list[str] = []
     for gain in ("kp", "kd"):
         names = [f"{gain}[{i}]" for i in (1, 2, 3)]
@@ -208,10 +228,8 @@ def controller_node_args(values: Mapping[str, float | bool]) -> list[str]:
             args += [f"--{gain}", _vec([float(values[n]) for n in names])]
     if "feedforward" in values and not values["feedforward"]:
         args.append("--no-feedforward")
-    for name, v in values.items():
-        if name != "feedforward" and not name.startswith(("kp[", "kd[")):
-            args += ["--set", f"{name}={float(v):.17g}"]
-    return args
+    return args + set_args({name: v for name, v in values.items()
+                            if name != "feedforward" and not name.startswith(("kp[", "kd["))})
 
 
 def open_bus(interface: str = "socketcand", *, host: str = "127.0.0.1", port: int = 29536,

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core._package import DATA_DIR
+from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import RrrError
 
 __all__ = [
@@ -42,7 +43,9 @@ __all__ = [
 ]
 
 DBC_PATH = DATA_DIR / "rrr_bench.dbc"
-PERIOD = 1e-3  # s
+#: s: the period of the bench's C nodes, RRR_SAMPLE_TIME_DEFAULT (rrr_control.h, 1 ms), the
+#: package's default sample time; a reference for the bench must be sampled at it.
+PERIOD = DEFAULT_SAMPLE_TIME
 #: E2E DataIDs (also in the DBC's comment and c_src/hil/hil_codec.h).
 DATA_IDS = {"VoltageCmd": 0x10, "JointState1": 0x21, "JointState2": 0x22, "JointState3": 0x23,
             "PlantStatus": 0x30}

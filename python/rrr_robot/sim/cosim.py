@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
 from .fmu_slave import FmuSlave
 from .fmus import fmu_path
@@ -34,7 +35,7 @@ PLANT_OUT = [f"{s}[{i}]" for s in ("q", "qd", "qdd") for i in J] + ["tip.x", "ti
 class CosimOptions:
     """Settings of one co-simulation run."""
 
-    step: float = 1e-3                                   # communication step, s
+    step: float = DEFAULT_SAMPLE_TIME                    # communication step, s
     plant_values: Mapping[str, float | bool] = field(default_factory=dict)
     controller_values: Mapping[str, float | bool] = field(default_factory=dict)
     plant_fmu: Path | None = None                        # default: the packaged FMU
