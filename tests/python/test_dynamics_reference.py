@@ -202,7 +202,7 @@ def test_default_model_matches_pinocchio_with_default_inertia() -> None:
     masses = np.array([8.0, 6.0, 2.5])
     coms = np.array([[0.0, -0.15, 0.0], [-0.20, 0.0, 0.05], [-0.15, 0.0, 0.02]])
     inertias = np.array(
-        [np.diag([0.05, 0.20, 0.05]), np.diag([0.02, 0.10, 0.10]), np.diag([0.005, 0.03, 0.03])]
+        [np.diag([0.12, 0.20, 0.12]), np.diag([0.02, 0.10, 0.10]), np.diag([0.005, 0.03, 0.03])]
     )
     rotor = np.array([0.02, 0.02, 0.01])
     robot = Robot(default, dh, default.g, masses, coms, inertias, rotor)

@@ -19,9 +19,9 @@ rrr_status rrr_inertial_default(rrr_inertial *in)
     /* link 1: only its inertia about the vertical (joint-1) axis, which is y1, matters */
     in->link[0].mass = 8.0;
     in->link[0].com[1] = -0.15;
-    in->link[0].inertia_com[0][0] = 0.05;
+    in->link[0].inertia_com[0][0] = 0.12;
     in->link[0].inertia_com[1][1] = 0.20;
-    in->link[0].inertia_com[2][2] = 0.05;
+    in->link[0].inertia_com[2][2] = 0.12;
     /* link 2: upper arm, COM behind the distal frame origin (x2 < 0) */
     in->link[1].mass = 6.0;
     in->link[1].com[0] = -0.20;
