@@ -1,0 +1,263 @@
+"""Outputs a user can trust (rrr_robot.core.outputs): every file appears complete or not at all,
+the files of a run appear together or not at all, an interrupted or killed run leaves the
+previous results as they were (its leftovers are hidden, recognisable and cleaned at the next
+run), and summary.json is strict JSON (a non-finite metric is null with a status)."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+from typing import Any
+
+import pytest
+import rrr_robot as rr
+from rrr_robot.core import outputs
+from rrr_robot.core.outputs import (
+    ResultSet,
+    atomic_open,
+    atomic_path,
+    atomic_write_text,
+    check_folder,
+    clean_stale,
+    is_temporary,
+    strict_json,
+)
+
+
+def snapshot(folder: Path) -> dict[str, bytes]:
+    """Every file under ``folder`` (hidden ones too) with its content."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def leftovers(folder: Path) -> list[str]:
+    """Temporary files and staging folders (not the manifests, which belong to the results)."""
+    return sorted(p.name for p in folder.iterdir()
+                  if p.name.startswith((outputs.TEMP_PREFIX, outputs.STAGING_PREFIX)))
+
+
+def strict_loads(text: str) -> Any:
+    """json.loads that refuses NaN, Infinity and -Infinity (as a strict parser does)."""
+    def refuse(token: str) -> None:
+        raise ValueError(f"not strict JSON: {token}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+# ---- single files -----------------------------------------------------------------------------
+
+
+def test_atomic_write_gives_the_whole_file_with_default_permissions(tmp_path: Path) -> None:
+    target = tmp_path / "a.json"
+    atomic_write_text(target, "one")
+    atomic_write_text(target, "two")
+    assert target.read_text() == "two"
+    assert os.listdir(tmp_path) == ["a.json"]
+    umask = os.umask(0)
+    os.umask(umask)
+    assert target.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+@pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt, OSError])
+def test_a_failure_while_writing_keeps_the_old_file(tmp_path: Path,
+                                                    error: type[BaseException]) -> None:
+    target = tmp_path / "log.csv"
+    target.write_text("old,complete\n")
+    with pytest.raises(error), atomic_open(target, newline="") as fh:
+        fh.write("new,")
+        assert list(tmp_path.glob("*.csv")) == [target]  # the half file never looks like one
+        raise error("interrupted")
+    assert target.read_text() == "old,complete\n"
+    assert os.listdir(tmp_path) == ["log.csv"]
+
+
+def test_a_failed_rename_keeps_the_old_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                            ) -> None:
+    target = tmp_path / "a.txt"
+    target.write_text("old")
+
+    def refuse(src: object, dst: object) -> None:
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(outputs.os, "replace", refuse)
+    with pytest.raises(OSError, match="No space"):
+        atomic_write_text(target, "new")
+    assert target.read_text() == "old" and os.listdir(tmp_path) == ["a.txt"]
+
+
+def test_temporary_names_are_hidden_and_never_end_like_results(tmp_path: Path) -> None:
+    with atomic_path(tmp_path / "ctc.csv") as tmp:
+        assert tmp.parent == tmp_path  # the rename never crosses a file system
+        assert tmp.name.startswith(".") and not tmp.name.endswith(".csv")
+        assert is_temporary(tmp)
+        tmp.write_text("x")
+    assert not is_temporary(tmp_path / "ctc.csv")
+    assert (tmp_path / "ctc.csv").read_text() == "x"
+
+
+def test_strict_json_writes_null_for_non_finite_numbers() -> None:
+    value = {"a": float("nan"), "b": [1.5, float("inf"), -float("inf")], "c": (True, None, "x"),
+             "d": {"e": 2}}
+    text = strict_json(value)
+    assert strict_loads(text) == {"a": None, "b": [1.5, None, None], "c": [True, None, "x"],
+                                  "d": {"e": 2}}
+    with pytest.raises(TypeError):
+        strict_json({"a": object()})
+
+
+# ---- result sets ------------------------------------------------------------------------------
+
+
+def write_run(folder: Path, files: dict[str, str], kind: str = "writing") -> None:
+    with ResultSet(folder, kind=kind) as rs:
+        for name, text in files.items():
+            rs.write_text(name, text)
+
+
+def test_a_result_set_appears_at_the_end_summary_last(tmp_path: Path,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    out = tmp_path / "out"
+    write_run(out, {"pd.csv": "old pd", "summary.json": "old"})
+    before = snapshot(out)
+    order: list[str] = []
+    real_replace = os.replace
+
+    def record(src: Any, dst: Any) -> None:
+        order.append(Path(dst).name)
+        real_replace(src, dst)
+
+    with ResultSet(out, kind="writing") as rs:
+        rs.write_text("summary.json", "new")
+        rs.write_text("pd.csv", "new pd")
+        during = {k: v for k, v in snapshot(out).items() if not k.startswith(".rrr-staging-")}
+        assert during == before  # nothing of the run is visible before its end
+        monkeypatch.setattr(outputs.os, "replace", record)
+    results = [n for n in order if not n.startswith(".")]
+    assert results == ["pd.csv", "summary.json"]
+    assert (out / "pd.csv").read_text() == "new pd" and (out / "summary.json").read_text() == "new"
+    assert leftovers(out) == []
+
+
+@pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt, SystemExit])
+def test_a_failed_run_leaves_the_previous_results(tmp_path: Path,
+                                                  error: type[BaseException]) -> None:
+    out = tmp_path / "out"
+    write_run(out, {"pd.csv": "old pd", "ctc.csv": "old ctc", "summary.json": "old"})
+    before = snapshot(out)
+    with pytest.raises(error), ResultSet(out, kind="writing") as rs:
+        rs.write_text("pd.csv", "new pd")  # the first file of the run, then the failure
+        raise error()
+    assert snapshot(out) == before
+    assert leftovers(out) == []
+
+
+def test_a_failed_run_removes_the_folders_it_created(tmp_path: Path) -> None:
+    with pytest.raises(KeyboardInterrupt), ResultSet(tmp_path / "a" / "b", kind="writing") as rs:
+        rs.write_text("pd.csv", "x")
+        raise KeyboardInterrupt
+    assert os.listdir(tmp_path) == []
+
+
+def test_files_of_the_previous_run_of_the_kind_go_others_stay(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    write_run(out, {"pd.csv": "1", "ctc.csv": "1", "summary.json": "1"})
+    write_run(out, {"plant.csv": "hil"}, kind="hil")
+    (out / "notes.txt").write_text("the user's")
+    write_run(out, {"ctc.csv": "2", "summary.json": "2"})  # fewer scenarios than before
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [
+        "ctc.csv", "notes.txt", "plant.csv", "summary.json"]
+    manifest = strict_loads((out / ".rrr-results-writing.json").read_text())
+    assert manifest == {"kind": "writing", "files": ["ctc.csv", "summary.json"]}
+
+
+def test_result_names_are_plain_file_names(tmp_path: Path) -> None:
+    with ResultSet(tmp_path, kind="writing") as rs:
+        for bad in ["../evil.csv", "a/b.csv", ".hidden", "", "..", ".rrr-results-writing.json"]:
+            with pytest.raises(rr.BadInputError, match="cannot name an output file"):
+                rs.path(bad)
+    assert os.listdir(tmp_path) == []
+
+
+def test_an_output_folder_that_cannot_be_one(tmp_path: Path) -> None:
+    blocker = tmp_path / "a_file"
+    blocker.write_text("keep")
+    for folder in (blocker, blocker / "sub"):
+        with pytest.raises(rr.BadInputError, match="output folder"):
+            check_folder(folder)
+        with pytest.raises(rr.BadInputError, match="output folder"):
+            ResultSet(folder, kind="writing").open()
+    assert blocker.read_text() == "keep" and os.listdir(tmp_path) == ["a_file"]
+
+
+KILLED_RUN = textwrap.dedent("""
+    import os, signal, sys
+    from pathlib import Path
+    from rrr_robot.core import outputs
+    from rrr_robot.core.outputs import ResultSet
+    out, when = Path(sys.argv[1]), sys.argv[2]
+    rs = ResultSet(out, kind="writing").open()
+    rs.write_text("pd.csv", "new pd")
+    rs.write_text("summary.json", "new")
+    if when == "run":
+        with outputs.atomic_open(rs.path("ctc.csv")) as fh:  # killed while writing a file
+            fh.write("new ct")
+            os.kill(os.getpid(), signal.SIGKILL)
+    real_replace, moved = os.replace, []
+    def replace(src, dst):
+        real_replace(src, dst)
+        if Path(src).parent == rs.staging and Path(dst).parent == out:
+            moved.append(dst)
+            os.kill(os.getpid(), signal.SIGKILL)  # killed after the first file is in place
+    outputs.os.replace = replace
+    rs.commit()
+""")
+
+
+def killed_run(out: Path, when: str) -> None:
+    proc = subprocess.run([sys.executable, "-c", KILLED_RUN, str(out), when],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+
+
+def test_a_killed_run_leaves_hidden_leftovers_that_the_next_run_removes(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    write_run(out, {"pd.csv": "old pd", "summary.json": "old"})
+    before = snapshot(out)
+    killed_run(out, "run")
+    left = leftovers(out)
+    assert len(left) == 1 and is_temporary(left[0])  # the staging folder, hidden
+    results = {k: v for k, v in snapshot(out).items() if not k.startswith(".rrr-staging-")}
+    assert results == before  # the previous results as they were
+    assert list(out.glob("*.csv")) == [out / "pd.csv"]
+    write_run(out, {"pd.csv": "newer pd", "summary.json": "newer"})  # the next run cleans
+    assert leftovers(out) == []
+    assert (out / "summary.json").read_text() == "newer"
+
+
+def test_a_run_killed_during_its_commit_is_finished_by_the_next(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    write_run(out, {"pd.csv": "old pd", "ctc.csv": "old ctc", "summary.json": "old"})
+    killed_run(out, "commit")
+    # killed after the first rename: the old summary.json is gone (removed first), so nothing
+    # describes a mix of old and new files
+    assert (out / "pd.csv").read_text() == "new pd"
+    assert not (out / "summary.json").exists()
+    assert clean_stale(out)  # what the next run does first: finishes the commit
+    assert leftovers(out) == []
+    assert (out / "summary.json").read_text() == "new"
+    assert not (out / "ctc.csv").exists()  # the killed run did not write it: not its result
+
+
+def test_leftovers_of_a_running_process_are_not_touched(tmp_path: Path) -> None:
+    with ResultSet(tmp_path, kind="writing") as rs:
+        rs.write_text("pd.csv", "x")
+        assert clean_stale(tmp_path) == []  # this process is still writing
+        assert (rs.staging / "pd.csv").exists()
+    stale = tmp_path / f"{outputs.TEMP_PREFIX}{os.getpid()}-0badcafe-ctc.csv.part"
+    stale.write_text("left by an earlier process with our pid (a container's pid 1)")
+    assert clean_stale(tmp_path) == [stale] and not stale.exists()
