@@ -33,6 +33,11 @@ log = logging.getLogger(__name__)
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
 
 
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split()) or type(exc).__name__
+    return text if len(text) <= 500 else text[:497] + "..."
+
+
 @dataclass
 class RealBlock:
     """A fixed set of Real variables exchanged in one FMI call; ``values`` views the buffer."""
@@ -149,8 +154,14 @@ class FmuSlave:
         self.name = instance_name
         self.time = 0.0
         self.last_message = ""
+        self._errors: list[str] = []  # the FMU's error messages during the current call
         self._closed = True
-        md = read_model_description(str(self.path))
+        self._initialized = False
+        try:
+            md = read_model_description(str(self.path))
+        except Exception as exc:  # OSError, BadZipFile, FMPy's validation errors
+            raise CosimError(f"{self._who}: cannot read the FMU {self.path}: "
+                             f"{_one_line(exc)}") from exc
         if md.coSimulation is None:
             raise CosimError(f"{self.path} has no Co-Simulation interface")
         calls = _CALLS.get(md.fmiVersion)
@@ -159,23 +170,44 @@ class FmuSlave:
                              "(2.0 and 3.0 are)")
         self.fmi_version: int = calls.version
         self._vars = {v.name: v for v in md.modelVariables}
-        self._unzipdir = extract(str(self.path))
-        self._api: _Fmi2 | _Fmi3 = calls(md, self._unzipdir, instance_name)
+        try:
+            self._unzipdir = extract(str(self.path))
+        except Exception as exc:
+            raise CosimError(f"{self._who}: cannot extract the FMU {self.path}: "
+                             f"{_one_line(exc)}") from exc
+        try:
+            self._api: _Fmi2 | _Fmi3 = calls(md, self._unzipdir, instance_name)
+        except Exception as exc:  # the binary is missing or does not load
+            shutil.rmtree(self._unzipdir, ignore_errors=True)
+            raise CosimError(f"{self._who}: cannot load the binary of {self.path}: "
+                             f"{_one_line(exc)}") from exc
         self._fmu = self._api.fmu
         self._closed = False
+        what = f"fmi{self.fmi_version}Instantiate"
         try:
             self._api.instantiate(self._log)
         except Exception as exc:  # FMPy raises a bare Exception here
             self.close()
-            raise CosimError(f"{self.name}: instantiation failed: {exc}"
-                             f"{': ' + self.last_message if self.last_message else ''}") from exc
-        self._initialized = False
+            raise CosimError(f"{self._who}: {what} failed{self._detail()}", function=what,
+                             status="ERROR") from exc
+
+    @property
+    def _who(self) -> str:
+        return self.name if self.name.strip() else f"FMU instance {self.name!r}"
+
+    def _detail(self) -> str:
+        """The FMU's own error messages during the call that failed (never those of an earlier
+        call), for the exception."""
+        return (": " + "; ".join(self._errors)) if self._errors else ""
 
     def _log(self, status: int, category: str, text: str) -> None:
-        level = logging.ERROR if status >= 2 else logging.DEBUG
+        # An error message goes into the CosimError of the call that reports it (the right
+        # place, with the instance's name), not to the log as well; should the call succeed
+        # after all, _guard logs it as a warning.
         if status >= 2:
             self.last_message = text
-        log.log(level, "[%s] %s %s: %s", self.name, _STATUS[min(status, 5)], category, text)
+            self._errors.append(text)
+        log.debug("[%s] %s %s: %s", self.name, _STATUS[min(status, 5)], category, text)
 
     # ---- variables ---------------------------------------------------------------------------
     def vr(self, name: str) -> int:
@@ -232,17 +264,22 @@ class FmuSlave:
 
     def _guard(self, what: str, fn: object, *args: object, **kwargs: object) -> None:
         if self._closed:
-            raise CosimError(f"{self.name}: {what} called after close()")
+            raise CosimError(f"{self._who}: {what} called after close()")
+        self._errors = []
         try:
             fn(*args, **kwargs)  # type: ignore[operator]
         except FMICallException as exc:
             status = _STATUS[exc.status] if 0 <= exc.status < 6 else str(exc.status)
-            detail = f": {self.last_message}" if self.last_message else ""
             what = f"fmi{self.fmi_version}{what}"
             raise CosimError(
-                f"{self.name}: {what} returned {status} at t = {self.time:.6f} s{detail}",
+                f"{self._who}: {what} returned {status} at t = {self.time:.6f} s"
+                f"{self._detail()}",
                 function=what, status=status,
             ) from exc
+        for text in self._errors:
+            log.warning("[%s] fmi%d%s: the FMU reported an error: %s", self.name,
+                        self.fmi_version, what, text)
+        self._errors = []
 
     def close(self) -> None:
         """Terminate and free the instance and remove the extraction folder (idempotent)."""
@@ -253,7 +290,8 @@ class FmuSlave:
             if self._initialized:
                 self._fmu.terminate()
         except FMICallException:
-            log.warning("%s: fmi%dTerminate failed", self.name, self.fmi_version)
+            log.warning("%s: fmi%dTerminate failed%s", self._who, self.fmi_version,
+                        self._detail())
         finally:
             if getattr(self._fmu, "component", None) is not None:
                 self._fmu.freeInstance()
