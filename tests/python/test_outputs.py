@@ -5,6 +5,7 @@ run), and summary.json is strict JSON (a non-finite metric is null with a status
 
 from __future__ import annotations
 
+import csv
 import json
 import os
 import signal
@@ -14,6 +15,7 @@ import textwrap
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import rrr_robot as rr
 from rrr_robot.core import outputs
@@ -27,6 +29,10 @@ from rrr_robot.core.outputs import (
     is_temporary,
     strict_json,
 )
+from rrr_robot.sim import cosim
+from rrr_robot.sim.cosim import CosimResult
+from rrr_robot.writing import job as job_module
+from rrr_robot.writing.job import WritingJob, run_writing, scenario_summary
 
 
 def snapshot(folder: Path) -> dict[str, bytes]:
@@ -98,6 +104,33 @@ def test_temporary_names_are_hidden_and_never_end_like_results(tmp_path: Path) -
         tmp.write_text("x")
     assert not is_temporary(tmp_path / "ctc.csv")
     assert (tmp_path / "ctc.csv").read_text() == "x"
+
+
+def test_cosim_csv_interrupted_midway_is_not_left_truncated(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Before: CosimResult.to_csv wrote into the result's own name, so an interruption left a
+    shorter ctc.csv with a valid header and whole rows, which looks complete."""
+    target = tmp_path / "ctc.csv"
+    target.write_text("previous run\n")
+
+    real_writer = csv.writer
+
+    class FailingWriter:
+        def __init__(self, fh: Any) -> None:
+            self.writer = real_writer(fh)
+
+        def writerow(self, row: Any) -> None:
+            self.writer.writerow(row)
+
+        def writerows(self, rows: Any) -> None:
+            self.writer.writerows(list(rows)[:10])
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(cosim.csv, "writer", FailingWriter)
+    with pytest.raises(KeyboardInterrupt):
+        fake_result(np.arange(100) * 1e-3).to_csv(target)
+    assert target.read_text() == "previous run\n"
+    assert os.listdir(tmp_path) == ["ctc.csv"]
 
 
 def test_strict_json_writes_null_for_non_finite_numbers() -> None:
@@ -261,3 +294,131 @@ def test_leftovers_of_a_running_process_are_not_touched(tmp_path: Path) -> None:
     stale = tmp_path / f"{outputs.TEMP_PREFIX}{os.getpid()}-0badcafe-ctc.csv.part"
     stale.write_text("left by an earlier process with our pid (a container's pid 1)")
     assert clean_stale(tmp_path) == [stale] and not stale.exists()
+
+
+# ---- the writing task -------------------------------------------------------------------------
+
+
+def fake_result(t: np.ndarray, x_ref: np.ndarray | None = None, tip_error: float = 1e-4,
+                wall_time: float = 0.01) -> CosimResult:
+    n = t.shape[0]
+    x = np.zeros((n, 3)) if x_ref is None else x_ref
+    z = np.zeros((n, 3))
+    return CosimResult(t=t, q_ref=z, qd_ref=z, x_ref=x, q=z, qd=z, qdd=z, tip=x + tip_error,
+                       u=z, u_n=z + 0.5, u_c=z + 0.1, wall_time=wall_time)
+
+
+def fake_cosim(monkeypatch: pytest.MonkeyPatch, tip_errors: dict[str, float] | None = None,
+               wall_times: dict[str, float] | None = None,
+               fail_at: int | None = None) -> list[str]:
+    """run_cosim replaced by a fast fake (scenario recognised by the call order); fail_at: the
+    call that raises KeyboardInterrupt (Ctrl-C in the middle of the run)."""
+    calls: list[str] = []
+
+    def run(t: Any, q: Any, qd: Any, qdd: Any, x: Any, options: Any) -> CosimResult:
+        name = ["pd", "ctc", "mismatch"][len(calls)]
+        calls.append(name)
+        if fail_at is not None and len(calls) == fail_at:
+            raise KeyboardInterrupt
+        return fake_result(t, x, (tip_errors or {}).get(name, 1e-4),
+                           (wall_times or {}).get(name, 0.01))
+
+    monkeypatch.setattr(job_module, "run_cosim", run)
+    return calls
+
+
+def writing_job(out: Path, figures: bool = False) -> WritingJob:
+    return WritingJob(out=out, text="a", scenarios=["pd", "ctc", "mismatch"], figures=figures)
+
+
+def skip_numeric_figures(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Figs 5 and 6 need the numeric IK and Pinocchio: slow, and not what is tested here."""
+    from rrr_robot.writing import plots
+
+    monkeypatch.setattr(plots, "fig_differences", lambda *args: None)
+
+
+@pytest.mark.parametrize("where", ["cosim", "csv", "figure", "summary"])
+def test_an_interrupted_writing_run_leaves_the_previous_results(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch, where: str) -> None:
+    """Ctrl-C after the first scenario's CSV (or in the figures, or while writing summary.json):
+    the folder keeps the previous run's files exactly, with no file of the new run. Before,
+    run_writing wrote into the folder as it went, so pd.csv was new and summary.json old."""
+    out = tmp_path / "out"
+    skip_numeric_figures(monkeypatch)
+    fake_cosim(monkeypatch, tip_errors={"pd": 0.02})
+    run_writing(writing_job(out, figures=True))
+    before = snapshot(out)
+    assert "fig_letters_ctc.png" in before and "pd.csv" in before
+
+    fake_cosim(monkeypatch, tip_errors={"pd": 0.03}, fail_at=2 if where == "cosim" else None)
+    if where == "csv":
+        real_to_csv = CosimResult.to_csv
+        written: list[Path] = []
+
+        def to_csv(self: CosimResult, path: Path) -> None:
+            if written:
+                raise KeyboardInterrupt
+            real_to_csv(self, path)
+            written.append(path)
+
+        monkeypatch.setattr(CosimResult, "to_csv", to_csv)
+    if where == "figure":
+        from rrr_robot.writing import plots
+
+        def fail(*args: Any) -> None:
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(plots, "fig_controls", fail)
+    if where == "summary":
+        def fail_json(*args: Any, **kwargs: Any) -> str:
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(job_module, "strict_json", fail_json)
+    with pytest.raises(KeyboardInterrupt):
+        run_writing(writing_job(out, figures=True))
+    assert snapshot(out) == before
+    assert leftovers(out) == []
+
+
+def test_a_writing_run_replaces_every_file_of_the_previous_one(tmp_path: Path,
+                                                               monkeypatch: pytest.MonkeyPatch,
+                                                               ) -> None:
+    out = tmp_path / "out"
+    fake_cosim(monkeypatch)
+    run_writing(writing_job(out))
+    fake_cosim(monkeypatch)
+    summary = run_writing(WritingJob(out=out, text="a", scenarios=["pd"], figures=False))
+    assert summary["files"] == ["pd.csv", "summary.json"]
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == \
+        summary["files"]
+    assert strict_loads((out / "summary.json").read_text()) == summary
+
+
+def test_summary_json_is_strict_with_null_and_a_status(tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """A diverged scenario (NaN tip) and an untimeable loop (wall time 0: infinite real-time
+    factor). Before: json.dumps wrote NaN and Infinity, which strict parsers refuse."""
+    out = tmp_path / "out"
+    fake_cosim(monkeypatch, tip_errors={"ctc": np.nan}, wall_times={"mismatch": 0.0})
+    summary = run_writing(writing_job(out))
+    text = (out / "summary.json").read_text()
+    assert "NaN" not in text and "Infinity" not in text
+    data = strict_loads(text)
+    assert data == summary
+    pd, ctc, mismatch = (data["scenarios"][n] for n in ("pd", "ctc", "mismatch"))
+    assert pd["status"] == "ok" and pd["non_finite"] == []
+    assert ctc["status"] == "diverged"
+    assert ctc["tip_error_max"] is None and ctc["tip_error_rms"] is None
+    assert ctc["non_finite"] == ["tip_error_max", "tip_error_rms"]
+    assert mismatch["status"] == "timing_unavailable" and mismatch["realtime_factor"] is None
+    assert mismatch["non_finite"] == ["realtime_factor"]
+    assert isinstance(mismatch["tip_error_max"], float)
+
+
+def test_scenario_summary() -> None:
+    s = scenario_summary({"rms_u_n": [0.1, np.nan, 0.2], "rms_u_c": [0.0, 0.0, 0.0],
+                          "tip_error_max": 1e-3, "tip_error_rms": 1e-4, "wall_time": 0.1,
+                          "realtime_factor": 50.0})
+    assert s["status"] == "diverged" and s["rms_u_n"] == [0.1, None, 0.2]
+    assert s["non_finite"] == ["rms_u_n"]

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.outputs import atomic_path
 from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, run_cosim
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
@@ -125,20 +126,25 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
     work = Path(tempfile.mkdtemp(prefix="rrr_hil_")) if workdir is None else Path(workdir)
     try:
         ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, work / "reference.csv")
-        with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=work / "plant.csv") as plant, \
-                start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
-                                 log_csv=work / "controller.csv",
-                                 extra=controller_node_args(controller_values)) as ctrl:
-            cs = ctrl.wait(timeout)
-            if cs["exit"] != 0:  # the plant would wait for a controller that is gone
-                plant.close()
+        # the C nodes write their logs themselves: to temporary names, renamed when the run
+        # succeeded (core.outputs), so a failed or interrupted run leaves no half log
+        with atomic_path(work / "plant.csv") as plant_log, \
+                atomic_path(work / "controller.csv") as ctrl_log:
+            with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log) as plant, \
+                    start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
+                                     log_csv=ctrl_log,
+                                     extra=controller_node_args(controller_values)) as ctrl:
+                cs = ctrl.wait(timeout)
+                if cs["exit"] != 0:  # the plant would wait for a controller that is gone
+                    plant.close()
+                    raise HilError(f"bench failed: controller exit {cs['exit']}: "
+                                   f"{ctrl.stderr.strip()}")
+                ps = plant.wait(timeout)
+            if cs["exit"] != 0 or ps["exit"] != 0:
                 raise HilError(f"bench failed: controller exit {cs['exit']}: "
-                               f"{ctrl.stderr.strip()}")
-            ps = plant.wait(timeout)
-        if cs["exit"] != 0 or ps["exit"] != 0:
-            raise HilError(f"bench failed: controller exit {cs['exit']}: {ctrl.stderr.strip()}; "
-                           f"plant exit {ps['exit']}: {plant.stderr.strip()}")
-        p, c = _read_log(work / "plant.csv"), _read_log(work / "controller.csv")
+                               f"{ctrl.stderr.strip()}; plant exit {ps['exit']}: "
+                               f"{plant.stderr.strip()}")
+            p, c = _read_log(plant_log), _read_log(ctrl_log)
         return BenchRun(t=p[:, 1], q=p[:, 2:5], qd=p[:, 5:8], u=c[:, [8, 11, 14]],
                         plant_summary=ps, controller_summary=cs)
     finally:

@@ -24,6 +24,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
+from ..core.outputs import atomic_open
 from ..core.param_names import param_index
 from ..sim.fmus import fmu_path
 from .protocol import PERIOD, HilError
@@ -67,7 +68,7 @@ def export_reference(t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArr
         raise HilError(f"the CAN bench's nodes run at {PERIOD:g} s: the reference is sampled at "
                        f"{float(steps[0]):g} s (the robot file's [control] sample_time)")
     rows = np.column_stack([t, q, qd, qdd])
-    with Path(path).open("w") as fh:
+    with atomic_open(path) as fh:  # complete or not at all (core.outputs)
         fh.write(",".join(_REF_HEADER) + "\n")
         for row in rows:
             fh.write(",".join(f"{v:.17g}" for v in row) + "\n")

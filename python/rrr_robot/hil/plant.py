@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.outputs import atomic_path
 from ..sim.cosim import PLANT_IN
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
@@ -250,8 +251,9 @@ class PythonPlant:
                 rc = 3
         rows = np.array(self._rows, dtype=float).reshape(-1, len(LOG_HEADER))
         if log_csv is not None:
-            np.savetxt(log_csv, rows, delimiter=",", header=",".join(LOG_HEADER), comments="",
-                       fmt="%.17g")
+            with atomic_path(log_csv) as tmp:  # complete or not at all (core.outputs)
+                np.savetxt(tmp, rows, delimiter=",", header=",".join(LOG_HEADER), comments="",
+                           fmt="%.17g")
         return PlantRun(log=rows, summary=self._summary(rc))
 
     def _summary(self, rc: int) -> dict[str, Any]:
@@ -278,15 +280,18 @@ def run_python_plant_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     work = Path(tempfile.mkdtemp(prefix="rrr_hilpy_")) if workdir is None else Path(workdir)
     try:
         ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, work / "reference.csv")
-        with start_listening_controller(ref_csv, log_csv=work / "controller.csv") as ctrl:
-            with open_bus("socketcand", port=ctrl.port or 0) as bus:
-                plant = PythonPlant(bus, q0=q_ref[0], qd0=qd_ref[0], rx_filter=rx_filter)
-                prun = plant.run(work / "plant.csv")
-            cs = ctrl.wait(timeout)
-        if cs["exit"] != 0 or prun.summary["exit"] != 0:
-            raise HilError(f"bench failed: controller exit {cs['exit']}: {ctrl.stderr.strip()}; "
-                           f"python plant exit {prun.summary['exit']}")
-        c = np.loadtxt(work / "controller.csv", delimiter=",", skiprows=1, ndmin=2)
+        # the C node writes its log itself: to a temporary name, renamed when the run succeeded
+        with atomic_path(work / "controller.csv") as ctrl_log:
+            with start_listening_controller(ref_csv, log_csv=ctrl_log) as ctrl:
+                with open_bus("socketcand", port=ctrl.port or 0) as bus:
+                    plant = PythonPlant(bus, q0=q_ref[0], qd0=qd_ref[0], rx_filter=rx_filter)
+                    prun = plant.run(work / "plant.csv")
+                cs = ctrl.wait(timeout)
+            if cs["exit"] != 0 or prun.summary["exit"] != 0:
+                raise HilError(f"bench failed: controller exit {cs['exit']}: "
+                               f"{ctrl.stderr.strip()}; python plant exit "
+                               f"{prun.summary['exit']}")
+            c = np.loadtxt(ctrl_log, delimiter=",", skiprows=1, ndmin=2)
         run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, [8, 11, 14]],
                        plant_summary=prun.summary, controller_summary=cs)
         return run, prun

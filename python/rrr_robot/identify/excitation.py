@@ -20,6 +20,7 @@ from scipy.optimize import minimize
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
+from ..core.outputs import atomic_write_text, strict_json
 from ..errors import BadInputError
 
 log = logging.getLogger(__name__)
@@ -53,7 +54,7 @@ class FourierTrajectory:
     def to_json(self, path: Path) -> None:
         data = {"period": self.period, "q0": self.q0.tolist(), "a": self.a.tolist(),
                 "b": self.b.tolist()}
-        Path(path).write_text(json.dumps(data, indent=2) + "\n")
+        atomic_write_text(path, strict_json(data) + "\n")
 
     @classmethod
     def from_json(cls, path: Path) -> FourierTrajectory:

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.outputs import atomic_open
 from ..errors import BadInputError
 
 log = logging.getLogger(__name__)
@@ -66,7 +67,7 @@ class Log:
                    joint, self.source)
 
     def to_csv(self, path: str | Path, comment: str = "") -> None:
-        """Write in the documented format (optional columns only if present)."""
+        """Write in the documented format (optional columns only if present), atomically."""
         cols: dict[str, FloatArray] = {"t": self.t}
         for name in ("q", "u", "qd", "qdd"):
             arr = getattr(self, name)
@@ -74,7 +75,7 @@ class Log:
                 cols |= {f"{name}[{i}]": arr[:, i - 1] for i in J}
         if self.joint is not None:
             cols["joint"] = self.joint.astype(float)
-        with Path(path).open("w", newline="") as fh:
+        with atomic_open(path, newline="") as fh:  # complete or not at all
             for line in comment.splitlines():
                 fh.write(f"# {line}\n")
             writer = csv.writer(fh)

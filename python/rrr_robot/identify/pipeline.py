@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..core.model import Model
+from ..core.outputs import atomic_path
 from ..core.param_names import group_names
 from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import write_toml
@@ -136,4 +137,5 @@ def write_robot(result: Identified, path: Path,
     header = ("Identified by rrr identify: [base_parameters] and [friction] estimated from logs;\n"
               "[identification] holds p_std (1 sigma) and figures of merit; the base parameters "
               f"are {group_names('p')[0]} ... {group_names('p')[-1]} (rrr_params.h).")
-    write_toml(tables, Path(path), header=header)
+    with atomic_path(path) as tmp:  # the file appears complete or not at all
+        write_toml(tables, tmp, header=header)

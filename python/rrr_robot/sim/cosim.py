@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.outputs import atomic_open
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
 from .fmu_slave import FmuSlave
@@ -72,7 +73,8 @@ class CosimResult:
         return float(self.t[-1] - self.t[0]) / self.wall_time if self.wall_time > 0 else np.inf
 
     def to_csv(self, path: Path) -> None:
-        """Write every signal, one row per communication point (columns documented in header)."""
+        """Write every signal, one row per communication point (columns documented in header),
+        atomically: the file appears complete or not at all (core.outputs)."""
         cols: dict[str, FloatArray] = {"t": self.t}
         for name in ("q_ref", "qd_ref", "q", "qd", "qdd", "u", "u_n", "u_c"):
             arr = getattr(self, name)
@@ -82,7 +84,7 @@ class CosimResult:
             arr = getattr(self, name)
             for i, axis in enumerate("xyz"):
                 cols[f"{name}.{axis}"] = arr[:, i]
-        with Path(path).open("w", newline="") as fh:
+        with atomic_open(path, newline="") as fh:
             writer = csv.writer(fh)
             writer.writerow(cols)
             writer.writerows(np.column_stack(list(cols.values())).tolist())

@@ -2,12 +2,14 @@
 
 ``run_writing`` checks everything it can before the first simulation (scenarios, robot file,
 workspace), co-simulates each scenario with the FMUs, and writes ``summary.json``, one CSV per
-scenario and the figures into the output folder.
+scenario and the figures into the output folder: all of them or none (a
+:class:`~rrr_robot.core.outputs.ResultSet`: an interrupted run leaves the previous results as
+they were). summary.json is strict JSON: a non-finite metric is null and the scenario's
+``status`` says why (:func:`scenario_summary`); ``files`` lists the files of the run.
 """
 
 from __future__ import annotations
 
-import json
 import logging
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -17,10 +19,10 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..core.model import DEFAULT_ROBOT_TOML, Model
+from ..core.outputs import ResultSet, check_folder, check_name, strict_json, to_strict_json_value
 from ..core.param_names import model_fmu_values
 from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import ControlGains
-from ..errors import BadInputError
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
 from .trajectory import Reference, WritingSpec, make_reference
@@ -70,6 +72,34 @@ def metrics(result: CosimResult) -> dict[str, Any]:
     }
 
 
+#: The metrics of a scenario that describe the motion (the others are timing).
+MOTION_METRICS = ("rms_u_n", "rms_u_c", "tip_error_max", "tip_error_rms")
+
+
+def scenario_summary(values: dict[str, Any]) -> dict[str, Any]:
+    """A scenario's metrics as written to summary.json (strict JSON): a non-finite number
+    becomes null, listed under ``non_finite``, and ``status`` says why: "ok" (all finite),
+    "diverged" (a motion metric is NaN or infinite: the simulated motion blew up) or
+    "timing_unavailable" (only the timing is not finite, e.g. a loop too short to time)."""
+    bad = sorted(k for k, v in values.items()
+                 if not np.all(np.isfinite(np.asarray(v, dtype=float))))
+    status = "ok"
+    if any(k in MOTION_METRICS for k in bad):
+        status = "diverged"
+    elif bad:
+        status = "timing_unavailable"
+    return {"status": status, **to_strict_json_value(values), "non_finite": bad}
+
+
+def _describe(s: dict[str, Any]) -> str:
+    if s["status"] == "diverged":
+        return f"DIVERGED (non-finite: {', '.join(s['non_finite'])})"
+    rtf = s["realtime_factor"]
+    return (f"tip error max {1e3 * s['tip_error_max']:.2f} mm, rms "
+            f"{1e3 * s['tip_error_rms']:.2f} mm, "
+            + (f"{rtf:.0f}x real time" if rtf is not None else "real-time factor unavailable"))
+
+
 class Prepared(NamedTuple):
     """What :func:`prepare` checked and built: the true model, the robot file it came from, the
     scenarios and the reference (sampled at the robot file's [control] sample_time)."""
@@ -102,44 +132,45 @@ def prepare(job: WritingJob) -> Prepared:
 def run_writing(job: WritingJob,
                 progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
     """Run the job and write its outputs; returns the summary written to summary.json."""
+    check_folder(job.out)  # a bad output folder fails before the inputs are even read
     model, robot, scenarios, ref = prepare(job)
-    try:
-        job.out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise BadInputError(f"cannot create the output folder {job.out}: {exc}") from exc
-    log.info("reference: %.2f s, %d samples, least workspace margin %.3f m, least |sin q3| %.3f",
-             ref.t[-1] - ref.t[0], ref.t.size, ref.min_margin_m, ref.min_elbow_margin)
-    results: dict[str, CosimResult] = {}
-    summary: dict[str, Any] = {"scenarios": {}}
-    for scn in scenarios:
-        def report(k: int, n: int, name: str = scn.name) -> None:
-            if progress is not None:
-                progress(name, k, n)
-        options = CosimOptions(
-            step=float(ref.t[1] - ref.t[0]),
-            plant_values=model_fmu_values(model),
-            controller_values=controller_fmu_values(scn, model, robot.require_control()),
-            progress=report,
-            fmi_version=job.fmi_version,
-        )
-        res = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
-        results[scn.name] = res
-        res.to_csv(job.out / f"{scn.name}.csv")
-        summary["scenarios"][scn.name] = metrics(res)
-        log.info("%s: tip error max %.2f mm, rms %.2f mm, %.0fx real time", scn.name,
-                 1e3 * summary["scenarios"][scn.name]["tip_error_max"],
-                 1e3 * summary["scenarios"][scn.name]["tip_error_rms"], res.realtime_factor)
-    summary["reference"] = {
-        "text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]),
-        "step": float(ref.t[1] - ref.t[0]),
-        "min_workspace_margin_m": ref.min_margin_m, "min_elbow_margin": ref.min_elbow_margin,
-        "min_shoulder_margin_m": ref.min_shoulder_margin_m,
-    }
-    summary["fmi_version"] = f"{job.fmi_version}.0"
-    summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
-    (job.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    if job.figures:
-        from .plots import write_figures
+    for scn in scenarios:  # the output names, before anything runs
+        check_name(f"{scn.name}.csv")
+    with ResultSet(job.out, kind="writing") as rs:
+        log.info("reference: %.2f s, %d samples, least workspace margin %.3f m, least |sin q3| "
+                 "%.3f", ref.t[-1] - ref.t[0], ref.t.size, ref.min_margin_m,
+                 ref.min_elbow_margin)
+        results: dict[str, CosimResult] = {}
+        summary: dict[str, Any] = {"scenarios": {}}
+        for scn in scenarios:
+            def report(k: int, n: int, name: str = scn.name) -> None:
+                if progress is not None:
+                    progress(name, k, n)
+            options = CosimOptions(
+                step=float(ref.t[1] - ref.t[0]),
+                plant_values=model_fmu_values(model),
+                controller_values=controller_fmu_values(scn, model, robot.require_control()),
+                progress=report,
+                fmi_version=job.fmi_version,
+            )
+            res = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
+            results[scn.name] = res
+            res.to_csv(rs.path(f"{scn.name}.csv"))
+            s = summary["scenarios"][scn.name] = scenario_summary(metrics(res))
+            log.info("%s: %s", scn.name, _describe(s))
+        summary["reference"] = {
+            "text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]),
+            "step": float(ref.t[1] - ref.t[0]),
+            "min_workspace_margin_m": ref.min_margin_m, "min_elbow_margin": ref.min_elbow_margin,
+            "min_shoulder_margin_m": ref.min_shoulder_margin_m,
+        }
+        summary["fmi_version"] = f"{job.fmi_version}.0"
+        summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
+        if job.figures:
+            from .plots import write_figures
 
-        write_figures(job.out, model, robot, ref, results)
+            write_figures(rs.staging, model, robot, ref, results)
+        summary["files"] = sorted([*rs.names(), "summary.json"])
+        summary = to_strict_json_value(summary)
+        rs.write_text("summary.json", strict_json(summary) + "\n")
     return summary

@@ -11,6 +11,7 @@ from matplotlib.figure import Figure
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
+from ..core.outputs import atomic_path
 from ..core.robot import RobotFile
 from ..sim.cosim import CosimResult
 from .references import inertial_from_robot, pinocchio_inverse_dynamics
@@ -28,9 +29,11 @@ def _pen_down_xz(xyz: FloatArray, pen_down: np.ndarray) -> tuple[FloatArray, Flo
 
 
 def _save(fig: Figure, path: Path) -> None:
+    """Save atomically (core.outputs): the PNG appears complete or not at all."""
     fig.tight_layout()
-    fig.savefig(path, dpi=120, bbox_inches="tight")
-    log.info("wrote %s", path)
+    with atomic_path(path) as tmp:  # tmp ends in .part: the format is given
+        fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", dpi=120, bbox_inches="tight")
+    log.info("drew %s", path.name)
 
 
 def fig_reference(out: Path, ref: Reference) -> None:
