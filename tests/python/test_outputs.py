@@ -12,12 +12,14 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 import rrr_robot as rr
+from rrr_robot.cli import main
 from rrr_robot.core import outputs
 from rrr_robot.core.outputs import (
     ResultSet,
@@ -416,9 +418,105 @@ def test_summary_json_is_strict_with_null_and_a_status(tmp_path: Path,
     assert isinstance(mismatch["tip_error_max"], float)
 
 
+def test_the_command_line_reports_a_diverged_scenario(tmp_path: Path,
+                                                      monkeypatch: pytest.MonkeyPatch,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    fake_cosim(monkeypatch, tip_errors={"ctc": np.inf})
+    rc = main(["writing", "--out", str(tmp_path / "out"), "--text", "a", "--no-figures", "-q"])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "ctc: DIVERGED: non-finite tip_error_max, tip_error_rms" in out
+    assert "pd: tip error max" in out
+
+
 def test_scenario_summary() -> None:
     s = scenario_summary({"rms_u_n": [0.1, np.nan, 0.2], "rms_u_c": [0.0, 0.0, 0.0],
                           "tip_error_max": 1e-3, "tip_error_rms": 1e-4, "wall_time": 0.1,
                           "realtime_factor": 50.0})
     assert s["status"] == "diverged" and s["rms_u_n"] == [0.1, None, 0.2]
     assert s["non_finite"] == ["rms_u_n"]
+
+
+# ---- rrr writing interrupted for real ---------------------------------------------------------
+
+
+def default_signals() -> None:
+    """In the child: Ctrl-C and SIGTERM as in a terminal, even when pytest itself was started
+    with SIGINT ignored (a background job of a non-interactive shell), which the child would
+    inherit (and Python respect)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def start_writing(out: Path) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "rrr_robot", "writing", "--out", str(out), "--quiet"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
+
+
+def wait_for_first_csv(out: Path, proc: subprocess.Popen[str]) -> None:
+    """Until the run has written its first scenario's CSV (into its staging folder)."""
+    deadline = time.monotonic() + 300
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, proc.communicate()
+        if any(out.glob(f"{outputs.STAGING_PREFIX}*/pd.csv")):
+            return
+        time.sleep(0.01)
+    proc.kill()
+    pytest.fail("the run wrote no CSV within 300 s")
+
+
+@pytest.fixture(scope="module")
+def previous(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder with the results of a real earlier run (one scenario, short text)."""
+    out = tmp_path_factory.mktemp("previous") / "out"
+    proc = subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--out", str(out),
+                           "--text", "a", "--scenario", "ctc", "--no-figures", "--quiet"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return out
+
+
+@pytest.mark.parametrize(("sig", "status", "line"), [
+    (signal.SIGINT, 130, "rrr: interrupted"),
+    (signal.SIGTERM, 143, "rrr: terminated"),
+])
+def test_rrr_writing_stopped_midway(previous: Path, tmp_path: Path, sig: int, status: int,
+                                    line: str) -> None:
+    """Ctrl-C (or kill) after the first scenario's CSV: one line, the exit status, no traceback,
+    the previous results exactly as they were and nothing of the stopped run."""
+    out = tmp_path / "out"
+    subprocess.run(["cp", "-a", str(previous), str(out)], check=True)
+    before = snapshot(out)
+    proc = start_writing(out)
+    wait_for_first_csv(out, proc)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == status, err
+    assert "Traceback" not in err
+    assert err.splitlines()[-1] == line and err.count(line) == 1
+    assert snapshot(out) == before
+    assert leftovers(out) == []
+
+
+def test_rrr_writing_killed_midway(previous: Path, tmp_path: Path) -> None:
+    """SIGKILL cannot be caught: the previous results stay, the run's staging folder is hidden
+    and the next run removes it."""
+    out = tmp_path / "out"
+    subprocess.run(["cp", "-a", str(previous), str(out)], check=True)
+    before = snapshot(out)
+    proc = start_writing(out)
+    wait_for_first_csv(out, proc)
+    proc.kill()
+    proc.communicate(timeout=60)
+    assert {k: v for k, v in snapshot(out).items() if not is_temporary(k.split("/")[0])
+            or k.startswith(outputs.MANIFEST_PREFIX)} == before
+    assert sorted(p.name for p in out.glob("*.csv")) == ["ctc.csv"]
+    assert len(leftovers(out)) == 1
+    rerun = subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--out", str(out),
+                            "--text", "a", "--scenario", "pd", "--no-figures", "--quiet"],
+                           capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    assert leftovers(out) == []
+    assert sorted(p.name for p in out.iterdir() if not p.name.startswith(".")) == [
+        "pd.csv", "summary.json"]

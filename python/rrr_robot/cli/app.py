@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
+import threading
 from collections.abc import Sequence
+from types import FrameType
 
 from .. import __version__
 from ..errors import RrrError
@@ -48,14 +51,48 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
-                        format="%(levelname)s %(name)s: %(message)s")
-    try:
-        return int(args.func(args))
-    except (RrrError, OSError) as exc:  # OSError: an output path that cannot be written
-        print(f"rrr: error: {exc}", file=sys.stderr)
-        return 2
+class _Terminated(BaseException):
+    """SIGTERM, turned into an exception so that the running command cleans up (its result set
+    is discarded, its C nodes are stopped) as it does for Ctrl-C."""
 
+
+def _on_sigterm(signum: int, frame: FrameType | None) -> None:
+    raise _Terminated
+
+
+def _one_line(exc: BaseException) -> str:
+    """An exception's message on one line (a message of an FMU or a parser may span lines)."""
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``rrr``; returns the exit status: 0 success, 2 bad input or a failure of the run
+    (one line ``rrr: error: ...``; argparse's own errors also exit 2), 130 Ctrl-C (``rrr:
+    interrupted``), 143 SIGTERM (``rrr: terminated``); a command may return others (``rrr hil
+    plant``: 3 when the plant latched a fault). Nothing is printed as a traceback for these:
+    every error of the package (:class:`RrrError`), of the file system (OSError: a path that
+    cannot be read or written) and of decoding (UnicodeError: a binary file given as text)
+    ends here, and an interrupted run leaves its previous results as they were
+    (rrr_robot.core.outputs)."""
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
+                            format="%(levelname)s %(name)s: %(message)s")
+        return int(args.func(args))
+    except KeyboardInterrupt:
+        print("rrr: interrupted", file=sys.stderr)
+        return 130
+    except _Terminated:
+        print("rrr: terminated", file=sys.stderr)
+        return 143
+    except (RrrError, OSError, UnicodeError) as exc:
+        print(f"rrr: error: {_one_line(exc)}", file=sys.stderr)
+        return 2
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)

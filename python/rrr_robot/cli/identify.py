@@ -4,8 +4,9 @@ library is :mod:`rrr_robot.identify`)."""
 from __future__ import annotations
 
 import argparse
-import json
+import contextlib
 import logging
+import os
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -13,10 +14,12 @@ from typing import Any
 import numpy as np
 
 from ..core.model import DEFAULT_ROBOT_TOML, Model
+from ..core.outputs import ResultSet, atomic_path, check_folder, strict_json
 from ..core.param_names import group_names
 from ..core.robot import read_robot_file
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
+from ._args import nonnegative_int, output_path, positive_int
 
 log = logging.getLogger(__name__)
 
@@ -29,15 +32,12 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     prior = prior_robot.model
     if args.validate:
         prior_robot.require_control()
-    out_dir = Path(args.out).resolve().parent
-    if not out_dir.is_dir():  # fail before the estimation, not after it
-        raise BadInputError(f"cannot write {args.out}: the folder {out_dir} does not exist")
+    _check_outputs(args)  # fail before the estimation, not after it
     settings = Settings(derivatives=args.derivatives, cutoff=args.cutoff,
                         friction_method=args.friction_method, weighting=args.weighting,
                         v_min=args.v_min)
     friction = read_log(args.friction_log, friction=True) if args.friction_log else None
     result = identify(read_log(args.log), prior, friction, settings)
-    write_robot(result, Path(args.out), prior_robot)
     report: dict[str, Any] = result.report()
     est = result.base.wls if settings.weighting == "wls" else result.base.ls
     print(f"cond(W) = {result.base.cond:.1f} from {result.base.rows} rows; {est.method}:")
@@ -49,29 +49,61 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         report["writing"] = validate_writing(prior, result.model, prior_robot)
         ratio = report["writing"]["tip_error_ratio"]
         print(f"writing task: tip error ratio identified/prior {ratio:.2f}")
-    if args.report:
-        Path(args.report).write_text(json.dumps(report, indent=2) + "\n")
+    # the robot file and the report together at the end, each complete or not at all: an
+    # interrupted run (also during --validate) leaves the previous files as they were
+    with contextlib.ExitStack() as outputs:
+        write_robot(result, outputs.enter_context(atomic_path(args.out)), prior_robot)
+        if args.report:
+            outputs.enter_context(atomic_path(args.report)).write_text(
+                strict_json(report) + "\n", encoding="utf-8")
     print(f"identified robot written to {args.out}")
     return 0
+
+
+def _check_outputs(args: argparse.Namespace) -> None:
+    """The files ``rrr identify`` will write, checked before it reads or estimates anything:
+    each in an existing folder, not a folder itself, not one of the input logs, and not the
+    same file twice."""
+    inputs = {Path(f).resolve(): f for f in (args.log, args.friction_log) if f}
+    seen: dict[Path, str] = {}
+    for option, path in (("--out", args.out), ("--report", args.report)):
+        if path is None:
+            continue
+        target = Path(path).resolve()
+        if target.is_dir():
+            raise BadInputError(f"cannot write {path} ({option}): it is a folder")
+        if not target.parent.is_dir():
+            raise BadInputError(f"cannot write {path}: the folder {target.parent} does not exist")
+        if not os.access(target.parent, os.W_OK | os.X_OK):
+            raise BadInputError(f"cannot write {path}: the folder {target.parent} is not "
+                                "writable")
+        if target in inputs:
+            raise BadInputError(f"{option} {path} is the input log {inputs[target]}: it would "
+                                "be overwritten")
+        if target in seen:
+            raise BadInputError(f"{option} {path} is also {seen[target]}: give two files")
+        seen[target] = option
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
     from ..identify import experiments as ex
     from ..identify.excitation import design_excitation
 
+    out = check_folder(args.out)  # before anything is read or run
     robot = read_robot_file(args.robot) if args.robot else None
     model = robot.model if robot is not None else Model.default()
     step = robot.sample_time if robot is not None else DEFAULT_SAMPLE_TIME
     ex.check_experiments(args.periods, step)  # the bounds, before anything runs
     sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
-    traj.to_json(out / "excitation.json")
-    note = f"simulated, sensors: {sensors}"
-    ex.friction_experiment(model, step=step, sensors=sensors).to_csv(out / "friction.csv", note)
-    ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors).to_csv(
-        out / "excitation.csv", f"{note}; cond(W) = {cond:.2f}")
+    # the three files appear together when every experiment succeeded (core.outputs)
+    with ResultSet(out, kind="identify-experiment") as rs:
+        traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
+        traj.to_json(rs.path("excitation.json"))
+        note = f"simulated, sensors: {sensors}"
+        ex.friction_experiment(model, step=step, sensors=sensors).to_csv(
+            rs.path("friction.csv"), note)
+        ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors).to_csv(
+            rs.path("excitation.csv"), f"{note}; cond(W) = {cond:.2f}")
     print(f"cond(W) of the excitation: {cond:.2f}; logs in {out}/ (friction.csv, "
           "excitation.csv, excitation.json)")
     return 0
@@ -88,7 +120,8 @@ def register_cli(sub: Any) -> None:
     p.add_argument("--friction-log", help="friction sweep CSV (adds column joint); without "
                    "it the prior's friction is used")
     p.add_argument("--robot", help="prior robot TOML: kinematics, k_t, u_max (default: packaged)")
-    p.add_argument("--out", required=True, help="identified robot TOML to write")
+    p.add_argument("--out", required=True, type=output_path,
+                   help="identified robot TOML to write")
     p.add_argument("--derivatives", choices=("butter", "savgol", "log"), default="butter",
                    help="zero-phase Butterworth, Savitzky-Golay, or the logged qd/qdd")
     p.add_argument("--cutoff", type=float, default=15.0, help="filter cutoff, Hz (default 15)")
@@ -98,7 +131,7 @@ def register_cli(sub: Any) -> None:
                    help="ls (default; honest 95 %% intervals) or wls (one noise level per joint)")
     p.add_argument("--v-min", type=float, default=0.05,
                    help="drop rows of joints slower than this, rad/s")
-    p.add_argument("--report", help="write the figures of merit as JSON")
+    p.add_argument("--report", type=output_path, help="write the figures of merit as JSON")
     p.add_argument("--validate", action="store_true",
                    help="run the writing task with the prior and the identified model")
     p.set_defaults(func=_cmd_identify)
@@ -106,11 +139,14 @@ def register_cli(sub: Any) -> None:
         "identify-experiment", help="simulate friction and excitation logs on the plant FMU",
         description="Design an excitation, run the friction sweep and the excitation on the "
         "plant FMU with encoder quantisation and noise, and write the logs.")
-    e.add_argument("--out", required=True, help="output folder")
+    e.add_argument("--out", required=True, type=output_path,
+                   help="output folder (its previous logs stay as they were unless every "
+                   "experiment succeeds)")
     e.add_argument("--robot", help="true robot TOML (default: packaged)")
     e.add_argument("--noise-free", action="store_true", help="ideal sensors (logs qd, qdd)")
-    e.add_argument("--seed", type=int, default=1)
-    e.add_argument("--periods", type=int, default=1,
+    e.add_argument("--seed", type=nonnegative_int, default=1,
+                   help="seed of the sensor noise and of the excitation design (>= 0)")
+    e.add_argument("--periods", type=positive_int, default=1,
                    help="excitation periods of 10 s (an experiment has at most 1,000,000 "
                    "samples: 1000 s at 1 ms)")
     e.set_defaults(func=_cmd_experiment)

@@ -8,6 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ._args import output_path
+
 
 class _ProgressBar:
     """A one-line progress bar on stderr (only when it is a terminal or forced)."""
@@ -25,6 +27,22 @@ class _ProgressBar:
         sys.stderr.flush()
 
 
+def _num(value: float | None, fmt: str, scale: float = 1.0) -> str:
+    """A number of summary.json (null when it was not finite)."""
+    return "n/a" if value is None else format(scale * value, fmt)
+
+
+def _scenario_line(s: dict[str, Any]) -> str:
+    """One scenario of summary.json for the terminal (non-finite metrics are null there)."""
+    if s.get("status") == "diverged":
+        return f"DIVERGED: non-finite {', '.join(s['non_finite'])} (see summary.json)"
+    rms_n = ", ".join(_num(v, ".2f") for v in s["rms_u_n"])
+    rms_c = ", ".join(_num(v, ".3f") for v in s["rms_u_c"])
+    return (f"tip error max {_num(s['tip_error_max'], '7.3f', 1e3)} mm, "
+            f"rms {_num(s['tip_error_rms'], '7.3f', 1e3)} mm; RMS u_n [{rms_n}] V, "
+            f"u_c [{rms_c}] V; {_num(s['realtime_factor'], '.0f')}x real time")
+
+
 def _cmd_writing(args: argparse.Namespace) -> int:
     from ..writing.job import WritingJob, run_writing
     from ..writing.scenarios import BUILTIN
@@ -36,11 +54,7 @@ def _cmd_writing(args: argparse.Namespace) -> int:
     )
     summary = run_writing(job, progress=_ProgressBar(not args.quiet and sys.stderr.isatty()))
     for name, s in summary["scenarios"].items():
-        rms_n = ", ".join(f"{v:.2f}" for v in s["rms_u_n"])
-        rms_c = ", ".join(f"{v:.3f}" for v in s["rms_u_c"])
-        print(f"{name:>10}: tip error max {1e3 * s['tip_error_max']:7.3f} mm, "
-              f"rms {1e3 * s['tip_error_rms']:7.3f} mm; RMS u_n [{rms_n}] V, "
-              f"u_c [{rms_c}] V; {s['realtime_factor']:.0f}x real time")
+        print(f"{name:>10}: {_scenario_line(s)}")
     print(f"results in {job.out}/ (summary.json, <scenario>.csv, figures)")
     return 0
 
@@ -56,7 +70,9 @@ def register_cli(subparsers: Any) -> None:
     p_w.add_argument("--scenario", action="append", metavar="S",
                      help="pd, ctc, mismatch or a scenario .toml file; repeat for several "
                      "(default: pd, ctc and mismatch)")
-    p_w.add_argument("--out", default="results", help="output folder (default: results)")
+    p_w.add_argument("--out", default=Path("results"), type=output_path,
+                     help="output folder (default: results); its previous results stay as they "
+                     "were unless the run succeeds")
     p_w.add_argument("--robot", help="robot TOML file (default: the packaged default robot)")
     p_w.add_argument("--scale", type=float, default=1.0,
                      help="factor on the letter height (default 1)")
