@@ -35,7 +35,13 @@ def test_dbc_is_shipped_and_complete() -> None:
     db = database()
     names = {m.name for m in db.messages}
     assert names == {"Sync", "VoltageCmd", "JointState1", "JointState2", "JointState3",
-                     "PlantStatus", "HeartbeatCtrl", "HeartbeatPlant"}
+                     "PlantStatus", "HeartbeatCtrl", "HeartbeatPlant", "StopCmd"}
+    stop = db.get_message_by_name("StopCmd")
+    assert (stop.frame_id, stop.length) == (0x090, 2)
+    reason = stop.get_signal_by_name("Reason")
+    assert (reason.minimum, reason.maximum) == (0, 3)
+    # the vector of tests/c/test_hil_codec.c: counter 5, reason 1 -> df 15
+    assert bytes(encode("StopCmd", {"AliveCounter": 5, "Reason": 1}).data) == bytes.fromhex("df15")
     q = db.get_message_by_name("JointState1").get_signal_by_name("Q")
     assert q.scale == 1e-6 and q.length == 32 and q.is_signed  # +/-2147 rad at 1 urad
     u = db.get_message_by_name("VoltageCmd").get_signal_by_name("U1")

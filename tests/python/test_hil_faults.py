@@ -66,7 +66,10 @@ class Rig:
         self.status = self.read_status(self.k)
         return self.status
 
-    def finish(self) -> tuple[dict[str, Any], np.ndarray]:
+    def finish(self, stop_counter: int | None = None) -> tuple[dict[str, Any], np.ndarray]:
+        # the authenticated stop: the next alive counter of the command sequence
+        counter = self.k & 15 if stop_counter is None else stop_counter
+        self.bus.send(encode("StopCmd", {"AliveCounter": counter, "Reason": 0}))
         self.bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
         self.bus.shutdown()
         summary = self.plant.wait(30)
@@ -139,14 +142,46 @@ def test_bad_command_latches_at_once(rig: Rig, fault: str) -> None:
     st = rig.period(bad)
     assert st["Faults"] == F[fault] and st["ZeroVoltage"] == 1 and st["State"] == 2
     assert rig.period()["Faults"] == F[fault]  # latched
-    # reset: a valid command with ResetFault = 1, Enable = 0
+    # reset (CiA 402 style): the request alone only arms it (State 3, still latched, 0 V) ...
     st = rig.period(rig.cmd(Enable=0, ResetFault=1))
-    assert st["Faults"] == 0 and st["State"] == 1
-    assert rig.period()["ZeroVoltage"] == 0
+    assert st["Faults"] == F[fault] and st["State"] == 3 and st["ZeroVoltage"] == 1
+    # ... the latch clears with the 3rd enabling command of consecutive alive counters
+    for _ in range(2):
+        st = rig.period()
+        assert st["Faults"] == F[fault] and st["ZeroVoltage"] == 1
+    st = rig.period()
+    assert st["Faults"] == 0 and st["State"] == 1 and st["ZeroVoltage"] == 0
     summary, log = rig.finish()
-    assert summary[fault] == 1 and summary["fault_events"] == 1 and summary["resets"] == 1
-    assert not applied(log, 3).any() and not applied(log, 4).any()
-    np.testing.assert_allclose(applied(log, 6), U)
+    assert summary["exit"] == 0 and summary["resets"] == 1
+    assert summary[fault] == 1 and summary["fault_events"] == 1
+    assert not applied(log, 3).any() and not applied(log, 7).any()
+    np.testing.assert_allclose(applied(log, 8), U)
+
+
+def test_reset_with_a_counter_gap_does_not_clear(rig: Rig) -> None:
+    for _ in range(3):
+        rig.period()
+    rig.period(rig.cmd(corrupt_crc=True))
+    st = rig.period(rig.cmd(Enable=0, ResetFault=1))
+    assert st["State"] == 3
+    for _ in range(3):  # the enabling commands skip one alive counter
+        st = rig.period(rig.cmd(counter=(rig.k + 1) & 15))
+    assert st["Faults"] == F["crc"] | F["counter"] and st["ZeroVoltage"] == 1
+    summary, _ = rig.finish(stop_counter=(rig.k + 1) & 15)
+    assert summary["exit"] == 0 and summary["resets"] == 0 and summary["counter"] == 1
+
+
+def test_unauthenticated_stop_is_ignored(rig: Rig) -> None:
+    for _ in range(3):
+        rig.period()
+    stale = encode("StopCmd", {"AliveCounter": (rig.k - 1) & 15, "Reason": 0})
+    bad_crc = encode("StopCmd", {"AliveCounter": rig.k & 15, "Reason": 0}, corrupt_crc=True)
+    heartbeat = encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1})
+    st = rig.period(stale, bad_crc, heartbeat, rig.cmd())
+    assert st["Faults"] == 0  # the plant ran this period: none of them stopped it
+    summary, _ = rig.finish()
+    assert summary["exit"] == 0 and summary["stop_rejected"] == 2
+    assert summary["fault_events"] == 0 and summary["periods"] == 4
 
 
 def test_unknown_ids_and_extended_frames_are_counted_not_faults(rig: Rig) -> None:

@@ -76,6 +76,8 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
         if plant is not None:
             summary = plant.wait()
             print(f"plant node: exit {summary['exit']}, faults {summary.get('faults')}")
+            if summary["exit"] != 0:  # the exit status reflects every node's
+                return int(summary["exit"])
     finally:
         if plant is not None:
             plant.close()
@@ -143,10 +145,13 @@ def _cmd_plant(args: argparse.Namespace, ref: Reference, work: Path,
               f"timeout {s['timeout']}, crc {s['crc']}, counter {s['counter']}, "
               f"range {s['range']}, bus {s['bus']}), periods at 0 V {s['zero_periods']}; "
               f"log {out / 'plant.csv'}")
+        node_exit = 0
         if ctrl is not None:
             cs = ctrl.wait()
+            node_exit = int(cs["exit"])
             print(f"controller node: exit {cs['exit']}, plant faults seen {cs['plant_faults']}")
-        return 0 if s["exit"] == 0 else 3
+        # the exit status reflects every side's: the plant's first, then the controller node's
+        return int(s["exit"]) if s["exit"] != 0 else node_exit
     finally:
         if ctrl is not None:
             ctrl.close()

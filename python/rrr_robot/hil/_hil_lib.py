@@ -27,7 +27,8 @@ LIB_NAME = "librrr_hil_supervisor.so"
 RX_OK, RX_UNKNOWN_ID, RX_BAD_DLC, RX_BAD_CRC, RX_OUT_OF_RANGE, RX_COUNT = range(6)
 RX_NAMES = ("ok", "unknown_id", "bad_dlc", "bad_crc", "out_of_range")
 # rrr_hil_kind
-KIND_SYNC, KIND_VOLTAGE_CMD, KIND_JOINT_STATE, KIND_PLANT_STATUS, KIND_HEARTBEAT = range(5)
+KIND_SYNC, KIND_VOLTAGE_CMD, KIND_JOINT_STATE, KIND_PLANT_STATUS, KIND_HEARTBEAT, KIND_STOP_CMD = (
+    range(6))
 FAULT_SYNC, FAULT_BUS = 32, 64
 
 
@@ -39,7 +40,7 @@ class SupConfig(ct.Structure):
 
 #: The event counters of ``rrr_hil_sup_err``, in order.
 SUP_ERR_NAMES = ("crc", "counter", "range", "format", "sync", "bus", "timeout", "cmd_missed",
-                 "fault_events", "resets", "zero_periods")
+                 "fault_events", "resets", "zero_periods", "stop_rejected")
 
 
 class SupErr(ct.Structure):
@@ -55,11 +56,19 @@ class VoltageCmd(ct.Structure):
                 ("u_V", ct.c_double * 3)]
 
 
+class StopCmd(ct.Structure):
+    """Mirror of ``rrr_hil_stop_cmd``."""
+
+    _fields_ = [("counter", ct.c_uint8), ("reason", ct.c_uint8)]
+
+
 class Sup(ct.Structure):
     """Mirror of ``rrr_hil_sup``."""
 
     _fields_ = [("cfg", SupConfig), ("faults", ct.c_uint8), ("have_counter", ct.c_uint8),
-                ("last_counter", ct.c_uint8), ("pending", ct.c_uint8), ("cmd", VoltageCmd),
+                ("last_counter", ct.c_uint8), ("pending", ct.c_uint8),
+                ("reset_step", ct.c_uint8), ("reset_enables", ct.c_uint8), ("stop", ct.c_uint8),
+                ("stop_reason", ct.c_uint8), ("cmd", VoltageCmd),
                 ("u_hold_V", ct.c_double * 3), ("missed_in_row", ct.c_uint),
                 ("zero_applied", ct.c_uint8), ("err", SupErr)]
 
@@ -86,7 +95,7 @@ class _JointState(ct.Structure):
 
 class _MsgUnion(ct.Union):
     _fields_ = [("sync", ct.c_uint32), ("cmd", VoltageCmd), ("joint", _JointState),
-                ("status", PlantStatus), ("heartbeat", ct.c_uint8 * 3)]
+                ("status", PlantStatus), ("heartbeat", ct.c_uint8 * 3), ("stop", StopCmd)]
 
 
 class Msg(ct.Structure):
@@ -99,6 +108,7 @@ _SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "rrr_hil_sup_config_default": ([], SupConfig),
     "rrr_hil_sup_init": ([ct.POINTER(Sup), ct.POINTER(SupConfig)], ct.c_int),
     "rrr_hil_sup_on_command": ([ct.POINTER(Sup), ct.c_int, ct.POINTER(VoltageCmd)], None),
+    "rrr_hil_sup_on_stop": ([ct.POINTER(Sup), ct.c_int, ct.POINTER(StopCmd)], ct.c_int),
     "rrr_hil_sup_raise": ([ct.POINTER(Sup), ct.c_uint8], None),
     "rrr_hil_sup_next_period": ([ct.POINTER(Sup), ct.c_double * 3], ct.c_int),
     "rrr_hil_sup_status": ([ct.POINTER(Sup), ct.POINTER(PlantStatus)], None),
@@ -148,6 +158,14 @@ def _check_layout(lib: ct.CDLL) -> None:
     ok = ok and (s.err.bus, s.err.fault_events, s.err.cmd_missed, s.err.zero_periods) == (1,) * 4
     ok = ok and zero == 1 and s.zero_applied == 1 and s.missed_in_row == 1
     ok = ok and (st.faults, st.zero_voltage, st.fault_count, st.cmd_missed) == (FAULT_BUS, 1, 1, 1)
+    # the fields of the reset sequence and the stop (padding and the end of err in C)
+    cmd = VoltageCmd(3, 0, 1)  # a reset request: arms the reset of the latched bus fault
+    lib.rrr_hil_sup_on_command(ct.byref(s), RX_OK, ct.byref(cmd))
+    ok = ok and (s.reset_step, s.reset_enables, s.last_counter) == (1, 0, 3)
+    ok = ok and lib.rrr_hil_sup_on_stop(ct.byref(s), RX_BAD_CRC, None) == 0
+    stop = StopCmd(4, 2)
+    ok = ok and lib.rrr_hil_sup_on_stop(ct.byref(s), RX_OK, ct.byref(stop)) == 1
+    ok = ok and (s.stop, s.stop_reason, s.err.stop_rejected) == (1, 2, 1)
     if not ok:
         raise RrrError(f"{library_path()}: rrr_hil_sup does not match the ctypes mirror in "
                        f"{__file__} (rebuild, or update the mirror after a change in C)")
@@ -182,6 +200,19 @@ class Supervisor:
         cmd = ct.byref(self._msg.u.cmd) if rx == RX_OK else None
         self._lib.rrr_hil_sup_on_command(ct.byref(self._s), rx, cmd)
         return rx
+
+    def on_stop_frame(self, message: Any) -> tuple[int, bool]:
+        """Decode a frame with the StopCmd id in C and feed it to the supervisor, as
+        rrr_hil_plant.c does; returns the ``RX_*`` result and whether the stop is honoured
+        (E2E-valid, counter 1..max_delta_counter above the last command's)."""
+        rx = int(self._lib.rrr_hil_decode(ct.byref(frame_of(message)), ct.byref(self._msg)))
+        stop = ct.byref(self._msg.u.stop) if rx == RX_OK else None
+        return rx, bool(self._lib.rrr_hil_sup_on_stop(ct.byref(self._s), rx, stop))
+
+    @property
+    def stop_reason(self) -> int | None:
+        """StopCmd.Reason of the honoured stop, None before one."""
+        return int(self._s.stop_reason) if self._s.stop else None
 
     def raise_fault(self, fault: int) -> None:
         """Latch an external fault (``FAULT_SYNC``, ``FAULT_BUS``)."""

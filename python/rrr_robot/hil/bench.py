@@ -107,6 +107,8 @@ def run_fmu_controller(bus: Any, t: FloatArray, q_ref: FloatArray, qd_ref: Float
             if k < n - 1:
                 bus.send(encode("Sync", {"Cycle": k}))
                 ctrl.do_step(PERIOD)
+        # the stop request: E2E-protected, the next alive counter after the last VoltageCmd
+        bus.send(encode("StopCmd", {"AliveCounter": n & 15, "Reason": 0}))
         bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
     return BenchRun(t=t, q=q_rec, qd=qd_rec, u=u_rec, plant_summary=dict(waiter.status),
                     controller_summary={"rejected": waiter.rejected})

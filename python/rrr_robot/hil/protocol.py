@@ -47,8 +47,8 @@ DBC_PATH = DATA_DIR / "rrr_bench.dbc"
 #: package's default sample time; a reference for the bench must be sampled at it.
 PERIOD = DEFAULT_SAMPLE_TIME
 #: E2E DataIDs (also in the DBC's comment and c_src/hil/hil_codec.h).
-DATA_IDS = {"VoltageCmd": 0x10, "JointState1": 0x21, "JointState2": 0x22, "JointState3": 0x23,
-            "PlantStatus": 0x30}
+DATA_IDS = {"VoltageCmd": 0x10, "StopCmd": 0x11, "JointState1": 0x21, "JointState2": 0x22,
+            "JointState3": 0x23, "PlantStatus": 0x30}
 #: Latched fault bits of PlantStatus.Faults.
 FAULT_BITS = {"timeout": 1, "crc": 2, "counter": 4, "range": 8, "format": 16, "sync": 32,
               "bus": 64}
