@@ -11,7 +11,7 @@ Subpackages, each importing only from those below it: ``cli`` (the ``rrr`` comma
 
 from __future__ import annotations
 
-from .core.model import CtcOutput, Model, Singularity, bps_from_inertia
+from .core.model import Model, Singularity, bps_from_inertia
 from .core.robot import RobotFile, read_robot_file
 from .errors import (
     BadInputError,
@@ -31,7 +31,6 @@ __version__ = "0.1.0"
 __all__ = [
     "BadInputError",
     "CosimError",
-    "CtcOutput",
     "Model",
     "ModelError",
     "NumericError",

@@ -7,7 +7,7 @@ robot_file (the one robot file reader: :class:`RobotData`), robot (:class:`Robot
 checked file and its :class:`Model`).
 """
 
-from .model import DEFAULT_ROBOT_TOML, CtcOutput, Model, Singularity, bps_from_inertia
+from .model import DEFAULT_ROBOT_TOML, Model, Singularity, bps_from_inertia
 from .param_names import model_fmu_values
 from .robot import RobotFile, read_robot_file
 from .robot_file import DEFAULT_SAMPLE_TIME, ControlGains, LinkInertia, RobotData
@@ -16,7 +16,6 @@ __all__ = [
     "DEFAULT_ROBOT_TOML",
     "DEFAULT_SAMPLE_TIME",
     "ControlGains",
-    "CtcOutput",
     "LinkInertia",
     "Model",
     "RobotData",

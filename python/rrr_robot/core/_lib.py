@@ -76,18 +76,6 @@ class RawSingularity(ct.Structure):
     ]
 
 
-class RawGains(ct.Structure):
-    """Mirror of ``rrr_ctc_gains``."""
-
-    _fields_ = [("kp", D3), ("kd", D3), ("feedforward", ct.c_int)]
-
-
-class RawCtcOutput(ct.Structure):
-    """Mirror of ``rrr_ctc_output``."""
-
-    _fields_ = [("u", D3), ("u_n", D3), ("u_c", D3), ("saturated", ct.c_uint)]
-
-
 class RawParamInfo(ct.Structure):
     """Mirror of ``rrr_param_info`` (c_src/rrr/include/rrr/rrr_params.h): one row of the C
     parameter table."""
@@ -103,12 +91,6 @@ class RawParamInfo(ct.Structure):
 
 #: ``rrr_param_bound`` values: the lower bound of a parameter (every value must be finite).
 PARAM_ANY, PARAM_NONNEG, PARAM_POS = 0, 1, 2
-
-
-class RawPlantState(ct.Structure):
-    """Mirror of ``rrr_plant_state``."""
-
-    _fields_ = [("q", D3), ("qd", D3)]
 
 
 _P = ct.POINTER
@@ -140,11 +122,6 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_friction": [_M, _D, _D],
     "rrr_voltage_from_torque": [_M, _D, _D, _D],
     "rrr_torque_from_voltage": [_M, _D, _D, _D],
-    "rrr_saturate": [_M, _D, _D, _P(ct.c_uint)],
-    "rrr_ctc_gains_default": [_P(RawGains)],
-    "rrr_ctc": [_M, _P(RawGains), _D, _D, _D, _D, _D, _P(RawCtcOutput)],
-    "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
-    "rrr_plant_step": [_M, ct.c_double, _D, ct.c_double, _P(RawPlantState), _D],
     "rrr_param_set": [_M, ct.c_size_t, ct.c_double],
 }
 

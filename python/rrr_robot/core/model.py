@@ -39,16 +39,6 @@ class Singularity:
     det_jacobian: float
 
 
-@dataclass(frozen=True)
-class CtcOutput:
-    """One evaluation of the computed-torque law (eq 15), voltages in V."""
-
-    u: FloatArray
-    u_n: FloatArray
-    u_c: FloatArray
-    saturated: FloatArray
-
-
 def bps_from_inertia(
     dh: Mapping[str, float],
     masses: ArrayLike,
