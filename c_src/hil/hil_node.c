@@ -2,6 +2,7 @@
 #define _GNU_SOURCE /* prctl(PR_SET_TIMERSLACK), sched_setscheduler */
 
 #include "hil_node.h"
+#include "rrr/rrr_params.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -129,54 +130,6 @@ const char *rrr_hil_stop_signal_name(void)
     }
 }
 
-/* 1 when name is exactly fmt ("x[%d]%n" or "x[%d,%d]%n") with indices in 1..max. */
-static int indexed(const char *name, const char *fmt, int *i, int *k, int max)
-{
-    int used = -1;
-    const int want = k == NULL ? 1 : 2;
-    const int got = k == NULL ? sscanf(name, fmt, i, &used) : sscanf(name, fmt, i, k, &used);
-    if (got != want || used < 0 || name[used] != '\0' || *i < 1 || *i > max) {
-        return 0;
-    }
-    return k == NULL || (*k >= 1 && *k <= max);
-}
-
-/* The field of a model parameter named as in the FMUs, or NULL. */
-static double *model_field(rrr_model *m, const char *name)
-{
-    static const struct {
-        const char *name;
-        size_t offset;
-    } scalars[] = {
-        {"d1", offsetof(rrr_model, d1)}, {"a2", offsetof(rrr_model, a2)},
-        {"a3", offsetof(rrr_model, a3)}, {"d2", offsetof(rrr_model, d2)},
-        {"d3", offsetof(rrr_model, d3)}, {"g", offsetof(rrr_model, g)},
-        {"u_max", offsetof(rrr_model, u_max)},
-    };
-    for (size_t j = 0; j < sizeof scalars / sizeof scalars[0]; ++j) {
-        if (strcmp(name, scalars[j].name) == 0) {
-            return (double *)(void *)((char *)m + scalars[j].offset);
-        }
-    }
-    int i = 0, k = 0;
-    if (indexed(name, "p[%d]%n", &i, NULL, RRR_NP)) {
-        return &m->p[i - 1];
-    }
-    if (indexed(name, "kt[%d]%n", &i, NULL, 3)) {
-        return &m->kt[i - 1];
-    }
-    if (indexed(name, "b[%d]%n", &i, NULL, 3)) {
-        return &m->b[i - 1];
-    }
-    if (indexed(name, "f[%d,%d]%n", &i, &k, 3)) {
-        return &m->f[i - 1][k - 1];
-    }
-    if (indexed(name, "w[%d,%d]%n", &i, &k, 3)) {
-        return &m->w[i - 1][k - 1];
-    }
-    return NULL;
-}
-
 int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, size_t err_len)
 {
     const char *eq = strchr(assignment, '=');
@@ -188,8 +141,8 @@ int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, siz
     }
     memcpy(name, assignment, len);
     name[len] = '\0';
-    double *field = model_field(m, name);
-    if (field == NULL) {
+    const int row = rrr_param_index(name); /* librrr's one parameter table (rrr_params.h) */
+    if (row < 0) {
         snprintf(err, err_len, "unknown model parameter '%s' (d1, a2, a3, d2, d3, g, u_max, "
                  "p[1..16], kt[i], b[i], f[i,k], w[i,k])", name);
         return -1;
@@ -201,8 +154,7 @@ int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, siz
         snprintf(err, err_len, "%s: expected a finite number, got '%s'", name, eq + 1);
         return -1;
     }
-    *field = v;
-    return 0;
+    return rrr_param_set(m, (size_t)row, v) == RRR_OK ? 0 : -1; /* v is finite: RRR_OK */
 }
 
 int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog)
