@@ -19,6 +19,7 @@ import math
 import numbers
 import re
 import tomllib
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -93,14 +94,16 @@ class Invalid(Exception):  # internal signal, converted to the package's error
         self.requirement, self.value, self.index = requirement, value, index
 
 
-class Field:
+class Field(ABC):
     """A field check: ``check(value)`` returns the value converted or raises :class:`Invalid`."""
 
+    @abstractmethod
     def check(self, value: Any) -> Any:
-        raise NotImplementedError
+        """The value converted, or :class:`Invalid`."""
 
+    @abstractmethod
     def describe(self) -> str:
-        raise NotImplementedError
+        """What the field must be, for messages."""
 
 
 def _is_number(value: Any) -> bool:
