@@ -67,7 +67,7 @@ def cmeel_prefix() -> Path:
     if not (prefix / "lib" / "cmake" / "pinocchio").is_dir():
         sys.exit(
             f"run_bench: no Pinocchio CMake config under {prefix}; "
-            "pip install pin cmeel-eigen cmeel-urdfdom-headers"
+            "pip install .[bench] (pin, cmeel-eigen, cmeel-urdfdom-headers)"
         )
     return prefix
 
