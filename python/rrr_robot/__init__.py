@@ -11,8 +11,9 @@ Subpackages, each importing only from those below it: ``cli`` (the ``rrr`` comma
 
 from __future__ import annotations
 
-from .core.model import Model, Singularity, bps_from_inertia
-from .core.robot import RobotFile, read_robot_file
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .errors import (
     BadInputError,
     CosimError,
@@ -24,7 +25,36 @@ from .errors import (
     SingularError,
     UnreachableError,
 )
-from .sim.fmus import fmu_path
+
+if TYPE_CHECKING:
+    from .core.model import Model, Singularity, bps_from_inertia
+    from .core.robot import RobotFile, read_robot_file
+    from .sim.fmus import fmu_path
+
+#: The re-exported names that need numpy and librrr, imported on first use (``rr.Model``), so
+#: that ``import rrr_robot`` (and ``rrr --help``, ``rrr fmus``) loads neither.
+_LAZY = {
+    "Model": ".core.model",
+    "Singularity": ".core.model",
+    "bps_from_inertia": ".core.model",
+    "RobotFile": ".core.robot",
+    "read_robot_file": ".core.robot",
+    "fmu_path": ".sim.fmus",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value  # the next access does not come here
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
+
 
 __version__ = "0.1.0"
 

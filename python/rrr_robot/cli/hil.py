@@ -12,8 +12,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from ._args import host_port, nonnegative_int, output_path
 
 if TYPE_CHECKING:
@@ -44,6 +42,8 @@ def _cmd_hil(args: argparse.Namespace) -> int:
 def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, float | bool],
               work: Path, out: Path) -> int:
     """One side of ``rrr hil``, writing its files into ``work`` (they end up in ``out``)."""
+    import numpy as np
+
     from ..hil.bench import run_c_bench, run_fmu_controller
     from ..hil.nodes import export_reference, start_plant
 
@@ -118,6 +118,8 @@ def _cmd_plant(args: argparse.Namespace, ref: Reference, work: Path,
     ``rrr_hil_controller --socketcan IF`` started after this plant. The files go to ``work``
     (the staging folder of the run's result set) and end up in ``out`` (default: ``work``)."""
     out = work if out is None else out
+    import numpy as np
+
     from ..hil.nodes import controller_node_args, export_reference, start_listening_controller
     from ..hil.plant import PythonPlant, drop_commands_from
 

@@ -11,13 +11,6 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from ..core.model import DEFAULT_ROBOT_TOML, Model
-from ..core.outputs import ResultSet, atomic_path, check_folder, strict_json
-from ..core.param_names import group_names
-from ..core.robot import read_robot_file
-from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
 from ._args import nonnegative_int, output_path, positive_int
 
@@ -25,6 +18,11 @@ log = logging.getLogger(__name__)
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
+    # the library is imported when the command runs: rrr --help loads none of it
+    from ..core.model import DEFAULT_ROBOT_TOML
+    from ..core.outputs import atomic_path, strict_json
+    from ..core.param_names import group_names
+    from ..core.robot import read_robot_file
     from ..identify.logs import read_log
     from ..identify.pipeline import Settings, identify, write_robot
 
@@ -86,6 +84,12 @@ def _check_outputs(args: argparse.Namespace) -> None:
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..core.model import Model
+    from ..core.outputs import ResultSet, check_folder
+    from ..core.robot import read_robot_file
+    from ..core.robot_file import DEFAULT_SAMPLE_TIME
     from ..identify import experiments as ex
     from ..identify.excitation import design_excitation
 

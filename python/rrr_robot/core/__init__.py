@@ -7,10 +7,46 @@ robot_file (the one robot file reader: :class:`RobotData`), robot (:class:`Robot
 checked file and its :class:`Model`).
 """
 
-from .model import DEFAULT_ROBOT_TOML, Model, Singularity, bps_from_inertia
-from .param_names import model_fmu_values
-from .robot import RobotFile, read_robot_file
-from .robot_file import DEFAULT_SAMPLE_TIME, ControlGains, LinkInertia, RobotData
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .model import DEFAULT_ROBOT_TOML, Model, Singularity, bps_from_inertia
+    from .param_names import model_fmu_values
+    from .robot import RobotFile, read_robot_file
+    from .robot_file import DEFAULT_SAMPLE_TIME, ControlGains, LinkInertia, RobotData
+
+#: Each re-exported name and its module, imported on first use: ``rrr_robot.core.outputs`` and
+#: ``rrr_robot.core._package`` (``rrr fmus``) do not load numpy or librrr.
+_LAZY = {
+    "DEFAULT_ROBOT_TOML": ".model",
+    "Model": ".model",
+    "Singularity": ".model",
+    "bps_from_inertia": ".model",
+    "model_fmu_values": ".param_names",
+    "RobotFile": ".robot",
+    "read_robot_file": ".robot",
+    "DEFAULT_SAMPLE_TIME": ".robot_file",
+    "ControlGains": ".robot_file",
+    "LinkInertia": ".robot_file",
+    "RobotData": ".robot_file",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
+
 
 __all__ = [
     "DEFAULT_ROBOT_TOML",

@@ -5,11 +5,50 @@ experiments (simulated logs on the plant FMU), pipeline (end to end), validation
 task). The command line (``rrr identify``) is in :mod:`rrr_robot.cli.identify`.
 """
 
-from .base_params import BaseParamResult, estimate_base_params
-from .excitation import ExcitationLimits, FourierTrajectory, design_excitation
-from .friction import curve_points, fit_ekf, fit_ls, fit_nls
-from .logs import Log, read_log
-from .pipeline import Identified, Settings, identify, write_robot
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .base_params import BaseParamResult, estimate_base_params
+    from .excitation import ExcitationLimits, FourierTrajectory, design_excitation
+    from .friction import curve_points, fit_ekf, fit_ls, fit_nls
+    from .logs import Log, read_log
+    from .pipeline import Identified, Settings, identify, write_robot
+
+#: Each re-exported name and its module, imported on first use (they need scipy).
+_LAZY = {
+    "BaseParamResult": ".base_params",
+    "estimate_base_params": ".base_params",
+    "ExcitationLimits": ".excitation",
+    "FourierTrajectory": ".excitation",
+    "design_excitation": ".excitation",
+    "curve_points": ".friction",
+    "fit_ekf": ".friction",
+    "fit_ls": ".friction",
+    "fit_nls": ".friction",
+    "Log": ".logs",
+    "read_log": ".logs",
+    "Identified": ".pipeline",
+    "Settings": ".pipeline",
+    "identify": ".pipeline",
+    "write_robot": ".pipeline",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
+
 
 __all__ = [
     "BaseParamResult",
