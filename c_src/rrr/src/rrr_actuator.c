@@ -17,13 +17,42 @@ static int actuator_ok(const rrr_model *m)
     return 1;
 }
 
-/* eq 9: 1 - 2 / (e^{2x} + 1) = tanh(x), which does not overflow for large |x| */
+/* tanh without libm's tanh: one exp, or none. Measured against the x87 tanhl over the whole
+ * double range (tests/c/test_plant.c) its error is below 1.5 ulp (libm's own tanh: 2.2 ulp), and
+ * it differs from libm's tanh by at most 2 ulp; it costs a third of libm's tanh in the friction.
+ *  - |x| < 1: tanh x = x - x z P(z) / Q(z), z = x^2, with P/Q the 8th convergent of Lambert's
+ *    continued fraction x / (1 + z / (3 + z / (5 + ...))) (integer coefficients, exact in double;
+ *    truncation error below 2.6e-17 relative on [0, 1]). Written as x minus a correction of at
+ *    most x/4, so the rounding errors of P/Q reach the result damped; no cancellation, exact
+ *    for subnormal x (z underflows to 0).
+ *  - 1 <= |x| < 19.1: tanh x = 1 - 2 / (e^{2|x|} + 1): the subtracted term is below 0.24, so
+ *    the errors of exp and the division shrink in the result.
+ *  - |x| >= 19.1: 1 - tanh|x| < 2 e^{-38.2} < 2^-54, so tanh x rounds to +-1.
+ * The sign goes back on with copysign (odd function; tanh(-0) = -0). NaN propagates. */
+static double tanh_fast(double x)
+{
+    const double a = fabs(x);
+    double r;
+    if (a < 1.0) {
+        const double z = a * a;
+        const double p = (((44.0 * z + 12870.0) * z + 810810.0) * z + 11486475.0) * z;
+        const double q = (((45.0 * z + 13860.0) * z + 945945.0) * z + 16216200.0) * z + 34459425.0;
+        r = a - a * (p / q);
+    } else if (a >= 19.1) {
+        r = 1.0;
+    } else { /* also NaN, which exp propagates */
+        r = 1.0 - 2.0 / (exp(2.0 * a) + 1.0);
+    }
+    return copysign(r, x);
+}
+
+/* eq 9 */
 static void friction(const rrr_model *m, const double qd[3], double uf[3])
 {
     for (int i = 0; i < RRR_NJ; ++i) {
         double v = m->b[i] * qd[i];
         for (int k = 0; k < RRR_NF; ++k) {
-            v += m->f[i][k] * tanh(m->w[i][k] * qd[i]);
+            v += m->f[i][k] * tanh_fast(m->w[i][k] * qd[i]);
         }
         uf[i] = v;
     }
