@@ -4,7 +4,8 @@
  *
  * Inputs: motor voltages u. Outputs: joint motion q, qd, qdd and the tip position.
  * Parameters: the rrr_model (same names as the controller's), the initial state q0, qd0 and the
- * internal integration step h_int. Co-Simulation: doStep calls rrr_plant_step (RK4, input held
+ * integrator settings (adaptive, rtol, atol; h_int for the fixed step). Co-Simulation: doStep
+ * calls rrr_plant_step (Dormand-Prince 5(4) with error control, or fixed-step RK4; input held
  * over the step). Model Exchange: continuous states q and qd, derivatives qd and qdd.
  */
 #ifndef RRR_FMU_PLANT_CONFIG_H
@@ -26,6 +27,9 @@ typedef enum plant_vr {
     vr_q0 = vr_model + RRR_MV_COUNT,           ///< q0[1..3], parameter, rad
     vr_qd0 = vr_q0 + RRR_NJ,                   ///< qd0[1..3], parameter, rad/s
     vr_h_int = vr_qd0 + RRR_NJ,                ///< h_int, parameter, s
+    vr_adaptive,                               ///< adaptive, Boolean parameter
+    vr_rtol,                                   ///< rtol, parameter
+    vr_atol,                                   ///< atol, parameter
     vr_time,                                   ///< time, independent variable, s
     vr_count
 } plant_vr;
@@ -33,11 +37,12 @@ typedef enum plant_vr {
 /** Model data of one plant instance (plain old data: copied into FMU state snapshots). */
 typedef struct plant_data {
     rrr_model model;                           ///< parameters
-    double h_int;                              ///< internal RK4 step upper bound, s
+    rrr_plant_integrator integ;                ///< adaptive, rtol, atol, h_int, max_steps
     double q0[RRR_NJ];                         ///< initial joint positions, rad
     double qd0[RRR_NJ];                        ///< initial joint velocities, rad/s
     double u[RRR_NJ];                          ///< input voltages, V (saturated inside the core)
-    rrr_plant_state x;                         ///< state: q (output), qd (output)
+    rrr_plant_state x;                         ///< state: q (output), qd (output), and the
+                                               ///< step-size controller's h_guess, err_prev
     double qdd[RRR_NJ];                        ///< acceleration at x under the current u, rad/s2
     double tip[3];                             ///< tip position in frame 0, m
 } plant_data;

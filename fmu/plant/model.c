@@ -1,6 +1,8 @@
 /*
  * The plant FMU: its variable table and the calls into librrr. No physics here: the dynamics,
- * the integrator and the kinematics are rrr_plant_step, rrr_plant_accel and rrr_fk.
+ * the integrator and the kinematics are rrr_plant_step, rrr_plant_accel and rrr_fk; doStep is
+ * one rrr_plant_step call with the settings in `integ` and the state in `x`, which is what a
+ * native closed loop calls as well.
  */
 #include "config.h"
 
@@ -38,8 +40,20 @@ static const fmu_variable plant_vars[] = {
     JOINT_PARAMS(vr_q0, "q0", "initial position", "rad", q0),
     JOINT_PARAMS(vr_qd0, "qd0", "initial velocity", "rad/s", qd0),
     FMU_PARAM(vr_h_int, "h_int",
-              "internal RK4 step upper bound, > 0 (a step of h takes ceil(h/h_int) substeps)", "s",
-              T, h_int),
+              "fixed-step mode (adaptive = false): RK4 substep upper bound, > 0 (a step of h "
+              "takes ceil(h/h_int) equal substeps); unused when adaptive",
+              "s", T, integ.h_int),
+    FMU_ROW(vr_adaptive, FMU_BOOLEAN, FMU_PARAMETER, FMU_FIXED, "adaptive",
+            "integrator inside doStep: true = Dormand-Prince 5(4) with step-size control to rtol "
+            "and atol; false = fixed-step RK4 in substeps of at most h_int",
+            NULL, T, integ.adaptive),
+    FMU_PARAM(vr_rtol, "rtol",
+              "adaptive: relative tolerance of the local error test, in [1e-14, 1e-2]",
+              NULL, T, integ.rtol),
+    FMU_PARAM(vr_atol, "atol",
+              "adaptive: absolute tolerance of the local error test (rad for q, rad/s for qd), "
+              "in [1e-14, 1e-2]",
+              NULL, T, integ.atol),
     FMU_TIME_ROW(vr_time),
 };
 
@@ -66,7 +80,9 @@ static fmu_status set_defaults(void *d)
     if (rrr_model_default(&p->model) != RRR_OK) {
         return FMU_ERROR;
     }
-    p->h_int = RRR_PLANT_H_INT_DEFAULT;
+    if (rrr_plant_integrator_default(&p->integ) != RRR_OK) {
+        return FMU_ERROR;
+    }
     return FMU_OK;
 }
 
@@ -84,14 +100,22 @@ static fmu_status initialize(fmu_instance *inst)
                     : "");
         return FMU_ERROR;
     }
-    if (!(p->h_int > 0.0)) {
-        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
-                "%s: parameter h_int must be > 0, got %.17g",
-                FMU_FN(inst, "ExitInitializationMode"), p->h_int);
+    if (rrr_plant_integrator_check(&p->integ, &field) != RRR_OK) {
+        if (strcmp(field, "rtol") == 0 || strcmp(field, "atol") == 0) {
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: parameter %s must be in [%g, %g], got %.17g",
+                    FMU_FN(inst, "ExitInitializationMode"), field, RRR_PLANT_TOL_MIN,
+                    RRR_PLANT_TOL_MAX, field[0] == 'r' ? p->integ.rtol : p->integ.atol);
+        } else {
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR, "%s: parameter h_int must be > 0, got %.17g",
+                    FMU_FN(inst, "ExitInitializationMode"), p->integ.h_int);
+        }
         return FMU_ERROR;
     }
-    memcpy(p->x.q, p->q0, sizeof p->x.q);
-    memcpy(p->x.qd, p->qd0, sizeof p->x.qd);
+    /* the step-size history starts empty: the first doStep estimates a step */
+    if (rrr_plant_state_init(p->q0, p->qd0, &p->x) != RRR_OK) {
+        return FMU_ERROR; /* q0, qd0 are finite (the glue refuses others): not reached */
+    }
     return FMU_OK;
 }
 
@@ -129,18 +153,29 @@ static fmu_status do_step(fmu_instance *inst, double h)
     rrr_plant_state x = p->x;
     double qdd[RRR_NJ];
     double tip[3];
-    if (h / p->h_int > RRR_PLANT_MAX_SUBSTEPS) {
+    if (!p->integ.adaptive && h / p->integ.h_int > (double)p->integ.max_steps) {
         fmu_log(inst, FMU_DISCARD, FMU_LOG_DISCARD,
                 "%s: a communication step of %.17g s needs %.3g substeps of h_int = "
                 "%.17g s, more than the %.0e one step may take: use shorter communication "
                 "steps or a larger h_int; the state stays at t = %.17g",
-                FMU_FN(inst, "DoStep"), h, h / p->h_int, p->h_int, RRR_PLANT_MAX_SUBSTEPS,
-                inst->time);
+                FMU_FN(inst, "DoStep"), h, h / p->integ.h_int, p->integ.h_int,
+                (double)p->integ.max_steps, inst->time);
         return FMU_DISCARD;
     }
-    rrr_status st = rrr_plant_step(&p->model, p->h_int, p->u, h, &x, qdd);
+    rrr_status st = rrr_plant_step(&p->model, &p->integ, p->u, h, &x, qdd, NULL);
     if (st == RRR_OK) {
         st = rrr_fk(&p->model, x.q, tip, NULL);
+    }
+    if (st == RRR_NUMERIC && p->integ.adaptive) {
+        fmu_log(inst, FMU_DISCARD, FMU_LOG_DISCARD,
+                "%s: rrr_plant_step from t = %.17g over h = %.17g failed: %s (no step size met "
+                "rtol = %.3g and atol = %.3g within the %.0e internal steps one doStep may take, "
+                "or the motion diverged); the state stays at t (q = [%.17g, %.17g, %.17g], "
+                "qd = [%.17g, %.17g, %.17g])",
+                FMU_FN(inst, "DoStep"), inst->time, h, rrr_status_str(st), p->integ.rtol,
+                p->integ.atol, (double)p->integ.max_steps, p->x.q[0], p->x.q[1], p->x.q[2],
+                p->x.qd[0], p->x.qd[1], p->x.qd[2]);
+        return FMU_DISCARD;
     }
     if (st != RRR_OK) {
         fmu_log(inst, FMU_DISCARD, FMU_LOG_DISCARD,
@@ -180,7 +215,8 @@ static int depends(fmu_vr unknown, fmu_vr known)
 const fmu_model FMU_MODEL = {
     .identifier = MODEL_IDENTIFIER,
     .description = "RRR robot arm plant: motor voltages in, joint motion and tip position out "
-                   "(closed-form dynamics of librrr; RK4 inside doStep, or continuous states for a solver)",
+                   "(closed-form dynamics of librrr; Dormand-Prince 5(4) with error control or fixed-step "
+                   "RK4 inside doStep, or continuous states for a solver)",
     .vars = plant_vars,
     .n_vars = sizeof plant_vars / sizeof plant_vars[0],
     .states = plant_states,

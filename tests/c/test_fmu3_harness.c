@@ -511,6 +511,12 @@ static fmi3Status set1(inst *x, const char *name, double v)
     return x->api->SetFloat64(x->c, &vr, 1, &v, 1);
 }
 
+static fmi3Status set_bool(inst *x, const char *name, fmi3Boolean v)
+{
+    const fmi3ValueReference vr = vr_of(x->api, name);
+    return x->api->SetBoolean(x->c, &vr, 1, &v, 1);
+}
+
 static double get1(inst *x, const char *name)
 {
     const fmi3ValueReference vr = vr_of(x->api, name);
@@ -700,6 +706,11 @@ static void drive(inst *x, int st)
         /* an invalid parameter makes exitInitializationMode fail */
         CHECK(set1(x, a->is_plant ? "a2" : "kp[1]", -1.0) == fmi3OK);
     }
+    if (st == ST_DISCARDED) {
+        /* the step below cannot be taken with the fixed-step RK4 (the adaptive default would
+         * integrate it) */
+        CHECK(set_bool(x, "adaptive", false) == fmi3OK);
+    }
     CHECK(enter_init(x) == fmi3OK);
     if (st == ST_INIT) {
         return;
@@ -717,7 +728,7 @@ static void drive(inst *x, int st)
     } else {
         CHECK(do_step(x, 0.0, H, NULL) == fmi3OK);
         if (st == ST_DISCARDED) {
-            /* 1e4 s at h_int = 1e-4 s: 1e8 substeps, rrr_plant_step refuses, doStep discards */
+            /* fixed step: 1e4 s at h_int = 1e-4 s needs 1e8 substeps: doStep discards */
             CHECK(do_step(x, H, 1e4, NULL) == fmi3Discard);
         }
     }
@@ -1135,6 +1146,18 @@ static void test_defaults(const fmu3 *plant, const fmu3 *ctrl)
             check_default(&c, pnames[k], values[k]);
         }
         check_default(&p, "h_int", RRR_PLANT_H_INT_DEFAULT);
+        check_default(&p, "rtol", RRR_PLANT_RTOL_DEFAULT);
+        check_default(&p, "atol", RRR_PLANT_ATOL_DEFAULT);
+        {
+            /* the plant integrates adaptively unless told otherwise */
+            const xml_var *ad = find_var(plant, "adaptive");
+            char start_ad[16] = "";
+            fmi3Boolean on = false;
+            CHECK(ad != NULL && ad->is_bool &&
+                  elem_attr(ad->elem, "start", start_ad, sizeof start_ad) == 0);
+            CHECK(ad != NULL && plant->GetBoolean(p.c, &ad->vr, 1, &on, 1) == fmi3OK && on);
+            CHECK(strcmp(start_ad, "true") == 0);
+        }
         for (int i = 0; i < 3; ++i) {
             char name[32];
             const char *zero_plant[] = {"u", "q0", "qd0"};
@@ -1564,6 +1587,8 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     expect_refused(&p, "d1", INFINITY, "d1");
     expect_refused(&p, "p[7]", -INFINITY, "p[7]");
     expect_refused(&p, "h_int", NAN, "h_int");
+    expect_refused(&p, "rtol", INFINITY, "rtol");
+    expect_refused(&p, "atol", NAN, "atol");
     expect_refused(&p, "q0[2]", INFINITY, "q0[2]");
     expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
     expect_refused(&p, "time", 1.0, "time");       /* the independent variable */
@@ -1740,6 +1765,8 @@ static void test_validation(const fmu3 *plant, const fmu3 *ctrl)
         expect_invalid(plant, me, "u_max", 0.0, "u_max");
         expect_invalid(plant, me, "p[7]", -10.0, "p[1]..p[16]");
         expect_invalid(plant, me, "h_int", 0.0, "h_int");
+        expect_invalid(plant, me, "rtol", 0.0, "rtol");
+        expect_invalid(plant, me, "atol", 0.5, "atol");
         expect_invalid(ctrl, me, "b[1]", -0.5, "b[1]");
         expect_invalid(ctrl, me, "kp[2]", -1.0, "kp[2]");
         expect_invalid(ctrl, me, "kd[3]", -1.0, "kd[3]");
@@ -1747,14 +1774,16 @@ static void test_validation(const fmu3 *plant, const fmu3 *ctrl)
     }
 }
 
-/* A step that cannot be taken (here 1e8 substeps) is discarded with a message naming the cause:
- * state StepDiscarded, lastSuccessfulTime and the plant state at the last communication point. */
+/* A step that cannot be taken (here 1e8 substeps of the fixed-step RK4) is discarded with a
+ * message naming the cause: state StepDiscarded, lastSuccessfulTime and the plant state at the
+ * last communication point. */
 static void test_discard(const fmu3 *plant)
 {
     inst p;
     if (inst_new(&p, plant, "discard", 0)) {
         return;
     }
+    CHECK(set_bool(&p, "adaptive", false) == fmi3OK);
     drive(&p, ST_STEP);
     const double q_before = get1(&p, "q[2]");
     double last = -1.0;
@@ -1891,12 +1920,24 @@ static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
     CHECK(plant->SetFMUState(p.c, sp) == fmi3OK);
     CHECK(get1(&p, "time") == L.t);
 
-    /* a state saved in StepMode brings a discarded step back to StepMode */
-    CHECK(do_step(&p, L.t, 1e4, NULL) == fmi3Discard);
-    check_state(&p, ST_DISCARDED, "after a discarded step");
-    CHECK(plant->SetFMUState(p.c, sp) == fmi3OK);
-    check_state(&p, ST_STEP, "after setFMUState");
     CHECK(do_step(&p, L.t, H, NULL) == fmi3OK);
+
+    /* a state saved in StepMode brings a discarded step back to StepMode (a step that cannot be
+     * taken: 1e8 substeps of the fixed-step RK4) */
+    inst f;
+    if (inst_new(&f, plant, "state_discard", 0) == 0) {
+        fmi3FMUState sf = NULL;
+        CHECK(set_bool(&f, "adaptive", false) == fmi3OK);
+        drive(&f, ST_STEP);
+        CHECK(plant->GetFMUState(f.c, &sf) == fmi3OK);
+        CHECK(do_step(&f, H, 1e4, NULL) == fmi3Discard);
+        check_state(&f, ST_DISCARDED, "after a discarded step");
+        CHECK(plant->SetFMUState(f.c, sf) == fmi3OK);
+        check_state(&f, ST_STEP, "after setFMUState");
+        CHECK(do_step(&f, H, H, NULL) == fmi3OK);
+        CHECK(plant->FreeFMUState(f.c, &sf) == fmi3OK && sf == NULL);
+        inst_free(&f);
+    }
 
     fmi3FMUState none = NULL;
     CHECK(plant->FreeFMUState(p.c, &none) == fmi3OK);
@@ -2132,8 +2173,9 @@ static void test_model_exchange(const fmu3 *plant, const fmu3 *ctrl)
     inst_free(&c);
 }
 
-/* RK4 at 1e-4 s on the Model Exchange plant against the Co-Simulation plant (its own RK4 at
- * h_int = 1e-4 s inside doStep), the same piecewise-constant input, 0.2 s. */
+/* RK4 at 1e-4 s on the Model Exchange plant against the Co-Simulation plant in fixed-step mode
+ * (adaptive = false: its own RK4 at h_int = 1e-4 s inside doStep), the same piecewise-constant
+ * input, 0.2 s. */
 #define ME_TOL 1e-9
 
 static void rk4_stage(inst *x, double t, const double xs[], double k[])
@@ -2158,6 +2200,7 @@ static void test_me_against_cs(const fmu3 *plant)
         CHECK(set1(&me, init[i], init_v[i]) == fmi3OK && set1(&cs, init[i], init_v[i]) == fmi3OK);
     }
     drive(&me, ST_CONT);
+    CHECK(set_bool(&cs, "adaptive", false) == fmi3OK);
     CHECK(enter_init(&cs) == fmi3OK && plant->ExitInitializationMode(cs.c) == fmi3OK);
     fmi3ValueReference vu[3], vx[MAX_STATES];
     vrs3(plant, "u", vu);

@@ -418,6 +418,12 @@ static fmi2Status set1(inst *x, const char *name, double v)
     return x->api->SetReal(x->c, &vr, 1, &v);
 }
 
+static fmi2Status set_bool(inst *x, const char *name, fmi2Boolean v)
+{
+    const fmi2ValueReference vr = vr_of(x->api, name);
+    return x->api->SetBoolean(x->c, &vr, 1, &v);
+}
+
 static double get1(inst *x, const char *name)
 {
     const fmi2ValueReference vr = vr_of(x->api, name);
@@ -512,6 +518,17 @@ static void test_defaults(const fmu_api *plant, const fmu_api *ctrl)
         check_default(&c, names[k], values[k]);
     }
     check_default(&p, "h_int", RRR_PLANT_H_INT_DEFAULT);
+    check_default(&p, "rtol", RRR_PLANT_RTOL_DEFAULT);
+    check_default(&p, "atol", RRR_PLANT_ATOL_DEFAULT);
+    {
+        /* the plant integrates adaptively unless told otherwise */
+        const fmi2ValueReference ad = vr_of(plant, "adaptive");
+        fmi2Boolean on = fmi2False;
+        char start_ad[16];
+        start_of(plant, "adaptive", start_ad, sizeof start_ad);
+        CHECK(plant->GetBoolean(p.c, &ad, 1, &on) == fmi2OK && on == fmi2True);
+        CHECK(strcmp(start_ad, "true") == 0);
+    }
     for (int i = 0; i < 3; ++i) {
         char name[32];
         const char *zero_plant[] = {"u", "q0", "qd0"};
@@ -737,6 +754,11 @@ static int drive(inst *x, int state)
         /* an invalid parameter makes exitInitializationMode fail */
         CHECK(set1(x, is_plant ? "a2" : "kp[1]", -1.0) == fmi2OK);
     }
+    if (state == ST_FAILED) {
+        /* the step below cannot be taken with the fixed-step RK4 (the adaptive default would
+         * integrate it) */
+        CHECK(set_bool(x, "adaptive", fmi2False) == fmi2OK);
+    }
     CHECK(a->SetupExperiment(x->c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
     CHECK(a->EnterInitializationMode(x->c) == fmi2OK);
     if (state == ST_INIT) {
@@ -749,7 +771,7 @@ static int drive(inst *x, int state)
     CHECK(a->ExitInitializationMode(x->c) == fmi2OK);
     CHECK(a->DoStep(x->c, 0.0, H, fmi2True) == fmi2OK);
     if (state == ST_FAILED) {
-        /* 1e4 s at h_int = 1e-4 s needs 1e8 substeps: rrr_plant_step refuses, doStep discards */
+        /* fixed step: 1e4 s at h_int = 1e-4 s needs 1e8 substeps: doStep discards */
         CHECK(a->DoStep(x->c, H, 1e4, fmi2True) == fmi2Discard);
     } else if (state == ST_TERM) {
         CHECK(a->Terminate(x->c) == fmi2OK);
@@ -1150,6 +1172,8 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     expect_refused(&p, "d1", INFINITY, "d1");
     expect_refused(&p, "p[7]", -INFINITY, "p[7]");
     expect_refused(&p, "h_int", NAN, "h_int");
+    expect_refused(&p, "rtol", INFINITY, "rtol");
+    expect_refused(&p, "atol", NAN, "atol");
     expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
     expect_refused(&c, "q_ref[3]", NAN, "q_ref[3]");
     expect_refused(&c, "kp[2]", INFINITY, "kp[2]");
@@ -1257,6 +1281,9 @@ static void test_validation(const fmu_api *plant, const fmu_api *ctrl)
     expect_invalid(plant, "u_max", 0.0, "u_max");
     expect_invalid(plant, "p[7]", -10.0, "p[1]..p[16]");
     expect_invalid(plant, "h_int", 0.0, "h_int");
+    expect_invalid(plant, "rtol", 0.0, "rtol");
+    expect_invalid(plant, "rtol", 0.5, "rtol");
+    expect_invalid(plant, "atol", 1e-16, "atol");
     expect_invalid(ctrl, "b[1]", -0.5, "b[1]");
     expect_invalid(ctrl, "kp[2]", -1.0, "kp[2]");
     expect_invalid(ctrl, "kd[3]", -1.0, "kd[3]");
@@ -1283,14 +1310,15 @@ static void test_time_overflow(const fmu_api *plant)
     inst_free(&p);
 }
 
-/* A step that cannot be taken (here 1e8 substeps) is discarded with a message naming the cause:
- * state StepFailed, the plant state unchanged. */
+/* A step that cannot be taken (here 1e8 substeps of the fixed-step RK4) is discarded with a
+ * message naming the cause: state StepFailed, the plant state unchanged. */
 static void test_discard(const fmu_api *plant)
 {
     inst p;
     if (inst_new(&p, plant, "discard")) {
         return;
     }
+    CHECK(set_bool(&p, "adaptive", fmi2False) == fmi2OK);
     CHECK(drive(&p, ST_DONE) == 0);
     const double q_before = get1(&p, "q[2]");
     log_clear(&p);
@@ -1387,11 +1415,25 @@ static void test_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
     CHECK(plant->GetRealStatus(p.c, fmi2LastSuccessfulTime, &t_now) == fmi2OK);
     CHECK(fabs(t_now - L.t) < 1e-12);
 
-    /* a state saved in StepComplete brings a failed step back to StepComplete */
-    CHECK(plant->DoStep(p.c, L.t, 1e4, fmi2True) == fmi2Discard);
-    CHECK(fingerprint(&p) == expected_fingerprint[ST_FAILED]);
     CHECK(plant->SetFMUstate(p.c, sp) == fmi2OK);
     CHECK(plant->DoStep(p.c, L.t, H, fmi2True) == fmi2OK);
+
+    /* a state saved in StepComplete brings a failed step back to StepComplete (a step that
+     * cannot be taken: 1e8 substeps of the fixed-step RK4) */
+    inst f;
+    if (inst_new(&f, plant, "state_discard") == 0) {
+        fmi2FMUstate sf = NULL;
+        CHECK(set_bool(&f, "adaptive", fmi2False) == fmi2OK);
+        CHECK(drive(&f, ST_DONE) == 0);
+        CHECK(plant->GetFMUstate(f.c, &sf) == fmi2OK);
+        CHECK(plant->DoStep(f.c, H, 1e4, fmi2True) == fmi2Discard);
+        CHECK(fingerprint(&f) == expected_fingerprint[ST_FAILED]);
+        CHECK(plant->SetFMUstate(f.c, sf) == fmi2OK);
+        CHECK(fingerprint(&f) == expected_fingerprint[ST_DONE]);
+        CHECK(plant->DoStep(f.c, H, H, fmi2True) == fmi2OK);
+        CHECK(plant->FreeFMUstate(f.c, &sf) == fmi2OK && sf == NULL);
+        inst_free(&f);
+    }
 
     fmi2FMUstate none = NULL;
     CHECK(plant->FreeFMUstate(p.c, &none) == fmi2OK);
@@ -1781,8 +1823,8 @@ static void test_me_derivatives(const fmu_api *api)
 }
 
 /* Explicit RK4 through the Model Exchange interface (h = 1e-4 s, 0.5 s, constant voltages)
- * against the Co-Simulation plant (h_int = 1e-4 s, doStep of 1 ms = 10 RK4 substeps of
- * 1e-3 / 10 s): the same method on the same right-hand side. */
+ * against the Co-Simulation plant in fixed-step mode (adaptive = false, h_int = 1e-4 s, doStep
+ * of 1 ms = 10 RK4 substeps of 1e-3 / 10 s): the same method on the same right-hand side. */
 static void test_me_rk4_vs_cs(const fmu_api *api)
 {
     enum { STEPS = 500, SUB = 10 };
@@ -1805,6 +1847,7 @@ static void test_me_rk4_vs_cs(const fmu_api *api)
         CHECK(api->SetReal(both[k]->c, vu, 3, u) == fmi2OK);
     }
     CHECK(set1(&cs, "h_int", 1e-4) == fmi2OK);
+    CHECK(set_bool(&cs, "adaptive", fmi2False) == fmi2OK);
     CHECK(drive_me(&me, MS_CONT) == 0);
     CHECK(drive(&cs, ST_INIT) == 0);
     CHECK(api->ExitInitializationMode(cs.c) == fmi2OK);

@@ -20,6 +20,7 @@ SETTABLE = [
     ("plant", "q0[2]"),
     ("plant", "p[5]"),
     ("plant", "h_int"),
+    ("plant", "rtol"),
     ("controller", "q_ref[3]"),
     ("controller", "qd[1]"),
     ("controller", "kd[2]"),
@@ -118,6 +119,8 @@ def test_illegal_call_sequences_after_terminate() -> None:
         ("plant", "a3", 0.0),
         ("plant", "kt[3]", -1.0),
         ("plant", "h_int", -1e-4),
+        ("plant", "rtol", 0.5),
+        ("plant", "atol", 0.0),
         ("controller", "u_max", 0.0),
         ("controller", "kd[2]", -1.0),
     ],
@@ -153,6 +156,7 @@ def test_do_step_arguments() -> None:
 
 def test_a_step_that_cannot_be_taken_is_discarded() -> None:
     with Slave("plant").instantiate() as s:
+        s.fmu.setBoolean([s.vr["adaptive"]], [False])  # the fixed-step RK4
         s.to_step_mode()
         s.fmu.doStep(0.0, STEP)
         q = s.get(joint("q") + joint("qd"))

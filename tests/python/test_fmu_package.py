@@ -39,6 +39,9 @@ EXPECTED: dict[str, dict[str, tuple[str, str | None]]] = {
         **{n: ("parameter", "rad") for n in joint("q0")},
         **{n: ("parameter", "rad/s") for n in joint("qd0")},
         "h_int": ("parameter", "s"),
+        "adaptive": ("parameter", None),
+        "rtol": ("parameter", None),
+        "atol": ("parameter", None),
     },
     "controller": {
         **{n: ("input", "rad") for n in joint("q_ref") + joint("q")},
@@ -126,7 +129,8 @@ def test_model_description(which: str) -> None:
             assert v.variability == "fixed" and v.initial == "exact", v.name
         else:
             assert v.variability == "continuous", v.name
-    assert variables.get("feedforward") is None or variables["feedforward"].type == "Boolean"
+    for flag in ("feedforward", "adaptive"):
+        assert variables.get(flag) is None or variables[flag].type == "Boolean"
     vrs = sorted(v.valueReference for v in md.modelVariables)
     assert vrs == list(range(len(vrs)))
 

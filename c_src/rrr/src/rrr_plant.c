@@ -1,4 +1,5 @@
-/* The plant: voltages in, joint motion out, integrated by fixed-step RK4 (see rrr_plant.h). */
+/* The plant: voltages in, joint motion out, integrated by Dormand-Prince 5(4) with step-size
+ * control or by fixed-step RK4 (see rrr_plant.h). */
 #include <string.h>
 
 #include "rrr_internal.h"
@@ -67,16 +68,67 @@ static rrr_status rk4(const rrr_model *m, const double u[3], double dt, double q
     return RRR_OK;
 }
 
-rrr_status rrr_plant_step(const rrr_model *m, double h_int, const double u[3], double h,
-                          rrr_plant_state *x, double qdd[3])
+/* ---- settings and state ------------------------------------------------------------------ */
+
+rrr_status rrr_plant_integrator_default(rrr_plant_integrator *s)
 {
-    if (m == NULL || u == NULL || x == NULL || !isfinite(h_int) || !(h_int > 0.0) ||
-        !isfinite(h) || !(h > 0.0) || !rrr_finite_n(u, 3) || !rrr_finite_n(x->q, 3) ||
-        !rrr_finite_n(x->qd, 3)) {
+    if (s == NULL) {
         return RRR_BAD_INPUT;
     }
-    const double n_real = ceil(h / h_int * (1.0 - 1e-12)); /* 1e-3 / 1e-4 is 10 substeps, not 11 */
-    if (!(n_real <= RRR_PLANT_MAX_SUBSTEPS)) {
+    s->adaptive = 1;
+    s->rtol = RRR_PLANT_RTOL_DEFAULT;
+    s->atol = RRR_PLANT_ATOL_DEFAULT;
+    s->h_int = RRR_PLANT_H_INT_DEFAULT;
+    s->max_steps = RRR_PLANT_MAX_STEPS_DEFAULT;
+    return RRR_OK;
+}
+
+static int tol_ok(double tol)
+{
+    return tol >= RRR_PLANT_TOL_MIN && tol <= RRR_PLANT_TOL_MAX; /* false for NaN */
+}
+
+rrr_status rrr_plant_integrator_check(const rrr_plant_integrator *s, const char **field)
+{
+    const char *bad = NULL;
+    if (s == NULL) {
+        bad = "settings";
+    } else if (!tol_ok(s->rtol)) {
+        bad = "rtol";
+    } else if (!tol_ok(s->atol)) {
+        bad = "atol";
+    } else if (!isfinite(s->h_int) || !(s->h_int > 0.0)) {
+        bad = "h_int";
+    } else if (s->max_steps < 1) {
+        bad = "max_steps";
+    }
+    if (field != NULL) {
+        *field = bad != NULL ? bad : "";
+    }
+    return bad != NULL ? RRR_BAD_INPUT : RRR_OK;
+}
+
+rrr_status rrr_plant_state_init(const double q0[3], const double qd0[3], rrr_plant_state *x)
+{
+    if (q0 == NULL || qd0 == NULL || x == NULL || !rrr_finite_n(q0, 3) || !rrr_finite_n(qd0, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_plant_state s;
+    memcpy(s.q, q0, sizeof s.q);
+    memcpy(s.qd, qd0, sizeof s.qd);
+    s.h_guess = 0.0;
+    s.err_prev = 0.0;
+    *x = s;
+    return RRR_OK;
+}
+
+/* ---- fixed step: RK4 --------------------------------------------------------------------- */
+
+static rrr_status step_fixed(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
+                             double h, rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats)
+{
+    const double n_real = ceil(h / s->h_int * (1.0 - 1e-12)); /* 1e-3 / 1e-4 is 10 substeps, not 11 */
+    if (!(n_real <= (double)s->max_steps)) {
         return RRR_BAD_INPUT;
     }
     const long n = n_real < 1.0 ? 1L : (long)n_real;
@@ -101,6 +153,269 @@ rrr_status rrr_plant_step(const rrr_model *m, double h_int, const double u[3], d
     memcpy(x->qd, qd, sizeof qd);
     if (qdd != NULL) {
         memcpy(qdd, a, sizeof a);
+    }
+    if (stats != NULL) {
+        stats->steps = n;
+        stats->rejected = 0;
+        stats->evals = 4 * n + 1;
+    }
+    return RRR_OK;
+}
+
+/* ---- adaptive: Dormand-Prince 5(4) ---------------------------------------------------------- */
+
+/* y = (q, qd), f(y) = (qd, qdd): six components. */
+enum { NY = 6 };
+
+/* f(y) under u. RRR_NUMERIC when y is not finite (a trial stage ran away: the caller rejects the
+ * step), otherwise the status of the acceleration. */
+static rrr_status deriv(const rrr_model *m, const double u[3], const double y[NY], double f[NY])
+{
+    if (!rrr_finite_n(y, NY)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(f, y + 3, 3 * sizeof f[0]);
+    return accel(m, y, y + 3, u, f + 3);
+}
+
+/* Error-test scale of component i. */
+static double scale(const rrr_plant_integrator *s, double a, double b)
+{
+    return s->atol + s->rtol * fmax(fabs(a), fabs(b));
+}
+
+/* Dormand and Prince's coefficients (Hairer, Norsett, Wanner, Table II.5.2). */
+#define A21 (1.0 / 5.0)
+#define A31 (3.0 / 40.0)
+#define A32 (9.0 / 40.0)
+#define A41 (44.0 / 45.0)
+#define A42 (-56.0 / 15.0)
+#define A43 (32.0 / 9.0)
+#define A51 (19372.0 / 6561.0)
+#define A52 (-25360.0 / 2187.0)
+#define A53 (64448.0 / 6561.0)
+#define A54 (-212.0 / 729.0)
+#define A61 (9017.0 / 3168.0)
+#define A62 (-355.0 / 33.0)
+#define A63 (46732.0 / 5247.0)
+#define A64 (49.0 / 176.0)
+#define A65 (-5103.0 / 18656.0)
+#define B1 (35.0 / 384.0) /* 5th-order weights = the 7th stage's row (FSAL); b2 = b7 = 0 */
+#define B3 (500.0 / 1113.0)
+#define B4 (125.0 / 192.0)
+#define B5 (-2187.0 / 6784.0)
+#define B6 (11.0 / 84.0)
+#define E1 (71.0 / 57600.0) /* b - b_hat (4th order), e2 = 0 */
+#define E3 (-71.0 / 16695.0)
+#define E4 (71.0 / 1920.0)
+#define E5 (-17253.0 / 339200.0)
+#define E6 (22.0 / 525.0)
+#define E7 (-1.0 / 40.0)
+
+/* One trial step of length h from y, k1 = f(y): the 5th-order y5, k7 = f(y5) and the scaled RMS
+ * error. A stage that is not finite or whose acceleration is RRR_NUMERIC makes err infinite (the
+ * step is rejected); any other failure is returned. */
+static rrr_status dp5_trial(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
+                            double h, const double y[NY], const double k1[NY], double y5[NY],
+                            double k7[NY], double *err)
+{
+    double k2[NY], k3[NY], k4[NY], k5[NY], k6[NY], ys[NY];
+    rrr_status st;
+    for (int i = 0; i < NY; ++i) {
+        ys[i] = y[i] + h * (A21 * k1[i]);
+    }
+    st = deriv(m, u, ys, k2);
+    if (st == RRR_OK) {
+        for (int i = 0; i < NY; ++i) {
+            ys[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i]);
+        }
+        st = deriv(m, u, ys, k3);
+    }
+    if (st == RRR_OK) {
+        for (int i = 0; i < NY; ++i) {
+            ys[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
+        }
+        st = deriv(m, u, ys, k4);
+    }
+    if (st == RRR_OK) {
+        for (int i = 0; i < NY; ++i) {
+            ys[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
+        }
+        st = deriv(m, u, ys, k5);
+    }
+    if (st == RRR_OK) {
+        for (int i = 0; i < NY; ++i) {
+            ys[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] +
+                                A65 * k5[i]);
+        }
+        st = deriv(m, u, ys, k6);
+    }
+    if (st == RRR_OK) {
+        for (int i = 0; i < NY; ++i) {
+            y5[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i]);
+        }
+        st = deriv(m, u, y5, k7);
+    }
+    if (st == RRR_NUMERIC) {
+        *err = INFINITY;
+        return RRR_OK;
+    }
+    if (st != RRR_OK) {
+        return st;
+    }
+    double sum = 0.0;
+    for (int i = 0; i < NY; ++i) {
+        const double e = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +
+                              E7 * k7[i]);
+        const double r = e / scale(s, y[i], y5[i]);
+        sum += r * r;
+    }
+    *err = sqrt(sum / NY); /* NaN cannot pass the error test either */
+    return RRR_OK;
+}
+
+/* Starting step when the state has no proposal (Hairer's hinit for order 5): a step that would
+ * change y by 1 % of its scale at the initial slope, checked against a second derivative from
+ * one explicit Euler step, capped by 100 times the first guess and by the interval. */
+static double initial_step(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
+                           double interval, const double y[NY], const double f0[NY],
+                           long *evals)
+{
+    double dnf = 0.0, dny = 0.0;
+    for (int i = 0; i < NY; ++i) {
+        const double sk = scale(s, y[i], y[i]);
+        dnf += (f0[i] / sk) * (f0[i] / sk);
+        dny += (y[i] / sk) * (y[i] / sk);
+    }
+    double h = (dnf <= 1e-10 || dny <= 1e-10) ? 1e-6 : sqrt(dny / dnf) * 0.01;
+    h = fmin(h, interval);
+    double y1[NY], f1[NY];
+    for (int i = 0; i < NY; ++i) {
+        y1[i] = y[i] + h * f0[i];
+    }
+    ++*evals;
+    if (deriv(m, u, y1, f1) != RRR_OK) {
+        return h; /* the step-size control takes it from here */
+    }
+    double der2 = 0.0;
+    for (int i = 0; i < NY; ++i) {
+        const double d = (f1[i] - f0[i]) / scale(s, y[i], y[i]);
+        der2 += d * d;
+    }
+    const double der12 = fmax(sqrt(der2) / h, sqrt(dnf));
+    const double h1 = der12 <= 1e-15 ? fmax(1e-6, h * 1e-3) : pow(0.01 / der12, 0.2);
+    return fmin(fmin(100.0 * h, h1), interval);
+}
+
+/* Step-size controller (Hairer's DOPRI5): h_new = h / fac, fac = err^0.17 / err_prev^0.04 / 0.9
+ * clamped to [1/10, 5], i.e. the step grows at most 10 times and shrinks at most 5 times. */
+#define PI_ALPHA 0.17
+#define PI_BETA 0.04
+#define SAFETY 0.9
+#define FAC_SHRINK 5.0   /* 1 / smallest step ratio */
+#define FAC_GROW 0.1     /* 1 / largest step ratio */
+#define ERR_PREV_MIN 1e-4
+#define STRETCH 1.01     /* a step may stretch by 1 % to end the interval */
+
+static rrr_status step_adaptive(const rrr_model *m, const rrr_plant_integrator *s,
+                                const double u[3], double interval, rrr_plant_state *x,
+                                double qdd[3], rrr_plant_stats *stats)
+{
+    double y[NY], k1[NY], y5[NY], k7[NY];
+    memcpy(y, x->q, sizeof x->q);
+    memcpy(y + 3, x->qd, sizeof x->qd);
+    long evals = 1, steps = 0, rejected = 0, attempts = 0;
+    rrr_status st = deriv(m, u, y, k1);
+    if (st != RRR_OK) {
+        return st == RRR_NUMERIC ? RRR_BAD_INPUT : st; /* y was checked finite: not reached */
+    }
+    double h = x->h_guess > 0.0 ? x->h_guess : initial_step(m, s, u, interval, y, k1, &evals);
+    double err_prev = x->err_prev > 0.0 ? x->err_prev : ERR_PREV_MIN;
+    double t = 0.0;
+    int after_reject = 0;
+    for (;;) {
+        if (attempts >= s->max_steps) {
+            return RRR_NUMERIC;
+        }
+        /* the rest of the interval in equal steps no longer than h (1 % stretch allowed) */
+        const double rest = interval - t;
+        const double ratio = rest / h;
+        const int last = ratio <= STRETCH;
+        const double hs = last ? rest : rest / ceil(ratio);
+        if (!(t + hs > t)) {
+            return RRR_NUMERIC; /* the step size underflowed */
+        }
+        double err = 0.0;
+        st = dp5_trial(m, s, u, hs, y, k1, y5, k7, &err);
+        ++attempts;
+        evals += 6;
+        if (st != RRR_OK) {
+            return st;
+        }
+        if (err <= 1.0) {
+            memcpy(y, y5, sizeof y);
+            memcpy(k1, k7, sizeof k1); /* FSAL */
+            ++steps;
+            const double fac11 = pow(err, PI_ALPHA);
+            const double fac = fmax(FAC_GROW, fmin(FAC_SHRINK,
+                                                   fac11 / pow(err_prev, PI_BETA) / SAFETY));
+            h = hs / fac;
+            if (after_reject) {
+                h = fmin(h, hs);
+            }
+            err_prev = fmax(err, ERR_PREV_MIN);
+            after_reject = 0;
+            if (last) {
+                break;
+            }
+            t += hs;
+        } else {
+            /* err is > 1, +Inf or NaN: shrink (NaN and Inf by the largest factor) */
+            const double fac11 = pow(err, PI_ALPHA);
+            h = hs / (isfinite(fac11) ? fmin(FAC_SHRINK, fac11 / SAFETY) : FAC_SHRINK);
+            after_reject = 1;
+            ++rejected;
+        }
+    }
+    memcpy(x->q, y, sizeof x->q);
+    memcpy(x->qd, y + 3, sizeof x->qd);
+    x->h_guess = h;
+    x->err_prev = err_prev;
+    if (qdd != NULL) {
+        memcpy(qdd, k1 + 3, 3 * sizeof qdd[0]); /* f at the end state: FSAL */
+    }
+    if (stats != NULL) {
+        stats->steps = steps;
+        stats->rejected = rejected;
+        stats->evals = evals;
+    }
+    return RRR_OK;
+}
+
+rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
+                          double h, rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats)
+{
+    if (m == NULL || u == NULL || x == NULL || rrr_plant_integrator_check(s, NULL) != RRR_OK ||
+        !isfinite(h) || !(h > 0.0) || !rrr_finite_n(u, 3) || !rrr_finite_n(x->q, 3) ||
+        !rrr_finite_n(x->qd, 3) || !isfinite(x->h_guess) || !(x->h_guess >= 0.0) ||
+        !isfinite(x->err_prev) || !(x->err_prev >= 0.0)) {
+        return RRR_BAD_INPUT;
+    }
+    /* work on a copy: x is written only on success */
+    rrr_plant_state w = *x;
+    double a[3];
+    rrr_plant_stats st_work = {0, 0, 0};
+    const rrr_status st = s->adaptive ? step_adaptive(m, s, u, h, &w, a, &st_work)
+                                      : step_fixed(m, s, u, h, &w, a, &st_work);
+    if (st != RRR_OK) {
+        return st;
+    }
+    *x = w;
+    if (qdd != NULL) {
+        memcpy(qdd, a, sizeof a);
+    }
+    if (stats != NULL) {
+        *stats = st_work;
     }
     return RRR_OK;
 }
