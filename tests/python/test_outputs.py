@@ -5,7 +5,7 @@ run), and summary.json is strict JSON (a non-finite metric is null with a status
 
 from __future__ import annotations
 
-import csv
+import contextlib
 import json
 import os
 import signal
@@ -13,6 +13,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +21,7 @@ import numpy as np
 import pytest
 import rrr_robot as rr
 from rrr_robot.cli import main
-from rrr_robot.core import outputs
+from rrr_robot.core import outputs, tables
 from rrr_robot.core.outputs import (
     ResultSet,
     atomic_open,
@@ -31,7 +32,6 @@ from rrr_robot.core.outputs import (
     is_temporary,
     strict_json,
 )
-from rrr_robot.sim import cosim
 from rrr_robot.sim.cosim import CosimResult
 from rrr_robot.writing import job as job_module
 from rrr_robot.writing.job import WritingJob, run_writing, scenario_summary
@@ -115,20 +115,27 @@ def test_cosim_csv_interrupted_midway_is_not_left_truncated(
     target = tmp_path / "ctc.csv"
     target.write_text("previous run\n")
 
-    real_writer = csv.writer
+    real_open = tables.atomic_open
 
-    class FailingWriter:
+    class FailingFile:
+        """Lets the header and the first block of rows through, then Ctrl-C."""
+
         def __init__(self, fh: Any) -> None:
-            self.writer = real_writer(fh)
+            self.fh, self.writes = fh, 0
 
-        def writerow(self, row: Any) -> None:
-            self.writer.writerow(row)
+        def write(self, text: str) -> int:
+            self.writes += 1
+            if self.writes > 2:
+                raise KeyboardInterrupt
+            return int(self.fh.write(text))
 
-        def writerows(self, rows: Any) -> None:
-            self.writer.writerows(list(rows)[:10])
-            raise KeyboardInterrupt
+    @contextlib.contextmanager
+    def failing_open(*args: Any, **kwargs: Any) -> Iterator[FailingFile]:
+        with real_open(*args, **kwargs) as fh:
+            yield FailingFile(fh)
 
-    monkeypatch.setattr(cosim.csv, "writer", FailingWriter)
+    monkeypatch.setattr(tables, "_BLOCK_ROWS", 10)
+    monkeypatch.setattr(tables, "atomic_open", failing_open)
     with pytest.raises(KeyboardInterrupt):
         fake_result(np.arange(100) * 1e-3).to_csv(target)
     assert target.read_text() == "previous run\n"
@@ -232,7 +239,7 @@ def test_an_output_folder_that_cannot_be_one(tmp_path: Path) -> None:
 KILLED_RUN = textwrap.dedent("""
     import os, signal, sys
     from pathlib import Path
-    from rrr_robot.core import outputs
+    from rrr_robot.core import outputs, tables
     from rrr_robot.core.outputs import ResultSet
     out, when = Path(sys.argv[1]), sys.argv[2]
     rs = ResultSet(out, kind="writing").open()

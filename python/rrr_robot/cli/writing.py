@@ -50,12 +50,13 @@ def _cmd_writing(args: argparse.Namespace) -> int:
     job = WritingJob(
         out=Path(args.out), text=args.text, scenarios=args.scenario or list(BUILTIN),
         robot=Path(args.robot) if args.robot else WritingJob.robot, scale=args.scale,
-        figures=not args.no_figures, fmi_version=args.fmi,
+        figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
     )
     summary = run_writing(job, progress=_ProgressBar(not args.quiet and sys.stderr.isatty()))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
-    print(f"results in {job.out}/ (summary.json, <scenario>.csv, figures)")
+    figures = ", figures" if job.figures else ""
+    print(f"results in {job.out}/ (summary.json, <scenario>.{job.table_format}{figures})")
     return 0
 
 
@@ -64,7 +65,8 @@ def register_cli(subparsers: Any) -> None:
     p_w = subparsers.add_parser(
         "writing", help="run the writing task: co-simulate the FMUs for each scenario",
         description="Co-simulate the controller and plant FMUs on the writing task and write "
-        "summary.json, one CSV per scenario and the figures (paper Figs 2-9) into --out.",
+        "summary.json, one table of every signal per scenario (CSV, or Parquet with --format "
+        "parquet) and the figures (paper Figs 2-9) into --out.",
     )
     p_w.add_argument("--text", help="text to write (default: the paper-like default text)")
     p_w.add_argument("--scenario", action="append", metavar="S",
@@ -80,5 +82,9 @@ def register_cli(subparsers: Any) -> None:
     p_w.add_argument("--fmi", type=int, choices=(2, 3), default=2,
                      help="FMI version of the FMUs to co-simulate (default 2; the results are "
                      "identical)")
+    p_w.add_argument("--format", choices=("csv", "parquet"), default="csv",
+                     help="format of the per-scenario signal tables <scenario>.csv or "
+                     "<scenario>.parquet (default csv; parquet needs pyarrow: pip install "
+                     "'rrr_robot[parquet]'); the same columns and values")
     p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p_w.set_defaults(func=_cmd_writing)

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core._arrays import FloatArray
-from ..core.outputs import atomic_open
+from ..core.tables import write_csv
 from ..errors import BadInputError
 
 log = logging.getLogger(__name__)
@@ -75,12 +75,7 @@ class Log:
                 cols |= {f"{name}[{i}]": arr[:, i - 1] for i in J}
         if self.joint is not None:
             cols["joint"] = self.joint.astype(float)
-        with atomic_open(path, newline="") as fh:  # complete or not at all
-            for line in comment.splitlines():
-                fh.write(f"# {line}\n")
-            writer = csv.writer(fh)
-            writer.writerow(cols)
-            writer.writerows(np.column_stack(list(cols.values())).tolist())
+        write_csv(path, cols, comment)  # complete or not at all; every value exact
 
 
 def _header(path: Path) -> tuple[list[str], int]:

@@ -7,7 +7,6 @@ FMUs then advance. Every signal is recorded into preallocated arrays.
 
 from __future__ import annotations
 
-import csv
 import logging
 import time
 from collections.abc import Callable, Mapping
@@ -17,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from ..core._arrays import FloatArray
-from ..core.outputs import atomic_open
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..core.tables import write_table
 from ..errors import BadInputError
 from .fmu_slave import FmuSlave
 from .fmus import fmu_path
@@ -72,9 +71,10 @@ class CosimResult:
         """Simulated time per wall-clock time of the loop."""
         return float(self.t[-1] - self.t[0]) / self.wall_time if self.wall_time > 0 else np.inf
 
-    def to_csv(self, path: Path) -> None:
-        """Write every signal, one row per communication point (columns documented in header),
-        atomically: the file appears complete or not at all (core.outputs)."""
+    def columns(self) -> dict[str, FloatArray]:
+        """Every signal as a named column, one row per communication point: ``t``, then
+        ``q_ref[i]``, ``qd_ref[i]``, ``q[i]``, ``qd[i]``, ``qdd[i]``, ``u[i]``, ``u_n[i]``,
+        ``u_c[i]`` (i = 1..3), ``x_ref.x`` ... ``tip.z`` (the FMU variables' names)."""
         cols: dict[str, FloatArray] = {"t": self.t}
         for name in ("q_ref", "qd_ref", "q", "qd", "qdd", "u", "u_n", "u_c"):
             arr = getattr(self, name)
@@ -84,10 +84,16 @@ class CosimResult:
             arr = getattr(self, name)
             for i, axis in enumerate("xyz"):
                 cols[f"{name}.{axis}"] = arr[:, i]
-        with atomic_open(path, newline="") as fh:
-            writer = csv.writer(fh)
-            writer.writerow(cols)
-            writer.writerows(np.column_stack(list(cols.values())).tolist())
+        return cols
+
+    def write(self, path: Path, fmt: str = "csv") -> None:
+        """Write :meth:`columns` as a ``csv`` or ``parquet`` table (core.tables: every value
+        exact), atomically: the file appears complete or not at all (core.outputs)."""
+        write_table(path, self.columns(), fmt)
+
+    def to_csv(self, path: Path) -> None:
+        """Write every signal as CSV (:meth:`write`)."""
+        self.write(path, "csv")
 
 
 def _check_reference(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,

@@ -1,11 +1,11 @@
 """The writing task end to end (paper section V): reference, co-simulations, metrics, outputs.
 
 ``run_writing`` checks everything it can before the first simulation (scenarios, robot file,
-workspace), co-simulates each scenario with the FMUs, and writes ``summary.json``, one CSV per
-scenario and the figures into the output folder: all of them or none (a
-:class:`~rrr_robot.core.outputs.ResultSet`: an interrupted run leaves the previous results as
-they were). summary.json is strict JSON: a non-finite metric is null and the scenario's
-``status`` says why (:func:`scenario_summary`); ``files`` lists the files of the run.
+workspace, table format), co-simulates each scenario with the FMUs, and writes ``summary.json``,
+one table per scenario (CSV, or Parquet with pyarrow) and the figures into the output folder:
+all of them or none (a :class:`~rrr_robot.core.outputs.ResultSet`: an interrupted run leaves the
+previous results as they were). summary.json is strict JSON: a non-finite metric is null and the
+scenario's ``status`` says why (:func:`scenario_summary`); ``files`` lists the files of the run.
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from ..core.outputs import ResultSet, check_folder, check_name, strict_json, to_
 from ..core.param_names import model_fmu_values
 from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import ControlGains
+from ..core.tables import check_table_format
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
 from .trajectory import Reference, WritingSpec, make_reference
@@ -45,6 +46,7 @@ class WritingJob:
     scale: float = 1.0
     figures: bool = True
     fmi_version: int = 2   # of the FMUs the job co-simulates: 2 or 3 (identical results)
+    table_format: str = "csv"  # of the per-scenario signal tables: csv or parquet (core.tables)
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,
@@ -133,9 +135,10 @@ def run_writing(job: WritingJob,
                 progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
     """Run the job and write its outputs; returns the summary written to summary.json."""
     check_folder(job.out)  # a bad output folder fails before the inputs are even read
+    fmt = check_table_format(job.table_format)  # parquet without pyarrow fails here
     model, robot, scenarios, ref = prepare(job)
     for scn in scenarios:  # the output names, before anything runs
-        check_name(f"{scn.name}.csv")
+        check_name(f"{scn.name}.{fmt}")
     with ResultSet(job.out, kind="writing") as rs:
         log.info("reference: %.2f s, %d samples, least workspace margin %.3f m, least |sin q3| "
                  "%.3f", ref.t[-1] - ref.t[0], ref.t.size, ref.min_margin_m,
@@ -155,7 +158,7 @@ def run_writing(job: WritingJob,
             )
             res = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
             results[scn.name] = res
-            res.to_csv(rs.path(f"{scn.name}.csv"))
+            res.write(rs.path(f"{scn.name}.{fmt}"), fmt)
             s = summary["scenarios"][scn.name] = scenario_summary(metrics(res))
             log.info("%s: %s", scn.name, _describe(s))
         summary["reference"] = {
