@@ -61,7 +61,7 @@ def per_call(n: int, step: float) -> dict[str, float]:
             "controller getReal (9 outputs, runs rrr_ctc)": lambda: (ctrl.set_block(c_in),
                                                                      ctrl.get_block(c_out)),
             "plant setReal (3 inputs)": lambda: plant.set_block(p_in),
-            "plant doStep (1 ms = 10 RK4 substeps)": lambda: plant.do_step(step),
+            "plant doStep (1 ms, default integrator)": lambda: plant.do_step(step),
             "controller doStep": lambda: ctrl.do_step(step),
             "plant getReal (12 outputs)": lambda: plant.get_block(p_out),
         }
