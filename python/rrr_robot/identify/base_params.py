@@ -25,6 +25,7 @@ from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.param_names import group_names
 from ..errors import BadInputError
+from ._threads import one_blas_thread
 from .logs import Log
 from .signals import derivatives
 
@@ -114,6 +115,7 @@ def _solve(w: FloatArray, y: FloatArray, scale: FloatArray, method: str,
     return Estimate(p, np.sqrt(np.diag(cov)), sigma, method)
 
 
+@one_blas_thread
 def estimate_base_params(lg: Log, prior: Model, method: str = "butter", cutoff: float = 15.0,
                          v_min: float = 0.05) -> BaseParamResult:
     """LS and WLS estimates of p with standard deviations (see module docstring)."""

@@ -22,6 +22,7 @@ from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.outputs import atomic_write_text, strict_json
 from ..errors import BadInputError
+from ._threads import one_blas_thread
 
 log = logging.getLogger(__name__)
 
@@ -99,6 +100,7 @@ def _linear_constraints(traj: FourierTrajectory, lim: ExcitationLimits,
     return [{"type": "ineq", "fun": lambda x: gm @ x + hv, "jac": lambda _x: gm}]
 
 
+@one_blas_thread
 def design_excitation(prior: Model, q0: FloatArray, limits: ExcitationLimits = ExcitationLimits(),
                       period: float = 10.0, harmonics: int = 5, samples: int = 100,
                       maxiter: int = 60, seed: int = 0) -> tuple[FourierTrajectory, float]:

@@ -38,6 +38,7 @@ from scipy.optimize import least_squares
 from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..errors import BadInputError
+from ._threads import one_blas_thread
 from .logs import Log
 from .signals import derivatives
 
@@ -93,6 +94,7 @@ def _pairs(t: FloatArray, q: FloatArray, blocks: list[slice]) -> list[tuple[slic
     return out
 
 
+@one_blas_thread
 def curve_points(lg: Log, joint: int, prior: Model, cutoff: float = 5.0,
                  method: str = "butter", every: int = 5) -> CurvePoints:
     """Friction curve points of one joint from a sweep log (see module docstring); ``prior``
@@ -127,6 +129,7 @@ def curve_points(lg: Log, joint: int, prior: Model, cutoff: float = 5.0,
     return CurvePoints(speed[order], coef[: len(pairs)][order])
 
 
+@one_blas_thread
 def fit_ls(points: CurvePoints, w: FloatArray) -> FrictionFit:
     """f and b by linear least squares with w fixed."""
     w = np.asarray(w, dtype=float)
@@ -146,6 +149,7 @@ def _projected(log_w: FloatArray, points: CurvePoints) -> FloatArray:
     return residual
 
 
+@one_blas_thread
 def fit_nls(points: CurvePoints, w_starts: FloatArray | None = None) -> FrictionFit:
     """f, w and b by variable-projection nonlinear least squares from several starts."""
     if points.v.size < 8:
@@ -169,6 +173,7 @@ def fit_nls(points: CurvePoints, w_starts: FloatArray | None = None) -> Friction
     return _result(coef, w, points, "nls (variable projection)")
 
 
+@one_blas_thread
 def fit_ekf(points: CurvePoints, w0: FloatArray, passes: int = 20,
             p0: float = 1.0, r: float = 1e-6) -> FrictionFit:
     """f, w, b as constant states of an Extended Kalman Filter, fed the curve points in turn

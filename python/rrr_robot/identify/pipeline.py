@@ -21,6 +21,7 @@ from ..core.param_names import group_names
 from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import write_toml
 from ..errors import BadInputError, ModelError
+from ._threads import one_blas_thread
 from .base_params import BaseParamResult, estimate_base_params
 from .friction import FrictionFit, curve_points, fit_ls, fit_nls
 from .logs import Log
@@ -80,6 +81,7 @@ class Identified:
         return bool(np.array_equal(self.model.p, self.base.wls.p))
 
 
+@one_blas_thread
 def identify_friction(lg: Log, prior: Model, settings: Settings = Settings(),
                       ) -> list[FrictionFit]:
     """One fit per joint (eq 9) from a sweep log."""
@@ -95,6 +97,7 @@ def identify_friction(lg: Log, prior: Model, settings: Settings = Settings(),
     return fits
 
 
+@one_blas_thread
 def identify(excitation: Log, prior: Model, friction: Log | None = None,
              settings: Settings = Settings()) -> Identified:
     """Friction (if a sweep log is given; otherwise the prior's) then the base parameters."""
