@@ -11,15 +11,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from ..errors import (
-    BadInputError,
-    ModelError,
-    NumericError,
-    RrrError,
-    SingularError,
-    UnreachableError,
-)
+from ..errors import RrrError
 from ._package import PACKAGE_DIR
+from ._status import STATUS_NAMES as STATUS_NAMES  # the status table lives in _status
+from ._status import raise_for as raise_for
 
 NP = 16
 D3 = ct.c_double * 3
@@ -76,6 +71,18 @@ class RawSingularity(ct.Structure):
     ]
 
 
+class RawCtcGains(ct.Structure):
+    """Mirror of ``rrr_ctc_gains`` (c_src/rrr/include/rrr/rrr_control.h)."""
+
+    _fields_ = [("kp", D3), ("kd", D3), ("feedforward", ct.c_int)]
+
+
+class RawCtcOutput(ct.Structure):
+    """Mirror of ``rrr_ctc_output``."""
+
+    _fields_ = [("u", D3), ("u_n", D3), ("u_c", D3), ("saturated", ct.c_uint)]
+
+
 class RawParamInfo(ct.Structure):
     """Mirror of ``rrr_param_info`` (c_src/rrr/include/rrr/rrr_params.h): one row of the C
     parameter table."""
@@ -122,6 +129,8 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_friction": [_M, _D, _D],
     "rrr_voltage_from_torque": [_M, _D, _D, _D],
     "rrr_torque_from_voltage": [_M, _D, _D, _D],
+    "rrr_ctc_gains_default": [_P(RawCtcGains)],
+    "rrr_ctc": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcOutput)],
     "rrr_param_set": [_M, ct.c_size_t, ct.c_double],
 }
 
@@ -133,35 +142,6 @@ _TABLE_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "rrr_param_in_range": ([ct.c_size_t, ct.c_double], ct.c_int),
     "rrr_sample_time_default": ([], ct.c_double),
 }
-
-STATUS_NAMES = [
-    "RRR_OK",
-    "RRR_BAD_INPUT",
-    "RRR_BAD_MODEL",
-    "RRR_NOT_POSITIVE_DEFINITE",
-    "RRR_UNREACHABLE",
-    "RRR_SINGULAR",
-    "RRR_NUMERIC",
-]
-
-_ERRORS: dict[int, type[RrrError]] = {
-    1: BadInputError,
-    2: ModelError,
-    3: ModelError,
-    4: UnreachableError,
-    5: SingularError,
-    6: NumericError,
-}
-
-_MEANING = {
-    1: "bad input (NULL, NaN/Inf or out-of-range argument)",
-    2: "invalid model parameter",
-    3: "inertia matrix D(q) is not positive definite",
-    4: "target is outside the workspace",
-    5: "singular configuration",
-    6: "result would be non-finite",
-}
-
 
 def library_path() -> Path:
     """Path of librrr: $RRR_LIBRARY if set, else the copy CMake installed in the package."""
@@ -242,12 +222,3 @@ def call(name: str, *args: Any, context: str | Callable[[], str] = "") -> None:
     status = FUNCS[name](*args)
     if status != 0:
         raise_for(name, status, context)
-
-
-def raise_for(name: str, status: int, context: str | Callable[[], str] = "") -> None:
-    """Raise the exception for a non-OK status of function ``name``."""
-    cls = _ERRORS.get(status, RrrError)
-    sname = STATUS_NAMES[status] if 0 <= status < len(STATUS_NAMES) else str(status)
-    text = context() if callable(context) else context
-    detail = f": {text}" if text else ""
-    raise cls(f"{name} failed with {sname} ({_MEANING.get(status, '?')}){detail}", name, sname)
