@@ -27,6 +27,7 @@ from .errors import (
 )
 
 if TYPE_CHECKING:
+    from .core.control import CtcGains
     from .core.model import Model, Singularity, bps_from_inertia
     from .core.robot import RobotFile, read_robot_file
     from .sim.fmus import fmu_path
@@ -34,6 +35,7 @@ if TYPE_CHECKING:
 #: The re-exported names that need numpy and librrr, imported on first use (``rr.Model``), so
 #: that ``import rrr_robot`` (and ``rrr --help``, ``rrr fmus``) loads neither.
 _LAZY = {
+    "CtcGains": ".core.control",
     "Model": ".core.model",
     "Singularity": ".core.model",
     "bps_from_inertia": ".core.model",
@@ -61,6 +63,7 @@ __version__ = "0.1.0"
 __all__ = [
     "BadInputError",
     "CosimError",
+    "CtcGains",
     "Model",
     "ModelError",
     "NumericError",

@@ -1,10 +1,13 @@
-"""The core: the ctypes binding of librrr and the model built on it (the lowest layer).
+"""The core: the bindings of librrr and the model built on it (the lowest layer).
 
-_lib (structures, signatures, status check), _arrays (vector and batch shapes), model
-(:class:`Model` and its closed-form algorithms, all in C), param_names (the C parameter table:
-the model's parameters under the FMUs' variable names), checked (checked reading of TOML files),
-robot_file (the one robot file reader: :class:`RobotData`), robot (:class:`RobotFile`: the
-checked file and its :class:`Model`).
+_ext (the compiled binding: Model's calls, rows looped in C; c_src/pyext/rrr_ext.c),
+_ctypes_kernels (the same calls through ctypes, where _ext was not built), _lib (the ctypes
+binding: structures, signatures, the parameter table), _status (statuses and their exceptions),
+_arrays (vector and batch shapes), model (:class:`Model` and its closed-form algorithms, all in
+C), control (:class:`CtcGains`, the gains of the computed-torque law), param_names (the C
+parameter table: the model's parameters under the FMUs' variable names), checked (checked
+reading of TOML files), robot_file (the one robot file reader: :class:`RobotData`), robot
+(:class:`RobotFile`: the checked file and its :class:`Model`).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from .control import CtcGains
     from .model import DEFAULT_ROBOT_TOML, Model, Singularity, bps_from_inertia
     from .param_names import model_fmu_values
     from .robot import RobotFile, read_robot_file
@@ -21,6 +25,7 @@ if TYPE_CHECKING:
 #: Each re-exported name and its module, imported on first use: ``rrr_robot.core.outputs`` and
 #: ``rrr_robot.core._package`` (``rrr fmus``) do not load numpy or librrr.
 _LAZY = {
+    "CtcGains": ".control",
     "DEFAULT_ROBOT_TOML": ".model",
     "Model": ".model",
     "Singularity": ".model",
@@ -52,6 +57,7 @@ __all__ = [
     "DEFAULT_ROBOT_TOML",
     "DEFAULT_SAMPLE_TIME",
     "ControlGains",
+    "CtcGains",
     "LinkInertia",
     "Model",
     "RobotData",

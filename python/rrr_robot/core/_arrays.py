@@ -11,11 +11,14 @@ FloatArray = NDArray[np.float64]
 
 
 def as_rows(value: ArrayLike, name: str, width: int = 3) -> tuple[FloatArray, bool]:
-    """Return (array of shape (n, width), was_batch); raise BadInputError on a wrong shape."""
+    """Return (array of shape (n, width): float64, C-contiguous, aligned; was_batch); raise
+    BadInputError on a wrong shape."""
     try:
         raw = np.asarray(value)
         if not np.iscomplexobj(raw):
             arr = np.ascontiguousarray(raw, dtype=np.float64)
+            if not arr.flags.aligned:  # C reads doubles at aligned addresses only
+                arr = arr.copy()
     except (TypeError, ValueError) as exc:
         raise BadInputError(f"{name} must be an array of numbers: {exc}") from exc
     if np.iscomplexobj(raw):

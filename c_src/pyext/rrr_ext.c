@@ -1,0 +1,1453 @@
+/*
+ * rrr_robot.core._ext: the compiled CPython binding of librrr behind rrr_robot.core.model.Model.
+ *
+ * It converts arguments and loops over rows; every number comes from a librrr call (linked
+ * statically from the same objects as the package's librrr.so), never from model maths here.
+ *
+ * - Kernels(raw): holds a ctypes RawModel (kept alive, its buffer exported for the Kernels' life)
+ *   and reads the rrr_model in place, so the Model's parameters have one home.
+ * - Arguments are (3,) vectors or (n, 3) batches with the rules of rrr_robot.core._arrays:
+ *   a float64 C-contiguous aligned ndarray is read in place (no copy), as is any other buffer
+ *   of native doubles (array.array, memoryview, ctypes arrays); a list or tuple of three floats
+ *   or ints is read directly; anything else goes through _arrays.as_rows, which converts it or
+ *   raises the package's BadInputError with its message. Batches broadcast single rows like
+ *   _arrays.broadcast_rows.
+ * - Results are new float64 numpy arrays, written in place.
+ * - Every row is checked by the status of its C call; a failure raises the exception class of
+ *   rrr_robot.core._status for that status, with the message of the ctypes binding
+ *   ("rrr_fk failed with RRR_BAD_INPUT (...): sample 4: q = [0.1, nan, 0.3]").
+ * - Batches of at least RRR_EXT_NOGIL_ROWS rows run without the GIL (the loop touches no Python
+ *   object; a failing row is reported after the GIL is taken back).
+ *
+ * numpy without its headers (no build dependency on numpy): an ndarray is recognised by its type
+ * and read through the leading fields of numpy's PyArrayObject_fields (data, nd, dimensions,
+ * strides, base, descr, flags), the ABI that numpy's own PyArray_DATA/NDIM/... macros compile
+ * to and that numpy 1.x and 2.x share; results are made by PyArray_New, taken from numpy's C API
+ * table (the _ARRAY_API capsule that numpy's import_array() reads) for the two ABI versions that
+ * have it in slot 93. Each is checked on arrays numpy made when the module is imported; if a
+ * check fails, arrays are read through the buffer protocol and made by numpy.empty instead
+ * (NUMPY_IN_PLACE, NUMPY_C_API tell which).
+ *
+ * Adding a call of librrr: a row function with the row_fn signature and a map_spec naming its
+ * inputs and outputs; map_rows() does the rest (parsing, broadcasting, the GIL, the error
+ * message). ctc is the model for a call with a parameter block besides the rows.
+ *
+ * The closed loop: the control law is bound (Kernels.ctc, Model.ctc; row_ctc is one sample of
+ * it). The plant step (rrr_plant_step of rrr_plant.h) is deliberately not bound here: its API
+ * was being changed when this module was written. Its seam is one function beside row_ctc that
+ * converts an rrr_plant_state and calls rrr_plant_step, with MODEL(), ctc_gains_from() and the
+ * argument helpers (parse_arg, new_array, raise_status) as the pieces a closed-loop engine needs.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "rrr/rrr.h"
+
+#define NJ 3
+#define MAX_IN 5
+#define MAX_OUT 3
+/** Batches of at least this many rows release the GIL while they run. */
+#define RRR_EXT_NOGIL_ROWS 1000
+
+/* ------------------------------------------------------------------------------------------ */
+/* numpy, without its headers                                                                 */
+/* ------------------------------------------------------------------------------------------ */
+
+/* The leading fields of numpy's PyArrayObject_fields (numpy/ndarraytypes.h). */
+typedef struct {
+    PyObject_HEAD
+    char *data;
+    int nd;
+    Py_ssize_t *dimensions;
+    Py_ssize_t *strides;
+    PyObject *base;
+    PyObject *descr;
+    int flags;
+} np_head;
+
+#define NP_C_CONTIGUOUS 0x0001
+#define NP_F_CONTIGUOUS 0x0002
+#define NP_ALIGNED 0x0100
+#define NP_WRITEABLE 0x0400
+
+/* numpy's C API table (the capsule numpy._core._multiarray_umath._ARRAY_API that numpy's
+ * import_array() reads): slot 0 PyArray_GetNDArrayCVersion, slot 2 &PyArray_Type, slot 93
+ * PyArray_New; NPY_DOUBLE is type number 12. The same slots and signatures in the ABI of numpy
+ * 1.x (0x01000009) and 2.x (0x02000000), the only ABI versions used. */
+#define NP_SLOT_VERSION 0
+#define NP_SLOT_TYPE 2
+#define NP_SLOT_NEW 93
+#define NP_DOUBLE 12
+typedef unsigned int (*np_version_fn)(void);
+typedef PyObject *(*np_new_fn)(PyTypeObject *type, int nd, const Py_ssize_t *dims, int type_num,
+                               const Py_ssize_t *strides, void *data, int itemsize, int flags,
+                               PyObject *obj);
+_Static_assert(sizeof(np_new_fn) == sizeof(void *), "function pointers in the numpy API table");
+
+static PyTypeObject *g_ndarray;   /* numpy.ndarray */
+static PyObject *g_empty;         /* numpy.empty */
+static PyObject *g_float64;       /* numpy.dtype("float64") */
+static np_new_fn g_np_new;        /* numpy's PyArray_New, or NULL: numpy.empty creates arrays */
+static int g_np_layout_ok;        /* np_head verified at import: arrays are read in place */
+
+/* rrr_robot */
+static PyObject *g_as_rows;       /* rrr_robot.core._arrays.as_rows */
+static PyObject *g_rrr_error;     /* rrr_robot.errors.RrrError */
+static PyObject *g_bad_input;     /* rrr_robot.errors.BadInputError */
+static PyObject *g_status_names;  /* rrr_robot.core._status.STATUS_NAMES (tuple) */
+static PyObject *g_status_errors; /* rrr_robot.core._status.ERRORS (dict: status -> class) */
+static PyObject *g_status_meaning;/* rrr_robot.core._status.MEANING (dict: status -> str) */
+static PyObject *g_branch_names;  /* tuple of the four (shoulder, elbow) name tuples */
+
+static double *array_data(PyObject *arr)
+{
+    if (g_np_layout_ok) {
+        return (double *)(void *)((np_head *)arr)->data;
+    }
+    Py_buffer view;
+    if (PyObject_GetBuffer(arr, &view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) != 0) {
+        return NULL;
+    }
+    double *data = (double *)view.buf; /* the array is ours alone: the pointer stays valid */
+    PyBuffer_Release(&view);
+    return data;
+}
+
+static PyObject *empty_of_shape(int rank, const Py_ssize_t *shape)
+{
+    if (g_np_new != NULL) {
+        return g_np_new(g_ndarray, rank, shape, NP_DOUBLE, NULL, NULL, 0, 0, NULL);
+    }
+    PyObject *tuple = PyTuple_New(rank);
+    if (tuple == NULL) {
+        return NULL;
+    }
+    for (int k = 0; k < rank; ++k) {
+        PyObject *v = PyLong_FromSsize_t(shape[k]);
+        if (v == NULL) {
+            Py_DECREF(tuple);
+            return NULL;
+        }
+        PyTuple_SET_ITEM(tuple, k, v);
+    }
+    PyObject *arr = PyObject_Vectorcall(g_empty, &tuple, 1, NULL);
+    Py_DECREF(tuple);
+    return arr;
+}
+
+/* A new float64 array: (n, *dims) for a batch, dims for one state (nd = 0: a (n,) batch). */
+static PyObject *new_array(int batch, Py_ssize_t n, int nd, const Py_ssize_t *dims,
+                           double **data)
+{
+    Py_ssize_t shape[3];
+    int rank = 0;
+    if (batch) {
+        shape[rank++] = n;
+    }
+    for (int d = 0; d < nd; ++d) {
+        shape[rank++] = dims[d];
+    }
+    PyObject *arr = empty_of_shape(rank, shape);
+    if (arr == NULL) {
+        return NULL;
+    }
+    *data = array_data(arr);
+    if (*data == NULL) {
+        Py_DECREF(arr);
+        return NULL;
+    }
+    return arr;
+}
+
+/* Whether a (2, 3) array made by empty_of_shape has the np_head layout numpy's own accessors
+ * would read (checked against the buffer protocol and numpy's attributes), and its transpose
+ * the flags of a non-C-contiguous view. -1 on a Python error. */
+static int np_layout_holds(void)
+{
+    const Py_ssize_t shape[2] = {2, NJ};
+    PyObject *a = empty_of_shape(2, shape);
+    if (a == NULL) {
+        return -1;
+    }
+    Py_buffer view;
+    if (PyObject_GetBuffer(a, &view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
+        Py_DECREF(a);
+        return -1;
+    }
+    PyObject *t = PyObject_GetAttrString(a, "T");
+    PyObject *dtype = PyObject_GetAttrString(a, "dtype");
+    int ok = 0;
+    if (t != NULL && dtype != NULL && Py_IS_TYPE(a, g_ndarray) && Py_IS_TYPE(t, g_ndarray)) {
+        const np_head *h = (const np_head *)a;
+        const np_head *ht = (const np_head *)t;
+        const int want = NP_C_CONTIGUOUS | NP_ALIGNED | NP_WRITEABLE;
+        ok = h->data == (char *)view.buf && view.len == (Py_ssize_t)(2 * NJ * sizeof(double)) &&
+             strcmp(view.format, "d") == 0 && h->nd == 2 && h->dimensions[0] == 2 &&
+             h->dimensions[1] == NJ && h->strides[0] == (Py_ssize_t)(NJ * sizeof(double)) &&
+             h->strides[1] == (Py_ssize_t)sizeof(double) && h->descr == dtype &&
+             dtype == g_float64 && (h->flags & want) == want && h->base == NULL &&
+             ht->data == h->data && ht->nd == 2 && ht->dimensions[0] == NJ &&
+             (ht->flags & NP_C_CONTIGUOUS) == 0 && (ht->flags & NP_F_CONTIGUOUS) != 0 &&
+             ht->base == a;
+    }
+    PyBuffer_Release(&view);
+    Py_XDECREF(t);
+    Py_XDECREF(dtype);
+    Py_DECREF(a);
+    return PyErr_Occurred() ? -1 : ok;
+}
+
+/* PyArray_New from numpy's API capsule, or NULL when the capsule or its ABI is not the known one. */
+static np_new_fn numpy_new_fn(void)
+{
+    PyObject *mod = PyImport_ImportModule("numpy._core._multiarray_umath");
+    if (mod == NULL) { /* numpy 1.x */
+        PyErr_Clear();
+        mod = PyImport_ImportModule("numpy.core._multiarray_umath");
+    }
+    PyObject *capsule = mod != NULL ? PyObject_GetAttrString(mod, "_ARRAY_API") : NULL;
+    Py_XDECREF(mod);
+    void **api = capsule != NULL && PyCapsule_CheckExact(capsule)
+                     ? PyCapsule_GetPointer(capsule, NULL) : NULL;
+    Py_XDECREF(capsule); /* the table is numpy's static data: it outlives the capsule object */
+    PyErr_Clear();
+    if (api == NULL || api[NP_SLOT_TYPE] != (void *)g_ndarray) {
+        return NULL;
+    }
+    np_version_fn version;
+    np_new_fn fn;
+    memcpy(&version, &api[NP_SLOT_VERSION], sizeof version);
+    memcpy(&fn, &api[NP_SLOT_NEW], sizeof fn);
+    const unsigned int abi = version();
+    return abi == 0x01000009u || abi == 0x02000000u ? fn : NULL;
+}
+
+/* Decide how arrays are made (PyArray_New, else numpy.empty) and read (np_head, else the buffer
+ * protocol), each only after it was checked on arrays numpy made. */
+static int numpy_setup(void)
+{
+    g_np_layout_ok = 0; /* array_data reads through the buffer protocol during the checks */
+    g_np_new = NULL;
+    int ok = np_layout_holds();
+    if (ok < 0) {
+        return -1;
+    }
+    if (!ok) {
+        return 0; /* numpy.empty and the buffer protocol */
+    }
+    g_np_new = numpy_new_fn();
+    if (g_np_new != NULL) {
+        ok = np_layout_holds();
+        if (ok < 0) {
+            return -1;
+        }
+        if (!ok) {
+            g_np_new = NULL;
+        }
+    }
+    g_np_layout_ok = 1;
+    return 0;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Arguments: (3,) or (n, 3)                                                                  */
+/* ------------------------------------------------------------------------------------------ */
+
+typedef struct {
+    const double *data;  /* row 0 */
+    Py_ssize_t rows;
+    Py_ssize_t step;     /* doubles between the rows the loop reads: NJ, or 0 (broadcast) */
+    int batch;           /* given as (n, 3) */
+    PyObject *keep;      /* owned: the array as_rows converted, or NULL */
+    Py_buffer view;      /* held while data points into it (has_view) */
+    int has_view;
+    double small[NJ];    /* a list or tuple of three numbers */
+} vec_arg;
+
+static void arg_release(vec_arg *a)
+{
+    if (a->has_view) {
+        PyBuffer_Release(&a->view);
+        a->has_view = 0;
+    }
+    Py_CLEAR(a->keep);
+}
+
+static void args_release(vec_arg *a, int n)
+{
+    for (int k = 0; k < n; ++k) {
+        arg_release(&a[k]);
+    }
+}
+
+static int set_shape(vec_arg *a, int ndim, const Py_ssize_t *shape)
+{
+    if (ndim == 1 && shape[0] == NJ) {
+        a->rows = 1;
+        a->batch = 0;
+        return 1;
+    }
+    if (ndim == 2 && shape[1] == NJ) {
+        a->rows = shape[0];
+        a->batch = 1;
+        return 1;
+    }
+    return 0;
+}
+
+static int is_aligned(const void *p)
+{
+    return ((uintptr_t)p % _Alignof(double)) == 0;
+}
+
+/* A float64 ndarray, C-contiguous and aligned, of shape (3,) or (n, 3): read in place. */
+static int from_ndarray(PyObject *obj, vec_arg *a)
+{
+    if (!g_np_layout_ok || !PyObject_TypeCheck(obj, g_ndarray)) {
+        return 0;
+    }
+    const np_head *h = (const np_head *)obj;
+    const int want = NP_C_CONTIGUOUS | NP_ALIGNED;
+    if (h->descr != g_float64 || (h->flags & want) != want || !set_shape(a, h->nd, h->dimensions)) {
+        return 0;
+    }
+    a->data = (const double *)(const void *)h->data;
+    return 1;
+}
+
+/* A list or tuple of exactly three floats or ints (numpy would make the same doubles). */
+static int from_sequence(PyObject *obj, vec_arg *a)
+{
+    PyObject *const *items;
+    if (PyList_CheckExact(obj) && PyList_GET_SIZE(obj) == NJ) {
+        items = ((PyListObject *)obj)->ob_item;
+    } else if (PyTuple_CheckExact(obj) && PyTuple_GET_SIZE(obj) == NJ) {
+        items = ((PyTupleObject *)obj)->ob_item;
+    } else {
+        return 0;
+    }
+    for (int k = 0; k < NJ; ++k) {
+        PyObject *it = items[k];
+        if (PyFloat_CheckExact(it)) {
+            a->small[k] = PyFloat_AS_DOUBLE(it);
+        } else if (PyLong_CheckExact(it)) {
+            const double v = PyLong_AsDouble(it);
+            if (v == -1.0 && PyErr_Occurred()) {
+                PyErr_Clear(); /* too large: as_rows decides */
+                return 0;
+            }
+            a->small[k] = v;
+        } else {
+            return 0;
+        }
+    }
+    a->data = a->small;
+    a->rows = 1;
+    a->batch = 0;
+    return 1;
+}
+
+static int native_double_format(const char *f)
+{
+    if (f == NULL) {
+        return 0; /* "B" */
+    }
+    if (f[0] == '@' || f[0] == '=' ||
+#if PY_LITTLE_ENDIAN
+        f[0] == '<'
+#else
+        f[0] == '>' || f[0] == '!'
+#endif
+    ) {
+        ++f;
+    }
+    return f[0] == 'd' && f[1] == '\0';
+}
+
+/* Any other exporter of C-contiguous native doubles: read in place while the view is held. */
+static int from_buffer(PyObject *obj, vec_arg *a)
+{
+    if (!PyObject_CheckBuffer(obj)) {
+        return 0;
+    }
+    if (PyObject_GetBuffer(obj, &a->view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
+        PyErr_Clear(); /* not contiguous, ...: as_rows converts it */
+        return 0;
+    }
+    a->has_view = 1;
+    const Py_buffer *v = &a->view;
+    if (v->itemsize == (Py_ssize_t)sizeof(double) && native_double_format(v->format) &&
+        is_aligned(v->buf) && v->shape != NULL && set_shape(a, v->ndim, v->shape)) {
+        a->data = (const double *)v->buf;
+        return 1;
+    }
+    PyBuffer_Release(&a->view);
+    a->has_view = 0;
+    return 0;
+}
+
+/* Everything else: _arrays.as_rows converts it (a float64 (n, 3) array, C-contiguous and aligned)
+ * or raises. */
+static int from_as_rows(PyObject *obj, const char *name, vec_arg *a)
+{
+    PyObject *pyname = PyUnicode_FromString(name);
+    if (pyname == NULL) {
+        return -1;
+    }
+    PyObject *res = PyObject_CallFunctionObjArgs(g_as_rows, obj, pyname, NULL);
+    Py_DECREF(pyname);
+    if (res == NULL) {
+        return -1;
+    }
+    if (!PyTuple_Check(res) || PyTuple_GET_SIZE(res) != 2) {
+        Py_DECREF(res);
+        PyErr_SetString(PyExc_SystemError, "_arrays.as_rows returned no (array, batch) pair");
+        return -1;
+    }
+    const int batch = PyObject_IsTrue(PyTuple_GET_ITEM(res, 1));
+    a->keep = Py_NewRef(PyTuple_GET_ITEM(res, 0));
+    Py_DECREF(res);
+    if (batch < 0) {
+        return -1;
+    }
+    if (PyObject_GetBuffer(a->keep, &a->view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
+        return -1;
+    }
+    a->has_view = 1;
+    const Py_buffer *v = &a->view;
+    if (v->itemsize != (Py_ssize_t)sizeof(double) || !native_double_format(v->format) ||
+        v->ndim != 2 || v->shape[1] != NJ) {
+        PyErr_SetString(PyExc_SystemError, "_arrays.as_rows returned no float64 (n, 3) array");
+        return -1;
+    }
+    if (!is_aligned(v->buf)) {
+        PyErr_SetString(PyExc_SystemError, "_arrays.as_rows returned a misaligned array");
+        return -1;
+    }
+    a->rows = v->shape[0];
+    a->batch = batch;
+    a->data = (const double *)v->buf;
+    return 0;
+}
+
+static int parse_arg(PyObject *obj, const char *name, vec_arg *a)
+{
+    memset(a, 0, sizeof *a);
+    if (from_ndarray(obj, a) || from_sequence(obj, a) || from_buffer(obj, a)) {
+        a->step = a->rows == 1 ? 0 : NJ;
+        return 0;
+    }
+    if (from_as_rows(obj, name, a) != 0) {
+        arg_release(a);
+        return -1;
+    }
+    a->step = a->rows == 1 ? 0 : NJ;
+    return 0;
+}
+
+/* Parse args[0..k) in order (the first bad one raises); on failure nothing is held. */
+static int parse_args(PyObject *const *args, int k, const char *const *names, vec_arg *a)
+{
+    for (int i = 0; i < k; ++i) {
+        if (parse_arg(args[i], names[i], &a[i]) != 0) {
+            args_release(a, i);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* The common row count of a batch (_arrays.broadcast_rows): 1-row arguments are repeated. */
+static int broadcast(vec_arg *a, int k, const char *const *names, Py_ssize_t *n, int *batch)
+{
+    *batch = 0;
+    *n = 1;
+    for (int i = 0; i < k; ++i) {
+        *batch |= a[i].batch;
+    }
+    if (!*batch) {
+        return 0;
+    }
+    Py_ssize_t most = 0;
+    for (int i = 0; i < k; ++i) {
+        most = a[i].rows > most ? a[i].rows : most;
+    }
+    for (int i = 0; i < k; ++i) {
+        if (a[i].rows != 1 && a[i].rows != most) {
+            PyErr_Format(g_bad_input, "%s has %zd rows, expected %zd", names[i], a[i].rows, most);
+            return -1;
+        }
+    }
+    *n = most;
+    return 0;
+}
+
+static int check_nargs(const char *method, Py_ssize_t nargs, int want)
+{
+    if (nargs != want) {
+        PyErr_Format(PyExc_TypeError, "%s() takes %d arguments (%zd given)", method, want, nargs);
+        return -1;
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Errors                                                                                     */
+/* ------------------------------------------------------------------------------------------ */
+
+/* str(row.tolist()) of one row: "[0.1, 0.2, nan]" */
+static PyObject *row_repr(const double *row)
+{
+    PyObject *list = PyList_New(NJ);
+    if (list == NULL) {
+        return NULL;
+    }
+    for (Py_ssize_t k = 0; k < NJ; ++k) {
+        PyObject *v = PyFloat_FromDouble(row[k]);
+        if (v == NULL) {
+            Py_DECREF(list);
+            return NULL;
+        }
+        PyList_SET_ITEM(list, k, v);
+    }
+    PyObject *text = PyObject_Repr(list);
+    Py_DECREF(list);
+    return text;
+}
+
+/* "<names> = <row 0>, <row 1>, ..." (joined, the ctypes binding's rows) or, with names == NULL,
+ * "<name 0> = <row 0>, <name 1> = <row 1>, ..." (energy's rows). */
+static PyObject *rows_text(const char *joined, const char *const *names, int k,
+                           const double *const *rows)
+{
+    PyObject *parts = PyList_New(0);
+    if (parts == NULL) {
+        return NULL;
+    }
+    for (int i = 0; i < k; ++i) {
+        PyObject *r = row_repr(rows[i]);
+        PyObject *part = NULL;
+        if (r != NULL) {
+            part = joined != NULL ? Py_NewRef(r) : PyUnicode_FromFormat("%s = %U", names[i], r);
+            Py_DECREF(r);
+        }
+        if (part == NULL || PyList_Append(parts, part) != 0) {
+            Py_XDECREF(part);
+            Py_DECREF(parts);
+            return NULL;
+        }
+        Py_DECREF(part);
+    }
+    PyObject *sep = PyUnicode_FromString(", ");
+    PyObject *body = sep != NULL ? PyUnicode_Join(sep, parts) : NULL;
+    Py_XDECREF(sep);
+    Py_DECREF(parts);
+    if (body == NULL || joined == NULL) {
+        return body;
+    }
+    PyObject *text = PyUnicode_FromFormat("%s = %U", joined, body);
+    Py_DECREF(body);
+    return text;
+}
+
+/* Raise the package's exception for a non-OK status of C function fn, as _status.raise_for:
+ * class ERRORS.get(status, RrrError), message "<fn> failed with <name> (<meaning>)[: context]". */
+static void raise_status(const char *fn, int status, PyObject *context)
+{
+    PyObject *key = PyLong_FromLong(status);
+    if (key == NULL) {
+        return;
+    }
+    PyObject *cls = PyDict_GetItemWithError(g_status_errors, key); /* borrowed */
+    PyObject *meaning = cls != NULL || !PyErr_Occurred()
+                            ? PyDict_GetItemWithError(g_status_meaning, key) /* borrowed */
+                            : NULL;
+    PyObject *sname = NULL;
+    if (!PyErr_Occurred()) {
+        sname = status >= 0 && status < PyTuple_GET_SIZE(g_status_names)
+                    ? Py_NewRef(PyTuple_GET_ITEM(g_status_names, status))
+                    : PyObject_Str(key);
+    }
+    Py_DECREF(key);
+    if (sname == NULL) {
+        return;
+    }
+    PyObject *text = meaning != NULL ? Py_NewRef(meaning) : PyUnicode_FromString("?");
+    PyObject *msg = NULL;
+    if (text != NULL) {
+        msg = context != NULL && PyUnicode_GET_LENGTH(context) > 0
+                  ? PyUnicode_FromFormat("%s failed with %U (%U): %U", fn, sname, text, context)
+                  : PyUnicode_FromFormat("%s failed with %U (%U)", fn, sname, text);
+        Py_DECREF(text);
+    }
+    if (msg != NULL) {
+        PyObject *exc = PyObject_CallFunction(cls != NULL ? cls : g_rrr_error, "OsO", msg, fn,
+                                              sname);
+        if (exc != NULL) {
+            PyErr_SetObject((PyObject *)Py_TYPE(exc), exc);
+            Py_DECREF(exc);
+        }
+        Py_DECREF(msg);
+    }
+    Py_DECREF(sname);
+}
+
+/* The status error of row i: "sample i: <rows_text>". */
+static void raise_row(const char *fn, int status, Py_ssize_t i, const char *joined,
+                      const char *const *names, int k, const double *const *rows)
+{
+    PyObject *body = rows_text(joined, names, k, rows);
+    if (body == NULL) {
+        return;
+    }
+    PyObject *context = PyUnicode_FromFormat("sample %zd: %U", i, body);
+    Py_DECREF(body);
+    if (context != NULL) {
+        raise_status(fn, status, context);
+        Py_DECREF(context);
+    }
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Row functions: one librrr call on one row, a uniform signature for map_rows                */
+/* ------------------------------------------------------------------------------------------ */
+
+typedef rrr_status (*row_fn)(const rrr_model *m, const void *ctx, const double *const *in,
+                             double *const *out);
+
+#define M33(p) ((double(*)[NJ])(void *)(p))
+
+static rrr_status row_fk(const rrr_model *m, const void *ctx, const double *const *in,
+                         double *const *out)
+{
+    (void)ctx;
+    return rrr_fk(m, in[0], out[0], M33(out[1]));
+}
+
+static rrr_status row_jacobian(const rrr_model *m, const void *ctx, const double *const *in,
+                               double *const *out)
+{
+    (void)ctx;
+    return rrr_jacobian(m, in[0], M33(out[0]));
+}
+
+static rrr_status row_tip_motion(const rrr_model *m, const void *ctx, const double *const *in,
+                                 double *const *out)
+{
+    (void)ctx;
+    return rrr_tip_motion(m, in[0], in[1], in[2], out[0], out[1]);
+}
+
+static rrr_status row_joint_motion(const rrr_model *m, const void *ctx, const double *const *in,
+                                   double *const *out)
+{
+    (void)ctx;
+    return rrr_joint_motion(m, in[0], in[1], in[2], out[0], out[1]);
+}
+
+typedef struct {
+    rrr_shoulder shoulder;
+    rrr_elbow elbow;
+} posture;
+
+static rrr_status row_ik_branch(const rrr_model *m, const void *ctx, const double *const *in,
+                                double *const *out)
+{
+    const posture *p = ctx;
+    return rrr_ik_branch(m, in[0], p->shoulder, p->elbow, out[0]);
+}
+
+static rrr_status row_workspace_margin(const rrr_model *m, const void *ctx,
+                                       const double *const *in, double *const *out)
+{
+    (void)ctx;
+    return rrr_workspace_margin(m, in[0], out[0], NULL);
+}
+
+static rrr_status row_regressor(const rrr_model *m, const void *ctx, const double *const *in,
+                                double *const *out)
+{
+    (void)ctx;
+    return rrr_regressor(m, in[0], in[1], in[2], (double(*)[RRR_NP])(void *)out[0]);
+}
+
+static rrr_status row_inverse_dynamics(const rrr_model *m, const void *ctx,
+                                       const double *const *in, double *const *out)
+{
+    (void)ctx;
+    return rrr_inverse_dynamics(m, in[0], in[1], in[2], out[0]);
+}
+
+static rrr_status row_mass_matrix(const rrr_model *m, const void *ctx, const double *const *in,
+                                  double *const *out)
+{
+    (void)ctx;
+    return rrr_mass_matrix(m, in[0], M33(out[0]));
+}
+
+static rrr_status row_coriolis(const rrr_model *m, const void *ctx, const double *const *in,
+                               double *const *out)
+{
+    (void)ctx;
+    return rrr_coriolis(m, in[0], in[1], out[0]);
+}
+
+static rrr_status row_gravity(const rrr_model *m, const void *ctx, const double *const *in,
+                              double *const *out)
+{
+    (void)ctx;
+    return rrr_gravity(m, in[0], out[0]);
+}
+
+static rrr_status row_forward_dynamics(const rrr_model *m, const void *ctx,
+                                       const double *const *in, double *const *out)
+{
+    (void)ctx;
+    return rrr_forward_dynamics(m, in[0], in[1], in[2], out[0]);
+}
+
+static rrr_status row_energy(const rrr_model *m, const void *ctx, const double *const *in,
+                             double *const *out)
+{
+    (void)ctx;
+    return rrr_energy(m, in[0], in[1], out[0], out[1]);
+}
+
+static rrr_status row_friction(const rrr_model *m, const void *ctx, const double *const *in,
+                               double *const *out)
+{
+    (void)ctx;
+    return rrr_friction(m, in[0], out[0]);
+}
+
+static rrr_status row_voltage_from_torque(const rrr_model *m, const void *ctx,
+                                          const double *const *in, double *const *out)
+{
+    (void)ctx;
+    return rrr_voltage_from_torque(m, in[0], in[1], out[0]);
+}
+
+static rrr_status row_torque_from_voltage(const rrr_model *m, const void *ctx,
+                                          const double *const *in, double *const *out)
+{
+    (void)ctx;
+    return rrr_torque_from_voltage(m, in[0], in[1], out[0]);
+}
+
+static rrr_status row_ctc(const rrr_model *m, const void *ctx, const double *const *in,
+                          double *const *out)
+{
+    rrr_ctc_output o;
+    const rrr_status st = rrr_ctc(m, ctx, in[0], in[1], in[2], in[3], in[4], &o);
+    if (st == RRR_OK) {
+        memcpy(out[0], o.u, sizeof o.u);
+        memcpy(out[1], o.u_n, sizeof o.u_n);
+        memcpy(out[2], o.u_c, sizeof o.u_c);
+    }
+    return st;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* map_rows: parse, broadcast, allocate, loop (without the GIL for large batches), report      */
+/* ------------------------------------------------------------------------------------------ */
+
+typedef struct {
+    const char *method;           /* Kernels method, for argument count errors */
+    const char *cname;            /* the librrr function named in errors */
+    row_fn fn;
+    int n_in;
+    const char *in_names[MAX_IN];
+    const char *joined;           /* "q, qd, qdd" in a row's message; NULL: "q = ..., qd = ..." */
+    int n_out;
+    int out_nd[MAX_OUT];          /* rank of one row's output: 0 (a number), 1 or 2 */
+    Py_ssize_t out_dims[MAX_OUT][2];
+} map_spec;
+
+static Py_ssize_t out_size(const map_spec *s, int j)
+{
+    Py_ssize_t size = 1;
+    for (int d = 0; d < s->out_nd[j]; ++d) {
+        size *= s->out_dims[j][d];
+    }
+    return size;
+}
+
+/* Run fn over rows [0, n); the failing row, or -1. Touches no Python object. */
+static Py_ssize_t loop_rows(const rrr_model *m, const map_spec *s, const void *ctx,
+                            const vec_arg *a, double *const *outs, const Py_ssize_t *sizes,
+                            Py_ssize_t n, rrr_status *status)
+{
+    const double *in[MAX_IN];
+    double *out[MAX_OUT];
+    for (Py_ssize_t i = 0; i < n; ++i) {
+        for (int k = 0; k < s->n_in; ++k) {
+            in[k] = a[k].data + i * a[k].step;
+        }
+        for (int j = 0; j < s->n_out; ++j) {
+            out[j] = outs[j] + i * sizes[j];
+        }
+        const rrr_status st = s->fn(m, ctx, in, out);
+        if (st != RRR_OK) {
+            *status = st;
+            return i;
+        }
+    }
+    return -1;
+}
+
+static Py_ssize_t run_rows(const rrr_model *m, const map_spec *s, const void *ctx,
+                           const vec_arg *a, double *const *outs, const Py_ssize_t *sizes,
+                           Py_ssize_t n, rrr_status *status)
+{
+    Py_ssize_t bad;
+    if (n >= RRR_EXT_NOGIL_ROWS) {
+        Py_BEGIN_ALLOW_THREADS
+        bad = loop_rows(m, s, ctx, a, outs, sizes, n, status);
+        Py_END_ALLOW_THREADS
+    } else {
+        bad = loop_rows(m, s, ctx, a, outs, sizes, n, status);
+    }
+    return bad;
+}
+
+static void raise_failed_row(const map_spec *s, const vec_arg *a, Py_ssize_t i, rrr_status st)
+{
+    const double *rows[MAX_IN];
+    for (int k = 0; k < s->n_in; ++k) {
+        rows[k] = a[k].data + i * a[k].step;
+    }
+    raise_row(s->cname, (int)st, i, s->joined, s->in_names, s->n_in, rows);
+}
+
+/* The outputs of a map, for parsed and broadcast arguments: one array (or number) or a tuple. */
+static PyObject *map_parsed(const rrr_model *m, const map_spec *s, const void *ctx,
+                            const vec_arg *a, Py_ssize_t n, int batch)
+{
+    PyObject *arrays[MAX_OUT] = {NULL};
+    double *outs[MAX_OUT];
+    Py_ssize_t sizes[MAX_OUT];
+    double scalars[MAX_OUT]; /* one state's number outputs */
+    PyObject *result = NULL;
+    for (int j = 0; j < s->n_out; ++j) {
+        sizes[j] = out_size(s, j);
+        if (!batch && s->out_nd[j] == 0) {
+            outs[j] = &scalars[j];
+        } else {
+            arrays[j] = new_array(batch, n, s->out_nd[j], s->out_dims[j], &outs[j]);
+            if (arrays[j] == NULL) {
+                goto done;
+            }
+        }
+    }
+    rrr_status st = RRR_OK;
+    const Py_ssize_t bad = run_rows(m, s, ctx, a, outs, sizes, n, &st);
+    if (bad >= 0) {
+        raise_failed_row(s, a, bad, st);
+        goto done;
+    }
+    for (int j = 0; j < s->n_out; ++j) {
+        if (arrays[j] == NULL) {
+            arrays[j] = PyFloat_FromDouble(scalars[j]);
+            if (arrays[j] == NULL) {
+                goto done;
+            }
+        }
+    }
+    if (s->n_out == 1) {
+        result = arrays[0];
+        arrays[0] = NULL;
+    } else {
+        result = PyTuple_New(s->n_out);
+        if (result != NULL) {
+            for (int j = 0; j < s->n_out; ++j) {
+                PyTuple_SET_ITEM(result, j, arrays[j]);
+                arrays[j] = NULL;
+            }
+        }
+    }
+done:
+    for (int j = 0; j < s->n_out; ++j) {
+        Py_XDECREF(arrays[j]);
+    }
+    return result;
+}
+
+static PyObject *map_rows(const rrr_model *m, const map_spec *s, const void *ctx,
+                          PyObject *const *args)
+{
+    vec_arg a[MAX_IN];
+    if (parse_args(args, s->n_in, s->in_names, a) != 0) {
+        return NULL;
+    }
+    Py_ssize_t n;
+    int batch;
+    PyObject *result = NULL;
+    if (broadcast(a, s->n_in, s->in_names, &n, &batch) == 0) {
+        result = map_parsed(m, s, ctx, a, n, batch);
+    }
+    args_release(a, s->n_in);
+    return result;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Kernels                                                                                    */
+/* ------------------------------------------------------------------------------------------ */
+
+typedef struct {
+    PyObject_HEAD
+    PyObject *owner;      /* the ctypes RawModel */
+    Py_buffer view;       /* its memory, exported while the Kernels lives */
+    const rrr_model *m;
+} KernelsObject;
+
+static PyObject *Kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
+{
+    PyObject *raw;
+    static char *kwlist[] = {"raw", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O:Kernels", kwlist, &raw)) {
+        return NULL;
+    }
+    Py_buffer view;
+    if (PyObject_GetBuffer(raw, &view, PyBUF_SIMPLE) != 0) {
+        return NULL;
+    }
+    if (view.len != (Py_ssize_t)sizeof(rrr_model) || !is_aligned(view.buf)) {
+        PyErr_Format(PyExc_TypeError,
+                     "Kernels needs an aligned rrr_model of %zu bytes (a RawModel), got %zd bytes",
+                     sizeof(rrr_model), view.len);
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    KernelsObject *self = (KernelsObject *)type->tp_alloc(type, 0);
+    if (self == NULL) {
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    self->owner = Py_NewRef(raw);
+    self->view = view;
+    self->m = (const rrr_model *)view.buf;
+    return (PyObject *)self;
+}
+
+static void Kernels_dealloc(PyObject *op)
+{
+    KernelsObject *self = (KernelsObject *)op;
+    if (self->owner != NULL) {
+        PyBuffer_Release(&self->view);
+        Py_CLEAR(self->owner);
+    }
+    Py_TYPE(op)->tp_free(op);
+}
+
+#define MODEL(op) (((KernelsObject *)(op))->m)
+
+static const map_spec S_FK = {"fk", "rrr_fk", row_fk, 1, {"q"}, "q",
+                              2, {1, 2}, {{NJ, 0}, {NJ, NJ}}};
+static const map_spec S_JACOBIAN = {"jacobian", "rrr_jacobian", row_jacobian, 1, {"q"}, "q",
+                                    1, {2}, {{NJ, NJ}}};
+static const map_spec S_TIP_MOTION = {"tip_motion", "rrr_tip_motion", row_tip_motion,
+                                      3, {"q", "qd", "qdd"}, "q, qd, qdd",
+                                      2, {1, 1}, {{NJ, 0}, {NJ, 0}}};
+static const map_spec S_JOINT_MOTION = {"joint_motion", "rrr_joint_motion", row_joint_motion,
+                                        3, {"q", "xd", "xdd"}, "q, xd, xdd",
+                                        2, {1, 1}, {{NJ, 0}, {NJ, 0}}};
+static const map_spec S_IK_BRANCH = {"ik_branch", "rrr_ik_branch", row_ik_branch, 1, {"x"}, "x",
+                                     1, {1}, {{NJ, 0}}};
+static const map_spec S_WORKSPACE_MARGIN = {"workspace_margin", "rrr_workspace_margin",
+                                            row_workspace_margin, 1, {"x"}, "x",
+                                            1, {0}, {{0, 0}}};
+static const map_spec S_REGRESSOR = {"regressor", "rrr_regressor", row_regressor,
+                                     3, {"q", "qd", "qdd"}, "q, qd, qdd",
+                                     1, {2}, {{NJ, RRR_NP}}};
+static const map_spec S_INVERSE_DYNAMICS = {"inverse_dynamics", "rrr_inverse_dynamics",
+                                            row_inverse_dynamics, 3, {"q", "qd", "qdd"},
+                                            "q, qd, qdd", 1, {1}, {{NJ, 0}}};
+static const map_spec S_MASS_MATRIX = {"mass_matrix", "rrr_mass_matrix", row_mass_matrix,
+                                       1, {"q"}, "q", 1, {2}, {{NJ, NJ}}};
+static const map_spec S_CORIOLIS = {"coriolis", "rrr_coriolis", row_coriolis,
+                                    2, {"q", "qd"}, "q, qd", 1, {1}, {{NJ, 0}}};
+static const map_spec S_GRAVITY = {"gravity", "rrr_gravity", row_gravity, 1, {"q"}, "q",
+                                   1, {1}, {{NJ, 0}}};
+static const map_spec S_FORWARD_DYNAMICS = {"forward_dynamics", "rrr_forward_dynamics",
+                                            row_forward_dynamics, 3, {"q", "qd", "tau"},
+                                            "q, qd, tau", 1, {1}, {{NJ, 0}}};
+static const map_spec S_ENERGY = {"energy", "rrr_energy", row_energy, 2, {"q", "qd"}, NULL,
+                                  2, {0, 0}, {{0, 0}, {0, 0}}};
+static const map_spec S_FRICTION = {"friction", "rrr_friction", row_friction, 1, {"qd"}, "qd",
+                                    1, {1}, {{NJ, 0}}};
+static const map_spec S_VOLTAGE_FROM_TORQUE = {"voltage_from_torque", "rrr_voltage_from_torque",
+                                               row_voltage_from_torque, 2, {"qd", "tau"},
+                                               "qd, tau", 1, {1}, {{NJ, 0}}};
+static const map_spec S_TORQUE_FROM_VOLTAGE = {"torque_from_voltage", "rrr_torque_from_voltage",
+                                               row_torque_from_voltage, 2, {"qd", "u"}, "qd, u",
+                                               1, {1}, {{NJ, 0}}};
+static const map_spec S_CTC = {"ctc", "rrr_ctc", row_ctc, 5,
+                               {"q_ref", "qd_ref", "qdd_ref", "q", "qd"},
+                               "q_ref, qd_ref, qdd_ref, q, qd",
+                               3, {1, 1, 1}, {{NJ, 0}, {NJ, 0}, {NJ, 0}}};
+
+static PyObject *map_method(PyObject *self, const map_spec *s, PyObject *const *args,
+                            Py_ssize_t nargs)
+{
+    if (check_nargs(s->method, nargs, s->n_in) != 0) {
+        return NULL;
+    }
+    return map_rows(MODEL(self), s, NULL, args);
+}
+
+#define MAP_METHOD(name, spec)                                                           \
+    static PyObject *K_##name(PyObject *self, PyObject *const *args, Py_ssize_t nargs) \
+    {                                                                                    \
+        return map_method(self, &(spec), args, nargs);                                   \
+    }
+
+MAP_METHOD(fk, S_FK)
+MAP_METHOD(jacobian, S_JACOBIAN)
+MAP_METHOD(tip_motion, S_TIP_MOTION)
+MAP_METHOD(joint_motion, S_JOINT_MOTION)
+MAP_METHOD(workspace_margin, S_WORKSPACE_MARGIN)
+MAP_METHOD(regressor, S_REGRESSOR)
+MAP_METHOD(inverse_dynamics, S_INVERSE_DYNAMICS)
+MAP_METHOD(mass_matrix, S_MASS_MATRIX)
+MAP_METHOD(coriolis, S_CORIOLIS)
+MAP_METHOD(gravity, S_GRAVITY)
+MAP_METHOD(forward_dynamics, S_FORWARD_DYNAMICS)
+MAP_METHOD(energy, S_ENERGY)
+MAP_METHOD(friction, S_FRICTION)
+MAP_METHOD(voltage_from_torque, S_VOLTAGE_FROM_TORQUE)
+MAP_METHOD(torque_from_voltage, S_TORQUE_FROM_VOLTAGE)
+
+/* ik_branch(x, shoulder, elbow): shoulder 0 front / 1 back, elbow 0 up / 1 down. */
+static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (check_nargs("ik_branch", nargs, 3) != 0) {
+        return NULL;
+    }
+    const long shoulder = PyLong_AsLong(args[1]);
+    const long elbow = PyLong_AsLong(args[2]);
+    if (PyErr_Occurred()) {
+        return NULL;
+    }
+    if ((shoulder != 0 && shoulder != 1) || (elbow != 0 && elbow != 1)) {
+        PyErr_Format(g_bad_input, "posture indices must be 0 or 1, got %ld, %ld", shoulder, elbow);
+        return NULL;
+    }
+    const posture p = {shoulder ? RRR_SHOULDER_BACK : RRR_SHOULDER_FRONT,
+                       elbow ? RRR_ELBOW_DOWN : RRR_ELBOW_UP};
+    return map_rows(MODEL(self), &S_IK_BRANCH, &p, args);
+}
+
+/* One target only: parse x and refuse a batch with the method's message. */
+static int one_target(PyObject *obj, const char *name, const char *refusal, vec_arg *a)
+{
+    if (parse_arg(obj, name, a) != 0) {
+        return -1;
+    }
+    if (a->batch) {
+        arg_release(a);
+        PyErr_SetString(g_bad_input, refusal);
+        return -1;
+    }
+    return 0;
+}
+
+static int solve_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs, const char *method,
+                    const char *refusal, rrr_ik_set *sol)
+{
+    if (check_nargs(method, nargs, 1) != 0) {
+        return -1;
+    }
+    vec_arg x;
+    if (one_target(args[0], "x", refusal, &x) != 0) {
+        return -1;
+    }
+    const rrr_status st = rrr_ik(MODEL(self), x.data, sol);
+    if (st != RRR_OK) {
+        PyObject *r = row_repr(x.data);
+        PyObject *context = r != NULL ? PyUnicode_FromFormat("x = %U", r) : NULL;
+        Py_XDECREF(r);
+        if (context != NULL) {
+            raise_status("rrr_ik", (int)st, context);
+            Py_DECREF(context);
+        }
+    }
+    arg_release(&x);
+    return st == RRR_OK ? 0 : -1;
+}
+
+static PyObject *K_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    rrr_ik_set sol;
+    if (solve_ik(self, args, nargs, "ik", "ik takes one target (3,); use ik_nearest for paths",
+                 &sol) != 0) {
+        return NULL;
+    }
+    const Py_ssize_t dims[2] = {sol.n, NJ};
+    double *data;
+    PyObject *out = new_array(0, 0, 2, dims, &data);
+    if (out != NULL) {
+        memcpy(data, sol.q, (size_t)sol.n * sizeof sol.q[0]);
+    }
+    return out;
+}
+
+static PyObject *K_ik_branches(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    rrr_ik_set sol;
+    if (solve_ik(self, args, nargs, "ik_branches",
+                 "ik_branches takes one target (3,), as ik does", &sol) != 0) {
+        return NULL;
+    }
+    PyObject *out = PyList_New(sol.n);
+    if (out == NULL) {
+        return NULL;
+    }
+    for (int i = 0; i < sol.n; ++i) {
+        PyList_SET_ITEM(out, i, Py_NewRef(PyTuple_GET_ITEM(g_branch_names, sol.branch[i] & 3)));
+    }
+    return out;
+}
+
+/* ik_nearest's rows: each solution seeds the next row. The failing row, or -1. */
+static Py_ssize_t nearest_rows(const rrr_model *m, const vec_arg *x, const double *seed,
+                               double *q, Py_ssize_t n, rrr_status *status)
+{
+    const double *prev = seed;
+    for (Py_ssize_t i = 0; i < n; ++i) {
+        const rrr_status st = rrr_ik_nearest(m, x->data + i * x->step, prev, q + i * NJ, NULL);
+        if (st != RRR_OK) {
+            *status = st;
+            return i;
+        }
+        prev = q + i * NJ;
+    }
+    return -1;
+}
+
+static PyObject *K_ik_nearest(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (check_nargs("ik_nearest", nargs, 2) != 0) {
+        return NULL;
+    }
+    vec_arg x, prev;
+    if (parse_arg(args[0], "x", &x) != 0) {
+        return NULL;
+    }
+    if (parse_arg(args[1], "q_prev", &prev) != 0) {
+        arg_release(&x);
+        return NULL;
+    }
+    PyObject *out = NULL;
+    if (prev.batch) {
+        PyErr_Format(g_bad_input,
+                     "q_prev must have shape (3,) (the seed of the first target), got (%zd, %d)",
+                     prev.rows, NJ);
+        goto done;
+    }
+    const Py_ssize_t dims[1] = {NJ};
+    double *q;
+    out = new_array(x.batch, x.rows, 1, dims, &q);
+    if (out == NULL) {
+        goto done;
+    }
+    double seed[NJ];
+    memcpy(seed, prev.data, sizeof seed);
+    rrr_status st = RRR_OK;
+    Py_ssize_t bad;
+    if (x.rows >= RRR_EXT_NOGIL_ROWS) {
+        Py_BEGIN_ALLOW_THREADS
+        bad = nearest_rows(MODEL(self), &x, seed, q, x.rows, &st);
+        Py_END_ALLOW_THREADS
+    } else {
+        bad = nearest_rows(MODEL(self), &x, seed, q, x.rows, &st);
+    }
+    if (bad >= 0) {
+        static const char *const name[1] = {"x"};
+        const double *row = x.data + bad * x.step;
+        raise_row("rrr_ik_nearest", (int)st, bad, "x", name, 1, &row);
+        Py_CLEAR(out);
+    }
+done:
+    arg_release(&x);
+    arg_release(&prev);
+    return out;
+}
+
+/* float(value), finite, else BadInputError (model._finite_scalar). */
+static int finite_scalar(PyObject *value, const char *name, double *out)
+{
+    PyObject *f = PyNumber_Float(value);
+    if (f == NULL) {
+        if (!PyErr_ExceptionMatches(PyExc_TypeError) && !PyErr_ExceptionMatches(PyExc_ValueError)) {
+            return -1;
+        }
+        PyObject *type, *cause, *tb;
+        PyErr_Fetch(&type, &cause, &tb);
+        PyErr_NormalizeException(&type, &cause, &tb);
+        if (tb != NULL) {
+            PyException_SetTraceback(cause, tb);
+        }
+        Py_XDECREF(type);
+        Py_XDECREF(tb);
+        PyObject *msg = PyUnicode_FromFormat("%s must be a finite number, got %R", name, value);
+        PyObject *exc = msg != NULL ? PyObject_CallOneArg(g_bad_input, msg) : NULL;
+        Py_XDECREF(msg);
+        if (exc == NULL) {
+            Py_XDECREF(cause);
+            return -1;
+        }
+        PyException_SetContext(exc, Py_XNewRef(cause));
+        PyException_SetCause(exc, cause); /* raise ... from exc */
+        PyErr_SetObject((PyObject *)Py_TYPE(exc), exc);
+        Py_DECREF(exc);
+        return -1;
+    }
+    const double v = PyFloat_AS_DOUBLE(f);
+    if (!isfinite(v)) {
+        PyErr_Format(g_bad_input, "%s must be a finite number, got %R", name, f);
+        Py_DECREF(f);
+        return -1;
+    }
+    Py_DECREF(f);
+    *out = v;
+    return 0;
+}
+
+/* singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, shoulder_margin, det_J) */
+static PyObject *K_singularity(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (check_nargs("singularity", nargs, 2) != 0) {
+        return NULL;
+    }
+    vec_arg q;
+    if (one_target(args[0], "q",
+                   "singularity takes one configuration (3,); classify a path row by row",
+                   &q) != 0) {
+        return NULL;
+    }
+    double tol;
+    PyObject *out = NULL;
+    if (finite_scalar(args[1], "tol", &tol) == 0) {
+        rrr_singularity s;
+        const rrr_status st = rrr_singularity_classify(MODEL(self), q.data, tol, &s);
+        if (st == RRR_OK) {
+            out = Py_BuildValue("(NNNddd)", PyBool_FromLong(s.flags & RRR_SING_ELBOW_STRETCHED),
+                                PyBool_FromLong(s.flags & RRR_SING_ELBOW_FOLDED),
+                                PyBool_FromLong(s.flags & RRR_SING_SHOULDER), s.elbow_margin,
+                                s.shoulder_margin, s.det_jacobian);
+        } else {
+            PyObject *r = row_repr(q.data);
+            PyObject *context = r != NULL ? PyUnicode_FromFormat("q = %U", r) : NULL;
+            Py_XDECREF(r);
+            if (context != NULL) {
+                raise_status("rrr_singularity_classify", (int)st, context);
+                Py_DECREF(context);
+            }
+        }
+    }
+    arg_release(&q);
+    return out;
+}
+
+/* nominal_voltage(q, qd, qdd): every row's tau = R p first, then u = tau / k_t + u_f(qd), as
+ * Model.voltage_from_torque(qd, Model.inverse_dynamics(q, qd, qdd)) (the same refusals). */
+static PyObject *K_nominal_voltage(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    const map_spec *s = &S_INVERSE_DYNAMICS;
+    if (check_nargs("nominal_voltage", nargs, 3) != 0) {
+        return NULL;
+    }
+    vec_arg a[3];
+    if (parse_args(args, 3, s->in_names, a) != 0) {
+        return NULL;
+    }
+    Py_ssize_t n;
+    int batch;
+    PyObject *out = NULL;
+    if (broadcast(a, 3, s->in_names, &n, &batch) == 0) {
+        PyObject *tau = map_parsed(MODEL(self), s, NULL, a, n, batch);
+        vec_arg b[2];
+        if (tau != NULL && parse_arg(tau, "tau", &b[1]) == 0) {
+            b[0] = a[1]; /* qd, as parsed (not released through b) */
+            out = map_parsed(MODEL(self), &S_VOLTAGE_FROM_TORQUE, NULL, b, n, batch);
+            arg_release(&b[1]);
+        }
+        Py_XDECREF(tau);
+    }
+    args_release(a, 3);
+    return out;
+}
+
+/* The gains of the control law from the bytes of an rrr_ctc_gains (CtcGains.packed), copied. */
+static int ctc_gains_from(PyObject *obj, rrr_ctc_gains *gains)
+{
+    Py_buffer view;
+    if (PyObject_GetBuffer(obj, &view, PyBUF_SIMPLE) != 0) {
+        return -1;
+    }
+    const int size_ok = view.len == (Py_ssize_t)sizeof *gains;
+    if (size_ok) {
+        memcpy(gains, view.buf, sizeof *gains);
+    }
+    PyBuffer_Release(&view);
+    if (!size_ok) {
+        PyErr_Format(PyExc_TypeError,
+                     "ctc needs the %zu bytes of an rrr_ctc_gains (CtcGains.packed)",
+                     sizeof *gains);
+        return -1;
+    }
+    return 0;
+}
+
+/* ctc(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, u_n, u_c), one state or rows. */
+static PyObject *K_ctc(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    rrr_ctc_gains gains;
+    if (check_nargs("ctc", nargs, 6) != 0 || ctc_gains_from(args[0], &gains) != 0) {
+        return NULL;
+    }
+    return map_rows(MODEL(self), &S_CTC, &gains, args + 1);
+}
+
+#define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))K_##name, METH_FASTCALL, doc}
+
+static PyMethodDef Kernels_methods[] = {
+    FASTCALL(fk, "fk(q) -> (x, R)"),
+    FASTCALL(jacobian, "jacobian(q) -> J"),
+    FASTCALL(tip_motion, "tip_motion(q, qd, qdd) -> (xd, xdd)"),
+    FASTCALL(joint_motion, "joint_motion(q, xd, xdd) -> (qd, qdd)"),
+    FASTCALL(ik, "ik(x) -> (k, 3) solutions"),
+    FASTCALL(ik_branches, "ik_branches(x) -> [(shoulder, elbow), ...]"),
+    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow) -> q (shoulder 0 front / 1 back, elbow 0 up / 1 down)"),
+    FASTCALL(ik_nearest, "ik_nearest(x, q_prev) -> q"),
+    FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, shoulder_margin, det_jacobian)"),
+    FASTCALL(workspace_margin, "workspace_margin(x) -> margin"),
+    FASTCALL(regressor, "regressor(q, qd, qdd) -> R"),
+    FASTCALL(inverse_dynamics, "inverse_dynamics(q, qd, qdd) -> tau"),
+    FASTCALL(mass_matrix, "mass_matrix(q) -> D"),
+    FASTCALL(coriolis, "coriolis(q, qd) -> c"),
+    FASTCALL(gravity, "gravity(q) -> h"),
+    FASTCALL(forward_dynamics, "forward_dynamics(q, qd, tau) -> qdd"),
+    FASTCALL(energy, "energy(q, qd) -> (kinetic, potential)"),
+    FASTCALL(friction, "friction(qd) -> u_f"),
+    FASTCALL(voltage_from_torque, "voltage_from_torque(qd, tau) -> u"),
+    FASTCALL(torque_from_voltage, "torque_from_voltage(qd, u) -> tau"),
+    FASTCALL(nominal_voltage, "nominal_voltage(q, qd, qdd) -> u_n"),
+    FASTCALL(ctc, "ctc(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, u_n, u_c)"),
+    {NULL, NULL, 0, NULL},
+};
+
+static PyTypeObject KernelsType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "rrr_robot.core._ext.Kernels",
+    .tp_basicsize = sizeof(KernelsObject),
+    .tp_dealloc = Kernels_dealloc,
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "Kernels(raw): the calls of librrr on the rrr_model in the buffer of raw (a ctypes "
+              "RawModel, read in place and kept alive). Arguments are (3,) vectors or (n, 3) "
+              "batches; every method mirrors the Model method of the same name.",
+    .tp_methods = Kernels_methods,
+    .tp_new = Kernels_new,
+};
+
+/* ------------------------------------------------------------------------------------------ */
+/* Module                                                                                     */
+/* ------------------------------------------------------------------------------------------ */
+
+static PyObject *attr_of(const char *module, const char *name)
+{
+    PyObject *mod = PyImport_ImportModule(module);
+    if (mod == NULL) {
+        return NULL;
+    }
+    PyObject *value = PyObject_GetAttrString(mod, name);
+    Py_DECREF(mod);
+    return value;
+}
+
+static int import_dependencies(void)
+{
+    PyObject *ndarray = attr_of("numpy", "ndarray");
+    if (ndarray == NULL) {
+        return -1;
+    }
+    if (!PyType_Check(ndarray)) {
+        Py_DECREF(ndarray);
+        PyErr_SetString(PyExc_ImportError, "numpy.ndarray is not a type");
+        return -1;
+    }
+    g_ndarray = (PyTypeObject *)ndarray;
+    g_empty = attr_of("numpy", "empty");
+    PyObject *dtype = attr_of("numpy", "dtype");
+    if (g_empty == NULL || dtype == NULL) {
+        Py_XDECREF(dtype);
+        return -1;
+    }
+    g_float64 = PyObject_CallFunction(dtype, "s", "float64");
+    Py_DECREF(dtype);
+    g_as_rows = attr_of("rrr_robot.core._arrays", "as_rows");
+    g_rrr_error = attr_of("rrr_robot.errors", "RrrError");
+    g_bad_input = attr_of("rrr_robot.errors", "BadInputError");
+    PyObject *names = attr_of("rrr_robot.core._status", "STATUS_NAMES");
+    g_status_errors = attr_of("rrr_robot.core._status", "ERRORS");
+    g_status_meaning = attr_of("rrr_robot.core._status", "MEANING");
+    if (g_float64 == NULL || g_as_rows == NULL || g_rrr_error == NULL || g_bad_input == NULL ||
+        names == NULL || g_status_errors == NULL || g_status_meaning == NULL) {
+        Py_XDECREF(names);
+        return -1;
+    }
+    g_status_names = PySequence_Tuple(names);
+    Py_DECREF(names);
+    if (g_status_names == NULL) {
+        return -1;
+    }
+    if (!PyDict_Check(g_status_errors) || !PyDict_Check(g_status_meaning)) {
+        PyErr_SetString(PyExc_ImportError, "rrr_robot.core._status: ERRORS and MEANING must be dicts");
+        return -1;
+    }
+    /* branch index = shoulder * 2 + elbow (rrr_kinematics.h) */
+    g_branch_names = Py_BuildValue("((ss)(ss)(ss)(ss))", "front", "up", "front", "down", "back",
+                                   "up", "back", "down");
+    if (g_branch_names == NULL) {
+        return -1;
+    }
+    return numpy_setup();
+}
+
+static struct PyModuleDef ext_module = {
+    PyModuleDef_HEAD_INIT,
+    .m_name = "rrr_robot.core._ext",
+    .m_doc = "The compiled binding of librrr behind rrr_robot.core.model.Model (Kernels).",
+    .m_size = -1,
+};
+
+PyMODINIT_FUNC PyInit__ext(void);
+
+PyMODINIT_FUNC PyInit__ext(void)
+{
+    if (import_dependencies() != 0) {
+        return NULL;
+    }
+    if (PyType_Ready(&KernelsType) != 0) {
+        return NULL;
+    }
+    PyObject *m = PyModule_Create(&ext_module);
+    if (m == NULL) {
+        return NULL;
+    }
+    if (PyModule_AddObjectRef(m, "Kernels", (PyObject *)&KernelsType) != 0 ||
+        PyModule_AddIntConstant(m, "NOGIL_ROWS", RRR_EXT_NOGIL_ROWS) != 0 ||
+        PyModule_AddIntConstant(m, "MODEL_SIZE", (long)sizeof(rrr_model)) != 0 ||
+        PyModule_AddIntConstant(m, "CTC_GAINS_SIZE", (long)sizeof(rrr_ctc_gains)) != 0 ||
+        PyModule_AddObjectRef(m, "NUMPY_IN_PLACE", g_np_layout_ok ? Py_True : Py_False) != 0 ||
+        PyModule_AddObjectRef(m, "NUMPY_C_API", g_np_new != NULL ? Py_True : Py_False) != 0) {
+        Py_DECREF(m);
+        return NULL;
+    }
+    return m;
+}

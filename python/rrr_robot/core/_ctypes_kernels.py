@@ -1,0 +1,227 @@
+"""The calls of librrr behind Model through ctypes: the interface of the compiled ``_ext.Kernels``
+(same arguments, results and refusals), used when the extension module was not built (no Python
+headers on the build machine) and, in the tests, as the reference the extension is compared with
+bit for bit. Each call costs microseconds of ctypes overhead; batches loop in Python.
+"""
+
+from __future__ import annotations
+
+import ctypes as ct
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import BadInputError
+from . import _lib
+from ._arrays import FloatArray, as_rows, broadcast_rows, ptr, rows_of
+
+_BRANCHES = (("front", "up"), ("front", "down"), ("back", "up"), ("back", "down"))
+
+
+def finite_scalar(value: object, name: str) -> float:
+    """A finite float from a number; BadInputError otherwise."""
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise BadInputError(f"{name} must be a finite number, got {value!r}") from exc
+    if not np.isfinite(v):
+        raise BadInputError(f"{name} must be a finite number, got {v}")
+    return v
+
+
+class Kernels:
+    """The librrr calls on ``raw`` (read in place), one ctypes call per row."""
+
+    def __init__(self, raw: _lib.RawModel) -> None:
+        self._raw = raw
+        self._ref = ct.byref(raw)
+
+    # ---- kinematics -----------------------------------------------------------------------
+    def fk(self, q: ArrayLike, /) -> tuple[FloatArray, FloatArray]:
+        qs, batch = as_rows(q, "q")
+        x, rot = self._rowwise("rrr_fk", [qs], [(3,), (3, 3)], "q")
+        return (x, rot) if batch else (x[0], rot[0])
+
+    def jacobian(self, q: ArrayLike, /) -> FloatArray:
+        return self._map1("rrr_jacobian", q, "q", (3, 3))
+
+    def tip_motion(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, /
+                   ) -> tuple[FloatArray, FloatArray]:
+        rows, batch = broadcast_rows((q, "q"), (qd, "qd"), (qdd, "qdd"))
+        xd, xdd = self._rowwise("rrr_tip_motion", rows, [(3,), (3,)], "q, qd, qdd")
+        return (xd, xdd) if batch else (xd[0], xdd[0])
+
+    def joint_motion(self, q: ArrayLike, xd: ArrayLike, xdd: ArrayLike, /
+                     ) -> tuple[FloatArray, FloatArray]:
+        rows, batch = broadcast_rows((q, "q"), (xd, "xd"), (xdd, "xdd"))
+        qd, qdd = self._rowwise("rrr_joint_motion", rows, [(3,), (3,)], "q, xd, xdd")
+        return (qd, qdd) if batch else (qd[0], qdd[0])
+
+    def _ik_set(self, x: ArrayLike, refusal: str) -> _lib.RawIkSet:
+        xs, batch = as_rows(x, "x")
+        if batch:
+            raise BadInputError(refusal)
+        sol = _lib.RawIkSet()
+        _lib.call("rrr_ik", self._ref, ptr(xs[0]), ct.byref(sol), context=f"x = {xs[0].tolist()}")
+        return sol
+
+    def ik(self, x: ArrayLike, /) -> FloatArray:
+        sol = self._ik_set(x, "ik takes one target (3,); use ik_nearest for paths")
+        return np.array([sol.q[i][:] for i in range(sol.n)]).reshape(sol.n, 3)
+
+    def ik_branches(self, x: ArrayLike, /) -> list[tuple[str, str]]:
+        sol = self._ik_set(x, "ik_branches takes one target (3,), as ik does")
+        return [_BRANCHES[sol.branch[i]] for i in range(sol.n)]
+
+    def ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, /) -> FloatArray:
+        if shoulder not in (0, 1) or elbow not in (0, 1):
+            raise BadInputError(f"posture indices must be 0 or 1, got {shoulder}, {elbow}")
+        xs, batch = as_rows(x, "x")
+        q = np.empty_like(xs)
+        fn = _lib.FUNCS["rrr_ik_branch"]
+        (xb, xs_), (qb, qs_) = rows_of(xs), rows_of(q)
+        for i in range(xs.shape[0]):
+            if status := fn(self._ref, xb + i * xs_, shoulder, elbow, qb + i * qs_):
+                _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
+        return q if batch else q[0]
+
+    def ik_nearest(self, x: ArrayLike, q_prev: ArrayLike, /) -> FloatArray:
+        xs, batch = as_rows(x, "x")
+        prev_rows, prev_batch = as_rows(q_prev, "q_prev")
+        if prev_batch:
+            raise BadInputError(f"q_prev must have shape (3,) (the seed of the first target), "
+                                f"got {prev_rows.shape}")
+        prev = np.array(prev_rows[0])
+        q = np.empty_like(xs)
+        fn = _lib.FUNCS["rrr_ik_nearest"]
+        (xb, xs_), (qb, qs_) = rows_of(xs), rows_of(q)
+        prev_addr = ptr(prev)
+        for i in range(xs.shape[0]):
+            if status := fn(self._ref, xb + i * xs_, prev_addr, qb + i * qs_, None):
+                _lib.raise_for("rrr_ik_nearest", status, f"sample {i}: x = {xs[i].tolist()}")
+            prev_addr = qb + i * qs_
+        return q if batch else q[0]
+
+    def singularity(self, q: ArrayLike, tol: object, /
+                    ) -> tuple[bool, bool, bool, float, float, float]:
+        qs, batch = as_rows(q, "q")
+        if batch:
+            raise BadInputError("singularity takes one configuration (3,); classify a path "
+                                "row by row")
+        s = _lib.RawSingularity()
+        _lib.call("rrr_singularity_classify", self._ref, ptr(qs[0]), finite_scalar(tol, "tol"),
+                  ct.byref(s), context=f"q = {qs[0].tolist()}")
+        return (bool(s.flags & 1), bool(s.flags & 2), bool(s.flags & 4), s.elbow_margin,
+                s.shoulder_margin, s.det_jacobian)
+
+    def workspace_margin(self, x: ArrayLike, /) -> FloatArray | float:
+        xs, batch = as_rows(x, "x")
+        out = np.empty(xs.shape[0])
+        fn = _lib.FUNCS["rrr_workspace_margin"]
+        (xb, xs_), (ob, os_) = rows_of(xs), rows_of(out)
+        for i in range(xs.shape[0]):
+            if status := fn(self._ref, xb + i * xs_, ob + i * os_, None):
+                _lib.raise_for("rrr_workspace_margin", status, f"sample {i}: x = {xs[i].tolist()}")
+        return out if batch else float(out[0])
+
+    # ---- dynamics -------------------------------------------------------------------------
+    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, /) -> FloatArray:
+        return self._map3("rrr_regressor", q, qd, qdd, (3, _lib.NP))
+
+    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, /) -> FloatArray:
+        return self._map3("rrr_inverse_dynamics", q, qd, qdd, (3,))
+
+    def mass_matrix(self, q: ArrayLike, /) -> FloatArray:
+        return self._map1("rrr_mass_matrix", q, "q", (3, 3))
+
+    def coriolis(self, q: ArrayLike, qd: ArrayLike, /) -> FloatArray:
+        return self._map2("rrr_coriolis", (q, "q"), (qd, "qd"))
+
+    def gravity(self, q: ArrayLike, /) -> FloatArray:
+        return self._map1("rrr_gravity", q, "q", (3,))
+
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, /) -> FloatArray:
+        return self._map3("rrr_forward_dynamics", q, qd, tau, (3,), names=("q", "qd", "tau"))
+
+    def energy(self, q: ArrayLike, qd: ArrayLike, /) -> tuple[Any, Any]:
+        (qs, qds), batch = broadcast_rows((q, "q"), (qd, "qd"))
+        n = qs.shape[0]
+        kin, pot = np.empty(n), np.empty(n)
+        k, v = ct.c_double(), ct.c_double()
+        fn = _lib.FUNCS["rrr_energy"]
+        for i in range(n):
+            if status := fn(self._ref, ptr(qs[i]), ptr(qds[i]), ct.byref(k), ct.byref(v)):
+                _lib.raise_for("rrr_energy", status,
+                               f"sample {i}: q = {qs[i].tolist()}, qd = {qds[i].tolist()}")
+            kin[i], pot[i] = k.value, v.value
+        return (kin, pot) if batch else (float(kin[0]), float(pot[0]))
+
+    # ---- actuators and control ------------------------------------------------------------
+    def friction(self, qd: ArrayLike, /) -> FloatArray:
+        return self._map1("rrr_friction", qd, "qd", (3,))
+
+    def voltage_from_torque(self, qd: ArrayLike, tau: ArrayLike, /) -> FloatArray:
+        return self._map2("rrr_voltage_from_torque", (qd, "qd"), (tau, "tau"))
+
+    def torque_from_voltage(self, qd: ArrayLike, u: ArrayLike, /) -> FloatArray:
+        return self._map2("rrr_torque_from_voltage", (qd, "qd"), (u, "u"))
+
+    def nominal_voltage(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, /) -> FloatArray:
+        return self.voltage_from_torque(qd, self.inverse_dynamics(q, qd, qdd))
+
+    def ctc(self, gains: bytes, q_ref: ArrayLike, qd_ref: ArrayLike, qdd_ref: ArrayLike,
+            q: ArrayLike, qd: ArrayLike, /) -> tuple[FloatArray, FloatArray, FloatArray]:
+        if len(gains) != ct.sizeof(_lib.RawCtcGains):
+            raise TypeError(f"ctc needs the {ct.sizeof(_lib.RawCtcGains)} bytes of an "
+                            "rrr_ctc_gains (CtcGains.packed)")
+        raw_gains = _lib.RawCtcGains.from_buffer_copy(gains)
+        names = ("q_ref", "qd_ref", "qdd_ref", "q", "qd")
+        rows, batch = broadcast_rows(*zip((q_ref, qd_ref, qdd_ref, q, qd), names, strict=True))
+        n = rows[0].shape[0]
+        u, u_n, u_c = (np.empty((n, 3)) for _ in range(3))
+        out = _lib.RawCtcOutput()
+        fn = _lib.FUNCS["rrr_ctc"]
+        for i in range(n):
+            if status := fn(self._ref, ct.byref(raw_gains), *(ptr(a[i]) for a in rows),
+                            ct.byref(out)):
+                self._fail("rrr_ctc", status, rows, ", ".join(names), i)
+            u[i], u_n[i], u_c[i] = out.u[:], out.u_n[:], out.u_c[:]
+        return (u, u_n, u_c) if batch else (u[0], u_n[0], u_c[0])
+
+    # ---- helpers ---------------------------------------------------------------------------
+    def _rowwise(self, fn: str, ins: list[FloatArray], out_shapes: list[tuple[int, ...]],
+                 names: str) -> list[FloatArray]:
+        """Call ``fn(model, in_1[i], ..., out_1[i], ...)`` for every row i of the inputs."""
+        n = ins[0].shape[0]
+        outs = [np.empty((n, *shape)) for shape in out_shapes]
+        bases = [rows_of(a) for a in (*ins, *outs)]
+        call = _lib.FUNCS[fn]
+        ref = self._ref
+        for i in range(n):
+            if status := call(ref, *[base + i * step for base, step in bases]):
+                self._fail(fn, status, ins, names, i)
+        return outs
+
+    @staticmethod
+    def _fail(fn: str, status: int, ins: list[FloatArray], names: str, i: int) -> None:
+        values = ", ".join(str(a[i].tolist()) for a in ins)
+        _lib.raise_for(fn, status, f"sample {i}: {names} = {values}")
+
+    def _map1(self, fn: str, a: ArrayLike, name: str, shape: tuple[int, ...]) -> FloatArray:
+        rows, batch = as_rows(a, name)
+        (out,) = self._rowwise(fn, [rows], [shape], name)
+        return out if batch else out[0]
+
+    def _map2(self, fn: str, a: tuple[ArrayLike, str], b: tuple[ArrayLike, str]) -> FloatArray:
+        rows, batch = broadcast_rows(a, b)
+        (out,) = self._rowwise(fn, rows, [(3,)], f"{a[1]}, {b[1]}")
+        return out if batch else out[0]
+
+    def _map3(
+        self, fn: str, a: ArrayLike, b: ArrayLike, c: ArrayLike, shape: tuple[int, ...],
+        names: tuple[str, str, str] = ("q", "qd", "qdd"),
+    ) -> FloatArray:
+        rows, batch = broadcast_rows((a, names[0]), (b, names[1]), (c, names[2]))
+        (out,) = self._rowwise(fn, rows, [shape], ", ".join(names))
+        return out if batch else out[0]

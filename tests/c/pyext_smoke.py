@@ -1,0 +1,56 @@
+#!/usr/bin/env python3
+"""CTest pyext_smoke: the extension module of a CMake build (rrr_robot.core._ext) on the package
+sources, before any pip install.
+
+Stages python/rrr_robot with the built _ext module and librrr.so into a temporary folder and runs
+the binding's tests (tests/python/test_ext_binding.py: every method against the ctypes binding
+bit for bit, the refusals, batches without the GIL and from threads) and the Model API tests on
+it. In the sanitizer build CMake runs this under the preloaded ASan runtime, so ASan and UBSan
+check the module's C code and the librrr it links.
+
+Usage: pyext_smoke.py --package python/rrr_robot --ext <_ext...so> --lib <librrr.so>
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+TESTS = ["tests/python/test_ext_binding.py", "tests/python/test_model_api.py"]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--package", type=Path, required=True)
+    parser.add_argument("--ext", type=Path, required=True)
+    parser.add_argument("--lib", type=Path, required=True)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix="rrr-pyext-") as tmp:
+        pkg = Path(tmp) / "rrr_robot"
+        shutil.copytree(args.package, pkg, ignore=shutil.ignore_patterns("__pycache__", "*.so"))
+        shutil.copy2(args.ext, pkg / "core" / args.ext.name)
+        shutil.copy2(args.lib, pkg / "librrr.so")
+        env = {**os.environ, "PYTHONPATH": tmp, "PYTHONDONTWRITEBYTECODE": "1"}
+        env.pop("RRR_LIBRARY", None)
+        where = subprocess.run(
+            [sys.executable, "-c", "import rrr_robot.core.model as m, rrr_robot.core._ext as e; "
+             "print(m.BINDING, e.__file__)"],
+            env=env, check=True, capture_output=True, text=True).stdout.split()
+        print(f"pyext_smoke: binding {where[0]}, module {where[1]}", flush=True)
+        if where[0] != "extension" or not where[1].startswith(tmp):
+            print("pyext_smoke: the staged extension module was not the one imported",
+                  file=sys.stderr)
+            return 1
+        return subprocess.run(
+            [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *TESTS],
+            env=env, cwd=ROOT, check=False).returncode
+
+
+if __name__ == "__main__":
+    sys.exit(main())
