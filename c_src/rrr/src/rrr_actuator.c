@@ -19,7 +19,8 @@ static int actuator_ok(const rrr_model *m)
 
 /* tanh without libm's tanh: one exp, or none. Measured against the x87 tanhl over the whole
  * double range (tests/c/test_plant.c) its error is below 1.5 ulp (libm's own tanh: 2.2 ulp), and
- * it differs from libm's tanh by at most 2 ulp; it costs a third of libm's tanh in the friction.
+ * it differs from libm's tanh by at most 2 ulp; along the writing task's velocities the friction
+ * costs 0.46 of what it costs with libm's tanh.
  *  - |x| < 1: tanh x = x - x z P(z) / Q(z), z = x^2, with P/Q the 8th convergent of Lambert's
  *    continued fraction x / (1 + z / (3 + z / (5 + ...))) (integer coefficients, exact in double;
  *    truncation error below 2.6e-17 relative on [0, 1]). Written as x minus a correction of at
