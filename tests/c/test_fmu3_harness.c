@@ -20,10 +20,10 @@
  * one message naming function and state, state unchanged), for both interface types; functions
  * that are not provided; NaN/Inf and other refused sets (old value kept); doStep arguments and a
  * discarded step; parameter validation; Model Exchange: lifecycle, derivatives = rrr_plant_accel,
- * refused states and times, an RK4 integration against the Co-Simulation plant; FMU state
- * get/set/serialize/deserialize (bit-identical reruns, corrupted, truncated and foreign bytes
- * refused, interface types kept apart); two instances in one process; log categories; no FMI 3
- * message that names an FMI 2 function.
+ * refused states and times, an RK4 integration against the fixed-step Co-Simulation plant;
+ * FMU state get/set/serialize/deserialize (bit-identical reruns, corrupted, truncated and
+ * foreign bytes refused, interface types kept apart); two instances in one process; log
+ * categories; no FMI 3 message that names an FMI 2 function.
  */
 #define _POSIX_C_SOURCE 200809L
 
