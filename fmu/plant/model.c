@@ -215,8 +215,8 @@ static int depends(fmu_vr unknown, fmu_vr known)
 const fmu_model FMU_MODEL = {
     .identifier = MODEL_IDENTIFIER,
     .description = "RRR robot arm plant: motor voltages in, joint motion and tip position out "
-                   "(closed-form dynamics of librrr; Dormand-Prince 5(4) with error control or fixed-step "
-                   "RK4 inside doStep, or continuous states for a solver)",
+                   "(closed-form dynamics of librrr; Dormand-Prince 5(4) with error control or "
+                   "fixed-step RK4 inside doStep, or continuous states for a solver)",
     .vars = plant_vars,
     .n_vars = sizeof plant_vars / sizeof plant_vars[0],
     .states = plant_states,

@@ -19,7 +19,8 @@
  * Model Exchange (the same binaries): the lifecycle of section 3.2.3 with the value of every call
  * (states = q0, qd0 in initialization mode, nominals > 0, no events); derivatives = librrr's
  * rrr_plant_accel bit for bit and dq/dt = qd; RK4 through setContinuousStates/getDerivatives =
- * the Co-Simulation plant in fixed-step mode (adaptive = false) bit for bit; controller outputs = Co-Simulation = rrr_ctc bit for bit;
+ * the Co-Simulation plant in fixed-step mode (adaptive = false) bit for bit; controller
+ * outputs = Co-Simulation = rrr_ctc bit for bit;
  * every function (Co-Simulation ones included) from every Model Exchange state, refused where
  * the table does not allow it (message naming function and state, serialized FMU state
  * unchanged) and accepted where it does; refused arguments (NaN/Inf states and time, wrong nx/ni,

@@ -127,7 +127,8 @@ rrr_status rrr_plant_state_init(const double q0[3], const double qd0[3], rrr_pla
 static rrr_status step_fixed(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
                              double h, rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats)
 {
-    const double n_real = ceil(h / s->h_int * (1.0 - 1e-12)); /* 1e-3 / 1e-4 is 10 substeps, not 11 */
+    /* 1e-3 / 1e-4 is 10 substeps, not 11 */
+    const double n_real = ceil(h / s->h_int * (1.0 - 1e-12));
     if (!(n_real <= (double)s->max_steps)) {
         return RRR_BAD_INPUT;
     }

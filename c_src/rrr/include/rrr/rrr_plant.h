@@ -60,8 +60,10 @@ extern "C" {
 
 /** @brief How the plant integrates (plain data; rrr_plant_integrator_default fills it). */
 typedef struct rrr_plant_integrator {
-    int adaptive;        ///< nonzero (default): Dormand-Prince 5(4), error-controlled; 0: fixed-step RK4
-    double rtol;         ///< adaptive: relative tolerance, in [RRR_PLANT_TOL_MIN, RRR_PLANT_TOL_MAX]
+    int adaptive;        ///< nonzero (default): Dormand-Prince 5(4), error-controlled;
+                         ///< 0: fixed-step RK4
+    double rtol;         ///< adaptive: relative tolerance, in [RRR_PLANT_TOL_MIN,
+                         ///< RRR_PLANT_TOL_MAX]
     double atol;         ///< adaptive: absolute tolerance, rad and rad/s, in the same range
     double h_int;        ///< fixed step: substep upper bound, s, > 0 and finite
     long max_steps;      ///< most internal steps per call, >= 1
