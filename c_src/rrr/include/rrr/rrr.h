@@ -12,6 +12,7 @@
 #include "rrr_actuator.h"
 #include "rrr_control.h"
 #include "rrr_plant.h"
+#include "rrr_sim.h"
 
 /** Version of librrr. */
 #define RRR_VERSION_STRING "0.1.0"

@@ -1,0 +1,83 @@
+/* The closed loop in C, in the co-simulation master's order (rrr_sim.h). */
+#include "rrr_internal.h"
+
+/* The plant outputs the FMU would report: q, qd, qdd, tip. */
+static void put_plant(double row[RRR_SIM_PLANT_COLS], const rrr_plant_state *x,
+                      const double qdd[3], const double tip[3])
+{
+    memcpy(row, x->q, 3 * sizeof(double));
+    memcpy(row + 3, x->qd, 3 * sizeof(double));
+    memcpy(row + 6, qdd, 3 * sizeof(double));
+    memcpy(row + 9, tip, 3 * sizeof(double));
+}
+
+rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_integrator *integ,
+                               const double q0[3], const double qd0[3], const rrr_model *ctrl,
+                               const rrr_ctc_gains *gains, size_t n, double step,
+                               const double ref[], double plant_out[], double ctrl_out[],
+                               size_t *done)
+{
+    if (done != NULL) {
+        *done = 0;
+    }
+    if (plant == NULL || integ == NULL || q0 == NULL || qd0 == NULL || ctrl == NULL ||
+        gains == NULL || ref == NULL || plant_out == NULL || ctrl_out == NULL || n == 0 ||
+        !isfinite(step) || !(step > 0.0) || rrr_plant_integrator_check(integ, NULL) != RRR_OK) {
+        return RRR_BAD_INPUT;
+    }
+    /* the FMUs' ExitInitializationMode: both models validated */
+    rrr_status st = rrr_model_validate(plant, NULL);
+    if (st == RRR_OK) {
+        st = rrr_model_validate(ctrl, NULL);
+    }
+    if (st != RRR_OK) {
+        return st;
+    }
+    rrr_plant_state x;
+    st = rrr_plant_state_init(q0, qd0, &x);
+    if (st != RRR_OK) {
+        return st;
+    }
+    /* the plant's first outputs: qdd under its start input u = 0, the tip at q0 */
+    const double u0[3] = {0.0, 0.0, 0.0};
+    double qdd[3], tip[3];
+    st = rrr_plant_accel(plant, &x, u0, qdd);
+    if (st == RRR_OK) {
+        st = rrr_fk(plant, x.q, tip, NULL);
+    }
+    for (size_t k = 0; st == RRR_OK && k < n; ++k) {
+        const double *r = ref + k * RRR_SIM_REF_COLS;
+        double *c = ctrl_out + k * RRR_SIM_CTRL_COLS;
+        put_plant(plant_out + k * RRR_SIM_PLANT_COLS, &x, qdd, tip);
+        rrr_ctc_output out;
+        st = rrr_ctc(ctrl, gains, r, r + 3, r + 6, x.q, x.qd, &out);
+        if (st != RRR_OK) {
+            break;
+        }
+        memcpy(c, out.u, 3 * sizeof(double));
+        memcpy(c + 3, out.u_n, 3 * sizeof(double));
+        memcpy(c + 6, out.u_c, 3 * sizeof(double));
+        if (k + 1 < n) {
+            /* the plant FMU's doStep: the state and its outputs change only on success */
+            rrr_plant_state next = x;
+            double qdd_next[3], tip_next[3];
+            st = rrr_plant_step(plant, integ, out.u, step, &next, qdd_next, NULL);
+            if (st == RRR_OK) {
+                st = rrr_fk(plant, next.q, tip_next, NULL);
+            }
+            if (st != RRR_OK) {
+                if (done != NULL) {
+                    *done = k + 1;
+                }
+                return st;
+            }
+            x = next;
+            memcpy(qdd, qdd_next, sizeof qdd);
+            memcpy(tip, tip_next, sizeof tip);
+        }
+        if (done != NULL) {
+            *done = k + 1;
+        }
+    }
+    return st;
+}

@@ -1,0 +1,82 @@
+/* The closed loop in C (rrr_sim.h): refusals, the first rows, and tracking of a smooth reference.
+ * Its equality with the FMUs driven by the co-simulation master, bit for bit, is checked from
+ * Python (tests/python/test_native_engine.py), where the master lives. */
+#include <math.h>
+#include <string.h>
+
+#include "rrr/rrr.h"
+#include "rrr_test.h"
+
+#define N 1000
+#define STEP 1e-3
+
+static double ref[N][RRR_SIM_REF_COLS], pout[N][RRR_SIM_PLANT_COLS], cout_[N][RRR_SIM_CTRL_COLS];
+
+static void reference(void)
+{
+    for (int k = 0; k < N; ++k) {
+        const double t = k * STEP;
+        for (int i = 0; i < 3; ++i) {
+            const double a = 0.3 + 0.1 * i, w = 2.0 + i;
+            ref[k][i] = 0.2 * i + a * sin(w * t);
+            ref[k][3 + i] = a * w * cos(w * t);
+            ref[k][6 + i] = -a * w * w * sin(w * t);
+        }
+    }
+}
+
+int main(void)
+{
+    rrr_model m;
+    rrr_ctc_gains g;
+    rrr_plant_integrator s;
+    CHECK(rrr_model_default(&m) == RRR_OK && rrr_ctc_gains_default(&g) == RRR_OK);
+    CHECK(rrr_plant_integrator_default(&s) == RRR_OK);
+    reference();
+    size_t done = 99;
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
+                                     pout[0], cout_[0], &done),
+                 RRR_OK);
+    CHECK(done == N);
+    /* row 0: the initial state; the controller sees it */
+    CHECK(memcmp(pout[0], ref[0], 3 * sizeof(double)) == 0);
+    double err = 0.0;
+    for (int k = 0; k < N; ++k) {
+        for (int i = 0; i < 3; ++i) {
+            err = fmax(err, fabs(pout[k][i] - ref[k][i]));
+        }
+    }
+    CHECK(err < 1e-3);
+    /* the first controller row equals rrr_ctc at the initial state */
+    rrr_ctc_output o;
+    CHECK(rrr_ctc(&m, &g, ref[0], ref[0] + 3, ref[0] + 6, pout[0], pout[0] + 3, &o) == RRR_OK);
+    CHECK(memcmp(cout_[0], o.u, sizeof o.u) == 0 && memcmp(cout_[0] + 3, o.u_n, sizeof o.u_n) == 0);
+
+    /* refusals */
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, 0, STEP, ref[0], pout[0],
+                                     cout_[0], &done),
+                 RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, NAN, ref[0], pout[0],
+                                     cout_[0], &done),
+                 RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, NULL, pout[0],
+                                     cout_[0], &done),
+                 RRR_BAD_INPUT);
+    rrr_model bad = m;
+    bad.kt[1] = 0.0;
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &bad, &g, N, STEP, ref[0],
+                                     pout[0], cout_[0], &done),
+                 RRR_BAD_MODEL);
+    rrr_plant_integrator bs = s;
+    bs.rtol = 0.5;
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &bs, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
+                                     pout[0], cout_[0], &done),
+                 RRR_BAD_INPUT);
+    /* a non-finite reference at sample 500: the loop stops there, earlier rows are valid */
+    ref[500][4] = NAN;
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
+                                     pout[0], cout_[0], &done),
+                 RRR_BAD_INPUT);
+    CHECK(done == 500);
+    return rrr_test_report("test_sim");
+}
