@@ -1,0 +1,311 @@
+#!/usr/bin/env python3
+"""Benchmark the Python API of rrr_robot (the compiled binding rrr_robot.core._ext) against
+Pinocchio's and the Robotics Toolbox's Python APIs, on the same robot and the same inputs.
+
+Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk`` against
+``ets.eval``; ``Model.ik`` (every branch) against ``ets.ik_LM`` (one solution); a batch of 1e5
+states of ``Model.inverse_dynamics`` against the Robotics Toolbox's batch ``rne`` and against
+librrr's ``rrr_inverse_dynamics`` in a plain C loop (bench/batch_floor.c, built with the system C
+compiler against the package's librrr.so: the floor of the batch); and, for the record, one
+state of ``inverse_dynamics`` through the ctypes binding the extension replaced.
+
+Interleaved: each repeat times a block of ours and a block of the reference on the same inputs
+back to back (the order alternating between repeats), so both see the same machine load; each
+row reports min / median / max over the repeats of ns per call (per state for batches) and of
+the per-repeat ratio reference / ours. The agreement of every pair is checked first.
+
+This is a measurement, not a test: nothing fails when a target is missed.
+
+Usage: python bench/bench_python.py [--repeats N] [--states N] [--batch N] [--seed N]
+                                    [--json FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes as ct
+import datetime as dt
+import gc
+import json
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+ALPHA = (np.pi / 2, 0.0, 0.0)
+IK_Q0 = np.array([0.1, 0.2, 1.0])  # the start of run_bench.py's LM references
+POSITION_MASK = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+
+
+def log(msg: str) -> None:
+    print(f"[bench_python] {msg}", file=sys.stderr, flush=True)
+
+
+@dataclass
+class Pair:
+    """One row: our call and the reference's on the same inputs, each timed as a block of
+    ``calls`` calls (``per`` items per call: states of a batch)."""
+
+    operation: str
+    ours_name: str
+    ours: Callable[[int], object]
+    ref_name: str
+    ref: Callable[[int], object]
+    calls: int
+    per: int = 1
+    target: str = ""
+    target_ratio: float | None = None
+    target_ns: float | None = None
+    ours_ns: list[float] = field(default_factory=list)
+    ref_ns: list[float] = field(default_factory=list)
+    agreement: str = ""
+
+    def block(self, fn: Callable[[int], object]) -> float:
+        """ns per item of one block."""
+        t0 = time.perf_counter_ns()
+        for k in range(self.calls):
+            fn(k)
+        return (time.perf_counter_ns() - t0) / (self.calls * self.per)
+
+    def run(self, repeats: int) -> None:
+        for k in range(min(self.calls, 20)):  # warm-up
+            self.ours(k)
+            self.ref(k)
+        gc.disable()
+        try:
+            for r in range(repeats):
+                if r % 2 == 0:
+                    self.ours_ns.append(self.block(self.ours))
+                    self.ref_ns.append(self.block(self.ref))
+                else:
+                    self.ref_ns.append(self.block(self.ref))
+                    self.ours_ns.append(self.block(self.ours))
+        finally:
+            gc.enable()
+
+    @property
+    def ratios(self) -> list[float]:
+        return [r / o for o, r in zip(self.ours_ns, self.ref_ns, strict=True)]
+
+    def verdict(self) -> str:
+        if not self.target:
+            return ""
+        ok = True
+        if self.target_ratio is not None:
+            ok &= statistics.median(self.ratios) >= self.target_ratio
+        if self.target_ns is not None:
+            ok &= statistics.median(self.ours_ns) <= self.target_ns
+        return f"{self.target}: {'met' if ok else 'NOT met'}"
+
+
+def mmm(values: list[float], fmt: Callable[[float], str]) -> str:
+    return " / ".join(fmt(v) for v in (min(values), statistics.median(values), max(values)))
+
+
+def fmt_ns(ns: float) -> str:
+    return f"{ns:,.0f}" if ns >= 100 else f"{ns:.1f}"
+
+
+def fmt_ratio(r: float) -> str:
+    return f"{r:,.1f}x" if r < 100 else f"{r:,.0f}x"
+
+
+def batch_floor(workdir: Path, package: Path) -> Any:
+    """bench/batch_floor.c built against the package's librrr.so (None without a C compiler)."""
+    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        log("no C compiler: the librrr-in-C row is left out")
+        return None
+    lib = workdir / "libbatchfloor.so"
+    include = ROOT / "c_src" / "rrr" / "include"
+    subprocess.run([cc, "-std=c11", "-O2", "-shared", "-fPIC", f"-I{include}",
+                    str(ROOT / "bench" / "batch_floor.c"), f"-L{package}", "-l:librrr.so",
+                    f"-Wl,-rpath,{package}", "-o", str(lib)], check=True)
+    floor = ct.CDLL(str(lib))
+    fn = floor.batch_floor_inverse_dynamics
+    fn.argtypes = [ct.c_void_p] * 5 + [ct.c_long]
+    fn.restype = ct.c_long
+    return fn
+
+
+def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str, str]]:
+    import pinocchio as pin
+    import roboticstoolbox as rtb
+    import rrr_robot as rr
+    from rrr_robot.core import _ctypes_kernels, _ext
+    from rrr_robot.core import model as model_module
+    from rrr_robot.writing.references import inertial_from_robot, pinocchio_model
+
+    robot_file = rr.read_robot_file()
+    model = robot_file.model
+    inertial = inertial_from_robot(robot_file)
+    if inertial is None:
+        sys.exit("bench_python: the default robot file has no link tables")
+    dh = model.dh
+    pm = pinocchio_model(dh, model.g, inertial)
+    pdata = pm.createData()
+    a = (0.0, dh["a2"], dh["a3"])
+    d = (dh["d1"], dh["d2"], dh["d3"])
+    links = [
+        rtb.RevoluteDH(d=d[i], a=a[i], alpha=ALPHA[i], m=inertial.masses[i],
+                       r=inertial.coms[i], I=inertial.inertias_com[i], Jm=inertial.rotor[i],
+                       G=1.0, B=0.0, Tc=[0.0, 0.0])
+        for i in range(3)
+    ]
+    robot = rtb.DHRobot(links, gravity=[0.0, 0.0, -model.g])
+    ets = robot.ets()  # prebuilt once: robot.ik_LM would rebuild it on every call
+
+    rng = np.random.default_rng(args.seed)
+    n = args.states
+    q = rng.uniform(-np.pi, np.pi, (n, 3))
+    qd = rng.uniform(-3.0, 3.0, (n, 3))
+    qdd = rng.uniform(-10.0, 10.0, (n, 3))
+    q_ik = np.column_stack([rng.uniform(-np.pi, np.pi, n), rng.uniform(-np.pi / 2, np.pi / 2, n),
+                            rng.uniform(0.2, 2.5, n)])  # away from the elbow singularities
+    x_ik, _ = model.fk(q_ik)
+    teps = []
+    for x in x_ik:
+        tep = np.eye(4)
+        tep[:3, 3] = x
+        teps.append(tep)
+    rows = [(q[k], qd[k], qdd[k]) for k in range(n)]  # the same row objects for both sides
+    xs = list(x_ik)
+    nb = args.batch
+    bq, bqd, bqdd = (rng.uniform(lo, hi, (nb, 3)) for lo, hi in
+                     ((-np.pi, np.pi), (-3.0, 3.0), (-10.0, 10.0)))
+    ctypes_kernels = _ctypes_kernels.Kernels(model.raw)
+    floor = batch_floor(workdir, Path(rr.__file__).parent)
+
+    def ik_lm(k: int) -> Any:
+        return ets.ik_LM(teps[k % n], q0=IK_Q0, tol=args.ik_tol, mask=POSITION_MASK,
+                         joint_limits=False)
+
+    log("agreement checks")
+    tau = model.inverse_dynamics(q, qd, qdd)
+    rnea = np.array([pin.rnea(pm, pdata, *rows[k]) for k in range(n)])
+    fk_eval = np.array([ets.eval(q[k])[:3, 3] for k in range(n)])
+    batch_ours = model.inverse_dynamics(bq, bqd, bqdd)
+    batch_rne = np.asarray(robot.rne(bq, bqd, bqdd), dtype=float)
+    lm_err, lm_solved = 0.0, 0
+    for k in range(min(n, 200)):
+        sol = ik_lm(k)
+        if sol.success:
+            lm_solved += 1
+            back = model.fk(np.asarray(sol.q, dtype=float))[0]
+            lm_err = max(lm_err, float(np.abs(back - xs[k]).max()))
+    fk_back = max(float(np.abs(model.fk(model.ik(x))[0] - x).max()) for x in xs)
+    ct_tau = np.array([ctypes_kernels.inverse_dynamics(*rows[k]) for k in range(n)])
+
+    per_call = args.calls
+    pairs = [
+        Pair("tau = R p, one state", "Model.inverse_dynamics",
+             lambda k: model.inverse_dynamics(*rows[k % n]), "Pinocchio pin.rnea",
+             lambda k: pin.rnea(pm, pdata, *rows[k % n]), per_call,
+             target=">= 1x (goal 2x)", target_ratio=1.0,
+             agreement=f"{np.abs(tau - rnea).max():.1e}"),
+        Pair("FK, one state", "Model.fk", lambda k: model.fk(rows[k % n][0]),
+             "RTB ets.eval", lambda k: ets.eval(rows[k % n][0]), per_call,
+             target=">= 5x", target_ratio=5.0,
+             agreement=f"{np.abs(fk_eval - model.fk(q)[0]).max():.1e}"),
+        Pair("IK, one target (ours: all branches)", "Model.ik", lambda k: model.ik(xs[k % n]),
+             "RTB ets.ik_LM (1 solution)", ik_lm, max(per_call // 20, 10),
+             target=">= 5x", target_ratio=5.0,
+             agreement=f"FK(IK(x)) - x: {fk_back:.1e} m; LM ({lm_solved}/{min(n, 200)} "
+                       f"solved): {lm_err:.1e} m"),
+        Pair(f"tau = R p, batch of {nb:,} states (per state)", "Model.inverse_dynamics",
+             lambda k: model.inverse_dynamics(bq, bqd, bqdd), "RTB rne (batch)",
+             lambda k: robot.rne(bq, bqd, bqdd), 1, per=nb,
+             target="<= 100 ns and >= 5x", target_ratio=5.0, target_ns=100.0,
+             agreement=f"{np.abs(batch_ours - batch_rne).max():.1e}"),
+    ]
+    if floor is not None:
+        out = np.empty((nb, 3))
+        addr = [a.ctypes.data for a in (bq, bqd, bqdd, out)]
+        m_addr = ct.addressof(model.raw)
+        if floor(m_addr, *addr, nb) != -1:
+            sys.exit("bench_python: batch_floor_inverse_dynamics failed")
+        pairs.append(Pair(
+            f"tau = R p, batch of {nb:,} states (per state): the C floor",
+            "Model.inverse_dynamics", lambda k: model.inverse_dynamics(bq, bqd, bqdd),
+            "librrr in a C loop (bench/batch_floor.c)", lambda k: floor(m_addr, *addr, nb), 1,
+            per=nb, agreement=f"bit-identical: {out.tobytes() == batch_ours.tobytes()}"))
+    pairs += [
+        Pair("tau = R p, one state: the binding before", "Model.inverse_dynamics",
+             lambda k: model.inverse_dynamics(*rows[k % n]), "ctypes (_ctypes_kernels)",
+             lambda k: ctypes_kernels.inverse_dynamics(*rows[k % n]), max(per_call // 10, 10),
+             agreement=f"{np.abs(tau - ct_tau).max():.1e} (bit-identical: "
+                       f"{tau.tobytes() == ct_tau.tobytes()})"),
+    ]
+    info = {
+        "binding": f"{model_module.BINDING} (numpy in place: {_ext.NUMPY_IN_PLACE}, "
+                   f"numpy C API: {_ext.NUMPY_C_API}, GIL released from {_ext.NOGIL_ROWS} rows)",
+        "versions": f"Python {platform.python_version()}, numpy {np.__version__}, pin "
+                    f"{pin.__version__}, roboticstoolbox-python {rtb.__version__}",
+    }
+    return pairs, info
+
+
+def cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text(encoding="utf-8").splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats per row")
+    parser.add_argument("--states", type=int, default=1000, help="single-state inputs")
+    parser.add_argument("--calls", type=int, default=2000,
+                        help="calls per block of a single-state row (IK LM: 1/20 of it)")
+    parser.add_argument("--batch", type=int, default=100_000, help="states of the batch row")
+    parser.add_argument("--ik-tol", type=float, default=1e-12, help="ets.ik_LM tol")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--json", type=Path, help="also write the raw timings to this file")
+    args = parser.parse_args(argv)
+
+    load_start = " ".join(f"{v:.2f}" for v in os.getloadavg())
+    with tempfile.TemporaryDirectory(prefix="rrr-bench-") as tmp:
+        pairs, info = build(args, Path(tmp))
+        for p in pairs:
+            log(f"{p.operation}: {args.repeats} interleaved repeats")
+            p.run(args.repeats)
+    load_end = " ".join(f"{v:.2f}" for v in os.getloadavg())
+
+    print(f"Python API benchmark, {dt.datetime.now().isoformat(timespec='seconds')}, "
+          f"{cpu_model()}, {os.cpu_count()} CPUs, load average {load_start} (start) / "
+          f"{load_end} (end)")
+    print(f"{info['versions']}; binding: {info['binding']}")
+    print(f"{args.repeats} interleaved repeats; each cell: min / median / max\n")
+    print("| operation | ours | ours (ns) | reference | reference (ns) | ratio ref/ours "
+          "| agreement (max abs diff) | target |")
+    print("|---|---|---:|---|---:|---:|---|---|")
+    for p in pairs:
+        print(f"| {p.operation} | `{p.ours_name}` | {mmm(p.ours_ns, fmt_ns)} | {p.ref_name} | "
+              f"{mmm(p.ref_ns, fmt_ns)} | {mmm(p.ratios, fmt_ratio)} | {p.agreement} | "
+              f"{p.verdict()} |")
+    if args.json:
+        args.json.write_text(json.dumps({
+            "info": info, "load": [load_start, load_end],
+            "rows": [{"operation": p.operation, "ours_ns": p.ours_ns, "ref_ns": p.ref_ns,
+                      "reference": p.ref_name, "agreement": p.agreement} for p in pairs],
+        }, indent=1), encoding="utf-8")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
