@@ -202,7 +202,8 @@ static int np_layout_holds(void)
     return PyErr_Occurred() ? -1 : ok;
 }
 
-/* PyArray_New from numpy's API capsule, or NULL when the capsule or its ABI is not the known one. */
+/* PyArray_New from numpy's API capsule, or NULL when the capsule or its ABI is not the known
+ * one. */
 static np_new_fn numpy_new_fn(void)
 {
     PyObject *mod = PyImport_ImportModule("numpy._core._multiarray_umath");
@@ -1323,9 +1324,11 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(joint_motion, "joint_motion(q, xd, xdd) -> (qd, qdd)"),
     FASTCALL(ik, "ik(x) -> (k, 3) solutions"),
     FASTCALL(ik_branches, "ik_branches(x) -> [(shoulder, elbow), ...]"),
-    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow) -> q (shoulder 0 front / 1 back, elbow 0 up / 1 down)"),
+    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow) -> q (shoulder 0 front / 1 back, "
+                        "elbow 0 up / 1 down)"),
     FASTCALL(ik_nearest, "ik_nearest(x, q_prev) -> q"),
-    FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, shoulder_margin, det_jacobian)"),
+    FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, "
+                          "shoulder_margin, det_jacobian)"),
     FASTCALL(workspace_margin, "workspace_margin(x) -> margin"),
     FASTCALL(regressor, "regressor(q, qd, qdd) -> R"),
     FASTCALL(inverse_dynamics, "inverse_dynamics(q, qd, qdd) -> tau"),
@@ -1407,7 +1410,8 @@ static int import_dependencies(void)
         return -1;
     }
     if (!PyDict_Check(g_status_errors) || !PyDict_Check(g_status_meaning)) {
-        PyErr_SetString(PyExc_ImportError, "rrr_robot.core._status: ERRORS and MEANING must be dicts");
+        PyErr_SetString(PyExc_ImportError,
+                        "rrr_robot.core._status: ERRORS and MEANING must be dicts");
         return -1;
     }
     /* branch index = shoulder * 2 + elbow (rrr_kinematics.h) */
