@@ -4,9 +4,10 @@
 One command, one run: builds the C++ driver bench/bench_core.cpp with CMake (librrr from
 c_src/rrr with the repository's own CMakeLists, Pinocchio from the ``pin`` wheel), runs it, times
 the Robotics Toolbox for Python (``rne``, ``ets.ik_LM`` on a prebuilt ETS, ``ets.eval``,
-``accel``) and our Python binding (ctypes) in the same process, counts the operations of our
-generated dynamics (c_src/rrr/gen/derive_dynamics.py) and of our IK (a hand count of
-c_src/rrr/src/rrr_kinematics.c, checked against the source text), and prints markdown tables.
+``accel``), our Python API (the installed package's compiled binding) and bare ctypes calls of
+the build's librrr.so in the same process, counts the operations of our generated dynamics
+(c_src/rrr/gen/derive_dynamics.py) and of our IK (a hand count of c_src/rrr/src/rrr_kinematics.c,
+checked against the source text), and prints markdown tables.
 
 This is a measurement, not a test: nothing fails when a target is missed.
 
@@ -97,7 +98,7 @@ def run_core(exe: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Python-side timings: RTB and our ctypes binding
+# Python-side timings: RTB, our Python API (the compiled binding) and bare ctypes calls
 # ---------------------------------------------------------------------------------------------
 def best_ns(fn: Callable[[int], object], n: int, repeats: int) -> float:
     """Best over repeats of (time of fn(0..n-1)) / n, in ns per call."""
@@ -491,7 +492,8 @@ def report(
             f"checks, called from the driver) {t['kernel.tau']:.1f} ns of the "
             f"{t['tau.ours']:.1f} ns of `rrr_inverse_dynamics`")
     add(f"- Python rows: {args.py_states} states, best of {args.py_repeats} passes; "
-        "includes interpreter and ctypes/binding overhead on both sides")
+        "includes interpreter and binding overhead on both sides (`Model`: the compiled binding "
+        "rrr_robot.core._ext of the installed package; bare ctypes: this build's librrr.so)")
     add(f"- IK: position only (mask [1,1,1,0,0,0]), targets from q1 in [-pi, pi], "
         f"q2 in [-pi/2, pi/2], q3 in [0.2, 2.5]; LM solvers: q0 = (0.1, 0.2, 1.0), "
         f"tol = {args.ik_tol:g} on E = |e|^2/2, ilimit 30, slimit 100, joint_limits off. "
@@ -504,7 +506,7 @@ def report(
     add("")
     lines.extend(render_rows(rows_c))
     add("")
-    add("## Through Python: our binding (`rrr_robot`, ctypes) vs RTB")
+    add("## Through Python: our binding (`rrr_robot`) vs RTB")
     add("")
     lines.extend(render_rows(rows_py))
     add("")
@@ -586,9 +588,9 @@ def main(argv: list[str] | None = None) -> int:
     if not exe.is_file() or not lib.is_file():
         sys.exit(f"run_bench: {exe} or {lib} missing: run without --skip-build")
 
-    # the Python binding uses the librrr.so of this very build and this checkout's package
+    # bare ctypes calls use the librrr.so of this very build; Model, the installed package (pip
+    # install .[bench]: its compiled binding, which this checkout's sources alone do not have)
     os.environ["RRR_LIBRARY"] = str(lib)
-    sys.path.insert(0, str(ROOT / "python"))
 
     core = run_core(exe, args)
     py = python_side(args)
