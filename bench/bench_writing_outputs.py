@@ -8,9 +8,12 @@ Each repeat then starts, for each copy of the package, one fresh process that ti
 - ``csv``: writing the three ``<scenario>.csv`` (CosimResult.to_csv, atomic);
 - ``parquet``: the same as Parquet (only where the copy can: CosimResult.write, pyarrow);
 - ``figures``: the figures phase as ``run_writing`` runs it (import of the plotting module and
-  the figure libraries, the numeric references of Figs 5 and 6, every figure);
+  the figure libraries, the numeric references of Figs 5 and 6, every figure), all in that
+  process (wall and CPU time);
 
-and with ``--whole``, a complete ``rrr writing --out DIR -q`` of each copy. The copies run one
+and with ``--whole``, a complete ``rrr writing --out DIR -q`` of each copy (wall time), with
+the figures phase as the run logs it (copies that log it: there the references of Figs 5 and 6
+come from the worker started before the co-simulations). The copies run one
 after the other within a repeat (A, B, A, B, ...), so a change of machine load affects both;
 min / median / max over the repeats.
 
@@ -57,10 +60,11 @@ with tempfile.TemporaryDirectory() as tmp:
             for name, res in results.items():
                 res.write(d / f"{name}.parquet", "parquet")
             out["parquet"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     from rrr_robot.writing.plots import write_figures
     write_figures(d, robot.model, robot, ref, results)
     out["figures"] = time.perf_counter() - t0
+    out["figures, CPU time"] = time.process_time() - c0
     out["pngs"] = len(list(d.glob("*.png")))
 print("PHASES:" + json.dumps(out))
 """
@@ -97,12 +101,16 @@ def _phases(pickled: Path, pythonpath: str | None) -> dict[str, float]:
     return dict(json.loads(line.removeprefix("PHASES:")))
 
 
-def _whole(pythonpath: str | None, folder: Path) -> float:
+def _whole(pythonpath: str | None, folder: Path) -> tuple[float, float | None]:
+    """Wall time of a run, and its figures phase as it logs it (copies that log it)."""
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--out", str(folder), "-q"],
-                   env=_env(pythonpath), check=True, stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL)
-    return time.perf_counter() - start
+    err = subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--out", str(folder),
+                          "-q"], env=_env(pythonpath), check=True, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True).stderr
+    wall = time.perf_counter() - start
+    logged = [line.rsplit(" ", 2)[-2] for line in err.splitlines()
+              if "rrr_robot.writing.job: figures: " in line]
+    return wall, float(logged[-1]) if logged else None
 
 
 def _row(name: str, values: list[float]) -> str:
@@ -130,8 +138,11 @@ def main() -> int:
                 for phase, value in phases.items():
                     times.setdefault((copy, phase), []).append(value)
                 if args.whole:
-                    times.setdefault((copy, "whole run"), []).append(
-                        _whole(pythonpath, Path(tmp) / f"out-{copy}"))
+                    wall, figures = _whole(pythonpath, Path(tmp) / f"out-{copy}")
+                    times.setdefault((copy, "whole run"), []).append(wall)
+                    if figures is not None:
+                        times.setdefault((copy, "figures phase within the run"), []).append(
+                            figures)
         print(f"{args.repeats} repeats, interleaved; {pngs} figures; load average "
               f"{os.getloadavg()[0]:.2f} at the end")
     print("| copy: phase | min [s] | median [s] | max [s] |")

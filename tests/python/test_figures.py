@@ -1,6 +1,7 @@
 """The writing task's figures (rrr_robot.writing.plots): every figure is still written, under
 the names it always had, at its size; long series are drawn as their envelope (extremes
-kept); log-axis labels are plain text (no mathtext)."""
+kept); log-axis labels are plain text (no mathtext); the references of Figs 5 and 6 computed by
+a forked worker are those computed in-process, and its failures surface as without it."""
 
 from __future__ import annotations
 
@@ -10,10 +11,13 @@ from typing import Any
 import numpy as np
 import pytest
 from PIL import Image
+from rrr_robot.errors import NumericError
 from rrr_robot.sim.cosim import CosimResult
 from rrr_robot.writing import job as job_module
+from rrr_robot.writing import references as references_module
 from rrr_robot.writing.job import WritingJob, prepare, run_writing
 from rrr_robot.writing.plots import DPI, PowerOfTenFormatter, envelope, write_figures
+from rrr_robot.writing.references import BackgroundReferences, numeric_references
 
 SCENARIOS = ("pd", "ctc", "mismatch")
 #: Every figure of a default run with its size in inches (the names of the README).
@@ -113,3 +117,41 @@ def test_log_axis_labels_are_plain_text() -> None:
     fmt = PowerOfTenFormatter()
     assert fmt._num_to_string(2e-3, 1e-4, 1e2) == "2\u00d710\u207b\u00b3"
     assert fmt._num_to_string(1e5, 1e-4, 1e2) == "10\u2075"
+
+
+def test_background_references_equal_the_in_process_ones(short_run: Any) -> None:
+    """The forked worker's references of Figs 5 and 6 are those computed in this process."""
+    pytest.importorskip("roboticstoolbox")
+    pytest.importorskip("pinocchio")
+    model, robot, ref, _ = short_run
+    with BackgroundReferences(model, robot, ref) as worker:
+        got = worker.result()
+    want = numeric_references(model, robot, ref)
+    assert got.ik is not None and got.tau is not None
+    assert np.array_equal(got.ik, want.ik) and np.array_equal(got.tau, want.tau)
+
+
+def test_background_references_failure_is_raised_here(short_run: Any,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    """A worker that fails gives way to the computation in this process, so the error is the
+    same as without a worker."""
+    model, robot, ref, _ = short_run
+
+    def broken(*args: Any) -> Any:
+        raise NumericError("ik_LM did not converge at row 3", "ik_LM")
+
+    monkeypatch.setattr(references_module, "numeric_ik_path", broken)  # the fork inherits it
+    with BackgroundReferences(model, robot, ref) as worker, \
+            pytest.raises(NumericError, match="row 3"):
+        worker.result()
+
+
+def test_background_references_close_stops_the_worker(short_run: Any) -> None:
+    model, robot, ref, _ = short_run
+    worker = BackgroundReferences(model, robot, ref)
+    proc = worker._proc
+    worker.close()
+    worker.close()  # idempotent
+    if proc is not None:  # Linux
+        assert not proc.is_alive() and proc.exitcode is not None
+    assert BackgroundReferences(model, robot, ref, start=False)._proc is None

@@ -362,16 +362,16 @@ def test_an_interrupted_writing_run_leaves_the_previous_results(
 
     fake_cosim(monkeypatch, tip_errors={"pd": 0.03}, fail_at=2 if where == "cosim" else None)
     if where == "csv":
-        real_to_csv = CosimResult.to_csv
+        real_write = CosimResult.write
         written: list[Path] = []
 
-        def to_csv(self: CosimResult, path: Path) -> None:
+        def write(self: CosimResult, path: Path, fmt: str = "csv") -> None:
             if written:
                 raise KeyboardInterrupt
-            real_to_csv(self, path)
+            real_write(self, path, fmt)
             written.append(path)
 
-        monkeypatch.setattr(CosimResult, "to_csv", to_csv)
+        monkeypatch.setattr(CosimResult, "write", write)
     if where == "figure":
         from rrr_robot.writing import plots
 

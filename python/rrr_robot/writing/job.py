@@ -11,6 +11,7 @@ scenario's ``status`` says why (:func:`scenario_summary`); ``files`` lists the f
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -25,6 +26,7 @@ from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import ControlGains
 from ..core.tables import check_table_format
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
+from .references import BackgroundReferences
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
 from .trajectory import Reference, WritingSpec, make_reference
 
@@ -139,12 +141,16 @@ def run_writing(job: WritingJob,
     model, robot, scenarios, ref = prepare(job)
     for scn in scenarios:  # the output names, before anything runs
         check_name(f"{scn.name}.{fmt}")
-    with ResultSet(job.out, kind="writing") as rs:
+    # the references of Figs 5 and 6 depend on the reference only: a forked worker computes them
+    # while the co-simulations run (references.BackgroundReferences; stopped at the block's end)
+    with BackgroundReferences(model, robot, ref, start=job.figures) as references, \
+            ResultSet(job.out, kind="writing") as rs:
         log.info("reference: %.2f s, %d samples, least workspace margin %.3f m, least |sin q3| "
                  "%.3f", ref.t[-1] - ref.t[0], ref.t.size, ref.min_margin_m,
                  ref.min_elbow_margin)
         results: dict[str, CosimResult] = {}
         summary: dict[str, Any] = {"scenarios": {}}
+        table_time = 0.0
         for scn in scenarios:
             def report(k: int, n: int, name: str = scn.name) -> None:
                 if progress is not None:
@@ -158,9 +164,12 @@ def run_writing(job: WritingJob,
             )
             res = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
             results[scn.name] = res
+            start = time.perf_counter()
             res.write(rs.path(f"{scn.name}.{fmt}"), fmt)
+            table_time += time.perf_counter() - start
             s = summary["scenarios"][scn.name] = scenario_summary(metrics(res))
             log.info("%s: %s", scn.name, _describe(s))
+        log.info("%s tables: %.2f s", fmt, table_time)
         summary["reference"] = {
             "text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]),
             "step": float(ref.t[1] - ref.t[0]),
@@ -170,9 +179,11 @@ def run_writing(job: WritingJob,
         summary["fmi_version"] = f"{job.fmi_version}.0"
         summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
         if job.figures:
+            start = time.perf_counter()
             from .plots import write_figures
 
-            write_figures(rs.staging, model, robot, ref, results)
+            write_figures(rs.staging, model, robot, ref, results, references)
+            log.info("figures: %.2f s", time.perf_counter() - start)
         summary["files"] = sorted([*rs.names(), "summary.json"])
         summary = to_strict_json_value(summary)
         rs.write_text("summary.json", strict_json(summary) + "\n")

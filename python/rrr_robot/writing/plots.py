@@ -25,8 +25,8 @@ from ..core.model import Model
 from ..core.outputs import atomic_path
 from ..core.robot import RobotFile
 from ..sim.cosim import CosimResult
-from .references import inertial_from_robot, pinocchio_inverse_dynamics
-from .trajectory import Reference, numeric_ik_path
+from .references import BackgroundReferences
+from .trajectory import Reference
 
 log = logging.getLogger(__name__)
 JOINTS = ("q1", "q2", "q3")
@@ -134,27 +134,23 @@ def fig_joints(out: Path, ref: Reference) -> None:
         _save(fig, out / name)
 
 
-def fig_differences(out: Path, model: Model, robot: RobotFile, ref: Reference) -> None:
-    """Figs 5 and 6: closed form against the Robotics Toolbox IK and Pinocchio's rnea."""
-    try:
-        numeric = numeric_ik_path(model, ref.x, ref.q[0])
-    except ImportError:
-        log.warning("Fig 5 skipped: roboticstoolbox-python is not installed (pip install "
-                    "'rrr_robot[verify]')")
+def fig_differences(out: Path, model: Model, robot: RobotFile, ref: Reference,
+                    references: BackgroundReferences | None = None) -> None:
+    """Figs 5 and 6: closed form against the Robotics Toolbox IK and Pinocchio's rnea
+    (``references``: a worker started earlier; without it they are computed here)."""
+    if references is None:
+        references = BackgroundReferences(model, robot, ref, start=False)
+    refs = references.result()
+    if refs.ik is None:
+        log.warning("Fig 5 skipped: %s", refs.ik_skipped)
     else:
-        _diff_plot(out / "fig5_ik_difference.png", ref.t, ref.q - numeric, "rad",
+        _diff_plot(out / "fig5_ik_difference.png", ref.t, ref.q - refs.ik, "rad",
                    "Closed-form minus numeric (Robotics Toolbox ik_LM) inverse kinematics")
-    inertial = inertial_from_robot(robot)
-    if inertial is None:
-        log.warning("Fig 6 skipped: the robot file gives base parameters, not link inertias")
-        return
-    try:
-        tau_ref = pinocchio_inverse_dynamics(model.dh, model.g, inertial, ref.q, ref.qd, ref.qdd)
-    except ImportError:
-        log.warning("Fig 6 skipped: Pinocchio is not installed (pip install 'rrr_robot[verify]')")
+    if refs.tau is None:
+        log.warning("Fig 6 skipped: %s", refs.tau_skipped)
         return
     tau = model.inverse_dynamics(ref.q, ref.qd, ref.qdd)
-    _diff_plot(out / "fig6_torque_difference.png", ref.t, tau - tau_ref, "N m",
+    _diff_plot(out / "fig6_torque_difference.png", ref.t, tau - refs.tau, "N m",
                "Closed-form R p minus Pinocchio rnea inverse dynamics")
 
 
@@ -216,11 +212,13 @@ def fig_tip_error(out: Path, results: Mapping[str, CosimResult]) -> None:
 
 
 def write_figures(out: Path, model: Model, robot: RobotFile, ref: Reference,
-                  results: Mapping[str, CosimResult]) -> None:
-    """Every figure of one writing-task run."""
+                  results: Mapping[str, CosimResult],
+                  references: BackgroundReferences | None = None) -> None:
+    """Every figure of one writing-task run (``references``: the worker computing those of
+    Figs 5 and 6, started earlier)."""
     fig_reference(out, ref)
     fig_joints(out, ref)
-    fig_differences(out, model, robot, ref)
+    fig_differences(out, model, robot, ref, references)
     fig_letters(out, ref, results)
     fig_controls(out, results)
     fig_tip_error(out, results)
