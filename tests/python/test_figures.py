@@ -1,7 +1,7 @@
 """The writing task's figures (rrr_robot.writing.plots): every figure is still written, under
 the names it always had, at its size; long series are drawn as their envelope (extremes
-kept); log-axis labels are plain text (no mathtext); the references of Figs 5 and 6 computed by
-a forked worker are those computed in-process, and its failures surface as without it."""
+kept); log-axis labels are plain text (no mathtext); Figs 2-6 drawn by the forked worker of a
+run are those drawn in-process, and its failures surface as without it."""
 
 from __future__ import annotations
 
@@ -15,9 +15,16 @@ from rrr_robot.errors import NumericError
 from rrr_robot.sim.cosim import CosimResult
 from rrr_robot.writing import job as job_module
 from rrr_robot.writing import references as references_module
+from rrr_robot.writing.figure_worker import ReferenceFigures
 from rrr_robot.writing.job import WritingJob, prepare, run_writing
-from rrr_robot.writing.plots import DPI, PowerOfTenFormatter, envelope, write_figures
-from rrr_robot.writing.references import BackgroundReferences, numeric_references
+from rrr_robot.writing.plots import (
+    DPI,
+    REFERENCE_FIGURES,
+    PowerOfTenFormatter,
+    envelope,
+    write_figures,
+    write_reference_figures,
+)
 
 SCENARIOS = ("pd", "ctc", "mismatch")
 #: Every figure of a default run with its size in inches (the names of the README).
@@ -119,39 +126,46 @@ def test_log_axis_labels_are_plain_text() -> None:
     assert fmt._num_to_string(1e5, 1e-4, 1e2) == "10\u2075"
 
 
-def test_background_references_equal_the_in_process_ones(short_run: Any) -> None:
-    """The forked worker's references of Figs 5 and 6 are those computed in this process."""
+
+def test_the_worker_draws_the_reference_figures_as_this_process_does(short_run: Any,
+                                                                      tmp_path: Path) -> None:
+    """Figs 2-6 drawn by the forked worker are byte for byte those drawn here."""
     pytest.importorskip("roboticstoolbox")
     pytest.importorskip("pinocchio")
     model, robot, ref, _ = short_run
-    with BackgroundReferences(model, robot, ref) as worker:
-        got = worker.result()
-    want = numeric_references(model, robot, ref)
-    assert got.ik is not None and got.tau is not None
-    assert np.array_equal(got.ik, want.ik) and np.array_equal(got.tau, want.tau)
+    (tmp_path / "worker").mkdir()
+    (tmp_path / "here").mkdir()
+    with ReferenceFigures(tmp_path / "worker", model, robot, ref) as worker:
+        worker.finish()
+    write_reference_figures(tmp_path / "here", model, robot, ref)
+    names = sorted(p.name for p in (tmp_path / "here").iterdir())
+    assert names == sorted(REFERENCE_FIGURES)
+    assert sorted(p.name for p in (tmp_path / "worker").iterdir()) == names
+    for name in names:
+        assert (tmp_path / "worker" / name).read_bytes() == (tmp_path / "here" / name).read_bytes()
 
 
-def test_background_references_failure_is_raised_here(short_run: Any,
-                                                      monkeypatch: pytest.MonkeyPatch) -> None:
-    """A worker that fails gives way to the computation in this process, so the error is the
-    same as without a worker."""
+def test_a_failing_worker_gives_way_to_this_process(short_run: Any, tmp_path: Path,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """A worker that fails: finish() draws here, so the error is the one of a run without
+    the worker (here the numeric IK's)."""
     model, robot, ref, _ = short_run
 
     def broken(*args: Any) -> Any:
         raise NumericError("ik_LM did not converge at row 3", "ik_LM")
 
     monkeypatch.setattr(references_module, "numeric_ik_path", broken)  # the fork inherits it
-    with BackgroundReferences(model, robot, ref) as worker, \
+    with ReferenceFigures(tmp_path, model, robot, ref) as worker, \
             pytest.raises(NumericError, match="row 3"):
-        worker.result()
+        worker.finish()
 
 
-def test_background_references_close_stops_the_worker(short_run: Any) -> None:
+def test_close_stops_the_worker(short_run: Any, tmp_path: Path) -> None:
     model, robot, ref, _ = short_run
-    worker = BackgroundReferences(model, robot, ref)
+    worker = ReferenceFigures(tmp_path, model, robot, ref)
     proc = worker._proc
     worker.close()
     worker.close()  # idempotent
     if proc is not None:  # Linux
         assert not proc.is_alive() and proc.exitcode is not None
-    assert BackgroundReferences(model, robot, ref, start=False)._proc is None
+    assert not ReferenceFigures(tmp_path, model, robot, ref, start=False).running

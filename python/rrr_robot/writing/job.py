@@ -26,7 +26,7 @@ from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import ControlGains
 from ..core.tables import check_table_format
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
-from .references import BackgroundReferences
+from .figure_worker import ReferenceFigures
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
 from .trajectory import Reference, WritingSpec, make_reference
 
@@ -141,10 +141,10 @@ def run_writing(job: WritingJob,
     model, robot, scenarios, ref = prepare(job)
     for scn in scenarios:  # the output names, before anything runs
         check_name(f"{scn.name}.{fmt}")
-    # the references of Figs 5 and 6 depend on the reference only: a forked worker computes them
-    # while the co-simulations run (references.BackgroundReferences; stopped at the block's end)
-    with BackgroundReferences(model, robot, ref, start=job.figures) as references, \
-            ResultSet(job.out, kind="writing") as rs:
+    with ResultSet(job.out, kind="writing") as rs, \
+            ReferenceFigures(rs.staging, model, robot, ref, start=job.figures) as ref_figures:
+        # Figs 2-6 depend on the reference only: a forked worker draws them while the
+        # co-simulations run (figure_worker; stopped at the block's end, before the commit)
         log.info("reference: %.2f s, %d samples, least workspace margin %.3f m, least |sin q3| "
                  "%.3f", ref.t[-1] - ref.t[0], ref.t.size, ref.min_margin_m,
                  ref.min_elbow_margin)
@@ -180,9 +180,10 @@ def run_writing(job: WritingJob,
         summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
         if job.figures:
             start = time.perf_counter()
-            from .plots import write_figures
+            from .plots import write_result_figures
 
-            write_figures(rs.staging, model, robot, ref, results, references)
+            write_result_figures(rs.staging, ref, results)
+            ref_figures.finish()  # Figs 2-6: the worker's, or drawn here
             log.info("figures: %.2f s", time.perf_counter() - start)
         summary["files"] = sorted([*rs.names(), "summary.json"])
         summary = to_strict_json_value(summary)

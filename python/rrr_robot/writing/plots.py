@@ -25,7 +25,7 @@ from ..core.model import Model
 from ..core.outputs import atomic_path
 from ..core.robot import RobotFile
 from ..sim.cosim import CosimResult
-from .references import BackgroundReferences
+from .references import NumericReferences, numeric_references
 from .trajectory import Reference
 
 log = logging.getLogger(__name__)
@@ -135,12 +135,10 @@ def fig_joints(out: Path, ref: Reference) -> None:
 
 
 def fig_differences(out: Path, model: Model, robot: RobotFile, ref: Reference,
-                    references: BackgroundReferences | None = None) -> None:
+                    references: NumericReferences | None = None) -> None:
     """Figs 5 and 6: closed form against the Robotics Toolbox IK and Pinocchio's rnea
-    (``references``: a worker started earlier; without it they are computed here)."""
-    if references is None:
-        references = BackgroundReferences(model, robot, ref, start=False)
-    refs = references.result()
+    (``references``: computed beforehand; without them they are computed here)."""
+    refs = references if references is not None else numeric_references(model, robot, ref)
     if refs.ik is None:
         log.warning("Fig 5 skipped: %s", refs.ik_skipped)
     else:
@@ -211,14 +209,30 @@ def fig_tip_error(out: Path, results: Mapping[str, CosimResult]) -> None:
     _save(fig, out / "fig_tip_error.png")
 
 
-def write_figures(out: Path, model: Model, robot: RobotFile, ref: Reference,
-                  results: Mapping[str, CosimResult],
-                  references: BackgroundReferences | None = None) -> None:
-    """Every figure of one writing-task run (``references``: the worker computing those of
-    Figs 5 and 6, started earlier)."""
+#: The figures that depend on the reference only (figure_worker draws them during the
+#: co-simulations), by name.
+REFERENCE_FIGURES = ("fig2_reference.png", "fig3_joint_positions.png",
+                     "fig4_joint_velocities.png", "fig5_ik_difference.png",
+                     "fig6_torque_difference.png")
+
+
+def write_reference_figures(out: Path, model: Model, robot: RobotFile, ref: Reference) -> None:
+    """Figs 2-6: the reference, its joint motion, and the closed form against the numeric
+    references (Figs 5 and 6 skipped, with a warning, without roboticstoolbox or pinocchio)."""
     fig_reference(out, ref)
     fig_joints(out, ref)
-    fig_differences(out, model, robot, ref, references)
+    fig_differences(out, model, robot, ref)
+
+
+def write_result_figures(out: Path, ref: Reference, results: Mapping[str, CosimResult]) -> None:
+    """Figs 7-9 and the tip error: the co-simulated scenarios."""
     fig_letters(out, ref, results)
     fig_controls(out, results)
     fig_tip_error(out, results)
+
+
+def write_figures(out: Path, model: Model, robot: RobotFile, ref: Reference,
+                  results: Mapping[str, CosimResult]) -> None:
+    """Every figure of one writing-task run, in this process."""
+    write_reference_figures(out, model, robot, ref)
+    write_result_figures(out, ref, results)

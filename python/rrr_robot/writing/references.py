@@ -1,20 +1,14 @@
 """Independent numeric references for the paper's Figs 5 and 6: Pinocchio's recursive
 Newton-Euler inverse dynamics on the same robot and the Robotics Toolbox's numeric IK
-(trajectory.numeric_ik_path), computed here or in a forked worker while the co-simulations run
-(:class:`BackgroundReferences`).
+(trajectory.numeric_ik_path); :func:`numeric_references` computes both (figure_worker computes
+them in a forked process while the co-simulations run).
 
 Optional dependencies: ``pip install 'rrr_robot[verify]'`` (pin, roboticstoolbox-python).
 """
 
 from __future__ import annotations
 
-import contextlib
-import ctypes
-import logging
 import math
-import multiprocessing
-import signal
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -25,8 +19,6 @@ from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.robot import RobotFile
 from .trajectory import Reference, numeric_ik_path
-
-log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -123,83 +115,3 @@ def numeric_references(model: Model, robot: RobotFile, ref: Reference) -> Numeri
             tau_skipped = "Pinocchio is not installed (pip install 'rrr_robot[verify]')"
     return NumericReferences(ik, tau, ik_skipped, tau_skipped)
 
-
-def _die_with_parent() -> None:
-    """Linux: this process gets SIGKILL when the process that started it ends (a killed run
-    leaves no worker behind). Elsewhere nothing."""
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
-
-
-def _worker(conn: Any, model: Model, robot: RobotFile, ref: Reference) -> None:
-    """The forked process of :class:`BackgroundReferences`: compute, send, exit quietly."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    _die_with_parent()
-    try:
-        conn.send(("ok", numeric_references(model, robot, ref)))
-    except BaseException as exc:  # any failure: the parent computes again and raises it
-        with contextlib.suppress(BaseException):
-            conn.send(("error", f"{type(exc).__name__}: {exc}"))
-    finally:
-        conn.close()
-
-
-class BackgroundReferences:
-    """:func:`numeric_references` computed in a forked process, started now and collected by
-    :meth:`result`: on Linux the references of Figs 5 and 6 (about 1.5 s, mostly importing the
-    Robotics Toolbox) are ready while the co-simulations run on the other core. Where fork is
-    not available, or when the worker fails in any way, :meth:`result` computes them in this
-    process (so an error is raised here, as without the worker). :meth:`close` (or the end of a
-    ``with`` block) stops the worker; a Ctrl-C goes to the parent only. ``start=False``: no
-    worker (:meth:`result` computes in this process if it is called)."""
-
-    def __init__(self, model: Model, robot: RobotFile, ref: Reference,
-                 start: bool = True) -> None:
-        self._args = (model, robot, ref)
-        self._proc: Any = None
-        self._conn: Any = None
-        if start and sys.platform.startswith("linux"):
-            ctx = multiprocessing.get_context("fork")
-            self._conn, child = ctx.Pipe(duplex=False)
-            self._proc = ctx.Process(target=_worker, args=(child, *self._args), daemon=True,
-                                     name="rrr-numeric-references")
-            self._proc.start()
-            child.close()
-
-    def result(self) -> NumericReferences:
-        """The references (waits for the worker)."""
-        if self._conn is not None:
-            try:
-                status, value = self._conn.recv()
-            except (EOFError, OSError):
-                status, value = "error", "the worker ended without a result"
-            finally:
-                self.close()
-            if status == "ok" and isinstance(value, NumericReferences):
-                return value
-            log.debug("numeric references computed again in this process: %s", value)
-        return numeric_references(*self._args)
-
-    def close(self) -> None:
-        """Stop the worker if it still runs; idempotent."""
-        proc, self._proc = self._proc, None
-        conn, self._conn = self._conn, None
-        if conn is not None:
-            conn.close()
-        if proc is not None:
-            if proc.is_alive():
-                proc.terminate()
-            proc.join(5.0)
-            if proc.is_alive():
-                proc.kill()
-                proc.join()
-
-    def __enter__(self) -> BackgroundReferences:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
