@@ -258,7 +258,7 @@ static rrr_status dp5_trial(const rrr_model *m, const rrr_plant_integrator *s, c
         st = deriv(m, u, y5, k7);
     }
     if (st == RRR_NUMERIC) {
-        *err = INFINITY;
+        *err = (double)INFINITY;
         return RRR_OK;
     }
     if (st != RRR_OK) {
