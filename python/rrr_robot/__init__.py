@@ -31,6 +31,7 @@ if TYPE_CHECKING:
     from .core.model import Model, Singularity, bps_from_inertia
     from .core.robot import RobotFile, read_robot_file
     from .sim.fmus import fmu_path
+    from .sim.native import simulate
 
 #: The re-exported names that need numpy and librrr, imported on first use (``rr.Model``), so
 #: that ``import rrr_robot`` (and ``rrr --help``, ``rrr fmus``) loads neither.
@@ -42,6 +43,7 @@ _LAZY = {
     "RobotFile": ".core.robot",
     "read_robot_file": ".core.robot",
     "fmu_path": ".sim.fmus",
+    "simulate": ".sim.native",
 }
 
 
@@ -78,4 +80,5 @@ __all__ = [
     "bps_from_inertia",
     "fmu_path",
     "read_robot_file",
+    "simulate",
 ]

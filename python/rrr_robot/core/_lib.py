@@ -83,6 +83,13 @@ class RawCtcOutput(ct.Structure):
     _fields_ = [("u", D3), ("u_n", D3), ("u_c", D3), ("saturated", ct.c_uint)]
 
 
+class RawPlantIntegrator(ct.Structure):
+    """Mirror of ``rrr_plant_integrator`` (c_src/rrr/include/rrr/rrr_plant.h)."""
+
+    _fields_ = [("adaptive", ct.c_int), ("rtol", ct.c_double), ("atol", ct.c_double),
+                ("h_int", ct.c_double), ("max_steps", ct.c_long)]
+
+
 class RawParamInfo(ct.Structure):
     """Mirror of ``rrr_param_info`` (c_src/rrr/include/rrr/rrr_params.h): one row of the C
     parameter table."""
@@ -131,6 +138,9 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_torque_from_voltage": [_M, _D, _D, _D],
     "rrr_ctc_gains_default": [_P(RawCtcGains)],
     "rrr_ctc": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcOutput)],
+    "rrr_plant_integrator_default": [_P(RawPlantIntegrator)],
+    "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
+                            ct.c_size_t, ct.c_double, _D, _D, _D, _P(ct.c_size_t)],
     "rrr_param_set": [_M, ct.c_size_t, ct.c_double],
 }
 

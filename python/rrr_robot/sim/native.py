@@ -1,0 +1,124 @@
+"""The closed loop in C: ``rr.simulate`` runs librrr's ``rrr_sim_closed_loop`` over a sampled
+reference, with the calls and the order of the co-simulation master (:func:`run_cosim`) on the
+controller and plant FMUs, and returns the same :class:`CosimResult`: bit for bit the same
+numbers, without FMI and Python in the loop.
+
+The FMUs' start values become the C structs as the FMUs' ``set_defaults`` and setters would make
+them: librrr's defaults, then the given values by FMU variable name (model parameters through the
+C parameter table; the plant's ``q0``, ``qd0``, ``adaptive``, ``rtol``, ``atol``, ``h_int``; the
+controller's ``kp``, ``kd``, ``feedforward``). An unknown name is refused, as an FMU would.
+"""
+
+from __future__ import annotations
+
+import ctypes as ct
+import time
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..core import _lib
+from ..core._arrays import FloatArray, ptr
+from ..core.control import CtcGains
+from ..core.param_names import param_index, set_values
+from ..errors import BadInputError
+from .cosim import CosimOptions, CosimResult, _check_reference
+
+__all__ = ["simulate"]
+
+J = (1, 2, 3)
+_INTEGRATOR = ("adaptive", "rtol", "atol", "h_int")
+
+
+def _split(values: Mapping[str, float | bool], extra: set[str], who: str,
+           ) -> tuple[dict[str, float], dict[str, float | bool]]:
+    """(model parameters, the FMU's other variables); BadInputError for a name it has not."""
+    model: dict[str, float] = {}
+    other: dict[str, float | bool] = {}
+    for name, value in values.items():
+        if param_index(name) >= 0:
+            model[name] = float(value)
+        elif name in extra:
+            other[name] = value
+        else:
+            raise BadInputError(f"the {who} has no variable {name!r} (its model parameters and "
+                                f"{', '.join(sorted(extra))})")
+    return model, other
+
+
+def _model(changes: Mapping[str, float]) -> _lib.RawModel:
+    raw = _lib.RawModel()
+    _lib.call("rrr_model_default", ct.byref(raw))
+    return set_values(raw, changes)
+
+
+def _vector(other: Mapping[str, float | bool], name: str, default: float = 0.0) -> FloatArray:
+    return np.array([float(other.get(f"{name}[{i}]", default)) for i in J])
+
+
+def _plant(values: Mapping[str, float | bool],
+           ) -> tuple[_lib.RawModel, _lib.RawPlantIntegrator, FloatArray, FloatArray]:
+    extra = {f"{v}[{i}]" for v in ("q0", "qd0") for i in J} | set(_INTEGRATOR)
+    model, other = _split(values, extra, "plant")
+    integ = _lib.RawPlantIntegrator()
+    _lib.call("rrr_plant_integrator_default", ct.byref(integ))
+    if "adaptive" in other:
+        integ.adaptive = int(bool(other["adaptive"]))
+    for name in ("rtol", "atol", "h_int"):
+        if name in other:
+            setattr(integ, name, float(other[name]))
+    return _model(model), integ, _vector(other, "q0"), _vector(other, "qd0")
+
+
+def _controller(values: Mapping[str, float | bool]) -> tuple[_lib.RawModel, _lib.RawCtcGains]:
+    extra = {f"{g}[{i}]" for g in ("kp", "kd") for i in J} | {"feedforward"}
+    model, other = _split(values, extra, "controller")
+    default = CtcGains.default()
+    kp = [float(other.get(f"kp[{i}]", default.kp[i - 1])) for i in J]
+    kd = [float(other.get(f"kd[{i}]", default.kd[i - 1])) for i in J]
+    gains = CtcGains(kp=(kp[0], kp[1], kp[2]), kd=(kd[0], kd[1], kd[2]),
+                     feedforward=bool(other.get("feedforward", default.feedforward)))
+    return _model(model), _lib.RawCtcGains.from_buffer_copy(gains.packed)
+
+
+def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
+             x_ref: FloatArray, options: CosimOptions | None = None) -> CosimResult:
+    """The closed loop of :func:`run_cosim` in C, bit-identical to the FMUs' co-simulation.
+
+    ``options`` as for :func:`run_cosim`; FMU files and the measurement/actuation hooks (a CAN
+    bench's quantisation) belong to the FMU engine and are refused here.
+    """
+    options = options if options is not None else CosimOptions()
+    _check_reference(t, q_ref, qd_ref, qdd_ref, options.step)
+    if options.measure is not None or options.actuate is not None:
+        raise BadInputError("the native engine has no measurement or actuation hooks (they model "
+                            "a CAN bench): run the FMUs (run_cosim) for those")
+    if options.plant_fmu is not None or options.controller_fmu is not None:
+        raise BadInputError("the native engine runs librrr, not FMU files: leave plant_fmu and "
+                            "controller_fmu unset, or run the FMUs (run_cosim)")
+    n = t.shape[0]
+    plant_values: dict[str, float | bool] = {f"q0[{i}]": float(q_ref[0, i - 1]) for i in J}
+    plant_values |= {f"qd0[{i}]": float(qd_ref[0, i - 1]) for i in J}
+    plant_values |= dict(options.plant_values)
+    plant, integ, q0, qd0 = _plant(plant_values)
+    ctrl, gains = _controller(options.controller_values)
+    ref = np.ascontiguousarray(np.hstack([q_ref, qd_ref, qdd_ref]), dtype=np.float64)
+    plant_rec = np.empty((n, 12))
+    ctrl_rec = np.empty((n, 9))
+    done = ct.c_size_t(0)
+    start = time.perf_counter()
+    status = _lib.FUNCS["rrr_sim_closed_loop"](
+        ct.byref(plant), ct.byref(integ), ptr(q0), ptr(qd0), ct.byref(ctrl), ct.byref(gains),
+        n, float(options.step), ptr(ref), ptr(plant_rec), ptr(ctrl_rec), ct.byref(done))
+    wall = time.perf_counter() - start
+    if status != 0:
+        k = int(done.value)  # 0 also when the setup (models, settings, initial state) failed
+        where = f"sample {k} (t = {t[min(k, n - 1)]:.6f} s)" + (" or its setup" if k == 0 else "")
+        _lib.raise_for("rrr_sim_closed_loop", status, f"at {where}")
+    if options.progress is not None:
+        options.progress(n - 1, n)
+    return CosimResult(
+        t=t, q_ref=q_ref, qd_ref=qd_ref, x_ref=x_ref,
+        q=plant_rec[:, 0:3], qd=plant_rec[:, 3:6], qdd=plant_rec[:, 6:9], tip=plant_rec[:, 9:12],
+        u=ctrl_rec[:, 0:3], u_n=ctrl_rec[:, 3:6], u_c=ctrl_rec[:, 6:9], wall_time=wall,
+    )
