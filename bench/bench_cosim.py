@@ -7,7 +7,7 @@ no recording, no progress). The breakdown times each FMI call kind alone in a lo
 table compares the FMI 3.0 FMUs with the FMI 2.0 ones under the same master, measured in
 alternating blocks (FMI 2, FMI 3, FMI 2, ...) on the same reference: min / median / max.
 
-Run:  python bench/bench_cosim.py [--repeats 3]
+Run:  python bench/bench_cosim.py [--repeats 5]
 """
 
 from __future__ import annotations
@@ -88,25 +88,37 @@ def fmi_versions(ref: object, step: float, blocks: int) -> tuple[list[float], li
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3, help="best of this many runs")
+    parser.add_argument("--repeats", type=int, default=5, help="alternating blocks (>= 3)")
     args = parser.parse_args()
     model = rr.Model.default()
     ref = make_reference(model)
     step = float(ref.t[1] - ref.t[0])
     n = ref.t.size
     sim_time = float(ref.t[-1] - ref.t[0])
-    ours = min(run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, CosimOptions(step=step)).wall_time
-               for _ in range(args.repeats))
-    ceiling = min(bare_loop(n - 1, step, ref.q[0]) for _ in range(args.repeats))
+    blocks = max(3, args.repeats)
+    walls: dict[str, list[float]] = {"master": [], "ceiling": [], "native": []}
+    opts = CosimOptions(step=step)
+    for _ in range(blocks):  # alternating blocks: master, bare loop, native, master, ...
+        walls["master"].append(run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, opts).wall_time)
+        walls["ceiling"].append(bare_loop(n - 1, step, ref.q[0]))
+        walls["native"].append(rr.simulate(ref.t, ref.q, ref.qd, ref.qdd, ref.x, opts).wall_time)
     print(f"# Co-simulation speed: {platform.processor() or platform.machine()}, "
-          f"{os.cpu_count()} CPUs, Python {platform.python_version()}, best of {args.repeats}")
+          f"{os.cpu_count()} CPUs, Python {platform.python_version()}, {blocks} alternating "
+          "blocks, min / median / max")
     print(f"default writing task: {sim_time:.2f} s simulated, {n} steps of {1e3 * step:g} ms\n")
-    print("| loop | wall time (s) | real-time factor | us/step |")
-    print("|---|---|---|---|")
-    for name, wall in (("run_cosim (master, recording)", ours), ("bare FMPy loop (ceiling)",
-                                                                  ceiling)):
-        print(f"| {name} | {wall:.3f} | {sim_time / wall:.1f}x | {1e6 * wall / n:.1f} |")
-    print(f"\nmaster reaches {100 * ceiling / ours:.0f} % of the ceiling\n")
+    print("| loop | real-time factor | us/step (median) |")
+    print("|---|---|---|")
+    for key, name in (("master", "run_cosim: FMUs through FMPy (master, recording)"),
+                      ("ceiling", "bare FMPy loop (the same FMI calls, nothing else)"),
+                      ("native", "rr.simulate: the same loop in C (rrr_sim_closed_loop)")):
+        rtf = sim_time / np.array(walls[key])
+        print(f"| {name} | {rtf.min():.1f}x / {np.median(rtf):.1f}x / {rtf.max():.1f}x | "
+              f"{1e6 * float(np.median(walls[key])) / n:.2f} |")
+    share = np.array(walls["ceiling"]) / np.array(walls["master"])
+    speedup = np.array(walls["master"]) / np.array(walls["native"])
+    print(f"\nmaster / ceiling (per block): {100 * share.min():.0f} / "
+          f"{100 * np.median(share):.0f} / {100 * share.max():.0f} %; rr.simulate / master: "
+          f"{speedup.min():.1f}x / {np.median(speedup):.1f}x / {speedup.max():.1f}x\n")
     print("| where the time goes (each call alone) | us/call |")
     print("|---|---|")
     for name, us in per_call(5000, step).items():
