@@ -12,8 +12,8 @@ Each repeat then starts, for each copy of the package, one fresh process that ti
   process (wall and CPU time);
 
 and with ``--whole``, a complete ``rrr writing --out DIR -q`` of each copy (wall time), with
-the figures phase as the run logs it (copies that log it: there the references of Figs 5 and 6
-come from the worker started before the co-simulations). The copies run one
+the figures phase as the run logs it (copies that log it: there a forked worker has drawn
+Figs 2-6 during the co-simulations, writing.figure_worker). The copies run one
 after the other within a repeat (A, B, A, B, ...), so a change of machine load affects both;
 min / median / max over the repeats.
 
