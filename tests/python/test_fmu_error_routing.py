@@ -121,3 +121,40 @@ def test_an_fmu_that_cannot_be_read_is_a_cosim_error(tmp_path: Path) -> None:
         with pytest.raises(rr.CosimError, match=needle) as info:
             FmuSlave(path, "plant")
         assert str(info.value).startswith("plant: ") and str(path) in str(info.value)
+
+
+def _nan_at(k_bad: int) -> Any:
+    """A measure/actuate function that passes values through except at its k_bad-th call."""
+    calls = [0]
+
+    def f(x: np.ndarray) -> np.ndarray:
+        calls[0] += 1
+        return np.full_like(x, np.nan) if calls[0] == k_bad + 1 else np.array(x)
+
+    return f
+
+
+@pytest.mark.parametrize("fmi", [2, 3])
+@pytest.mark.parametrize("which", ["measure", "actuate"])
+def test_a_failure_inside_the_stepping_loop_names_the_fmu_the_call_and_the_time(
+        fmi: int, which: str) -> None:
+    """The master binds its FMI calls once and guards the whole loop: a refused input at step
+    k is still a CosimError of the FMU that refused it, its call and t_k, with its reason."""
+    options = CosimOptions(fmi_version=fmi, **{which: _nan_at(4)})  # type: ignore[arg-type]
+    with pytest.raises(rr.CosimError) as info:
+        run_cosim(T, Q, ZERO, ZERO, ZERO, options)
+    who = "controller" if which == "measure" else "plant"
+    function = f"fmi{fmi}SetReal" if fmi == 2 else "fmi3SetFloat64"
+    message = str(info.value)
+    assert message.startswith(f"{who}: {function} returned ERROR at t = 0.004000 s: "), message
+    assert "must be finite, got nan" in message, message  # the FMU's own reason
+    assert info.value.function == function and info.value.status == "ERROR"
+
+
+def test_a_discarded_step_inside_the_loop_is_the_plants_do_step() -> None:
+    options = CosimOptions(plant_values={"adaptive": False, "h_int": 1e-12})
+    with pytest.raises(rr.CosimError) as info:
+        run_cosim(T, Q, ZERO, ZERO, ZERO, options)
+    assert str(info.value).startswith("plant: fmi2DoStep returned DISCARD at t = 0.000000 s: ")
+    assert "substeps of h_int" in str(info.value)
+    assert info.value.function == "fmi2DoStep"

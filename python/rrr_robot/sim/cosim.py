@@ -7,13 +7,16 @@ FMUs then advance. Every signal is recorded into preallocated arrays.
 
 from __future__ import annotations
 
+import ctypes as ct
 import logging
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from fmpy.fmi1 import FMICallException
 
 from ..core._arrays import FloatArray
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
@@ -110,9 +113,26 @@ def _check_reference(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_r
         raise BadInputError(f"the reference must be sampled at the communication step {step} s")
 
 
+def _cursor() -> tuple[Any, ct.c_void_p]:
+    """A ``double*`` for FMPy's value arguments and the address it holds, to move it over a
+    recording array (``address.value = ...``) so that the FMUs read from and write into the
+    recording arrays directly: no copy and no new pointer object per step."""
+    pointer = ct.POINTER(ct.c_double)()
+    return pointer, ct.c_void_p.from_buffer(pointer)
+
+
 def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
               x_ref: FloatArray, options: CosimOptions = CosimOptions()) -> CosimResult:
-    """Co-simulate controller and plant FMUs along a sampled joint reference."""
+    """Co-simulate controller and plant FMUs along a sampled joint reference.
+
+    The loop binds each FMI call once (FmuSlave.setter/getter/stepper) and points it into the
+    recording arrays (_cursor): ``rows`` holds, per communication point, the reference (q_ref,
+    qd_ref, qdd_ref) followed by the plant's outputs (q, qd, qdd, tip), so that its first 15
+    columns are the controller's inputs in their order; ``ctrl_rec`` holds the controller's
+    outputs, whose first three (u) are the plant's inputs. A failed call raises CosimError
+    naming the FMU, the call and the time; messages of calls that succeeded are logged as
+    warnings.
+    """
     _check_reference(t, q_ref, qd_ref, qdd_ref, options.step)
     n = t.shape[0]
     plant_values = {f"q0[{i}]": float(q_ref[0, i - 1]) for i in J}
@@ -125,32 +145,93 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
         plant.initialize(float(t[0]), plant_values)
         c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)
         p_in, p_out = plant.real_block(PLANT_IN), plant.real_block(PLANT_OUT)
-        plant_rec = np.empty((n, len(PLANT_OUT)))
+        rows = np.empty((n, 9 + len(PLANT_OUT)))
+        rows[:, 0:3], rows[:, 3:6], rows[:, 6:9] = q_ref, qd_ref, qdd_ref
         ctrl_rec = np.empty((n, len(CTRL_OUT)))
-        ref = np.hstack([q_ref, qd_ref, qdd_ref])
-        plant.get_block(p_out)
-        step, every = options.step, max(1, n // 100)
+        # row k of `rows` from its first column (the controller's inputs), row k of `ctrl_rec`
+        # (the controller's outputs and, its first three, the plant's inputs), row k of `rows`
+        # from column 9 (the plant's outputs); the arrays outlive the loop
+        rows_at, row_bytes = rows.ctypes.data, rows.strides[0]
+        out_at, out_bytes = ctrl_rec.ctypes.data, ctrl_rec.strides[0]
+        (c_in_ptr, c_in_addr), (u_ptr, u_addr), (p_out_ptr, p_out_addr) = (
+            _cursor(), _cursor(), _cursor())
+        c_set, c_get, c_step = ctrl.setter(c_in), ctrl.getter(c_out), ctrl.stepper()
+        p_set, p_get, p_step = plant.setter(p_in), plant.getter(p_out), plant.stepper()
         measure, actuate = options.measure, options.actuate
+
+        def c_set_measured(k: int) -> None:  # the controller's inputs through `measure`
+            assert measure is not None
+            c_in.values[:9] = rows[k, :9]
+            c_in.values[9:] = measure(rows[k, 9:15])
+            c_set(c_in.buffer)
+
+        def p_set_actuated(k: int) -> None:  # the plant's inputs through `actuate`
+            assert actuate is not None
+            p_in.values[:] = actuate(ctrl_rec[k, :3])
+            p_set(p_in.buffer)
+
+        step, now = options.step, float(t[0])
+        chunk = max(1, (n - 1) // 100) if options.progress is not None else n
+        messages = (ctrl.messages, plant.messages)
+        stage = "plant GetReal"
         start = time.perf_counter()
-        for k in range(n):
-            plant_rec[k] = p_out.values
-            c_in.values[:9] = ref[k]
-            c_in.values[9:] = p_out.values[:6] if measure is None else measure(p_out.values[:6])
-            ctrl.set_block(c_in)
-            ctrl.get_block(c_out)
-            ctrl_rec[k] = c_out.values
-            if k == n - 1:
-                break
-            p_in.values[:] = c_out.values[:3] if actuate is None else actuate(c_out.values[:3])
-            plant.set_block(p_in)
-            plant.do_step(step)
-            ctrl.do_step(step)
-            plant.get_block(p_out)
-            if options.progress is not None and k % every == 0:
-                options.progress(k, n)
+        try:
+            p_out_addr.value = rows_at + 9 * 8
+            p_get(p_out_ptr)
+            for first in range(0, n - 1, chunk):
+                for k in range(first, min(first + chunk, n - 1)):
+                    stage = "controller SetReal"
+                    if measure is None:
+                        c_in_addr.value = rows_at + k * row_bytes
+                        c_set(c_in_ptr)
+                    else:
+                        c_set_measured(k)
+                    stage = "controller GetReal"
+                    u_addr.value = out_at + k * out_bytes
+                    c_get(u_ptr)
+                    stage = "plant SetReal"
+                    if actuate is None:
+                        p_set(u_ptr)
+                    else:
+                        p_set_actuated(k)
+                    stage = "plant DoStep"
+                    p_step(now, step)
+                    stage = "controller DoStep"
+                    c_step(now, step)
+                    now += step
+                    stage = "plant GetReal"
+                    p_out_addr.value = rows_at + (k + 1) * row_bytes + 9 * 8
+                    p_get(p_out_ptr)
+                    if messages[0] or messages[1]:
+                        _flush(ctrl, plant, now)
+                if options.progress is not None:
+                    options.progress(first, n)
+            stage = "controller SetReal"
+            if measure is None:
+                c_in_addr.value = rows_at + (n - 1) * row_bytes
+                c_set(c_in_ptr)
+            else:
+                c_set_measured(n - 1)
+            stage = "controller GetReal"
+            u_addr.value = out_at + (n - 1) * out_bytes
+            c_get(u_ptr)
+        except FMICallException as exc:
+            who, call = stage.split(" ")
+            slave = ctrl if who == "controller" else plant
+            raise slave.call_failed(call, exc, now) from exc
+        if messages[0] or messages[1]:
+            _flush(ctrl, plant, now)
         wall = time.perf_counter() - start
+        ctrl.time = plant.time = now
     return CosimResult(
         t=t, q_ref=q_ref, qd_ref=qd_ref, x_ref=x_ref,
-        q=plant_rec[:, 0:3], qd=plant_rec[:, 3:6], qdd=plant_rec[:, 6:9], tip=plant_rec[:, 9:12],
+        q=rows[:, 9:12], qd=rows[:, 12:15], qdd=rows[:, 15:18], tip=rows[:, 18:21],
         u=ctrl_rec[:, 0:3], u_n=ctrl_rec[:, 3:6], u_c=ctrl_rec[:, 6:9], wall_time=wall,
     )
+
+
+def _flush(ctrl: FmuSlave, plant: FmuSlave, now: float) -> None:
+    """Log the FMUs' error messages of calls that succeeded as warnings."""
+    for slave in (ctrl, plant):
+        if slave.messages:
+            slave.flush_messages(f"the step to t = {now:.6f} s")

@@ -17,9 +17,10 @@ import shutil
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from fmpy import extract, read_model_description
@@ -52,6 +53,7 @@ class _Fmi2:
     """The FMI 2.0 calls FmuSlave needs, on FMPy's FMU2Slave."""
 
     version = 2
+    renamed: ClassVar[Mapping[str, str]] = {}
 
     def __init__(self, md: Any, unzipdir: str, name: str) -> None:
         from fmpy.fmi2 import FMU2Slave
@@ -91,11 +93,22 @@ class _Fmi2:
     def do_step(self, t: float, h: float) -> None:
         self.fmu.fmi2DoStep(self.fmu.component, t, h, 1)
 
+    def setter(self, vrs: ct.Array[Any], n: int) -> Callable[[Any], object]:
+        return partial(self.fmu.fmi2SetReal, self.fmu.component, vrs, n)
+
+    def getter(self, vrs: ct.Array[Any], n: int) -> Callable[[Any], object]:
+        return partial(self.fmu.fmi2GetReal, self.fmu.component, vrs, n)
+
+    def stepper(self) -> Callable[[float, float], object]:
+        fmi2_do_step, component = self.fmu.fmi2DoStep, self.fmu.component
+        return lambda t, h: fmi2_do_step(component, t, h, 1)
+
 
 class _Fmi3:
     """The FMI 3.0 calls FmuSlave needs, on FMPy's FMU3Slave."""
 
     version = 3
+    renamed: ClassVar[Mapping[str, str]] = {"SetReal": "SetFloat64", "GetReal": "GetFloat64"}
 
     def __init__(self, md: Any, unzipdir: str, name: str) -> None:
         from fmpy.fmi3 import FMU3Slave, fmi3Boolean, fmi3Float64
@@ -140,6 +153,19 @@ class _Fmi3:
         event, terminate, early = self._flags
         self.fmu.fmi3DoStep(self.fmu.component, t, h, True, ct.byref(event),
                             ct.byref(terminate), ct.byref(early), ct.byref(self._last))
+
+    def setter(self, vrs: ct.Array[Any], n: int) -> Callable[[Any], object]:
+        fmi3_set, component = self.fmu.fmi3SetFloat64, self.fmu.component
+        return lambda values: fmi3_set(component, vrs, n, values, n)
+
+    def getter(self, vrs: ct.Array[Any], n: int) -> Callable[[Any], object]:
+        fmi3_get, component = self.fmu.fmi3GetFloat64, self.fmu.component
+        return lambda values: fmi3_get(component, vrs, n, values, n)
+
+    def stepper(self) -> Callable[[float, float], object]:
+        fmi3_do_step, component = self.fmu.fmi3DoStep, self.fmu.component
+        tail = (*(ct.byref(flag) for flag in self._flags), ct.byref(self._last))
+        return lambda t, h: fmi3_do_step(component, t, h, True, *tail)
 
 
 #: The calls of each FMI version, by the model description's fmiVersion.
@@ -265,21 +291,54 @@ class FmuSlave:
     def _guard(self, what: str, fn: object, *args: object, **kwargs: object) -> None:
         if self._closed:
             raise CosimError(f"{self._who}: {what} called after close()")
-        self._errors = []
+        self._errors.clear()
         try:
             fn(*args, **kwargs)  # type: ignore[operator]
         except FMICallException as exc:
-            status = _STATUS[exc.status] if 0 <= exc.status < 6 else str(exc.status)
-            what = f"fmi{self.fmi_version}{what}"
-            raise CosimError(
-                f"{self._who}: {what} returned {status} at t = {self.time:.6f} s"
-                f"{self._detail()}",
-                function=what, status=status,
-            ) from exc
+            raise self.call_failed(what, exc, self.time) from exc
+        if self._errors:
+            self.flush_messages(f"fmi{self.fmi_version}{self._api.renamed.get(what, what)}")
+
+    # ---- the stepping loop's calls -----------------------------------------------------------
+    # A master that makes thousands of calls per second binds them once and skips the per-call
+    # guard: it runs its loop inside ``except FMICallException`` and turns the exception into
+    # call_failed(...), and calls flush_messages(...) when ``messages`` is not empty. The value
+    # arguments are anything FMPy accepts for a pointer to doubles (a ctypes array, or
+    # ``ctypes.byref`` of a ``c_double`` with an offset, which points into a recording array).
+    def setter(self, block: RealBlock) -> Callable[[Any], object]:
+        """The SetReal (SetFloat64) of ``block``'s variables, called with the values."""
+        return self._api.setter(block.vrs, len(block.names))
+
+    def getter(self, block: RealBlock) -> Callable[[Any], object]:
+        """The GetReal (GetFloat64) of ``block``'s variables, called with the destination."""
+        return self._api.getter(block.vrs, len(block.names))
+
+    def stepper(self) -> Callable[[float, float], object]:
+        """The DoStep, called with the communication point and the step size."""
+        return self._api.stepper()
+
+    @property
+    def messages(self) -> list[str]:
+        """The FMU's error messages since the last guarded call or flush_messages (the same
+        list object for the instance's lifetime: a loop may keep a reference)."""
+        return self._errors
+
+    def call_failed(self, what: str, exc: FMICallException, time: float) -> CosimError:
+        """The CosimError for the call ``what`` (e.g. "DoStep") that raised ``exc`` at ``time``,
+        with the FMU's messages; the caller raises it."""
+        status = _STATUS[exc.status] if 0 <= exc.status < 6 else str(exc.status)
+        function = f"fmi{self.fmi_version}{self._api.renamed.get(what, what)}"
+        err = CosimError(f"{self._who}: {function} returned {status} at t = {time:.6f} s"
+                         f"{self._detail()}", function=function, status=status)
+        self._errors.clear()
+        return err
+
+    def flush_messages(self, where: str) -> None:
+        """Log as warnings the error messages of calls that succeeded after all; ``where``
+        names the call or the step."""
         for text in self._errors:
-            log.warning("[%s] fmi%d%s: the FMU reported an error: %s", self.name,
-                        self.fmi_version, what, text)
-        self._errors = []
+            log.warning("[%s] %s: the FMU reported an error: %s", self.name, where, text)
+        self._errors.clear()
 
     def close(self) -> None:
         """Terminate and free the instance and remove the extraction folder (idempotent)."""
