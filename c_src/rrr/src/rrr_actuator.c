@@ -92,6 +92,23 @@ rrr_status rrr_voltage_from_torque(const rrr_model *m, const double qd[3], const
     return RRR_OK;
 }
 
+/* u_out = u_in clamped to +/- u_max; the bits of the joints that were clamped */
+static unsigned clamp3(const rrr_model *m, const double u_in[3], double u_out[3])
+{
+    unsigned bits = 0u;
+    for (int i = 0; i < RRR_NJ; ++i) {
+        u_out[i] = u_in[i];
+        if (u_out[i] > m->u_max) {
+            u_out[i] = m->u_max;
+            bits |= 1u << i;
+        } else if (u_out[i] < -m->u_max) {
+            u_out[i] = -m->u_max;
+            bits |= 1u << i;
+        }
+    }
+    return bits;
+}
+
 rrr_status rrr_saturate(const rrr_model *m, const double u_in[3], double u_out[3],
                         unsigned *saturated)
 {
@@ -99,18 +116,8 @@ rrr_status rrr_saturate(const rrr_model *m, const double u_in[3], double u_out[3
         !isfinite(m->u_max) || !(m->u_max > 0.0)) {
         return RRR_BAD_INPUT;
     }
-    unsigned bits = 0u;
     double v[3];
-    for (int i = 0; i < RRR_NJ; ++i) {
-        v[i] = u_in[i];
-        if (v[i] > m->u_max) {
-            v[i] = m->u_max;
-            bits |= 1u << i;
-        } else if (v[i] < -m->u_max) {
-            v[i] = -m->u_max;
-            bits |= 1u << i;
-        }
-    }
+    const unsigned bits = clamp3(m, u_in, v);
     memcpy(u_out, v, sizeof v);
     if (saturated != NULL) {
         *saturated = bits;
@@ -118,16 +125,28 @@ rrr_status rrr_saturate(const rrr_model *m, const double u_in[3], double u_out[3
     return RRR_OK;
 }
 
-rrr_status rrr_torque_from_voltage(const rrr_model *m, const double qd[3], const double u[3],
-                                   double tau[3])
+int rrr_actuator_params_ok(const rrr_model *m)
 {
-    if (m == NULL || qd == NULL || u == NULL || tau == NULL || !actuator_ok(m) ||
-        !rrr_finite_n(qd, 3) || !rrr_finite_n(u, 3)) {
+    return actuator_ok(m);
+}
+
+int rrr_actuator_friction(const rrr_model *m, int params_ok, const double qd[3], double uf[3])
+{
+    if (!params_ok || !rrr_finite_n(qd, 3)) {
+        return 0;
+    }
+    friction(m, qd, uf);
+    return 1;
+}
+
+rrr_status rrr_actuator_torque(const rrr_model *m, const double uf[3], const double u[3],
+                               double tau[3])
+{
+    if (!rrr_finite_n(u, 3)) {
         return RRR_BAD_INPUT;
     }
-    double us[3], uf[3], t[3];
-    (void)rrr_saturate(m, u, us, NULL);
-    friction(m, qd, uf);
+    double us[3], t[3];
+    (void)clamp3(m, u, us); /* u_max is valid: rrr_actuator_friction's params_ok */
     for (int i = 0; i < RRR_NJ; ++i) {
         t[i] = m->kt[i] * (us[i] - uf[i]);
     }
@@ -136,4 +155,15 @@ rrr_status rrr_torque_from_voltage(const rrr_model *m, const double qd[3], const
     }
     memcpy(tau, t, sizeof t);
     return RRR_OK;
+}
+
+rrr_status rrr_torque_from_voltage(const rrr_model *m, const double qd[3], const double u[3],
+                                   double tau[3])
+{
+    double uf[3];
+    if (m == NULL || qd == NULL || u == NULL || tau == NULL ||
+        !rrr_actuator_friction(m, actuator_ok(m), qd, uf)) {
+        return RRR_BAD_INPUT;
+    }
+    return rrr_actuator_torque(m, uf, u, tau);
 }

@@ -159,20 +159,22 @@ static int pivot_ok(double v)
     return v > 0.0 && isfinite(v);
 }
 
-rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], const double qd[3],
-                                const double tau[3], double qdd[3])
+void rrr_fd_factorize(const rrr_model *m, const double q[3], const double qd[3],
+                      rrr_fd_factor *f)
 {
-    if (m == NULL || q == NULL || qd == NULL || tau == NULL || qdd == NULL || !isfinite(q[0])) {
-        return RRR_BAD_INPUT;
+    f->st = RRR_OK;
+    if (!isfinite(q[0])) {
+        f->st = RRR_BAD_INPUT;
+        return;
     }
     const rrr_trig t = rrr_trig_of(q);
     /* bias c(q, qd) + h(q) = tau(q, qd, 0): one fused call; a non-finite p, a2, g, q or qd
      * shows here (before D, whose NaN would look like a failed pivot) */
     const double zero[3] = {0.0, 0.0, 0.0};
-    double bias[3];
-    rrr_gen_inverse_dynamics(m, &t, qd, zero, bias);
-    if (!rrr_finite_n(bias, 3)) {
-        return classify(m, q, qd, tau);
+    rrr_gen_inverse_dynamics(m, &t, qd, zero, f->bias);
+    if (!rrr_finite_n(f->bias, 3)) {
+        f->st = RRR_NUMERIC; /* rrr_fd_solve classifies it with tau */
+        return;
     }
     double D[3][3];
     rrr_gen_mass_matrix(m, &t, D);
@@ -180,34 +182,47 @@ rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], const dou
     /* D = L L^T */
     const double d00 = D[0][0];
     if (!pivot_ok(d00)) {
-        return RRR_NOT_POSITIVE_DEFINITE;
+        f->st = RRR_NOT_POSITIVE_DEFINITE;
+        return;
     }
-    const double l00 = sqrt(d00);
-    const double l10 = D[1][0] / l00;
-    const double l20 = D[2][0] / l00;
-    const double d11 = D[1][1] - l10 * l10;
+    f->l00 = sqrt(d00);
+    f->l10 = D[1][0] / f->l00;
+    f->l20 = D[2][0] / f->l00;
+    const double d11 = D[1][1] - f->l10 * f->l10;
     if (!pivot_ok(d11)) {
-        return RRR_NOT_POSITIVE_DEFINITE;
+        f->st = RRR_NOT_POSITIVE_DEFINITE;
+        return;
     }
-    const double l11 = sqrt(d11);
-    const double l21 = (D[2][1] - l20 * l10) / l11;
-    const double d22 = D[2][2] - l20 * l20 - l21 * l21;
+    f->l11 = sqrt(d11);
+    f->l21 = (D[2][1] - f->l20 * f->l10) / f->l11;
+    const double d22 = D[2][2] - f->l20 * f->l20 - f->l21 * f->l21;
     if (!pivot_ok(d22)) {
-        return RRR_NOT_POSITIVE_DEFINITE;
+        f->st = RRR_NOT_POSITIVE_DEFINITE;
+        return;
     }
-    const double l22 = sqrt(d22);
+    f->l22 = sqrt(d22);
+}
 
+rrr_status rrr_fd_solve(const rrr_model *m, const double q[3], const double qd[3],
+                        const rrr_fd_factor *f, const double tau[3], double qdd[3])
+{
+    if (f->st == RRR_NUMERIC) {
+        return classify(m, q, qd, tau);
+    }
+    if (f->st != RRR_OK) {
+        return f->st;
+    }
     /* L y = tau - bias, then L^T x = y */
-    const double r0 = tau[0] - bias[0];
-    const double r1 = tau[1] - bias[1];
-    const double r2 = tau[2] - bias[2];
-    const double y0 = r0 / l00;
-    const double y1 = (r1 - l10 * y0) / l11;
-    const double y2 = (r2 - l20 * y0 - l21 * y1) / l22;
+    const double r0 = tau[0] - f->bias[0];
+    const double r1 = tau[1] - f->bias[1];
+    const double r2 = tau[2] - f->bias[2];
+    const double y0 = r0 / f->l00;
+    const double y1 = (r1 - f->l10 * y0) / f->l11;
+    const double y2 = (r2 - f->l20 * y0 - f->l21 * y1) / f->l22;
     double x[3];
-    x[2] = y2 / l22;
-    x[1] = (y1 - l21 * x[2]) / l11;
-    x[0] = (y0 - l10 * x[1] - l20 * x[2]) / l00;
+    x[2] = y2 / f->l22;
+    x[1] = (y1 - f->l21 * x[2]) / f->l11;
+    x[0] = (y0 - f->l10 * x[1] - f->l20 * x[2]) / f->l00;
     if (!rrr_finite_n(x, 3)) {
         return classify(m, q, qd, tau);
     }
@@ -215,6 +230,17 @@ rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], const dou
     qdd[1] = x[1];
     qdd[2] = x[2];
     return RRR_OK;
+}
+
+rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], const double qd[3],
+                                const double tau[3], double qdd[3])
+{
+    if (m == NULL || q == NULL || qd == NULL || tau == NULL || qdd == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_fd_factor f;
+    rrr_fd_factorize(m, q, qd, &f);
+    return rrr_fd_solve(m, q, qd, &f, tau, qdd);
 }
 
 rrr_status rrr_energy(const rrr_model *m, const double q[3], const double qd[3],

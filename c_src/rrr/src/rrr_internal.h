@@ -49,4 +49,61 @@ static inline rrr_trig rrr_trig_of(const double q[3])
     return t;
 }
 
+/* ---- the plant's right-hand side in two halves ------------------------------------------------
+ * Forward dynamics and the motor mapping split into what depends on the state (q, qd) only and
+ * what the input adds: the plant evaluates both halves each time, except that a caller that
+ * knows the state did not change (the closed loop in C, between communication steps) reuses the
+ * first half under a new input. The same code either way, so the numbers are the same bits. */
+
+/** The state-only half of rrr_forward_dynamics: bias c + h and the Cholesky factor of D. */
+typedef struct rrr_fd_factor {
+    double bias[3];
+    double l00, l10, l20, l11, l21, l22;
+    rrr_status st; /* RRR_OK; RRR_BAD_INPUT (q1); RRR_NUMERIC (the bias is not finite: the solve
+                    * classifies it with tau, as rrr_forward_dynamics does); RRR_NOT_POSITIVE_DEFINITE */
+} rrr_fd_factor;
+
+/** Fill f for (q, qd); m, q, qd non-NULL. */
+void rrr_fd_factorize(const rrr_model *m, const double q[3], const double qd[3], rrr_fd_factor *f);
+
+/** qdd = D^-1 (tau - bias) from f (of the same m, q, qd), with rrr_forward_dynamics' statuses. */
+rrr_status rrr_fd_solve(const rrr_model *m, const double q[3], const double qd[3],
+                        const rrr_fd_factor *f, const double tau[3], double qdd[3]);
+
+/** 1 when the actuator parameters (k_t, b, f, w, u_max) are valid: what rrr_torque_from_voltage
+ *  checks of the model, checked once by a caller that evaluates it many times. */
+int rrr_actuator_params_ok(const rrr_model *m);
+
+/** The state-only half of rrr_torque_from_voltage: 1 and the friction voltage uf at qd when
+ *  params_ok (rrr_actuator_params_ok(m)) and qd is finite, else 0 (uf unset). */
+int rrr_actuator_friction(const rrr_model *m, int params_ok, const double qd[3], double uf[3]);
+
+/** tau from the input u and the friction uf of rrr_actuator_friction (which returned 1), with
+ *  rrr_torque_from_voltage's statuses for u and the result. */
+rrr_status rrr_actuator_torque(const rrr_model *m, const double uf[3], const double u[3],
+                               double tau[3]);
+
+/** The plant's right-hand side at one state, before the input: rrr_plant_prepare fills it
+ *  (params_ok: rrr_actuator_params_ok(m)), rrr_plant_accel_prepared finishes it for an input u. */
+typedef struct rrr_plant_prep {
+    double q[3], qd[3];  /* the state it belongs to */
+    int input_ok;        /* rrr_actuator_friction's verdict */
+    double uf[3];
+    rrr_fd_factor fd;
+} rrr_plant_prep;
+
+void rrr_plant_prepare(const rrr_model *m, int params_ok, const double q[3], const double qd[3],
+                       rrr_plant_prep *p);
+rrr_status rrr_plant_accel_prepared(const rrr_model *m, const rrr_plant_prep *p,
+                                    const double u[3], double qdd[3]);
+
+/** rrr_plant_step that reuses, when it belongs to x's state (bit for bit), the right-hand side's
+ *  first half in *prep, and leaves there the one of the end state (adaptive integration; the
+ *  fixed step ignores it). prep->q must be NaN (or another state) when it holds nothing. The
+ *  caller keeps m the same between calls sharing a prep. The results are those of
+ *  rrr_plant_step, bit for bit. */
+rrr_status rrr_plant_step_prepared(const rrr_model *m, const rrr_plant_integrator *s,
+                                   const double u[3], double h, rrr_plant_state *x,
+                                   double qdd[3], rrr_plant_stats *stats, rrr_plant_prep *prep);
+
 #endif /* RRR_INTERNAL_H */

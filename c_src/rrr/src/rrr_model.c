@@ -1,6 +1,7 @@
 /* Model parameters: defaults, validation, base parameters from inertial parameters (eq 12). */
 #include <string.h>
 
+#include "rrr_dynamics_gen.h"
 #include "rrr_internal.h"
 
 /*
@@ -176,15 +177,12 @@ static rrr_status fail(const char **field, const char *name, rrr_status st)
     return st;
 }
 
-/* Smallest Cholesky pivot of D(0, q2, q3) (D does not depend on q1): D is positive definite
- * exactly where it is > 0. Returns at the first pivot that is not positive (or NaN). */
-static double min_pivot(const rrr_model *m, double q2, double q3)
+/* Smallest Cholesky pivot of D at the angles of t (D does not depend on q1): D is positive
+ * definite exactly where it is > 0. Returns at the first pivot that is not positive (or NaN). */
+static double min_pivot_at(const rrr_model *m, const rrr_trig *t)
 {
-    const double q[3] = {0.0, q2, q3};
     double D[3][3];
-    if (rrr_mass_matrix(m, q, D) != RRR_OK) {
-        return -(double)INFINITY;
-    }
+    rrr_gen_mass_matrix(m, t, D);
     const double d00 = D[0][0];
     if (!(d00 > 0.0)) {
         return fmin(d00, 0.0); /* a NaN pivot counts as 0: not positive definite */
@@ -199,6 +197,13 @@ static double min_pivot(const rrr_model *m, double q2, double q3)
         return fmin(d22, 0.0);
     }
     return fmin(fmin(d00, d11), d22);
+}
+
+static double min_pivot(const rrr_model *m, double q2, double q3)
+{
+    const double q[3] = {0.0, q2, q3};
+    const rrr_trig t = rrr_trig_of(q);
+    return min_pivot_at(m, &t);
 }
 
 /* Pattern search for the minimum of min_pivot from (q2, q3), steps halved down to 1e-9 rad;
@@ -232,29 +237,70 @@ static double refine_min_pivot(const rrr_model *m, double q2, double q3, double 
     return best;
 }
 
+enum { PD_GRID = 64 }; /* grid points per angle over the torus */
+
+/* min_pivot along q2 = angle i of the grid, for every q3 of the grid (sin and cos of the grid
+ * angles given: s = sin, c = cos; the sums as rrr_trig_of forms them) */
+static void pivot_row(const rrr_model *m, int i, const double s[PD_GRID],
+                      const double c[PD_GRID], double row[PD_GRID])
+{
+    for (int k = 0; k < PD_GRID; ++k) {
+        rrr_trig t;
+        t.s2 = s[i];
+        t.c2 = c[i];
+        t.s3 = s[k];
+        t.c3 = c[k];
+        t.s23 = t.s2 * t.c3 + t.c2 * t.s3;
+        t.c23 = t.c2 * t.c3 - t.s2 * t.s3;
+        row[k] = min_pivot_at(m, &t);
+    }
+}
+
 /* 1 when D(q) is positive definite for every q: D's entries are trigonometric polynomials of
  * degree 2 in q2 and q3, so its smallest Cholesky pivot is smooth with basins wide against a
- * 64 x 64 grid over the torus; every grid point is checked, and from every grid point lower
- * than its four neighbours a pattern search finds the bottom of that basin (a grid alone
- * misses a thin negative dip between grid points). */
+ * 64 x 64 grid over the torus; every grid point is checked, and from every grid point not
+ * above its four neighbours (the grid wraps around) a pattern search finds the bottom of that
+ * basin (a grid alone misses a thin negative dip between grid points). Each grid value is
+ * computed once, from the sines and cosines of the 64 grid angles, three rows at a time (no
+ * large stack frame). The model's parameters are finite here (range-checked first). */
 static int mass_matrix_pd_everywhere(const rrr_model *m)
 {
-    enum { N = 64 };
-    const double h = 2.0 * RRR_PI / N;
-    for (int i = 0; i < N; ++i) {
-        for (int k = 0; k < N; ++k) {
-            const double q2 = -RRR_PI + i * h, q3 = -RRR_PI + k * h;
-            const double v = min_pivot(m, q2, q3);
+    const double h = 2.0 * RRR_PI / PD_GRID;
+    double s[PD_GRID], c[PD_GRID];
+    for (int i = 0; i < PD_GRID; ++i) {
+        const double q = -RRR_PI + i * h;
+        s[i] = sin(q);
+        c[i] = cos(q);
+    }
+    double first[PD_GRID], last[PD_GRID], rows[3][PD_GRID];
+    pivot_row(m, 0, s, c, first);
+    pivot_row(m, PD_GRID - 1, s, c, last);
+    const double *prev = last, *cur = first;
+    for (int i = 0; i < PD_GRID; ++i) {
+        const double *next;
+        if (i + 1 == PD_GRID) {
+            next = first;
+        } else if (i + 1 == PD_GRID - 1) {
+            next = last;
+        } else {
+            double *r = rows[i % 3];
+            pivot_row(m, i + 1, s, c, r);
+            next = r;
+        }
+        for (int k = 0; k < PD_GRID; ++k) {
+            const double v = cur[k];
             if (!(v > 0.0)) {
                 return 0;
             }
-            const int local_min = v <= min_pivot(m, q2 + h, q3) &&
-                                  v <= min_pivot(m, q2 - h, q3) &&
-                                  v <= min_pivot(m, q2, q3 + h) && v <= min_pivot(m, q2, q3 - h);
-            if (local_min && !(refine_min_pivot(m, q2, q3, 0.5 * h) > 0.0)) {
+            const int kp = (k + 1) % PD_GRID, km = (k + PD_GRID - 1) % PD_GRID;
+            const int local_min = v <= next[k] && v <= prev[k] && v <= cur[kp] && v <= cur[km];
+            if (local_min &&
+                !(refine_min_pivot(m, -RRR_PI + i * h, -RRR_PI + k * h, 0.5 * h) > 0.0)) {
                 return 0;
             }
         }
+        prev = cur;
+        cur = next;
     }
     return 1;
 }

@@ -4,15 +4,51 @@
 
 #include "rrr_internal.h"
 
-static rrr_status accel(const rrr_model *m, const double q[3], const double qd[3],
-                        const double u[3], double qdd[3])
+void rrr_plant_prepare(const rrr_model *m, int params_ok, const double q[3], const double qd[3],
+                       rrr_plant_prep *p)
 {
+    memcpy(p->q, q, sizeof p->q);
+    memcpy(p->qd, qd, sizeof p->qd);
+    p->input_ok = rrr_actuator_friction(m, params_ok, qd, p->uf);
+    if (p->input_ok) {
+        rrr_fd_factorize(m, q, qd, &p->fd);
+    }
+}
+
+/* rrr_torque_from_voltage then rrr_forward_dynamics, with their statuses in their order */
+rrr_status rrr_plant_accel_prepared(const rrr_model *m, const rrr_plant_prep *p,
+                                    const double u[3], double qdd[3])
+{
+    if (!p->input_ok) {
+        return RRR_BAD_INPUT;
+    }
     double tau[3];
-    const rrr_status st = rrr_torque_from_voltage(m, qd, u, tau);
+    const rrr_status st = rrr_actuator_torque(m, p->uf, u, tau);
     if (st != RRR_OK) {
         return st;
     }
-    return rrr_forward_dynamics(m, q, qd, tau, qdd);
+    return rrr_fd_solve(m, p->q, p->qd, &p->fd, tau, qdd);
+}
+
+/* What every evaluation of the right-hand side within one call shares: the model, whether its
+ * actuator parameters are valid (checked once per call, not per evaluation) and the input. */
+typedef struct rhs {
+    const rrr_model *m;
+    int params_ok;
+    const double *u;
+} rhs;
+
+static rhs rhs_of(const rrr_model *m, const double u[3])
+{
+    const rhs r = {m, rrr_actuator_params_ok(m), u};
+    return r;
+}
+
+static rrr_status accel(const rhs *r, const double q[3], const double qd[3], double qdd[3])
+{
+    rrr_plant_prep p;
+    rrr_plant_prepare(r->m, r->params_ok, q, qd, &p);
+    return rrr_plant_accel_prepared(r->m, &p, r->u, qdd);
 }
 
 rrr_status rrr_plant_accel(const rrr_model *m, const rrr_plant_state *x, const double u[3],
@@ -21,16 +57,16 @@ rrr_status rrr_plant_accel(const rrr_model *m, const rrr_plant_state *x, const d
     if (m == NULL || x == NULL || u == NULL || qdd == NULL) {
         return RRR_BAD_INPUT;
     }
-    return accel(m, x->q, x->qd, u, qdd);
+    const rhs r = rhs_of(m, u);
+    return accel(&r, x->q, x->qd, qdd);
 }
 
 /* One classic Runge-Kutta 4 step of length dt on (q, qd). */
-static rrr_status rk4(const rrr_model *m, const double u[3], double dt, double q[3],
-                      double qd[3])
+static rrr_status rk4(const rhs *r, double dt, double q[3], double qd[3])
 {
     double k1v[3], k2v[3], k3v[3], k4v[3]; /* accelerations */
     double qa[3], va[3];
-    rrr_status st = accel(m, q, qd, u, k1v);
+    rrr_status st = accel(r, q, qd, k1v);
     for (int i = 0; i < 3 && st == RRR_OK; ++i) {
         qa[i] = q[i] + 0.5 * dt * qd[i];
         va[i] = qd[i] + 0.5 * dt * k1v[i];
@@ -38,7 +74,7 @@ static rrr_status rk4(const rrr_model *m, const double u[3], double dt, double q
     double k2q[3];
     memcpy(k2q, va, sizeof va);
     if (st == RRR_OK) {
-        st = accel(m, qa, va, u, k2v);
+        st = accel(r, qa, va, k2v);
     }
     for (int i = 0; i < 3 && st == RRR_OK; ++i) {
         qa[i] = q[i] + 0.5 * dt * k2q[i];
@@ -47,7 +83,7 @@ static rrr_status rk4(const rrr_model *m, const double u[3], double dt, double q
     double k3q[3];
     memcpy(k3q, va, sizeof va);
     if (st == RRR_OK) {
-        st = accel(m, qa, va, u, k3v);
+        st = accel(r, qa, va, k3v);
     }
     for (int i = 0; i < 3 && st == RRR_OK; ++i) {
         qa[i] = q[i] + dt * k3q[i];
@@ -56,7 +92,7 @@ static rrr_status rk4(const rrr_model *m, const double u[3], double dt, double q
     double k4q[3];
     memcpy(k4q, va, sizeof va);
     if (st == RRR_OK) {
-        st = accel(m, qa, va, u, k4v);
+        st = accel(r, qa, va, k4v);
     }
     if (st != RRR_OK) {
         return st;
@@ -124,8 +160,8 @@ rrr_status rrr_plant_state_init(const double q0[3], const double qd0[3], rrr_pla
 
 /* ---- fixed step: RK4 --------------------------------------------------------------------- */
 
-static rrr_status step_fixed(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
-                             double h, rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats)
+static rrr_status step_fixed(const rhs *r, const rrr_plant_integrator *s, double h,
+                             rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats)
 {
     /* 1e-3 / 1e-4 is 10 substeps, not 11 */
     const double n_real = ceil(h / s->h_int * (1.0 - 1e-12));
@@ -138,7 +174,7 @@ static rrr_status step_fixed(const rrr_model *m, const rrr_plant_integrator *s, 
     memcpy(q, x->q, sizeof q);
     memcpy(qd, x->qd, sizeof qd);
     for (long k = 0; k < n; ++k) {
-        const rrr_status st = rk4(m, u, dt, q, qd);
+        const rrr_status st = rk4(r, dt, q, qd);
         if (st != RRR_OK) {
             return st;
         }
@@ -146,7 +182,7 @@ static rrr_status step_fixed(const rrr_model *m, const rrr_plant_integrator *s, 
             return RRR_NUMERIC;
         }
     }
-    const rrr_status st = accel(m, q, qd, u, a);
+    const rrr_status st = accel(r, q, qd, a);
     if (st != RRR_OK) {
         return st;
     }
@@ -170,13 +206,24 @@ enum { NY = 6 };
 
 /* f(y) under u. RRR_NUMERIC when y is not finite (a trial stage ran away: the caller rejects the
  * step), otherwise the status of the acceleration. */
-static rrr_status deriv(const rrr_model *m, const double u[3], const double y[NY], double f[NY])
+static rrr_status deriv(const rhs *r, const double y[NY], double f[NY])
 {
     if (!rrr_finite_n(y, NY)) {
         return RRR_NUMERIC;
     }
     memcpy(f, y + 3, 3 * sizeof f[0]);
-    return accel(m, y, y + 3, u, f + 3);
+    return accel(r, y, y + 3, f + 3);
+}
+
+/* deriv, leaving the first half of the right-hand side at y in *p (when y is finite) */
+static rrr_status deriv_keep(const rhs *r, const double y[NY], double f[NY], rrr_plant_prep *p)
+{
+    if (!rrr_finite_n(y, NY)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(f, y + 3, 3 * sizeof f[0]);
+    rrr_plant_prepare(r->m, r->params_ok, y, y + 3, p);
+    return rrr_plant_accel_prepared(r->m, p, r->u, f + 3);
 }
 
 /* Error-test scale of component i. */
@@ -213,49 +260,48 @@ static double scale(const rrr_plant_integrator *s, double a, double b)
 #define E6 (22.0 / 525.0)
 #define E7 (-1.0 / 40.0)
 
-/* One trial step of length h from y, k1 = f(y): the 5th-order y5, k7 = f(y5) and the scaled RMS
- * error. A stage that is not finite or whose acceleration is RRR_NUMERIC makes err infinite (the
+/* One trial step of length h from y, k1 = f(y): the 5th-order y5, k7 = f(y5) (and its first
+ * half in *p7) and the scaled RMS error. A stage that is not finite or whose acceleration is RRR_NUMERIC makes err infinite (the
  * step is rejected); any other failure is returned. */
-static rrr_status dp5_trial(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
-                            double h, const double y[NY], const double k1[NY], double y5[NY],
-                            double k7[NY], double *err)
+static rrr_status dp5_trial(const rhs *r, const rrr_plant_integrator *s, double h, const double y[NY], const double k1[NY], double y5[NY],
+                            double k7[NY], rrr_plant_prep *p7, double *err)
 {
     double k2[NY], k3[NY], k4[NY], k5[NY], k6[NY], ys[NY];
     rrr_status st;
     for (int i = 0; i < NY; ++i) {
         ys[i] = y[i] + h * (A21 * k1[i]);
     }
-    st = deriv(m, u, ys, k2);
+    st = deriv(r, ys, k2);
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i]);
         }
-        st = deriv(m, u, ys, k3);
+        st = deriv(r, ys, k3);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
         }
-        st = deriv(m, u, ys, k4);
+        st = deriv(r, ys, k4);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
         }
-        st = deriv(m, u, ys, k5);
+        st = deriv(r, ys, k5);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] +
                                 A65 * k5[i]);
         }
-        st = deriv(m, u, ys, k6);
+        st = deriv(r, ys, k6);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             y5[i] = y[i] + h * (B1 * k1[i] + B3 * k3[i] + B4 * k4[i] + B5 * k5[i] + B6 * k6[i]);
         }
-        st = deriv(m, u, y5, k7);
+        st = deriv_keep(r, y5, k7, p7);
     }
     if (st == RRR_NUMERIC) {
         *err = (double)INFINITY;
@@ -268,8 +314,8 @@ static rrr_status dp5_trial(const rrr_model *m, const rrr_plant_integrator *s, c
     for (int i = 0; i < NY; ++i) {
         const double e = h * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] +
                               E7 * k7[i]);
-        const double r = e / scale(s, y[i], y5[i]);
-        sum += r * r;
+        const double ratio = e / scale(s, y[i], y5[i]);
+        sum += ratio * ratio;
     }
     *err = sqrt(sum / NY); /* NaN cannot pass the error test either */
     return RRR_OK;
@@ -278,8 +324,7 @@ static rrr_status dp5_trial(const rrr_model *m, const rrr_plant_integrator *s, c
 /* Starting step when the state has no proposal (Hairer's hinit for order 5): a step that would
  * change y by 1 % of its scale at the initial slope, checked against a second derivative from
  * one explicit Euler step, capped by 100 times the first guess and by the interval. */
-static double initial_step(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
-                           double interval, const double y[NY], const double f0[NY],
+static double initial_step(const rhs *r, const rrr_plant_integrator *s, double interval, const double y[NY], const double f0[NY],
                            long *evals)
 {
     double dnf = 0.0, dny = 0.0;
@@ -295,7 +340,7 @@ static double initial_step(const rrr_model *m, const rrr_plant_integrator *s, co
         y1[i] = y[i] + h * f0[i];
     }
     ++*evals;
-    if (deriv(m, u, y1, f1) != RRR_OK) {
+    if (deriv(r, y1, f1) != RRR_OK) {
         return h; /* the step-size control takes it from here */
     }
     double der2 = 0.0;
@@ -318,19 +363,28 @@ static double initial_step(const rrr_model *m, const rrr_plant_integrator *s, co
 #define ERR_PREV_MIN 1e-4
 #define STRETCH 1.01     /* a step may stretch by 1 % to end the interval */
 
-static rrr_status step_adaptive(const rrr_model *m, const rrr_plant_integrator *s,
-                                const double u[3], double interval, rrr_plant_state *x,
-                                double qdd[3], rrr_plant_stats *stats)
+/* `prep`: the first half of the right-hand side at x's state, reused when it is that state's;
+ * on success it holds the end state's (a trial's k7 evaluation, kept while the step is tried). */
+static rrr_status step_adaptive(const rhs *r, const rrr_plant_integrator *s, double interval,
+                                rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats,
+                                rrr_plant_prep *prep)
 {
     double y[NY], k1[NY], y5[NY], k7[NY];
     memcpy(y, x->q, sizeof x->q);
     memcpy(y + 3, x->qd, sizeof x->qd);
     long evals = 1, steps = 0, rejected = 0, attempts = 0;
-    rrr_status st = deriv(m, u, y, k1);
+    rrr_status st;
+    if (memcmp(prep->q, x->q, sizeof x->q) == 0 && memcmp(prep->qd, x->qd, sizeof x->qd) == 0) {
+        memcpy(k1, y + 3, 3 * sizeof k1[0]); /* deriv's work, the first half already done */
+        st = rrr_plant_accel_prepared(r->m, prep, r->u, k1 + 3);
+    } else {
+        st = deriv_keep(r, y, k1, prep);
+    }
+    rrr_plant_prep trial;
     if (st != RRR_OK) {
         return st == RRR_NUMERIC ? RRR_BAD_INPUT : st; /* y was checked finite: not reached */
     }
-    double h = x->h_guess > 0.0 ? x->h_guess : initial_step(m, s, u, interval, y, k1, &evals);
+    double h = x->h_guess > 0.0 ? x->h_guess : initial_step(r, s, interval, y, k1, &evals);
     double err_prev = x->err_prev > 0.0 ? x->err_prev : ERR_PREV_MIN;
     double t = 0.0;
     int after_reject = 0;
@@ -347,7 +401,7 @@ static rrr_status step_adaptive(const rrr_model *m, const rrr_plant_integrator *
             return RRR_NUMERIC; /* the step size underflowed */
         }
         double err = 0.0;
-        st = dp5_trial(m, s, u, hs, y, k1, y5, k7, &err);
+        st = dp5_trial(r, s, hs, y, k1, y5, k7, &trial, &err);
         ++attempts;
         evals += 6;
         if (st != RRR_OK) {
@@ -356,6 +410,7 @@ static rrr_status step_adaptive(const rrr_model *m, const rrr_plant_integrator *
         if (err <= 1.0) {
             memcpy(y, y5, sizeof y);
             memcpy(k1, k7, sizeof k1); /* FSAL */
+            *prep = trial;
             ++steps;
             const double fac11 = pow(err, PI_ALPHA);
             const double fac = fmax(FAC_GROW, fmin(FAC_SHRINK,
@@ -393,8 +448,9 @@ static rrr_status step_adaptive(const rrr_model *m, const rrr_plant_integrator *
     return RRR_OK;
 }
 
-rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
-                          double h, rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats)
+rrr_status rrr_plant_step_prepared(const rrr_model *m, const rrr_plant_integrator *s,
+                                   const double u[3], double h, rrr_plant_state *x,
+                                   double qdd[3], rrr_plant_stats *stats, rrr_plant_prep *prep)
 {
     if (m == NULL || u == NULL || x == NULL || rrr_plant_integrator_check(s, NULL) != RRR_OK ||
         !isfinite(h) || !(h > 0.0) || !rrr_finite_n(u, 3) || !rrr_finite_n(x->q, 3) ||
@@ -402,16 +458,19 @@ rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s, con
         !isfinite(x->err_prev) || !(x->err_prev >= 0.0)) {
         return RRR_BAD_INPUT;
     }
-    /* work on a copy: x is written only on success */
+    /* work on copies: x (and *prep) are written only on success */
     rrr_plant_state w = *x;
+    rrr_plant_prep p = *prep;
     double a[3];
     rrr_plant_stats st_work = {0, 0, 0};
-    const rrr_status st = s->adaptive ? step_adaptive(m, s, u, h, &w, a, &st_work)
-                                      : step_fixed(m, s, u, h, &w, a, &st_work);
+    const rhs r = rhs_of(m, u);
+    const rrr_status st = s->adaptive ? step_adaptive(&r, s, h, &w, a, &st_work, &p)
+                                      : step_fixed(&r, s, h, &w, a, &st_work);
     if (st != RRR_OK) {
         return st;
     }
     *x = w;
+    *prep = p;
     if (qdd != NULL) {
         memcpy(qdd, a, sizeof a);
     }
@@ -419,4 +478,13 @@ rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s, con
         *stats = st_work;
     }
     return RRR_OK;
+}
+
+rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s, const double u[3],
+                          double h, rrr_plant_state *x, double qdd[3], rrr_plant_stats *stats)
+{
+    rrr_plant_prep none;
+    memset(&none, 0, sizeof none);
+    none.q[0] = (double)NAN; /* belongs to no state: x's first half is computed */
+    return rrr_plant_step_prepared(m, s, u, h, x, qdd, stats, &none);
 }

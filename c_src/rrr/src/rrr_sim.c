@@ -41,7 +41,11 @@ rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_integrato
     /* the plant's first outputs: qdd under its start input u = 0, the tip at q0 */
     const double u0[3] = {0.0, 0.0, 0.0};
     double qdd[3], tip[3];
-    st = rrr_plant_accel(plant, &x, u0, qdd);
+    /* rrr_plant_accel in its two halves: the state's half is reused by the first step (and each
+     * step leaves its end state's for the next), the same numbers as computing it again */
+    rrr_plant_prep prep;
+    rrr_plant_prepare(plant, rrr_actuator_params_ok(plant), x.q, x.qd, &prep);
+    st = rrr_plant_accel_prepared(plant, &prep, u0, qdd);
     if (st == RRR_OK) {
         st = rrr_fk(plant, x.q, tip, NULL);
     }
@@ -61,7 +65,7 @@ rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_integrato
             /* the plant FMU's doStep: the state and its outputs change only on success */
             rrr_plant_state next = x;
             double qdd_next[3], tip_next[3];
-            st = rrr_plant_step(plant, integ, out.u, step, &next, qdd_next, NULL);
+            st = rrr_plant_step_prepared(plant, integ, out.u, step, &next, qdd_next, NULL, &prep);
             if (st == RRR_OK) {
                 st = rrr_fk(plant, next.q, tip_next, NULL);
             }
