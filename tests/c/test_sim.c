@@ -1,6 +1,8 @@
-/* The closed loop in C (rrr_sim.h): refusals, the first rows, and tracking of a smooth reference.
- * Its equality with the FMUs driven by the co-simulation master, bit for bit, is checked from
- * Python (tests/python/test_native_engine.py), where the master lives. */
+/* The closed loop in C (rrr_sim.h): refusals, the first rows, tracking of a smooth reference, and
+ * equality bit for bit with the same loop written over the public API (rrr_ctc, rrr_plant_step,
+ * rrr_fk: what the FMUs call), which it must match although it reuses each step's end-state
+ * half of the right-hand side. Its equality with the FMUs driven by the co-simulation master is
+ * checked from Python (tests/python/test_native_engine.py), where the master lives. */
 #include <math.h>
 #include <string.h>
 
@@ -23,6 +25,53 @@ static void reference(void)
             ref[k][6 + i] = -a * w * w * sin(w * t);
         }
     }
+}
+
+static double pub_p[N][RRR_SIM_PLANT_COLS], pub_c[N][RRR_SIM_CTRL_COLS];
+
+/* The master's loop over the public API (rrr_sim.h's steps 1-3); 0 when a call fails. */
+static int public_loop(const rrr_model *m, const rrr_plant_integrator *s, const rrr_ctc_gains *g)
+{
+    rrr_plant_state x;
+    const double u0[3] = {0.0, 0.0, 0.0};
+    double qdd[3], tip[3];
+    if (rrr_plant_state_init(ref[0], ref[0] + 3, &x) != RRR_OK ||
+        rrr_plant_accel(m, &x, u0, qdd) != RRR_OK || rrr_fk(m, x.q, tip, NULL) != RRR_OK) {
+        return 0;
+    }
+    for (int k = 0; k < N; ++k) {
+        memcpy(pub_p[k], x.q, sizeof x.q);
+        memcpy(pub_p[k] + 3, x.qd, sizeof x.qd);
+        memcpy(pub_p[k] + 6, qdd, sizeof qdd);
+        memcpy(pub_p[k] + 9, tip, sizeof tip);
+        rrr_ctc_output o;
+        if (rrr_ctc(m, g, ref[k], ref[k] + 3, ref[k] + 6, x.q, x.qd, &o) != RRR_OK) {
+            return 0;
+        }
+        memcpy(pub_c[k], o.u, sizeof o.u);
+        memcpy(pub_c[k] + 3, o.u_n, sizeof o.u_n);
+        memcpy(pub_c[k] + 6, o.u_c, sizeof o.u_c);
+        if (k + 1 < N && (rrr_plant_step(m, s, o.u, STEP, &x, qdd, NULL) != RRR_OK ||
+                          rrr_fk(m, x.q, tip, NULL) != RRR_OK)) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+static void equals_the_public_loop(const rrr_model *m, rrr_plant_integrator s,
+                                   const rrr_ctc_gains *g, const char *what)
+{
+    size_t done = 0;
+    CHECK_STATUS(rrr_sim_closed_loop(m, &s, ref[0], ref[0] + 3, m, g, N, STEP, ref[0], pout[0],
+                                     cout_[0], &done),
+                 RRR_OK);
+    CHECK(public_loop(m, &s, g));
+    const int same = memcmp(pout, pub_p, sizeof pout) == 0 && memcmp(cout_, pub_c, sizeof cout_) == 0;
+    if (!same) {
+        fprintf(stderr, "not bit for bit: %s\n", what);
+    }
+    CHECK(same);
 }
 
 int main(void)
@@ -51,6 +100,12 @@ int main(void)
     rrr_ctc_output o;
     CHECK(rrr_ctc(&m, &g, ref[0], ref[0] + 3, ref[0] + 6, pout[0], pout[0] + 3, &o) == RRR_OK);
     CHECK(memcmp(cout_[0], o.u, sizeof o.u) == 0 && memcmp(cout_[0] + 3, o.u_n, sizeof o.u_n) == 0);
+
+    /* the same numbers as the loop over the public API, adaptive and fixed-step */
+    equals_the_public_loop(&m, s, &g, "adaptive: rrr_sim_closed_loop == the public API's loop");
+    rrr_plant_integrator fixed = s;
+    fixed.adaptive = 0;
+    equals_the_public_loop(&m, fixed, &g, "fixed step: rrr_sim_closed_loop == the public loop");
 
     /* refusals */
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, 0, STEP, ref[0], pout[0],
