@@ -4,27 +4,11 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
 
 from ._args import output_path
-
-
-class _ProgressBar:
-    """A one-line progress bar on stderr (only when it is a terminal or forced)."""
-
-    def __init__(self, enabled: bool) -> None:
-        self.enabled = enabled
-
-    def __call__(self, name: str, k: int, n: int) -> None:
-        if not self.enabled:
-            return
-        frac = (k + 1) / n
-        bar = "#" * int(30 * frac)
-        end = "\n" if k + max(1, n // 100) >= n - 1 else ""
-        sys.stderr.write(f"\r{name:>10} [{bar:<30}] {100 * frac:5.1f} %{end}")
-        sys.stderr.flush()
+from ._progress import Bars, shown
 
 
 def _num(value: float | None, fmt: str, scale: float = 1.0) -> str:
@@ -53,7 +37,8 @@ def _cmd_writing(args: argparse.Namespace) -> int:
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
         engine=args.engine,
     )
-    summary = run_writing(job, progress=_ProgressBar(not args.quiet and sys.stderr.isatty()))
+    with Bars(shown(args.quiet)) as bars:
+        summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
     figures = ", figures" if job.figures else ""

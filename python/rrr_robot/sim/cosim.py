@@ -44,7 +44,7 @@ class CosimOptions:
     plant_fmu: Path | None = None                        # default: the packaged FMU
     controller_fmu: Path | None = None
     fmi_version: int = 2                                 # of the packaged FMUs: 2 or 3
-    progress: Callable[[int, int], None] | None = None  # called as progress(k, n) now and then
+    progress: Callable[[int, int], None] | None = None  # progress(k, n): sample k of n reached
     # what the controller measures of the plant's (q, qd) (6,), and what the plant receives of
     # the controller's u (3,): e.g. the quantisation of a CAN bench (rrr_robot.hil.protocol);
     # identity when None
@@ -204,8 +204,8 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
                     p_get(p_out_ptr)
                     if messages[0] or messages[1]:
                         _flush(ctrl, plant, now)
-                if options.progress is not None:
-                    options.progress(first, n)
+                if options.progress is not None:  # the sample reached: n - 1 at the end
+                    options.progress(min(first + chunk, n - 1), n)
             stage = "controller SetReal"
             if measure is None:
                 c_in_addr.value = rows_at + (n - 1) * row_bytes
