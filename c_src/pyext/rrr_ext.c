@@ -32,11 +32,10 @@
  * inputs and outputs; map_rows() does the rest (parsing, broadcasting, the GIL, the error
  * message). ctc is the model for a call with a parameter block besides the rows.
  *
- * The closed loop: the control law is bound (Kernels.ctc, Model.ctc; row_ctc is one sample of
- * it). The plant step (rrr_plant_step of rrr_plant.h) is deliberately not bound here: its API
- * was being changed when this module was written. Its seam is one function beside row_ctc that
- * converts an rrr_plant_state and calls rrr_plant_step, with MODEL(), ctc_gains_from() and the
- * argument helpers (parse_arg, new_array, raise_status) as the pieces a closed-loop engine needs.
+ * The closed loop: the control law (Kernels.ctc, Model.ctc; row_ctc is one sample of it) and
+ * the plant step (Kernels.plant_step, plant_accel: rrr_plant_step and rrr_plant_accel on an
+ * rrr_plant_state held in a ctypes struct that the call updates in place; Model.plant_step,
+ * rrr_robot.core.plant.Plant). The whole loop in C is rrr_sim_closed_loop (rr.simulate).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -1284,25 +1283,49 @@ static PyObject *K_nominal_voltage(PyObject *self, PyObject *const *args, Py_ssi
     return out;
 }
 
-/* The gains of the control law from the bytes of an rrr_ctc_gains (CtcGains.packed), copied. */
-static int ctc_gains_from(PyObject *obj, rrr_ctc_gains *gains)
+/* Copy a C struct of `size` bytes from a buffer of exactly that size (the bytes of a packed
+ * ctypes struct, e.g. CtcGains.packed); TypeError naming `what` otherwise. */
+static int struct_from(PyObject *obj, void *dst, size_t size, const char *method, const char *what)
 {
     Py_buffer view;
     if (PyObject_GetBuffer(obj, &view, PyBUF_SIMPLE) != 0) {
         return -1;
     }
-    const int size_ok = view.len == (Py_ssize_t)sizeof *gains;
+    const int size_ok = view.len == (Py_ssize_t)size;
     if (size_ok) {
-        memcpy(gains, view.buf, sizeof *gains);
+        memcpy(dst, view.buf, size);
     }
     PyBuffer_Release(&view);
     if (!size_ok) {
-        PyErr_Format(PyExc_TypeError,
-                     "ctc needs the %zu bytes of an rrr_ctc_gains (CtcGains.packed)",
-                     sizeof *gains);
+        PyErr_Format(PyExc_TypeError, "%s needs the %zu bytes of an %s", method, size, what);
         return -1;
     }
     return 0;
+}
+
+/* A writable buffer of exactly `size` bytes (a ctypes struct the call updates in place). */
+static int writable_struct(PyObject *obj, Py_buffer *view, size_t size, const char *method,
+                           const char *what)
+{
+    if (PyObject_GetBuffer(obj, view, PyBUF_WRITABLE) != 0) {
+        if (!PyErr_ExceptionMatches(PyExc_BufferError) &&
+            !PyErr_ExceptionMatches(PyExc_TypeError)) {
+            return -1;
+        }
+        PyErr_Clear();
+    } else if (view->len == (Py_ssize_t)size) {
+        return 0;
+    } else {
+        PyBuffer_Release(view);
+    }
+    PyErr_Format(PyExc_TypeError, "%s needs a writable %s of %zu bytes", method, what, size);
+    return -1;
+}
+
+/* The gains of the control law from the bytes of an rrr_ctc_gains (CtcGains.packed), copied. */
+static int ctc_gains_from(PyObject *obj, rrr_ctc_gains *gains)
+{
+    return struct_from(obj, gains, sizeof *gains, "ctc", "rrr_ctc_gains (CtcGains.packed)");
 }
 
 /* ctc(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, u_n, u_c), one state or rows. */
@@ -1313,6 +1336,108 @@ static PyObject *K_ctc(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         return NULL;
     }
     return map_rows(MODEL(self), &S_CTC, &gains, args + 1);
+}
+
+/* The state error's context: "u = [...], h = ..., q = [...], qd = [...]". */
+static void raise_plant(const char *fn, rrr_status st, const double *u, double h,
+                        const rrr_plant_state *x)
+{
+    PyObject *ru = row_repr(u), *rq = row_repr(x->q), *rqd = row_repr(x->qd);
+    PyObject *rh = PyFloat_FromDouble(h);
+    PyObject *context = ru != NULL && rq != NULL && rqd != NULL && rh != NULL
+                            ? PyUnicode_FromFormat("u = %U, h = %R, q = %U, qd = %U", ru, rh, rq,
+                                                   rqd)
+                            : NULL;
+    Py_XDECREF(ru);
+    Py_XDECREF(rq);
+    Py_XDECREF(rqd);
+    Py_XDECREF(rh);
+    if (context != NULL) {
+        raise_status(fn, (int)st, context);
+        Py_DECREF(context);
+    }
+}
+
+/* A (3,) result array holding v. */
+static PyObject *vector_of(const double v[NJ])
+{
+    const Py_ssize_t dims[1] = {NJ};
+    double *data;
+    PyObject *out = new_array(0, 1, 1, dims, &data);
+    if (out != NULL) {
+        memcpy(data, v, NJ * sizeof *v);
+    }
+    return out;
+}
+
+/* plant_step(integrator, u, h, state, stats) -> qdd: rrr_plant_step on the rrr_plant_state in
+ * the writable buffer `state` (updated in place only on success, as the C call does), the
+ * rrr_plant_stats of the call written into `stats`; qdd at the end of the interval. */
+static PyObject *K_plant_step(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    rrr_plant_integrator integ;
+    if (check_nargs("plant_step", nargs, 5) != 0 ||
+        struct_from(args[0], &integ, sizeof integ, "plant_step",
+                    "rrr_plant_integrator (PlantIntegrator.packed)") != 0) {
+        return NULL;
+    }
+    vec_arg u;
+    if (one_target(args[1], "u", "plant_step takes one input voltage u (3,)", &u) != 0) {
+        return NULL;
+    }
+    double h;
+    Py_buffer sv, tv;
+    PyObject *out = NULL;
+    if (finite_scalar(args[2], "h", &h) == 0 &&
+        writable_struct(args[3], &sv, sizeof(rrr_plant_state), "plant_step",
+                        "rrr_plant_state (RawPlantState)") == 0) {
+        if (writable_struct(args[4], &tv, sizeof(rrr_plant_stats), "plant_step",
+                            "rrr_plant_stats (RawPlantStats)") == 0) {
+            rrr_plant_state x;
+            rrr_plant_stats stats;
+            double qdd[NJ];
+            memcpy(&x, sv.buf, sizeof x);
+            const rrr_status st = rrr_plant_step(MODEL(self), &integ, u.data, h, &x, qdd, &stats);
+            if (st == RRR_OK) {
+                out = vector_of(qdd);
+                if (out != NULL) {
+                    memcpy(sv.buf, &x, sizeof x);
+                    memcpy(tv.buf, &stats, sizeof stats);
+                }
+            } else {
+                raise_plant("rrr_plant_step", st, u.data, h, &x);
+            }
+            PyBuffer_Release(&tv);
+        }
+        PyBuffer_Release(&sv);
+    }
+    arg_release(&u);
+    return out;
+}
+
+/* plant_accel(state, u) -> qdd of the rrr_plant_state in the buffer `state` under u. */
+static PyObject *K_plant_accel(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    rrr_plant_state x;
+    if (check_nargs("plant_accel", nargs, 2) != 0 ||
+        struct_from(args[0], &x, sizeof x, "plant_accel", "rrr_plant_state (RawPlantState)") !=
+            0) {
+        return NULL;
+    }
+    vec_arg u;
+    if (one_target(args[1], "u", "plant_accel takes one input voltage u (3,)", &u) != 0) {
+        return NULL;
+    }
+    double qdd[NJ];
+    PyObject *out = NULL;
+    const rrr_status st = rrr_plant_accel(MODEL(self), &x, u.data, qdd);
+    if (st == RRR_OK) {
+        out = vector_of(qdd);
+    } else {
+        raise_plant("rrr_plant_accel", st, u.data, 0.0, &x);
+    }
+    arg_release(&u);
+    return out;
 }
 
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))K_##name, METH_FASTCALL, doc}
@@ -1342,6 +1467,9 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(torque_from_voltage, "torque_from_voltage(qd, u) -> tau"),
     FASTCALL(nominal_voltage, "nominal_voltage(q, qd, qdd) -> u_n"),
     FASTCALL(ctc, "ctc(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, u_n, u_c)"),
+    FASTCALL(plant_step, "plant_step(integrator, u, h, state, stats) -> qdd (state and stats "
+                         "updated in place)"),
+    FASTCALL(plant_accel, "plant_accel(state, u) -> qdd"),
     {NULL, NULL, 0, NULL},
 };
 

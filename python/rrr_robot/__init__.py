@@ -28,7 +28,9 @@ from .errors import (
 
 if TYPE_CHECKING:
     from .core.control import CtcGains
+    from .core.integrator import PlantIntegrator
     from .core.model import Model, Singularity, bps_from_inertia
+    from .core.plant import Plant, PlantSnapshot, PlantStats
     from .core.robot import RobotFile, read_robot_file
     from .sim.fmus import fmu_path
     from .sim.native import simulate
@@ -40,6 +42,10 @@ _LAZY = {
     "Model": ".core.model",
     "Singularity": ".core.model",
     "bps_from_inertia": ".core.model",
+    "PlantIntegrator": ".core.integrator",
+    "Plant": ".core.plant",
+    "PlantSnapshot": ".core.plant",
+    "PlantStats": ".core.plant",
     "RobotFile": ".core.robot",
     "read_robot_file": ".core.robot",
     "fmu_path": ".sim.fmus",
@@ -69,6 +75,10 @@ __all__ = [
     "Model",
     "ModelError",
     "NumericError",
+    "Plant",
+    "PlantIntegrator",
+    "PlantSnapshot",
+    "PlantStats",
     "RobotFile",
     "RobotFileError",
     "RrrError",

@@ -4,9 +4,10 @@ sources, before any pip install.
 
 Stages python/rrr_robot with the built _ext module and librrr.so into a temporary folder and runs
 the binding's tests (tests/python/test_ext_binding.py: every method against the ctypes binding
-bit for bit, the refusals, batches without the GIL and from threads) and the Model API tests on
-it. In the sanitizer build CMake runs this under the preloaded ASan runtime, so ASan and UBSan
-check the module's C code and the librrr it links.
+bit for bit, the refusals, batches without the GIL and from threads), the Model API tests and
+the plant step's (tests/python/test_plant_api.py) on it. In the sanitizer build CMake runs this
+under the preloaded ASan runtime, so ASan and UBSan check the module's C code and the librrr it
+links.
 
 Usage: pyext_smoke.py --package python/rrr_robot --ext <_ext...so> --lib <librrr.so>
 """
@@ -22,7 +23,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-TESTS = ["tests/python/test_ext_binding.py", "tests/python/test_model_api.py"]
+TESTS = ["tests/python/test_ext_binding.py", "tests/python/test_model_api.py",
+         "tests/python/test_plant_api.py"]
 
 
 def main() -> int:

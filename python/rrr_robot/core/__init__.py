@@ -4,7 +4,9 @@ _ext (the compiled binding: Model's calls, rows looped in C; c_src/pyext/rrr_ext
 _ctypes_kernels (the same calls through ctypes, where _ext was not built), _lib (the ctypes
 binding: structures, signatures, the parameter table), _status (statuses and their exceptions),
 _arrays (vector and batch shapes), model (:class:`Model` and its closed-form algorithms, all in
-C), control (:class:`CtcGains`, the gains of the computed-torque law), param_names (the C
+C), control (:class:`CtcGains`, the gains of the computed-torque law), integrator
+(:class:`PlantIntegrator`, the plant's integrator settings), plant (:class:`Plant`, the plant
+stepped through librrr's rrr_plant_step), param_names (the C
 parameter table: the model's parameters under the FMUs' variable names), checked (checked
 reading of TOML files), robot_file (the one robot file reader: :class:`RobotData`), robot
 (:class:`RobotFile`: the checked file and its :class:`Model`).
@@ -17,8 +19,10 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from .control import CtcGains
+    from .integrator import PlantIntegrator
     from .model import DEFAULT_ROBOT_TOML, Model, Singularity, bps_from_inertia
     from .param_names import model_fmu_values
+    from .plant import Plant, PlantSnapshot, PlantStats
     from .robot import RobotFile, read_robot_file
     from .robot_file import DEFAULT_SAMPLE_TIME, ControlGains, LinkInertia, RobotData
 
@@ -30,6 +34,10 @@ _LAZY = {
     "Model": ".model",
     "Singularity": ".model",
     "bps_from_inertia": ".model",
+    "PlantIntegrator": ".integrator",
+    "Plant": ".plant",
+    "PlantSnapshot": ".plant",
+    "PlantStats": ".plant",
     "model_fmu_values": ".param_names",
     "RobotFile": ".robot",
     "read_robot_file": ".robot",
@@ -60,6 +68,10 @@ __all__ = [
     "CtcGains",
     "LinkInertia",
     "Model",
+    "Plant",
+    "PlantIntegrator",
+    "PlantSnapshot",
+    "PlantStats",
     "RobotData",
     "RobotFile",
     "Singularity",

@@ -189,6 +189,35 @@ class Kernels:
             u[i], u_n[i], u_c[i] = out.u[:], out.u_n[:], out.u_c[:]
         return (u, u_n, u_c) if batch else (u[0], u_n[0], u_c[0])
 
+    # ---- plant -----------------------------------------------------------------------------
+    def plant_step(self, integrator: bytes, u: ArrayLike, h: object, state: Any, stats: Any, /
+                   ) -> FloatArray:
+        integ = _struct_from(integrator, _lib.RawPlantIntegrator, "plant_step",
+                             "rrr_plant_integrator (PlantIntegrator.packed)")
+        u_arr = _one(u, "u", "plant_step takes one input voltage u (3,)")
+        step = finite_scalar(h, "h")
+        _writable(state, _lib.RawPlantState, "plant_step", "rrr_plant_state (RawPlantState)")
+        _writable(stats, _lib.RawPlantStats, "plant_step", "rrr_plant_stats (RawPlantStats)")
+        x = _lib.RawPlantState.from_buffer_copy(state)
+        qdd = np.empty(3)
+        out = _lib.RawPlantStats()
+        status = _lib.FUNCS["rrr_plant_step"](self._ref, ct.byref(integ), ptr(u_arr), step,
+                                               ct.byref(x), ptr(qdd), ct.byref(out))
+        if status:
+            _lib.raise_for("rrr_plant_step", status, _plant_context(u_arr, step, x))
+        ct.memmove(ct.addressof(state), ct.addressof(x), ct.sizeof(x))
+        ct.memmove(ct.addressof(stats), ct.addressof(out), ct.sizeof(out))
+        return qdd
+
+    def plant_accel(self, state: Any, u: ArrayLike, /) -> FloatArray:
+        x = _struct_from(state, _lib.RawPlantState, "plant_accel",
+                         "rrr_plant_state (RawPlantState)")
+        u_arr = _one(u, "u", "plant_accel takes one input voltage u (3,)")
+        qdd = np.empty(3)
+        if status := _lib.FUNCS["rrr_plant_accel"](self._ref, ct.byref(x), ptr(u_arr), ptr(qdd)):
+            _lib.raise_for("rrr_plant_accel", status, _plant_context(u_arr, 0.0, x))
+        return qdd
+
     # ---- helpers ---------------------------------------------------------------------------
     def _rowwise(self, fn: str, ins: list[FloatArray], out_shapes: list[tuple[int, ...]],
                  names: str) -> list[FloatArray]:
@@ -225,3 +254,31 @@ class Kernels:
         rows, batch = broadcast_rows((a, names[0]), (b, names[1]), (c, names[2]))
         (out,) = self._rowwise(fn, rows, [shape], ", ".join(names))
         return out if batch else out[0]
+
+
+def _struct_from(data: Any, kind: Any, method: str, what: str) -> Any:
+    """A copy of the C struct ``kind`` from a buffer of exactly its size; TypeError otherwise."""
+    try:
+        view = memoryview(data)
+    except TypeError:
+        view = None
+    if view is None or view.nbytes != ct.sizeof(kind):
+        raise TypeError(f"{method} needs the {ct.sizeof(kind)} bytes of an {what}")
+    return kind.from_buffer_copy(view.cast("B"))
+
+
+def _writable(data: Any, kind: Any, method: str, what: str) -> None:
+    """TypeError unless ``data`` is a writable ctypes struct of ``kind``'s size."""
+    if not isinstance(data, ct.Structure) or ct.sizeof(data) != ct.sizeof(kind):
+        raise TypeError(f"{method} needs a writable {what} of {ct.sizeof(kind)} bytes")
+
+
+def _one(value: ArrayLike, name: str, refusal: str) -> FloatArray:
+    rows, batch = as_rows(value, name)
+    if batch:
+        raise BadInputError(refusal)
+    return np.ascontiguousarray(rows[0])
+
+
+def _plant_context(u: FloatArray, h: float, x: Any) -> str:
+    return f"u = {u.tolist()}, h = {h!r}, q = {list(x.q)}, qd = {list(x.qd)}"

@@ -90,6 +90,18 @@ class RawPlantIntegrator(ct.Structure):
                 ("h_int", ct.c_double), ("max_steps", ct.c_long)]
 
 
+class RawPlantState(ct.Structure):
+    """Mirror of ``rrr_plant_state``: q, qd and the adaptive step-size controller's memory."""
+
+    _fields_ = [("q", D3), ("qd", D3), ("h_guess", ct.c_double), ("err_prev", ct.c_double)]
+
+
+class RawPlantStats(ct.Structure):
+    """Mirror of ``rrr_plant_stats``: the work of one ``rrr_plant_step`` call."""
+
+    _fields_ = [("steps", ct.c_long), ("rejected", ct.c_long), ("evals", ct.c_long)]
+
+
 class RawParamInfo(ct.Structure):
     """Mirror of ``rrr_param_info`` (c_src/rrr/include/rrr/rrr_params.h): one row of the C
     parameter table."""
@@ -139,6 +151,11 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_ctc_gains_default": [_P(RawCtcGains)],
     "rrr_ctc": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcOutput)],
     "rrr_plant_integrator_default": [_P(RawPlantIntegrator)],
+    "rrr_plant_integrator_check": [_P(RawPlantIntegrator), _P(ct.c_char_p)],
+    "rrr_plant_state_init": [_D, _D, _P(RawPlantState)],
+    "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
+    "rrr_plant_step": [_M, _P(RawPlantIntegrator), _D, ct.c_double, _P(RawPlantState), _D,
+                       _P(RawPlantStats)],
     "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
                             ct.c_size_t, ct.c_double, _D, _D, _D, _P(ct.c_size_t)],
     "rrr_param_set": [_M, ct.c_size_t, ct.c_double],

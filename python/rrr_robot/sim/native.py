@@ -20,6 +20,7 @@ import numpy as np
 from ..core import _lib
 from ..core._arrays import FloatArray, ptr
 from ..core.control import CtcGains
+from ..core.integrator import PlantIntegrator
 from ..core.param_names import param_index, set_values
 from ..errors import BadInputError
 from .cosim import CosimOptions, CosimResult, _check_reference
@@ -60,14 +61,13 @@ def _plant(values: Mapping[str, float | bool],
            ) -> tuple[_lib.RawModel, _lib.RawPlantIntegrator, FloatArray, FloatArray]:
     extra = {f"{v}[{i}]" for v in ("q0", "qd0") for i in J} | set(_INTEGRATOR)
     model, other = _split(values, extra, "plant")
-    integ = _lib.RawPlantIntegrator()
-    _lib.call("rrr_plant_integrator_default", ct.byref(integ))
+    settings: dict[str, float | bool] = {
+        name: other[name] for name in ("rtol", "atol", "h_int") if name in other}
     if "adaptive" in other:
-        integ.adaptive = int(bool(other["adaptive"]))
-    for name in ("rtol", "atol", "h_int"):
-        if name in other:
-            setattr(integ, name, float(other[name]))
-    return _model(model), integ, _vector(other, "q0"), _vector(other, "qd0")
+        settings["adaptive"] = bool(other["adaptive"])
+    integ = PlantIntegrator(**settings)  # type: ignore[arg-type]
+    return (_model(model), _lib.RawPlantIntegrator.from_buffer_copy(integ.packed),
+            _vector(other, "q0"), _vector(other, "qd0"))
 
 
 def _controller(values: Mapping[str, float | bool]) -> tuple[_lib.RawModel, _lib.RawCtcGains]:

@@ -1,0 +1,144 @@
+"""rr.Plant: librrr's plant step from Python through the compiled binding (its steps equal the
+plant FMU's doStep bit for bit: test_plant_fmu.py). Snapshots make reruns bit-exact, the ctypes
+binding gives the same numbers and refusals, a closed loop written in Python with Model.ctc and
+Plant.step equals rr.simulate bit for bit, and hostile input is refused without changing the
+state."""
+
+from __future__ import annotations
+
+import ctypes as ct
+
+import numpy as np
+import pytest
+import rrr_robot as rr
+from rrr_robot.core import _ctypes_kernels, _lib
+from rrr_robot.core.param_names import model_fmu_values
+from rrr_robot.sim.cosim import CosimOptions
+from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
+
+U = np.array([0.5, 1.0, 0.3])
+Q0 = np.array([0.1, 0.4, 1.0])
+H = 1e-3
+
+
+@pytest.fixture(scope="module")
+def model() -> rr.Model:
+    return rr.Model.default()
+
+
+def test_snapshot_restore_reruns_bit_for_bit(model) -> None:
+    plant = rr.Plant(model, q0=Q0)
+    for _ in range(50):
+        plant.step(U, H)
+    snap = plant.snapshot()
+    first = [plant.step(U * np.sin(k), H).copy() for k in range(40)]
+    end = (plant.q, plant.qd, plant.t)
+    plant.restore(snap)
+    again = [plant.step(U * np.sin(k), H).copy() for k in range(40)]
+    assert all(np.array_equal(a, b) for a, b in zip(first, again, strict=True))
+    assert np.array_equal(end[0], plant.q) and np.array_equal(end[1], plant.qd)
+    other = rr.Plant(model)  # another plant continues from the snapshot the same way
+    other.restore(snap)
+    assert np.array_equal(other.step(U * np.sin(0), H), first[0])
+    # the adaptive step-size memory is part of the snapshot
+    assert _state_of(snap).h_guess > 0.0 and _state_of(snap).err_prev > 0.0
+
+
+def _state_of(snap: rr.PlantSnapshot) -> _lib.RawPlantState:
+    return _lib.RawPlantState.from_buffer_copy(snap.state)
+
+
+def test_the_ctypes_binding_gives_the_same_steps_and_refusals(model) -> None:
+    ext, slow = model._k, _ctypes_kernels.Kernels(model.raw)
+    packed = rr.PlantIntegrator().packed
+    states = [_lib.RawPlantState(), _lib.RawPlantState()]
+    for s in states:
+        _lib.call("rrr_plant_state_init", _arr(Q0), _arr(np.zeros(3)), ct.byref(s))
+    stats = [_lib.RawPlantStats(), _lib.RawPlantStats()]
+    for k in range(100):
+        u = U * np.cos(0.1 * k)
+        a = ext.plant_step(packed, u, H, states[0], stats[0])
+        b = slow.plant_step(packed, u, H, states[1], stats[1])
+        assert np.array_equal(a, b) and bytes(states[0]) == bytes(states[1])
+        assert bytes(stats[0]) == bytes(stats[1])
+        assert np.array_equal(ext.plant_accel(states[0], u), slow.plant_accel(states[1], u))
+    hostile = [
+        ((packed, [np.nan, 0, 0], H), rr.BadInputError),
+        ((packed, np.zeros((2, 3)), H), rr.BadInputError),
+        ((packed, "abc", H), rr.BadInputError),
+        ((packed, U, 0.0), rr.BadInputError),
+        ((packed, U, -1e-3), rr.BadInputError),
+        ((packed, U, float("inf")), rr.BadInputError),
+        ((packed, U, "x"), rr.BadInputError),
+        ((b"short", U, H), TypeError),
+    ]
+    for args, exc in hostile:
+        before = [bytes(s) for s in states]
+        with pytest.raises(exc) as e_ext:
+            ext.plant_step(*args, states[0], stats[0])
+        with pytest.raises(exc) as e_slow:
+            slow.plant_step(*args, states[1], stats[1])
+        assert str(e_ext.value) == str(e_slow.value)
+        assert [bytes(s) for s in states] == before  # nothing written on a refusal
+    for kernels in (ext, slow):
+        with pytest.raises(TypeError):
+            kernels.plant_step(packed, U, H, b"\0" * ct.sizeof(_lib.RawPlantState), stats[0])
+
+
+def _arr(v: np.ndarray) -> int:
+    return np.ascontiguousarray(v, dtype=np.float64).ctypes.data
+
+
+def test_a_closed_loop_in_python_equals_rr_simulate(tmp_path) -> None:
+    prep = prepare(WritingJob(out=tmp_path / "o", text="am", figures=False))
+    ref = prep.reference
+    n = 800
+    t, q_ref, qd_ref, qdd_ref, x_ref = ref.t[:n], ref.q[:n], ref.qd[:n], ref.qdd[:n], ref.x[:n]
+    scn = {s.name: s for s in prep.scenarios}["mismatch"]
+    control = prep.robot.require_control()
+    opts = CosimOptions(step=float(t[1] - t[0]), plant_values=model_fmu_values(prep.model),
+                        controller_values=controller_fmu_values(scn, prep.model, control))
+    native = rr.simulate(t, q_ref, qd_ref, qdd_ref, x_ref, opts)
+    ctrl = scn.controller_model(prep.model)
+    gains = rr.CtcGains(scn.kp or control.kp, scn.kd or control.kd, scn.feedforward)
+    plant = rr.Plant(prep.model, q0=q_ref[0], qd0=qd_ref[0], t0=float(t[0]))
+    step = opts.step
+    for k in range(n):
+        assert np.array_equal(plant.q, native.q[k]) and np.array_equal(plant.qd, native.qd[k])
+        assert np.array_equal(plant.qdd, native.qdd[k]) and np.array_equal(plant.tip,
+                                                                           native.tip[k])
+        u, _, u_c = ctrl.ctc(gains, q_ref[k], qd_ref[k], qdd_ref[k], plant.q, plant.qd)
+        assert np.array_equal(u, native.u[k]) and np.array_equal(u_c, native.u_c[k]), k
+        if k < n - 1:
+            plant.step(u, step)
+
+
+def test_bad_construction_and_restore_are_refused(model) -> None:
+    with pytest.raises(rr.BadInputError, match="q0"):
+        rr.Plant(model, q0=[0.0, np.nan, 0.0])
+    with pytest.raises(rr.BadInputError):
+        rr.Plant(model, qd0=np.zeros((4, 3)))
+    with pytest.raises(rr.BadInputError, match="Model"):
+        rr.Plant("model")  # type: ignore[arg-type]
+    with pytest.raises(rr.BadInputError, match="rtol"):
+        rr.PlantIntegrator(rtol=0.5)
+    with pytest.raises(rr.BadInputError, match="h_int"):
+        rr.PlantIntegrator.fixed_step(0.0)
+    with pytest.raises(rr.BadInputError, match="adaptive"):
+        rr.PlantIntegrator(adaptive=1)  # type: ignore[arg-type]
+    with pytest.raises(rr.BadInputError, match="max_steps"):
+        rr.PlantIntegrator(max_steps=0)
+    plant = rr.Plant(model)
+    with pytest.raises(rr.BadInputError, match="snapshot"):
+        plant.restore("not a snapshot")  # type: ignore[arg-type]
+    snap = plant.snapshot()
+    bad = rr.PlantSnapshot(snap.state, (float("nan"), 0.0, 0.0), 0.0)
+    with pytest.raises(rr.BadInputError, match="non-finite"):
+        plant.restore(bad)
+    # a step the integrator cannot finish (max_steps reached) leaves the plant as it was
+    tight = rr.Plant(model, q0=Q0, integrator=rr.PlantIntegrator(max_steps=1, rtol=1e-14,
+                                                                  atol=1e-14))
+    before = tight.snapshot()
+    with pytest.raises(rr.RrrError, match="rrr_plant_step"):
+        tight.step(U, 0.5)
+    assert tight.snapshot() == before
