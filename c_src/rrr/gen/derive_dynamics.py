@@ -520,6 +520,8 @@ def build_functions(der: Derivation) -> list[GenFunction]:
     reg = [(f"Y[{k}][{col}]", compact(R[k, col], sparse)) for k in range(3) for col in range(NP)]
     tau_rows = [sp.expand(sum(R[k, col] * P[col] for col in range(NP))) for k in range(3)]
     tau = [(f"tau[{k}]", tau_expr(tau_rows[k], sparse)) for k in range(3)]
+    no_qdd = {x: 0 for x in qdd}
+    bias = [(f"b[{k}]", tau_expr(sp.expand(tau_rows[k].subs(no_qdd)), sparse)) for k in range(3)]
     mass = []
     for k in range(3):
         for j in range(k, 3):
@@ -554,6 +556,12 @@ def build_functions(der: Derivation) -> list[GenFunction]:
             "Motor torque tau = R(q, qd, qdd) p, fused (no regressor built).",
             "const double qd[3], const double qdd[3], double tau[3]",
             tau,
+        ),
+        GenFunction(
+            "rrr_gen_bias",
+            "Bias torques c(q, qd) + h(q) = tau(q, qd, 0), fused: what forward dynamics subtracts.",
+            "const double qd[3], double b[3]",
+            bias,
         ),
         GenFunction(
             "rrr_gen_mass_matrix",

@@ -168,16 +168,18 @@ void rrr_fd_factorize(const rrr_model *m, const double q[3], const double qd[3],
         return;
     }
     const rrr_trig t = rrr_trig_of(q);
-    /* bias c(q, qd) + h(q) = tau(q, qd, 0): one fused call; a non-finite p, a2, g, q or qd
-     * shows here (before D, whose NaN would look like a failed pivot) */
-    const double zero[3] = {0.0, 0.0, 0.0};
-    rrr_gen_inverse_dynamics(m, &t, qd, zero, f->bias);
-    if (!rrr_finite_n(f->bias, 3)) {
-        f->st = RRR_NUMERIC; /* rrr_fd_solve classifies it with tau */
-        return;
-    }
+    /* bias c(q, qd) + h(q) = tau(q, qd, 0): one fused generated call (82 operations against
+     * the 132 of tau with qdd = 0). A non-finite input shows in the bias or in D (the inertial
+     * parameters that multiply qdd only, in D): both are checked before the pivots, where a NaN
+     * would look like a failed one, and rrr_fd_solve classifies it with tau. */
+    rrr_gen_bias(m, &t, qd, f->bias);
     double D[3][3];
     rrr_gen_mass_matrix(m, &t, D);
+    if (!rrr_finite_n(f->bias, 3) || !rrr_finite_n(D[0], 3) || !rrr_finite_n(D[1], 3) ||
+        !rrr_finite_n(D[2], 3)) {
+        f->st = RRR_NUMERIC;
+        return;
+    }
 
     /* D = L L^T */
     const double d00 = D[0][0];

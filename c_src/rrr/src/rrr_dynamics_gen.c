@@ -173,6 +173,50 @@ void rrr_gen_inverse_dynamics(const rrr_model *m,
     tau[2] = g*t23 + p14*qdd3 + qdd1*t0 + qdd2*t22 + t12*t24 + t19*t5;
 }
 
+void rrr_gen_bias(const rrr_model *m, const rrr_trig *trig, const double qd[3], double b[3])
+{
+    const double s2 = trig->s2;
+    const double c2 = trig->c2;
+    const double s3 = trig->s3;
+    const double c3 = trig->c3;
+    const double s23 = trig->s23;
+    const double c23 = trig->c23;
+    const double a2 = m->a2;
+    const double g = m->g;
+    const double p1 = m->p[0];
+    const double p2 = m->p[1];
+    const double p3 = m->p[2];
+    const double p4 = m->p[3];
+    const double p5 = m->p[4];
+    const double p6 = m->p[5];
+    const double p8 = m->p[7];
+    const double p9 = m->p[8];
+    const double p10 = m->p[9];
+    const double p11 = m->p[10];
+    const double p15 = m->p[14];
+    const double p16 = m->p[15];
+    const double qd1 = qd[0];
+    const double qd2 = qd[1];
+    const double qd3 = qd[2];
+    const double t0 = qd3*qd3;
+    const double t1 = c23*p9 - p8*s23;
+    const double t2 = 2.0*qd2*qd3;
+    const double t3 = qd2*qd2;
+    const double t4 = 2.0*a2;
+    const double t5 = p4*t4;
+    const double t6 = p3*t4;
+    const double t7 = 2.0*c23*p5*s23 - p6*(2.0*s23*s23 - 1.0);
+    const double t8 = c2*c23*t5 + c2*s23*t6 + t7;
+    const double t9 = 2.0*s2;
+    const double t10 = c2*p1*t9 + p2*(2.0*s2*s2 - 1.0) + t5*(c3 - s23*t9) + t6*(c23*t9 + s3) + t7;
+    const double t11 = a2*(c3*p4 + p3*s3);
+    const double t12 = c23*p3 - p4*s23;
+    const double t13 = qd1*qd1;
+    b[0] = -qd1*qd2*t10 - qd1*qd3*t8 + t0*t1 + t1*t2 + t3*(c2*p11 - p10*s2 + t1);
+    b[1] = g*(c2*p15 - p16*s2 + t12) - t0*t11 + 0.5*t10*t13 - t11*t2;
+    b[2] = g*t12 + t11*t3 + 0.5*t13*t8;
+}
+
 void rrr_gen_mass_matrix(const rrr_model *m, const rrr_trig *trig, double D[3][3])
 {
     const double s2 = trig->s2;

@@ -26,6 +26,9 @@ void rrr_gen_inverse_dynamics(const rrr_model *m,
                               const double qdd[3],
                               double tau[3]);
 
+/** Bias torques c(q, qd) + h(q) = tau(q, qd, 0), fused: what forward dynamics subtracts. (82 operations after CSE.) */
+void rrr_gen_bias(const rrr_model *m, const rrr_trig *trig, const double qd[3], double b[3]);
+
 /** Inertia matrix D(q), rotor inertias included; full symmetric matrix. (36 operations after CSE.) */
 void rrr_gen_mass_matrix(const rrr_model *m, const rrr_trig *trig, double D[3][3]);
 
