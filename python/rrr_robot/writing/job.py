@@ -31,7 +31,7 @@ from ..sim.cosim import CosimOptions, CosimResult, run_cosim
 from ..sim.native import simulate
 from .figure_worker import ReferenceFigures
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
-from .trajectory import Reference, WritingSpec, make_reference
+from .trajectory import Reference, WritingSpec, fit_letter_height, make_reference
 
 log = logging.getLogger(__name__)
 
@@ -135,7 +135,10 @@ def prepare(job: WritingJob) -> Prepared:
     if job.text is not None:
         spec = replace(spec, text=job.text)
     if job.scale != 1.0:
-        spec = replace(spec, letter_height=spec.letter_height * job.scale)
+        # the factor on the height the text is written at (fitted to the writing area), and
+        # that height exactly: a scaled text that does not fit is refused
+        spec = replace(spec, letter_height=fit_letter_height(spec) * job.scale,
+                       fit_to_area=False)
     reference = make_reference(robot.model, spec)
     for s in scenarios:
         s.controller_model(robot.model)  # a perturbed model that is invalid fails here
@@ -183,7 +186,8 @@ def run_writing(job: WritingJob,
             log.info("%s: %s", scn.name, _describe(s))
         log.info("%s tables: %.2f s", fmt, table_time)
         summary["reference"] = {
-            "text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]),
+            "text": ref.spec.text, "letter_height": ref.spec.letter_height,
+            "duration": float(ref.t[-1] - ref.t[0]),
             "step": float(ref.t[1] - ref.t[0]),
             "min_workspace_margin_m": ref.min_margin_m, "min_elbow_margin": ref.min_elbow_margin,
             "min_shoulder_margin_m": ref.min_shoulder_margin_m,
