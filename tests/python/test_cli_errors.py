@@ -41,6 +41,9 @@ CASES: dict[str, tuple[list[str], str]] = {
     "writing-fmi-4": (["writing", "--fmi", "4"], "--fmi"),
     "writing-empty-out": (["writing", "--out", ""], "--out"),
     "writing-out-below-a-file": (["writing", "--out", "a_file/out"], "output folder"),
+    "writing-animate-unknown-format": (["writing", "--animate", "avi"], "--animate"),
+    "writing-text-too-long-for-the-area": (["writing", "--text", "The quick brown fox jumps "
+                                            "over the lazy dog"], "below min_letter_height"),
     # rrr identify (OUT is the robot file to write)
     "identify-missing-log": (["identify", "--log", "missing.csv"], "missing.csv"),
     "identify-binary-log": (["identify", "--log", "binary.toml"], "binary.toml"),

@@ -41,13 +41,16 @@ def _cmd_writing(args: argparse.Namespace) -> int:
         out=Path(args.out), text=_text(args.text), scenarios=args.scenario or list(BUILTIN),
         robot=Path(args.robot) if args.robot else WritingJob.robot, scale=args.scale,
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
-        engine=args.engine,
+        engine=args.engine, animate=args.animate,
     )
     with Bars(shown(args.quiet)) as bars:
         summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
     figures = ", figures" if job.figures else ""
+    animations = sorted({Path(f).suffix for f in summary["files"] if f.startswith("anim_")})
+    if animations:
+        figures += f", anim_<scenario>{animations[0]}"
     print(f"results in {job.out}/ (summary.json, <scenario>.{job.table_format}{figures})")
     return 0
 
@@ -103,5 +106,11 @@ def register_cli(subparsers: Any) -> None:
                      help="format of the per-scenario signal tables <scenario>.csv or "
                      "<scenario>.parquet (default csv; parquet needs pyarrow: pip install "
                      "'rrr_robot[parquet]'); the same columns and values")
+    p_w.add_argument("--animate", nargs="?", const="auto", choices=("auto", "gif", "mp4"),
+                     metavar="FORMAT",
+                     help="also write anim_<scenario>.gif or .mp4: the arm in 3-D writing (links, "
+                     "pen trace, reference), 15 frames per simulated second; FORMAT auto "
+                     "(default: mp4 when imageio-ffmpeg is installed, pip install "
+                     "'rrr_robot[mp4]', else gif), gif or mp4")
     p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p_w.set_defaults(func=_cmd_writing)

@@ -29,6 +29,7 @@ from ..core.tables import check_table_format
 from ..errors import BadInputError
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
 from ..sim.native import simulate
+from .animation import animate_result, animation_format
 from .figure_worker import ReferenceFigures
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
 from .trajectory import Reference, WritingSpec, fit_letter_height, make_reference
@@ -58,6 +59,8 @@ class WritingJob:
     # librrr (rr.simulate), bit-identical and several times faster, no FMU involved
     engine: str = "fmpy"
     table_format: str = "csv"  # of the per-scenario signal tables: csv or parquet (core.tables)
+    # an animation of the arm per scenario: None (none), "gif", "mp4" or "auto" (writing.animation)
+    animate: str | None = None
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,
@@ -152,9 +155,12 @@ def run_writing(job: WritingJob,
     if job.engine not in ENGINES:
         raise BadInputError(f"unknown engine {job.engine!r}: one of {', '.join(ENGINES)}")
     fmt = check_table_format(job.table_format)  # parquet without pyarrow fails here
+    anim = None if job.animate is None else animation_format(job.animate)  # mp4: its package
     model, robot, scenarios, ref = prepare(job)
     for scn in scenarios:  # the output names, before anything runs
         check_name(f"{scn.name}.{fmt}")
+        if anim is not None:
+            check_name(f"anim_{scn.name}.{anim}")
     with ResultSet(job.out, kind="writing") as rs, \
             ReferenceFigures(rs.staging, model, robot, ref, start=job.figures) as ref_figures:
         # Figs 2-6 depend on the reference only: a forked worker draws them while the
@@ -197,11 +203,26 @@ def run_writing(job: WritingJob,
         summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
         if job.figures:
             start = time.perf_counter()
-            from .plots import write_result_figures
+            from .plots import result_figure_count, write_result_figures
 
-            write_result_figures(rs.staging, ref, results)
+            total = result_figure_count(results) + 1   # and the reference figures, last
+
+            def drawn(k: int, n: int) -> None:
+                if progress is not None:
+                    progress("figures", k - 1, total)
+            write_result_figures(rs.staging, ref, results, progress=drawn)
             ref_figures.finish()  # Figs 2-6: the worker's, or drawn here
+            drawn(total, total)
             log.info("figures: %.2f s", time.perf_counter() - start)
+        if anim is not None:
+            start = time.perf_counter()
+            for name, res in results.items():
+                def frames(k: int, n: int, name: str = name) -> None:
+                    if progress is not None:
+                        progress(f"animation {name}", k - 1, n)
+                animate_result(rs.path(f"anim_{name}.{anim}"), model, ref, res, title=name,
+                               fmt=anim, progress=frames)
+            log.info("animations: %.2f s", time.perf_counter() - start)
         summary["files"] = sorted([*rs.names(), "summary.json"])
         summary = to_strict_json_value(summary)
         rs.write_text("summary.json", strict_json(summary) + "\n")

@@ -9,9 +9,10 @@ log axes are plain text (10⁻³, no mathtext parser).
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -232,11 +233,24 @@ def write_reference_figures(out: Path, model: Model, robot: RobotFile, ref: Refe
     fig_differences(out, model, robot, ref)
 
 
-def write_result_figures(out: Path, ref: Reference, results: Mapping[str, CosimResult]) -> None:
-    """Figs 7-9 and the tip error: the co-simulated scenarios."""
-    fig_letters(out, ref, results)
-    fig_controls(out, results)
-    fig_tip_error(out, results)
+def result_figure_count(results: Mapping[str, CosimResult]) -> int:
+    """How many figures :func:`write_result_figures` draws."""
+    return 2 * len(results) + 1
+
+
+def write_result_figures(out: Path, ref: Reference, results: Mapping[str, CosimResult],
+                         progress: Callable[[int, int], None] | None = None) -> None:
+    """Figs 7-9 and the tip error: the co-simulated scenarios; ``progress(done, total)`` after
+    each figure."""
+    steps: list[Callable[[], None]] = [
+        *(functools.partial(fig_letters, out, ref, {name: res}) for name, res in results.items()),
+        *(functools.partial(fig_controls, out, {name: res}) for name, res in results.items()),
+        functools.partial(fig_tip_error, out, results),
+    ]
+    for k, step in enumerate(steps):
+        step()
+        if progress is not None:
+            progress(k + 1, len(steps))
 
 
 def write_figures(out: Path, model: Model, robot: RobotFile, ref: Reference,
