@@ -115,7 +115,6 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors,
                                  progress=bars.callback("excitation")).to_csv(
             rs.path("excitation.csv"), f"{note}; cond(W) = {cond:.2f}")
-        bars.close()
     print(f"cond(W) of the excitation: {cond:.2f}; logs in {out}/ (friction.csv, "
           "excitation.csv, excitation.json)")
     return 0
