@@ -117,17 +117,26 @@ def test_help_states_the_writing_area_and_the_glyphs() -> None:
         assert part in text, part
 
 
-def test_two_line_text_through_the_cli(tmp_path: Path) -> None:
-    out = tmp_path / "out"
-    proc = subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--out", str(out),
-                           "-q", "--no-figures", "--engine", "native", "--scenario", "ctc",
-                           "--text", "Hi\\nyou"], capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, proc.stderr
+@pytest.mark.parametrize(("text", "written", "fitted"), [
+    ("Hello, world", "Hello, world", True), ("Hello\\nworld", "Hello\nworld", False)])
+def test_runs_with_default_options(tmp_path: Path, text: str, written: str,
+                                   fitted: bool) -> None:
+    """The issue's examples through the command line with every default (three scenarios
+    through the FMUs, the figures)."""
     import json
 
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--out", str(out),
+                           "-q", "--text", text], capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["reference"]["text"] == "Hi\nyou"
-    assert summary["reference"]["letter_height"] == 0.07
+    assert summary["reference"]["text"] == written
+    height = summary["reference"]["letter_height"]
+    assert (0.02 <= height < 0.07) if fitted else height == 0.07
+    assert set(summary["scenarios"]) == {"pd", "ctc", "mismatch"}
+    assert all(s["status"] == "ok" for s in summary["scenarios"].values())
+    assert summary["scenarios"]["ctc"]["tip_error_max"] < 1e-3
+    assert "fig_letters_ctc.png" in summary["files"]
 
 
 # ---- legends ----------------------------------------------------------------------------------
