@@ -26,6 +26,11 @@ if ! windows_tools_ok; then
     exit 1
   fi
 fi
+# pkg-config: the installed-tree test (CTest install_tree) checks `pkg-config --libs rrr`
+if ! command -v pkg-config >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq pkg-config >/dev/null
+fi
 # shellcheck disable=SC1091
 . scripts/setup_env.sh
 JOBS="$(nproc 2>/dev/null || echo 2)"

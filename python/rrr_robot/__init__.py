@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from .core.model import Model, Singularity, bps_from_inertia
     from .core.plant import Plant, PlantSnapshot, PlantStats
     from .core.robot import RobotFile, read_robot_file
+    from .core.urdf import robot_urdf, write_urdf
     from .sim.fmus import fmu_path
     from .sim.native import simulate
 
@@ -48,6 +49,8 @@ _LAZY = {
     "PlantStats": ".core.plant",
     "RobotFile": ".core.robot",
     "read_robot_file": ".core.robot",
+    "robot_urdf": ".core.urdf",
+    "write_urdf": ".core.urdf",
     "fmu_path": ".sim.fmus",
     "simulate": ".sim.native",
 }
@@ -90,5 +93,7 @@ __all__ = [
     "bps_from_inertia",
     "fmu_path",
     "read_robot_file",
+    "robot_urdf",
     "simulate",
+    "write_urdf",
 ]

@@ -41,6 +41,9 @@ CASES: dict[str, tuple[list[str], str]] = {
     "writing-fmi-4": (["writing", "--fmi", "4"], "--fmi"),
     "writing-empty-out": (["writing", "--out", ""], "--out"),
     "writing-out-below-a-file": (["writing", "--out", "a_file/out"], "output folder"),
+    "writing-animate-unknown-format": (["writing", "--animate", "avi"], "--animate"),
+    "writing-text-too-long-for-the-area": (["writing", "--text", "The quick brown fox jumps "
+                                            "over the lazy dog"], "below min_letter_height"),
     # rrr identify (OUT is the robot file to write)
     "identify-missing-log": (["identify", "--log", "missing.csv"], "missing.csv"),
     "identify-binary-log": (["identify", "--log", "binary.toml"], "binary.toml"),
@@ -89,6 +92,13 @@ CASES: dict[str, tuple[list[str], str]] = {
     "hil-bad-interface": (["hil", "bench", "--interface", "vcan"], "--interface"),
     "hil-out-below-a-file": (["hil", "export-reference", "--out", "a_file/out"],
                              "output folder"),
+    # rrr urdf (OUT is the URDF file to write)
+    "urdf-missing-robot": (["urdf", "--robot", "missing.toml"], "missing.toml"),
+    "urdf-binary-robot": (["urdf", "--robot", "binary.toml"], "binary.toml"),
+    "urdf-base-parameters-only": (["urdf", "--robot", "bp_robot.toml"], "[base_parameters]"),
+    "urdf-out-is-a-folder": (["urdf", "--out", "folder"], "is a folder"),
+    "urdf-out-in-missing-folder": (["urdf", "--out", "nowhere/rrr.urdf"], "does not exist"),
+    "urdf-no-out": (["urdf", "--out"], "--out"),
     # rrr, rrr fmus
     "no-command": ([], "command"),
     "unknown-command": (["paint"], "paint"),
@@ -96,7 +106,7 @@ CASES: dict[str, tuple[list[str], str]] = {
 }
 
 #: the commands that take an output (appended as --out OUT unless the case gives --out)
-TAKES_OUT = ("writing", "identify", "identify-experiment", "hil")
+TAKES_OUT = ("writing", "identify", "identify-experiment", "hil", "urdf")
 
 
 def make_workdir(folder: Path) -> None:
@@ -108,6 +118,7 @@ def make_workdir(folder: Path) -> None:
     robot = DEFAULT_ROBOT_TOML.read_text().replace("g = 9.81", "g = nan", 1)
     assert "g = nan" in robot
     (folder / "nan_robot.toml").write_text(robot)
+    rr.Model.default().to_toml(folder / "bp_robot.toml")  # [base_parameters], no link tables
     t = np.arange(300) * 1e-3
     rows = np.column_stack([t, np.zeros((300, 6))])
     (folder / "log.csv").write_text("t,q[1],q[2],q[3],u[1],u[2],u[3]\n" + "\n".join(

@@ -38,7 +38,7 @@ def test_import_loads_nothing_heavy(code, tmp_path):
 
 @pytest.mark.parametrize("argv", [
     ["--help"], ["--version"], ["fmus"], ["writing", "--help"], ["identify", "--help"],
-    ["identify-experiment", "--help"], ["hil", "--help"],
+    ["identify-experiment", "--help"], ["hil", "--help"], ["urdf", "--help"],
 ])
 def test_cli_start_loads_nothing_heavy(argv, tmp_path):
     code = ("from rrr_robot.cli import main\n"

@@ -177,10 +177,14 @@ def test_text_too_large_raises_before_running(
         raise AssertionError("the timing law ran for a text that does not fit")
 
     monkeypatch.setattr(tr, "timing_law", must_not_run)
+    # at the height asked for (fit_to_area false), and below min_letter_height when fitted
     with pytest.raises(rr.BadInputError, match="wide"):
-        tr.make_reference(model, tr.WritingSpec(letter_height=0.12))
+        tr.make_reference(model, tr.WritingSpec(letter_height=0.12, fit_to_area=False))
     with pytest.raises(rr.BadInputError, match="high"):
-        tr.make_reference(model, tr.WritingSpec(text="a\nb\nc", letter_height=0.07))
+        tr.make_reference(model, tr.WritingSpec(text="a\nb\nc", letter_height=0.07,
+                                                fit_to_area=False))
+    with pytest.raises(rr.BadInputError, match="below min_letter_height"):
+        tr.make_reference(model, tr.WritingSpec(text="\n".join("abcdefghi")))
 
 
 def test_off_workspace_raises_before_running(

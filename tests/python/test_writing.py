@@ -24,7 +24,8 @@ FIGURES = [
 def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("writing")
     result = subprocess.run(
-        [sys.executable, "-m", "rrr_robot", "writing", "--out", str(out), "--quiet"],
+        [sys.executable, "-m", "rrr_robot", "writing", "--out", str(out), "--quiet",
+         "--animate", "gif"],
         capture_output=True, text=True, timeout=900,
     )
     assert result.returncode == 0, result.stderr
@@ -42,6 +43,35 @@ def test_outputs_and_summary_shape(run: tuple[Path, dict]) -> None:
         assert (out / name).stat().st_size > 10_000, name
     header = (out / "ctc.csv").read_text().splitlines()[0].split(",")
     assert header[:4] == ["t", "q_ref[1]", "q_ref[2]", "q_ref[3]"] and "tip.z" in header
+
+
+def test_the_animations_show_the_arm_writing(run: tuple[Path, dict]) -> None:
+    """--animate gif: one GIF per scenario; the first frame shows the arm (pixels of the link
+    colour, far more than the legend's sample line), the last one the written text as well
+    (pixels of the trace colour beyond those of the legend, which the first frame has alone);
+    the three together well under 10 MB."""
+    from PIL import Image
+    from rrr_robot.writing.animation import FPS, LINK_COLOR, TRACE_COLOR
+
+    out, summary = run
+    names = [f"anim_{s}.gif" for s in ("pd", "ctc", "mismatch")]
+    assert set(names) <= set(summary["files"])
+    assert sum((out / n).stat().st_size for n in names) < 10e6
+
+    def pixels(frame: Image.Image, color: tuple[int, int, int]) -> int:
+        rgb = np.asarray(frame.convert("RGB"), dtype=int)
+        return int(np.sum(np.all(np.abs(rgb - np.array(color)) <= 24, axis=2)))
+
+    for name in names:
+        with Image.open(out / name) as gif:
+            assert gif.format == "GIF" and gif.size == (512, 384)
+            assert gif.n_frames >= int(summary["reference"]["duration"] * FPS)
+            assert pixels(gif, LINK_COLOR) > 1000, name     # the links, drawn 5 pt wide
+            legend = pixels(gif, TRACE_COLOR)               # nothing written yet
+            assert legend < 100, name
+            gif.seek(gif.n_frames - 1)
+            assert pixels(gif, LINK_COLOR) > 1000, name
+            assert pixels(gif, TRACE_COLOR) - legend > 150, name     # the text
 
 
 def test_feedforward_beats_pd_as_in_the_paper(run: tuple[Path, dict]) -> None:

@@ -15,6 +15,7 @@ from .. import __version__
 from ..errors import RrrError
 from .hil import register_cli as register_hil
 from .identify import register_cli as register_identify
+from .urdf import register_cli as register_urdf
 from .writing import register_cli as register_writing
 
 log = logging.getLogger("rrr_robot")
@@ -48,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
     register_writing(sub)
     register_identify(sub)
     register_hil(sub)
+    register_urdf(sub)
     return parser
 
 

@@ -13,6 +13,7 @@ from typing import Any
 
 from ..errors import BadInputError
 from ._args import nonnegative_int, output_path, positive_int
+from ._progress import Bars, shown
 
 log = logging.getLogger(__name__)
 
@@ -35,7 +36,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                         friction_method=args.friction_method, weighting=args.weighting,
                         v_min=args.v_min)
     friction = read_log(args.friction_log, friction=True) if args.friction_log else None
-    result = identify(read_log(args.log), prior, friction, settings)
+    with Bars(shown(args.quiet), unit="joint") as bars:
+        result = identify(read_log(args.log), prior, friction, settings, progress=bars)
     report: dict[str, Any] = result.report()
     est = result.base.wls if settings.weighting == "wls" else result.base.ls
     print(f"cond(W) = {result.base.cond:.1f} from {result.base.rows} rows; {est.method}:")
@@ -44,7 +46,10 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     if args.validate:
         from ..identify.validation import validate_writing
 
-        report["writing"] = validate_writing(prior, result.model, prior_robot)
+        with Bars(shown(args.quiet)) as bars:
+            report["writing"] = validate_writing(
+                prior, result.model, prior_robot,
+                progress=lambda name, k, n: bars(name, k + 1, n))
         ratio = report["writing"]["tip_error_ratio"]
         print(f"writing task: tip error ratio identified/prior {ratio:.2f}")
     # the robot file and the report together at the end, each complete or not at all: an
@@ -100,13 +105,15 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     ex.check_experiments(args.periods, step)  # the bounds, before anything runs
     sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)
     # the three files appear together when every experiment succeeded (core.outputs)
-    with ResultSet(out, kind="identify-experiment") as rs:
+    with ResultSet(out, kind="identify-experiment") as rs, Bars(shown(args.quiet)) as bars:
         traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
         traj.to_json(rs.path("excitation.json"))
         note = f"simulated, sensors: {sensors}"
-        ex.friction_experiment(model, step=step, sensors=sensors).to_csv(
+        ex.friction_experiment(model, step=step, sensors=sensors,
+                               progress=bars.callback("friction sweep")).to_csv(
             rs.path("friction.csv"), note)
-        ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors).to_csv(
+        ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors,
+                                 progress=bars.callback("excitation")).to_csv(
             rs.path("excitation.csv"), f"{note}; cond(W) = {cond:.2f}")
     print(f"cond(W) of the excitation: {cond:.2f}; logs in {out}/ (friction.csv, "
           "excitation.csv, excitation.json)")
@@ -138,6 +145,7 @@ def register_cli(sub: Any) -> None:
     p.add_argument("--report", type=output_path, help="write the figures of merit as JSON")
     p.add_argument("--validate", action="store_true",
                    help="run the writing task with the prior and the identified model")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     p.set_defaults(func=_cmd_identify)
     e = sub.add_parser(
         "identify-experiment", help="simulate friction and excitation logs on the plant FMU",
@@ -153,4 +161,5 @@ def register_cli(sub: Any) -> None:
     e.add_argument("--periods", type=positive_int, default=1,
                    help="excitation periods of 10 s (an experiment has at most 1,000,000 "
                    "samples: 1000 s at 1 ms)")
+    e.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     e.set_defaults(func=_cmd_experiment)

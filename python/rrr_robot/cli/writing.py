@@ -27,23 +27,49 @@ def _scenario_line(s: dict[str, Any]) -> str:
             f"u_c [{rms_c}] V; {_num(s['realtime_factor'], '.0f')}x real time")
 
 
+def _text(text: str | None) -> str | None:
+    """--text as written: a newline, or the two characters backslash n (what a shell passes for
+    'a\\nb'), starts a new line."""
+    return None if text is None else text.replace("\\n", "\n")
+
+
 def _cmd_writing(args: argparse.Namespace) -> int:
     from ..writing.job import WritingJob, run_writing
     from ..writing.scenarios import BUILTIN
 
     job = WritingJob(
-        out=Path(args.out), text=args.text, scenarios=args.scenario or list(BUILTIN),
+        out=Path(args.out), text=_text(args.text), scenarios=args.scenario or list(BUILTIN),
         robot=Path(args.robot) if args.robot else WritingJob.robot, scale=args.scale,
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
-        engine=args.engine,
+        engine=args.engine, animate=args.animate,
     )
     with Bars(shown(args.quiet)) as bars:
         summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
     figures = ", figures" if job.figures else ""
+    animations = sorted({Path(f).suffix for f in summary["files"] if f.startswith("anim_")})
+    if animations:
+        figures += f", anim_<scenario>{animations[0]}"
     print(f"results in {job.out}/ (summary.json, <scenario>.{job.table_format}{figures})")
     return 0
+
+
+#: The writing area and the glyphs, for ``rrr writing --help`` (the default robot's [writing]
+#: values and WritingSpec's defaults; tests/python/test_text_layout.py checks them).
+WRITING_EPILOG = """\
+writing area (default robot; a robot file's [writing] plane_y, x_range, z_range change it):
+  x from 0.35 to 0.65 m and z from 0.35 to 0.60 m (0.30 m x 0.25 m) in the vertical plane
+  y = -0.25 m; capital letters 0.07 m high (letter_height); lines 1.6 letter heights apart
+  (line_spacing), left-aligned. A text that does not fit is scaled down until it fits, down
+  to letters 0.02 m high (min_letter_height); below that it is refused with the numbers.
+glyphs: printable ASCII (space to ~) in the cursive Hershey font 'scripts', and the Greek
+  alphabet (Unicode, upper and lower case) in the Hershey font 'greek'; at most 200
+  characters.
+examples:
+  rrr writing --out results --text "Hello, world"
+  rrr writing --out results --text 'Hello\\nworld' --scenario ctc
+"""
 
 
 def register_cli(subparsers: Any) -> None:
@@ -53,8 +79,10 @@ def register_cli(subparsers: Any) -> None:
         description="Co-simulate the controller and plant FMUs on the writing task and write "
         "summary.json, one table of every signal per scenario (CSV, or Parquet with --format "
         "parquet) and the figures (paper Figs 2-9) into --out.",
+        epilog=WRITING_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p_w.add_argument("--text", help="text to write (default: the paper-like default text)")
+    p_w.add_argument("--text", help="text to write (default: the paper-like default text "
+                     "'a\u03c9m\u03b3'); a newline or \\n starts a new line")
     p_w.add_argument("--scenario", action="append", metavar="S",
                      help="pd, ctc, mismatch or a scenario .toml file; repeat for several "
                      "(default: pd, ctc and mismatch)")
@@ -63,7 +91,9 @@ def register_cli(subparsers: Any) -> None:
                      "were unless the run succeeds")
     p_w.add_argument("--robot", help="robot TOML file (default: the packaged default robot)")
     p_w.add_argument("--scale", type=float, default=1.0,
-                     help="factor on the letter height (default 1)")
+                     help="factor on the letter height the text is written at (after the fit "
+                     "to the writing area; default 1); a scaled text that does not fit is "
+                     "refused")
     p_w.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p_w.add_argument("--fmi", type=int, choices=(2, 3), default=2,
                      help="FMI version of the FMUs to co-simulate (default 2; the results are "
@@ -76,5 +106,11 @@ def register_cli(subparsers: Any) -> None:
                      help="format of the per-scenario signal tables <scenario>.csv or "
                      "<scenario>.parquet (default csv; parquet needs pyarrow: pip install "
                      "'rrr_robot[parquet]'); the same columns and values")
+    p_w.add_argument("--animate", nargs="?", const="auto", choices=("auto", "gif", "mp4"),
+                     metavar="FORMAT",
+                     help="also write anim_<scenario>.gif or .mp4: the arm in 3-D writing (links, "
+                     "pen trace, reference), 15 frames per simulated second; FORMAT auto "
+                     "(default: mp4 when imageio-ffmpeg is installed, pip install "
+                     "'rrr_robot[mp4]', else gif), gif or mp4")
     p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p_w.set_defaults(func=_cmd_writing)

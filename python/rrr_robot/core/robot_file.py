@@ -30,7 +30,7 @@ from typing import Any
 
 from ..errors import RobotFileError, RrrError
 from . import _lib
-from .checked import Document, Field, Matrix, Number, Text, Vector, load_toml, show
+from .checked import Document, Field, Flag, Matrix, Number, Text, Vector, load_toml, show
 from .param_names import PARAMS, ParamInfo, group_shape
 
 __all__ = [
@@ -112,6 +112,8 @@ WRITING_FIELDS: dict[str, Field] = {
     "x_range": Vector(2, _LENGTH, increasing=True),
     "z_range": Vector(2, _LENGTH, increasing=True),
     "letter_height": _SIZE,
+    "fit_to_area": Flag(),
+    "min_letter_height": _SIZE,
     "peak_speed": _SPEED,
     "min_speed": _SPEED,
     "lateral_acc": _ACC,

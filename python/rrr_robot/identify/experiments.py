@@ -17,7 +17,7 @@ plant FMU outputs ideal signals:
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,6 +41,10 @@ J = (1, 2, 3)
 MAX_EXPERIMENT_SAMPLES = 1_000_000
 #: Period of the excitation (s), design_excitation's default.
 EXCITATION_PERIOD = 10.0
+#: Samples between two progress reports of an experiment.
+PROGRESS_SAMPLES = 1000
+#: ``progress(done, total)``: samples simulated of an experiment.
+Progress = Callable[[int, int], None]
 
 
 @dataclass(frozen=True)
@@ -72,8 +76,9 @@ class Gains:
 
 def simulate(model: Model, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
              sensors: Sensors = IDEAL, gains: Gains = Gains(),
-             joint: np.ndarray | None = None) -> Log:
-    """Track (q_ref, qd_ref) with PD on the plant FMU (true parameters ``model``); the log."""
+             joint: np.ndarray | None = None, progress: Progress | None = None) -> Log:
+    """Track (q_ref, qd_ref) with PD on the plant FMU (true parameters ``model``); the log.
+    ``progress(done, n)`` every :data:`PROGRESS_SAMPLES` samples and at the end."""
     _check_samples(t.shape[0], "the experiment", float(t[1] - t[0]) if t.shape[0] > 1 else 0.0)
     n, h = t.shape[0], float(t[1] - t[0])
     rng = np.random.default_rng(sensors.seed)
@@ -101,6 +106,8 @@ def simulate(model: Model, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
             rec[k] = np.concatenate([q_meas, u, qd_true, acc.values])
             if k < n - 1:
                 plant.do_step(h)
+            if progress is not None and ((k + 1) % PROGRESS_SAMPLES == 0 or k == n - 1):
+                progress(k + 1, n)
     ideal = sensors.ideal
     return Log(t, rec[:, :3], rec[:, 3:6], rec[:, 6:9] if ideal else None,
                rec[:, 9:12] if ideal else None, joint, "simulated experiment")
@@ -149,12 +156,12 @@ def check_experiments(periods: int, step: float = DEFAULT_SAMPLE_TIME) -> None:
 
 def excitation_experiment(model: Model, traj: FourierTrajectory, periods: int = 1,
                           step: float = DEFAULT_SAMPLE_TIME, sensors: Sensors = IDEAL,
-                          gains: Gains = Gains()) -> Log:
+                          gains: Gains = Gains(), progress: Progress | None = None) -> Log:
     """Run the periodic excitation for whole periods; the plant starts on the reference."""
     excitation_samples(periods, step, traj.period)
     t = np.arange(round(periods * traj.period / step), dtype=np.float64) * step
     q, qd, _ = traj.evaluate(t)
-    return simulate(model, t, q, qd, sensors, gains)
+    return simulate(model, t, q, qd, sensors, gains, progress=progress)
 
 
 @dataclass(frozen=True)
@@ -217,8 +224,9 @@ LOCKING_GAINS = Gains(kp=(200.0, 400.0, 200.0), kd=(6.0, 12.0, 3.0))
 
 def friction_experiment(model: Model, design: SweepDesign = SweepDesign(),
                         step: float = DEFAULT_SAMPLE_TIME,
-                        sensors: Sensors = IDEAL, gains: Gains = LOCKING_GAINS) -> Log:
+                        sensors: Sensors = IDEAL, gains: Gains = LOCKING_GAINS,
+                        progress: Progress | None = None) -> Log:
     """Simulate the friction sweep; the log has the ``joint`` column."""
     t, q, qd, tag = friction_reference(design, step)
     log.info("friction sweep: %.0f s simulated", t[-1])
-    return simulate(model, t, q, qd, sensors, gains, joint=tag)
+    return simulate(model, t, q, qd, sensors, gains, joint=tag, progress=progress)

@@ -9,6 +9,7 @@ plus an ``[identification]`` table with the standard deviations and figures of m
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -83,8 +84,8 @@ class Identified:
 
 @one_blas_thread
 def identify_friction(lg: Log, prior: Model, settings: Settings = Settings(),
-                      ) -> list[FrictionFit]:
-    """One fit per joint (eq 9) from a sweep log."""
+                      progress: Callable[[int, int], None] | None = None) -> list[FrictionFit]:
+    """One fit per joint (eq 9) from a sweep log; ``progress(joints done, 3)``."""
     method = "log" if settings.derivatives == "log" else "butter"
     fits = []
     for j in (1, 2, 3):
@@ -94,17 +95,26 @@ def identify_friction(lg: Log, prior: Model, settings: Settings = Settings(),
                  fit.method, np.array2string(fit.f, precision=5),
                  np.array2string(fit.w, precision=4), fit.b, fit.residual_rms)
         fits.append(fit)
+        if progress is not None:
+            progress(j, 3)
     return fits
 
 
 @one_blas_thread
 def identify(excitation: Log, prior: Model, friction: Log | None = None,
-             settings: Settings = Settings()) -> Identified:
-    """Friction (if a sweep log is given; otherwise the prior's) then the base parameters."""
+             settings: Settings = Settings(),
+             progress: Callable[[str, int, int], None] | None = None) -> Identified:
+    """Friction (if a sweep log is given; otherwise the prior's) then the base parameters;
+    ``progress(phase, done, total)`` as each joint's friction fit ends ("friction fits")."""
     for lg in (excitation, friction):
         if lg is not None:
             check_voltages(lg, prior.u_max)
-    fits = identify_friction(friction, prior, settings) if friction is not None else None
+
+    def fitted(done: int, total: int) -> None:
+        if progress is not None:
+            progress("friction fits", done, total)
+    fits = (identify_friction(friction, prior, settings, progress=fitted)
+            if friction is not None else None)
     model = prior
     if fits is not None:
         model = prior.with_params(f=np.array([f.f for f in fits]),

@@ -5,6 +5,7 @@ with the true (or reference) model."""
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -20,9 +21,12 @@ from ..writing.trajectory import WritingSpec, make_reference
 log = logging.getLogger(__name__)
 
 
-def validate_writing(true_model: Model, identified: Model, robot: RobotFile) -> dict[str, Any]:
+def validate_writing(true_model: Model, identified: Model, robot: RobotFile,
+                     progress: Callable[[str, int, int], None] | None = None) -> dict[str, Any]:
     """Voltage prediction error and tip errors of CTC with the identified vs the true model, on
-    the writing task of the robot file ``robot`` (its [writing], [control] and sample time)."""
+    the writing task of the robot file ``robot`` (its [writing], [control] and sample time);
+    ``progress(name, sample, samples)`` during the two co-simulations ("writing true",
+    "writing identified")."""
     control = robot.require_control()
     ref = make_reference(true_model, WritingSpec.from_robot(robot))
     u_true = true_model.nominal_voltage(ref.q, ref.qd, ref.qdd)
@@ -34,9 +38,13 @@ def validate_writing(true_model: Model, identified: Model, robot: RobotFile) -> 
     }
     ctc = load_scenario("ctc")
     for name, ctrl_model in (("true", true_model), ("identified", identified)):
+        def report(k: int, n: int, name: str = name) -> None:
+            if progress is not None:
+                progress(f"writing {name}", k, n)
         options = CosimOptions(
             step=robot.sample_time, plant_values=model_fmu_values(true_model),
-            controller_values=controller_fmu_values(ctc, ctrl_model, control))
+            controller_values=controller_fmu_values(ctc, ctrl_model, control),
+            progress=report)
         res = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
         out[name] = metrics(res)
     out["tip_error_ratio"] = out["identified"]["tip_error_max"] / out["true"]["tip_error_max"]

@@ -29,9 +29,10 @@ from ..core.tables import check_table_format
 from ..errors import BadInputError
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
 from ..sim.native import simulate
+from .animation import animate_result, animation_format
 from .figure_worker import ReferenceFigures
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
-from .trajectory import Reference, WritingSpec, make_reference
+from .trajectory import Reference, WritingSpec, fit_letter_height, make_reference
 
 log = logging.getLogger(__name__)
 
@@ -58,6 +59,8 @@ class WritingJob:
     # librrr (rr.simulate), bit-identical and several times faster, no FMU involved
     engine: str = "fmpy"
     table_format: str = "csv"  # of the per-scenario signal tables: csv or parquet (core.tables)
+    # an animation of the arm per scenario: None (none), "gif", "mp4" or "auto" (writing.animation)
+    animate: str | None = None
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,
@@ -135,7 +138,10 @@ def prepare(job: WritingJob) -> Prepared:
     if job.text is not None:
         spec = replace(spec, text=job.text)
     if job.scale != 1.0:
-        spec = replace(spec, letter_height=spec.letter_height * job.scale)
+        # the factor on the height the text is written at (fitted to the writing area), and
+        # that height exactly: a scaled text that does not fit is refused
+        spec = replace(spec, letter_height=fit_letter_height(spec) * job.scale,
+                       fit_to_area=False)
     reference = make_reference(robot.model, spec)
     for s in scenarios:
         s.controller_model(robot.model)  # a perturbed model that is invalid fails here
@@ -149,9 +155,12 @@ def run_writing(job: WritingJob,
     if job.engine not in ENGINES:
         raise BadInputError(f"unknown engine {job.engine!r}: one of {', '.join(ENGINES)}")
     fmt = check_table_format(job.table_format)  # parquet without pyarrow fails here
+    anim = None if job.animate is None else animation_format(job.animate)  # mp4: its package
     model, robot, scenarios, ref = prepare(job)
     for scn in scenarios:  # the output names, before anything runs
         check_name(f"{scn.name}.{fmt}")
+        if anim is not None:
+            check_name(f"anim_{scn.name}.{anim}")
     with ResultSet(job.out, kind="writing") as rs, \
             ReferenceFigures(rs.staging, model, robot, ref, start=job.figures) as ref_figures:
         # Figs 2-6 depend on the reference only: a forked worker draws them while the
@@ -183,7 +192,8 @@ def run_writing(job: WritingJob,
             log.info("%s: %s", scn.name, _describe(s))
         log.info("%s tables: %.2f s", fmt, table_time)
         summary["reference"] = {
-            "text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]),
+            "text": ref.spec.text, "letter_height": ref.spec.letter_height,
+            "duration": float(ref.t[-1] - ref.t[0]),
             "step": float(ref.t[1] - ref.t[0]),
             "min_workspace_margin_m": ref.min_margin_m, "min_elbow_margin": ref.min_elbow_margin,
             "min_shoulder_margin_m": ref.min_shoulder_margin_m,
@@ -193,11 +203,26 @@ def run_writing(job: WritingJob,
         summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
         if job.figures:
             start = time.perf_counter()
-            from .plots import write_result_figures
+            from .plots import result_figure_count, write_result_figures
 
-            write_result_figures(rs.staging, ref, results)
+            total = result_figure_count(results) + 1   # and the reference figures, last
+
+            def drawn(k: int, n: int) -> None:
+                if progress is not None:
+                    progress("figures", k - 1, total)
+            write_result_figures(rs.staging, ref, results, progress=drawn)
             ref_figures.finish()  # Figs 2-6: the worker's, or drawn here
+            drawn(total, total)
             log.info("figures: %.2f s", time.perf_counter() - start)
+        if anim is not None:
+            start = time.perf_counter()
+            for name, res in results.items():
+                def frames(k: int, n: int, name: str = name) -> None:
+                    if progress is not None:
+                        progress(f"animation {name}", k - 1, n)
+                animate_result(rs.path(f"anim_{name}.{anim}"), model, ref, res, title=name,
+                               fmt=anim, progress=frames)
+            log.info("animations: %.2f s", time.perf_counter() - start)
         summary["files"] = sorted([*rs.names(), "summary.json"])
         summary = to_strict_json_value(summary)
         rs.write_text("summary.json", strict_json(summary) + "\n")

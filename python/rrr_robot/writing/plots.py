@@ -9,9 +9,10 @@ log axes are plain text (10⁻³, no mathtext parser).
 
 from __future__ import annotations
 
+import functools
 import logging
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -109,6 +110,15 @@ def _save(fig: Figure, path: Path,
     log.info("drew %s", path.name)
 
 
+def _bottom_legend(fig: Figure, pad_points: float = 4.0) -> float:
+    """A legend of the figure's labelled lines centred at its bottom edge; returns its height
+    with ``pad_points`` above it, as a fraction of the figure's height (the band the layout
+    must leave to it)."""
+    legend = fig.legend(loc="lower center", ncol=2, frameon=False)
+    box = legend.get_window_extent(fig.canvas.get_renderer())  # type: ignore[attr-defined]
+    return float((box.y1 + pad_points * fig.dpi / 72.0) / fig.bbox.height)
+
+
 def fig_reference(out: Path, ref: Reference) -> None:
     fig = _figure((12, 4))
     ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]})
@@ -175,10 +185,9 @@ def fig_letters(out: Path, ref: Reference, results: Mapping[str, CosimResult]) -
         ax.set(xlabel="x [m]", ylabel="z [m]",
                title=f"Scenario {name}: max tip error {1e3 * err.max():.2f} mm")
         ax.set_aspect("equal")
-        # below the axes, in a band the layout keeps free (the layout does not see a legend
-        # anchored outside its axes)
-        fig.legend(loc="lower center", ncol=2, frameon=False)
-        _save(fig, out / f"fig_letters_{name}.png", rect=(0.0, 0.08, 1.0, 1.0))
+        # below the axes and their labels, never over the letters: in a band at the bottom as
+        # high as the legend, which the layout keeps free (it does not see a figure legend)
+        _save(fig, out / f"fig_letters_{name}.png", rect=(0.0, _bottom_legend(fig), 1.0, 1.0))
 
 
 def fig_controls(out: Path, results: Mapping[str, CosimResult]) -> None:
@@ -224,11 +233,24 @@ def write_reference_figures(out: Path, model: Model, robot: RobotFile, ref: Refe
     fig_differences(out, model, robot, ref)
 
 
-def write_result_figures(out: Path, ref: Reference, results: Mapping[str, CosimResult]) -> None:
-    """Figs 7-9 and the tip error: the co-simulated scenarios."""
-    fig_letters(out, ref, results)
-    fig_controls(out, results)
-    fig_tip_error(out, results)
+def result_figure_count(results: Mapping[str, CosimResult]) -> int:
+    """How many figures :func:`write_result_figures` draws."""
+    return 2 * len(results) + 1
+
+
+def write_result_figures(out: Path, ref: Reference, results: Mapping[str, CosimResult],
+                         progress: Callable[[int, int], None] | None = None) -> None:
+    """Figs 7-9 and the tip error: the co-simulated scenarios; ``progress(done, total)`` after
+    each figure."""
+    steps: list[Callable[[], None]] = [
+        *(functools.partial(fig_letters, out, ref, {name: res}) for name, res in results.items()),
+        *(functools.partial(fig_controls, out, {name: res}) for name, res in results.items()),
+        functools.partial(fig_tip_error, out, results),
+    ]
+    for k, step in enumerate(steps):
+        step()
+        if progress is not None:
+            progress(k + 1, len(steps))
 
 
 def write_figures(out: Path, model: Model, robot: RobotFile, ref: Reference,

@@ -8,7 +8,6 @@ Optional dependencies: ``pip install 'rrr_robot[verify]'`` (pin, roboticstoolbox
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -16,39 +15,13 @@ from typing import Any
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.inertial import Inertial, dh_links, dh_transform, inertial_from_robot
 from ..core.model import Model
 from ..core.robot import RobotFile
 from .trajectory import Reference, numeric_ik_path
 
-
-@dataclass(frozen=True)
-class Inertial:
-    """Full inertial data of a robot file: masses (3,), COMs in DH frame i (3, 3), inertia
-    tensors about the COM (3, 3, 3), rotor inertias (3,)."""
-
-    masses: FloatArray
-    coms: FloatArray
-    inertias_com: FloatArray
-    rotor: FloatArray
-
-
-def inertial_from_robot(robot: RobotFile) -> Inertial | None:
-    """The link tables of a checked robot file, or None when it gives base parameters."""
-    if robot.links is None or robot.rotor_inertia is None:
-        return None
-    return Inertial(
-        masses=np.array([link.mass for link in robot.links]),
-        coms=np.array([link.com for link in robot.links], dtype=float),
-        inertias_com=np.array([np.diag(link.inertia_com) for link in robot.links], dtype=float),
-        rotor=np.asarray(robot.rotor_inertia, dtype=float),
-    )
-
-
-def _dh_transform(d: float, a: float, alpha: float) -> tuple[FloatArray, FloatArray]:
-    """Rotation and translation of Tz(d) Tx(a) Rx(alpha)."""
-    ca, sa = math.cos(alpha), math.sin(alpha)
-    rot = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
-    return rot, np.array([a, 0.0, d])
+__all__ = ["Inertial", "NumericReferences", "inertial_from_robot", "numeric_references",
+           "pinocchio_inverse_dynamics", "pinocchio_model"]
 
 
 def pinocchio_model(dh: Mapping[str, float], g: float, inertial: Inertial) -> Any:
@@ -58,11 +31,10 @@ def pinocchio_model(dh: Mapping[str, float], g: float, inertial: Inertial) -> An
 
     model = pin.Model()
     model.gravity.linear = np.array([0.0, 0.0, -g])
-    params = [(dh["d1"], 0.0, math.pi / 2), (dh["d2"], dh["a2"], 0.0), (dh["d3"], dh["a3"], 0.0)]
     parent, placement = 0, pin.SE3.Identity()
-    for i, (d, a, alpha) in enumerate(params):
+    for i, (d, a, alpha) in enumerate(dh_links(dh)):
         joint = model.addJoint(parent, pin.JointModelRZ(), placement, f"joint{i + 1}")
-        rot, pos = _dh_transform(d, a, alpha)
+        rot, pos = dh_transform(d, a, alpha)
         com = pos + rot @ inertial.coms[i]
         inertia = rot @ inertial.inertias_com[i] @ rot.T
         model.appendBodyToJoint(joint, pin.Inertia(inertial.masses[i], com, inertia),

@@ -21,9 +21,13 @@ curve of :mod:`rrr_robot.writing.writing_path` through the strokes of
 
 Joint motion: q = closed-form IK (``Model.ik_nearest``, continuous, one posture branch), qd and
 qdd through the Jacobian (``Model.joint_motion``). Before the timing law and the IK run, the text
-is checked: it must fit the writing area and every point of the path (pen lifts included) must
-keep ``min_workspace_margin`` from the workspace boundary; a violation raises BadInputError. The
-joint path must then keep |sin q3| >= ``min_elbow_margin`` on one posture branch.
+is laid out and checked: each newline starts a new line (``line_spacing`` letter heights below
+the last, left-aligned); a text that does not fit the writing area at ``letter_height`` is
+shrunk until it fits (``fit_to_area``, :func:`fit_letter_height`), but not below
+``min_letter_height`` (refused with the numbers); every point of the path (pen lifts included)
+must keep ``min_workspace_margin`` from the workspace boundary; a violation raises
+BadInputError. The joint path must then keep |sin q3| >= ``min_elbow_margin`` on one posture
+branch.
 
 The reference is sampled at ``dt``, the robot file's [control] sample_time
 (:meth:`WritingSpec.from_robot`). One run is bounded (checked before the reference is sampled):
@@ -37,7 +41,7 @@ import logging
 import math
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from typing import Any
 
 import numpy as np
@@ -68,6 +72,8 @@ __all__ = [
     "Reference",
     "TimingLaw",
     "WritingSpec",
+    "fit_letter_height",
+    "fitted_spec",
     "make_reference",
     "numeric_ik_path",
     "writing_path",
@@ -104,6 +110,8 @@ class WritingSpec:
     x_range: tuple[float, float] = (0.35, 0.65)
     z_range: tuple[float, float] = (0.35, 0.60)
     letter_height: float = 0.07            # capital letter, base line to cap line
+    fit_to_area: bool = True               # shrink letters that do not fit the writing area
+    min_letter_height: float = 0.02        # ... but not below this (m)
     peak_speed: float = 0.4
     min_speed: float = 0.05
     lateral_acc: float = 3.0               # sets the speed in curves: v = sqrt(a / curvature)
@@ -194,14 +202,62 @@ class Reference:
         return float(self.t[-1])
 
 
-def writing_path(spec: WritingSpec) -> WritingPath:
-    """The geometric path of a spec, placed in the middle of the writing area; raises
-    BadInputError if the text does not fit the area."""
-    strokes = text_strokes(
+def _strokes(spec: WritingSpec) -> list[FloatArray]:
+    return text_strokes(
         spec.text, spec.letter_height, spec.latin_font, spec.greek_font, spec.line_spacing
     )
+
+
+def _extent(strokes: list[FloatArray]) -> tuple[FloatArray, FloatArray]:
     pts = np.vstack(strokes)
-    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    return pts.min(axis=0), pts.max(axis=0)
+
+
+def _room(spec: WritingSpec) -> FloatArray:
+    return np.array([spec.x_range[1] - spec.x_range[0], spec.z_range[1] - spec.z_range[0]])
+
+
+def fit_letter_height(spec: WritingSpec) -> float:
+    """The letter height the text is written at: ``spec.letter_height`` when the text fits the
+    writing area at it (or ``fit_to_area`` is false), otherwise the largest height at which it
+    fits (the text's size is proportional to the letter height). BadInputError, with the
+    numbers, when that is below ``min_letter_height``."""
+    lo, hi = _extent(_strokes(spec))
+    size, room = hi - lo, _room(spec)
+    if not spec.fit_to_area or np.all(size <= room):
+        return spec.letter_height
+    # a hair below the exact ratio, so that the fitted text fits despite rounding
+    factor = float(np.min(room / size)) * (1.0 - 1e-9)
+    height = spec.letter_height * factor
+    if height < spec.min_letter_height:
+        raise BadInputError(
+            f"text {short_text(spec.text)} is {size[0]:.3f} m wide and {size[1]:.3f} m high at "
+            f"letter_height {spec.letter_height} m; the writing area is {room[0]:.3f} m x "
+            f"{room[1]:.3f} m (x_range {spec.x_range}, z_range {spec.z_range}), so it would fit "
+            f"only at letter_height {height:.4f} m, below min_letter_height "
+            f"{spec.min_letter_height} m: shorten the text, break it into lines (newlines), or "
+            "enlarge the writing area"
+        )
+    return height
+
+
+def fitted_spec(spec: WritingSpec) -> WritingSpec:
+    """``spec`` at the letter height :func:`fit_letter_height` chose (``spec`` itself when the
+    text fits as it is)."""
+    height = fit_letter_height(spec)
+    if height == spec.letter_height:
+        return spec
+    logger.info("text %s scaled to letter_height %.4f m (from %g m) to fit the writing area",
+                short_text(spec.text), height, spec.letter_height)
+    return replace(spec, letter_height=height)
+
+
+def writing_path(spec: WritingSpec) -> WritingPath:
+    """The geometric path of a spec at its letter height, placed in the middle of the writing
+    area; raises BadInputError if the text does not fit the area (:func:`fitted_spec` first
+    shrinks it to fit)."""
+    strokes = _strokes(spec)
+    lo, hi = _extent(strokes)
     area_lo = np.array([spec.x_range[0], spec.z_range[0]])
     area_hi = np.array([spec.x_range[1], spec.z_range[1]])
     size, room = hi - lo, area_hi - area_lo
@@ -388,7 +444,7 @@ def _singular_margins(model: Model, q: FloatArray, spec: WritingSpec) -> tuple[f
 
 def make_reference(model: Model, spec: WritingSpec | None = None) -> Reference:
     """Build the reference motion of the writing task (see the module doc)."""
-    spec = WritingSpec() if spec is None else spec
+    spec = fitted_spec(WritingSpec() if spec is None else spec)
     start = time.perf_counter()
     path = writing_path(spec)
     check_path_length(path, spec)

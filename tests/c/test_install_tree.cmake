@@ -1,0 +1,108 @@
+# CTest install_tree: cmake --install of this build into a fresh prefix, then what a downstream
+# user does with it: examples/c_consumer configured with find_package(rrr CONFIG REQUIRED)
+# (CMAKE_PREFIX_PATH), built against rrr::rrr and rrr::rrr_static and run; the same program
+# compiled with the flags of `pkg-config --cflags --libs rrr` (PKG_CONFIG_PATH) and run.
+# Arguments: -DBUILD=<this build> -DSOURCE=<source tree> -DWORK=<scratch folder> -DCC=<compiler>
+#            -DGENERATOR=<generator> -DPKG_CONFIG=<pkg-config> -DREADELF=<readelf>
+#            -DVERSION=<x.y.z> -DSOVERSION=<x>
+cmake_minimum_required(VERSION 3.16)
+foreach(v BUILD SOURCE WORK CC GENERATOR VERSION SOVERSION)
+  if(NOT DEFINED ${v})
+    message(FATAL_ERROR "test_install_tree.cmake: -D${v}=... missing")
+  endif()
+endforeach()
+set(prefix "${WORK}/prefix")
+file(REMOVE_RECURSE "${WORK}")
+file(MAKE_DIRECTORY "${WORK}")
+
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    string(REPLACE ";" " " cmd "${ARGN}")
+    message(FATAL_ERROR "failed (${rc}): ${cmd}\n${out}\n${err}")
+  endif()
+  set(run_out "${out}" PARENT_SCOPE)
+endfunction()
+
+run(${CMAKE_COMMAND} --install "${BUILD}" --prefix "${prefix}")
+
+# what the prefix holds; the library's libdir is lib (GNUInstallDirs below /usr/local or another
+# prefix that is not /usr)
+set(libdir "${prefix}/lib")
+foreach(f include/rrr/rrr.h include/rrr/rrr_kinematics.h
+          lib/librrr.a lib/librrr.so lib/librrr.so.${SOVERSION} lib/librrr.so.${VERSION}
+          lib/cmake/rrr/rrrConfig.cmake lib/cmake/rrr/rrrConfigVersion.cmake
+          lib/cmake/rrr/rrrTargets.cmake lib/pkgconfig/rrr.pc
+          share/rrr/fmus/rrr_plant.fmu share/rrr/fmus/rrr_controller.fmu
+          share/rrr/fmus/fmi3/rrr_plant.fmu share/rrr/fmus/fmi3/rrr_controller.fmu
+          share/rrr/rrr_bench.dbc bin/rrr_hil_plant bin/rrr_hil_controller)
+  if(NOT EXISTS "${prefix}/${f}")
+    message(FATAL_ERROR "cmake --install did not install ${f}")
+  endif()
+endforeach()
+foreach(link librrr.so librrr.so.${SOVERSION})
+  if(NOT IS_SYMLINK "${libdir}/${link}")
+    message(FATAL_ERROR "${link} is not a symbolic link")
+  endif()
+endforeach()
+if(NOT READELF)
+  message(FATAL_ERROR "readelf not found (binutils)")
+endif()
+run(${READELF} -d "${libdir}/librrr.so.${VERSION}")
+string(REGEX MATCH "Library soname: \\[([^]]*)\\]" _ "${run_out}")
+set(soname "${CMAKE_MATCH_1}")
+if(NOT soname STREQUAL "librrr.so.${SOVERSION}")
+  message(FATAL_ERROR "SONAME of librrr.so.${VERSION} is '${soname}', not librrr.so.${SOVERSION}")
+endif()
+message(STATUS "installed: librrr.so.${VERSION} (SONAME ${soname}), librrr.a, headers, "
+               "rrrConfig.cmake, rrr.pc, 4 FMUs, the CAN bench nodes and the DBC")
+
+# the downstream CMake project
+set(consumer "${WORK}/consumer")
+run(${CMAKE_COMMAND} -S "${SOURCE}/examples/c_consumer" -B "${consumer}" -G "${GENERATOR}"
+    -DCMAKE_C_COMPILER=${CC} -DCMAKE_BUILD_TYPE=Release "-DCMAKE_PREFIX_PATH=${prefix}")
+if(NOT run_out MATCHES "FMUs in ${prefix}/share/rrr/fmus")
+  message(FATAL_ERROR "the package does not name its FMU folder:\n${run_out}")
+endif()
+run(${CMAKE_COMMAND} --build "${consumer}")
+foreach(exe rrr_consumer rrr_consumer_static)
+  run("${consumer}/${exe}")
+  message(STATUS "${exe}: ${run_out}")
+  if(NOT run_out MATCHES "librrr ${VERSION}: .* 4 IK branches")
+    message(FATAL_ERROR "${exe} printed: ${run_out}")
+  endif()
+endforeach()
+# the shared one loads librrr.so.0 from the prefix
+run(ldd "${consumer}/rrr_consumer")
+if(NOT run_out MATCHES "librrr.so.${SOVERSION} => ${libdir}/librrr.so.${SOVERSION}")
+  message(FATAL_ERROR "rrr_consumer does not load the installed librrr.so.${SOVERSION}:\n${run_out}")
+endif()
+
+# pkg-config
+if(NOT PKG_CONFIG)
+  message(FATAL_ERROR "pkg-config not found (Debian: apt-get install pkg-config)")
+endif()
+set(ENV{PKG_CONFIG_PATH} "${libdir}/pkgconfig")
+run(${PKG_CONFIG} --modversion rrr)
+string(STRIP "${run_out}" modversion)
+if(NOT modversion STREQUAL VERSION)
+  message(FATAL_ERROR "pkg-config --modversion rrr: '${modversion}', expected ${VERSION}")
+endif()
+run(${PKG_CONFIG} --libs rrr)
+string(STRIP "${run_out}" libs)
+run(${PKG_CONFIG} --cflags rrr)
+string(STRIP "${run_out}" cflags)
+message(STATUS "pkg-config --cflags --libs rrr: ${cflags} ${libs}")
+if(NOT libs MATCHES "-lrrr")
+  message(FATAL_ERROR "pkg-config --libs rrr: '${libs}'")
+endif()
+separate_arguments(libs UNIX_COMMAND "${libs}")
+separate_arguments(cflags UNIX_COMMAND "${cflags}")
+run(${CC} -std=c11 ${cflags} "${SOURCE}/examples/c_consumer/main.c" -o "${WORK}/pc_consumer"
+    ${libs} -lm)
+set(ENV{LD_LIBRARY_PATH} "${libdir}")
+run("${WORK}/pc_consumer")
+if(NOT run_out MATCHES "librrr ${VERSION}: .* 4 IK branches")
+  message(FATAL_ERROR "pc_consumer printed: ${run_out}")
+endif()
+message(STATUS "pc_consumer: ${run_out}")
