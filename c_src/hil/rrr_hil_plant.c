@@ -17,7 +17,8 @@
  *
  * Output: a summary on stderr and one line "RRR_HIL_SUMMARY {json}" on stdout at exit, then one
  * line on stderr that says how the run ended ("rrr_hil_plant: exit 3 (peer lost) at period 57:
- * ..."); with --log, one CSV row per period (k, t, q, qd, applied u, zero, faults).
+ * ..."); with --log, one CSV row per period (k, t, q, qd, applied u, zero, faults, and the FMU's
+ * qdd and tip).
  * Exit status (rrr_hil_exit, hil_node.h): 0 the controller's StopCmd "end of run" (or --duration
  * in real time); 1 usage; 2 setup failed (FMU, transport); 3 the controller was lost (hang-up,
  * silence, transport error); 4 SIGINT/SIGTERM; 5 the FMU failed; 6 the controller's StopCmd
@@ -58,7 +59,9 @@ typedef struct plant {
     rrr_hil_fmu fmu;
     fmi2ValueReference vr_u[3];
     fmi2ValueReference vr_x[6]; /* q[1..3], qd[1..3] */
+    fmi2ValueReference vr_y[6]; /* qdd[1..3], tip.x, tip.y, tip.z (logged only) */
     double x[6];
+    double y[6];
     double u[3];
     rrr_hil_sup sup;
     rrr_hil_transport *tr;
@@ -253,6 +256,15 @@ static int setup_fmu(plant *p, const opts *o)
     }
     static const char *const xn[6] = {"q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]"};
     static const char *const un[3] = {"u[1]", "u[2]", "u[3]"};
+    static const char *const yn[6] = {"qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"};
+    for (int i = 0; i < 6; ++i) {
+        const long vr = rrr_hil_fmu_vr(&p->fmu, yn[i]);
+        if (vr < 0) {
+            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+            return -1;
+        }
+        p->vr_y[i] = (fmi2ValueReference)vr;
+    }
     for (int i = 0; i < 6; ++i) {
         const long vr = rrr_hil_fmu_vr(&p->fmu, xn[i]);
         if (vr < 0) {
@@ -288,7 +300,8 @@ static int setup_fmu(plant *p, const opts *o)
             return -1;
         }
     }
-    if (rrr_hil_fmu_init(&p->fmu, 0.0) != 0 || rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0) {
+    if (rrr_hil_fmu_init(&p->fmu, 0.0) != 0 || rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0 ||
+        rrr_hil_fmu_get(&p->fmu, p->vr_y, 6, p->y) != 0) {
         fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
         return -1;
     }
@@ -307,7 +320,11 @@ static void log_row(plant *p)
     for (int i = 0; i < 3; ++i) {
         fprintf(p->log, ",%.17g", p->u[i]);
     }
-    fprintf(p->log, ",%u,%u\n", (unsigned)p->sup.zero_applied, (unsigned)p->sup.faults);
+    fprintf(p->log, ",%u,%u", (unsigned)p->sup.zero_applied, (unsigned)p->sup.faults);
+    for (int i = 0; i < 6; ++i) {
+        fprintf(p->log, ",%.17g", p->y[i]);
+    }
+    fputc('\n', p->log);
 }
 
 /* Publish the state of period k: JointState1..3 then PlantStatus. */
@@ -343,7 +360,8 @@ static int advance(plant *p)
     (void)rrr_hil_sup_next_period(&p->sup, p->u);
     if (rrr_hil_fmu_set(&p->fmu, p->vr_u, 3, p->u) != 0 ||
         rrr_hil_fmu_step(&p->fmu, RRR_HIL_PERIOD_S) != 0 ||
-        rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0) {
+        rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0 ||
+        (p->log != NULL && rrr_hil_fmu_get(&p->fmu, p->vr_y, 6, p->y) != 0)) {
         (void)end_run(p, RRR_HIL_EXIT_FAULT, "the FMU failed: %s", p->fmu.last_error);
         return -1;
     }
@@ -543,7 +561,8 @@ int main(int argc, char **argv)
             return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
                                        o.log_path);
         }
-        fprintf(p.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u[2],u[3],zero,faults\n");
+        fprintf(p.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u[2],u[3],zero,faults,"
+                       "qdd[1],qdd[2],qdd[3],tip.x,tip.y,tip.z\n");
         log_row(&p);
     }
     FILE *latency_log = NULL;
