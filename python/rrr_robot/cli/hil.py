@@ -103,6 +103,8 @@ def _can_log_target(args: argparse.Namespace, out: Path) -> Path | None:
     if target.exists() and target.is_dir():
         raise BadInputError(f"--can-log {target}: is a folder")
     if folder.resolve() != out.resolve():
+        if folder.exists() and not folder.is_dir():
+            raise BadInputError(f"--can-log {target}: {folder} is not a folder")
         if not folder.is_dir():
             raise BadInputError(f"--can-log {target}: the folder {folder} does not exist")
         if not os.access(folder, os.W_OK | os.X_OK):

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core.outputs import atomic_path
-from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, run_cosim
+from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, CosimResult, run_cosim
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from .nodes import controller_node_args, export_reference, start_controller, start_plant
@@ -37,8 +37,8 @@ from .protocol import (
     quantise_state,
 )
 
-__all__ = ["BenchRun", "LogProgress", "RealTime", "quantised_cosim", "run_c_bench",
-           "run_fmu_controller", "write_controller_log"]
+__all__ = ["BenchRun", "LogProgress", "RealTime", "quantised_cosim", "quantised_cosim_result",
+           "run_c_bench", "run_fmu_controller", "write_controller_log"]
 
 #: Columns of the controller log (the C controller node's --log; run_fmu_controller's too).
 CONTROLLER_LOG_HEADER = ("k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u_n[1],u_c[1],u[2],u_n[2],"
@@ -283,14 +283,24 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
             shutil.rmtree(work, ignore_errors=True)
 
 
-def quantised_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
-                    plant_values: Mapping[str, float] = {},
-                    controller_values: Mapping[str, float | bool] = {}) -> BenchRun:
+def quantised_cosim_result(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
+                           qdd_ref: FloatArray, x_ref: FloatArray | None = None,
+                           plant_values: Mapping[str, float] = {},
+                           controller_values: Mapping[str, float | bool] = {}) -> CosimResult:
     """The FMPy co-simulation (cosim.run_cosim) with the bench's quantisation: the plant's q, qd
     pass through JointState and the controller's u through VoltageCmd (cantools, the same DBC).
     This is the arithmetic of the lockstep bench, so the C bench must match it to rounding."""
     options = CosimOptions(step=PERIOD, plant_values=plant_values,
                            controller_values=controller_values, measure=quantise_state,
                            actuate=quantise_command)
-    r = run_cosim(t, q_ref, qd_ref, qdd_ref, np.zeros_like(q_ref), options)
-    return BenchRun(t=t, q=r.q, qd=r.qd, u=r.u, plant_summary={}, controller_summary={})
+    x = np.zeros_like(q_ref) if x_ref is None else x_ref
+    return run_cosim(t, q_ref, qd_ref, qdd_ref, x, options)
+
+
+def quantised_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
+                    plant_values: Mapping[str, float] = {},
+                    controller_values: Mapping[str, float | bool] = {}) -> BenchRun:
+    """:func:`quantised_cosim_result` as a BenchRun (t, q, qd, u)."""
+    r = quantised_cosim_result(t, q_ref, qd_ref, qdd_ref, None, plant_values, controller_values)
+    return BenchRun(t=t, q=r.q, qd=r.qd, u=r.u, plant_summary={}, controller_summary={},
+                    u_n=r.u_n, u_c=r.u_c)
