@@ -2,11 +2,15 @@
  * (nearest rank), the real-time options (ranges), a short sleep-then-spin loop (latencies
  * recorded, none negative: not a timing test), its per-period latency log, and the frame log's
  * record layout and file (hil_framelog.h), which rrr_robot.hil.framelog reads. */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE /* CPU_SETSIZE */
 
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "hil_framelog.h"
 #include "hil_node.h"
@@ -96,6 +100,45 @@ static void test_loop(const char *dir)
     }
 }
 
+/* What is refused falls back with a warning: a CPU that does not exist, and SCHED_FIFO without
+ * the privilege (a child that drops it: RLIMIT_RTPRIO 0, and not root). (mlockall is not
+ * checked: this VM's kernel grants it even then.) */
+static void test_fallbacks(void)
+{
+    rrr_hil_rt_opts o;
+    rrr_hil_rt_opts_default(&o);
+    o.cpu = CPU_SETSIZE - 1;
+    rrr_hil_rt rt;
+    CHECK(rrr_hil_rt_init(&rt, 1e-3, 4u, &o, NULL, "test") == 0);
+    CHECK(rt.cpu == -1 && strstr(rt.setup, "CPU 1023: ") != NULL &&
+          strstr(rt.setup, "CPU 1023: yes") == NULL);
+    rrr_hil_rt_free(&rt);
+
+    const pid_t pid = fork();
+    if (pid == 0) {
+        const struct rlimit zero = {0, 0};
+        (void)setrlimit(RLIMIT_RTPRIO, &zero);
+        if (getuid() == 0 && (setgid(65534) != 0 || setuid(65534) != 0)) {
+            _exit(3);
+        }
+        rrr_hil_rt_opts_default(&o);
+        o.fifo_prio = 10;
+        if (rrr_hil_rt_init(&rt, 1e-3, 4u, &o, NULL, "test") != 0) {
+            _exit(4);
+        }
+        const int ok = rt.fifo == 0 &&
+                       strstr(rt.setup, "SCHED_FIFO 10: Operation not permitted") != NULL &&
+                       sched_getscheduler(0) != SCHED_FIFO;
+        rrr_hil_rt_wait(&rt); /* the loop still runs, under the default scheduler */
+        rrr_hil_rt_done(&rt);
+        rrr_hil_rt_free(&rt);
+        _exit(ok ? 0 : 5);
+    }
+    int status = -1;
+    CHECK(pid > 0 && waitpid(pid, &status, 0) == pid);
+    CHECK(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+}
+
 static void test_framelog(const char *dir)
 {
     uint8_t rec[RRR_HIL_FRAMELOG_RECORD];
@@ -139,6 +182,7 @@ int main(int argc, char **argv)
     test_percentiles();
     test_options();
     test_loop(dir);
+    test_fallbacks();
     test_framelog(dir);
     if (rrr_test_failures) {
         fprintf(stderr, "%d checks failed\n", rrr_test_failures);
