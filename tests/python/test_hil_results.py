@@ -115,3 +115,27 @@ def test_can_log_option_writes_asc(tmp_path: Path) -> None:
     s = json.loads((out / "summary.json").read_text())
     assert s["bus"]["can_log"] == str(target) and "frames.blf" not in s["files"]
     _check_read_back(fl.read_node_log(out / "frames.rrrcan"), target)
+
+
+def test_realtime_bench_reports_latencies(tmp_path: Path) -> None:
+    """Both C nodes in real time for 1 s (SCHED_FIFO, mlockall, affinity where permitted: the
+    numbers are the machine's and are not asserted; a benchmark records them)."""
+    out = tmp_path / "rt"
+    assert main(["hil", "bench", "--realtime", "--duration", "1", "--out", str(out),
+                 "--no-can-log", "-q"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    # the periods both loops logged (the plant ends at the StopCmd that follows the last command)
+    assert s["mode"] == "realtime" and 990 <= s["reference"]["periods"] <= 1001
+    assert {"fig_latency.png", "latency_controller.csv", "latency_plant.csv"} <= set(s["files"])
+    for node in ("controller", "plant"):
+        r = s["realtime"][node]
+        assert 0 <= r["p50_us"] <= r["p99_us"] <= r["p999_us"] <= r["max_us"]
+        assert r["rt_latency_p99_us"] == pytest.approx(r["p99_us"], abs=1e-3)
+        assert r["rt_periods"] > 900 and "rt_deadline_misses" in r and r["rt_setup"]
+        assert "sleep, then spin 100 us" in r["rt_setup"]
+    records = fl.read_node_log(out / "frames.rrrcan")
+    # no Sync in real time: the controller sends VoltageCmd every period (and the heartbeats)
+    tx = records[records["dir"] == 1]
+    assert not np.any(tx["id"] == 0x080)
+    assert np.count_nonzero(tx["id"] == 0x100) == s["realtime"]["controller"]["rt_periods"]
+    assert s["bus"]["frames_per_second"] is not None
