@@ -363,6 +363,20 @@ int rrr_hil_rt_arg(rrr_hil_rt_opts *o, int argc, char **argv, int *i, const char
     return 1;
 }
 
+FILE *rrr_hil_rt_open_log(const rrr_hil_rt_opts *o, int realtime, const char *prog, int *failed)
+{
+    *failed = 0;
+    if (!realtime || o->latency_log == NULL) {
+        return NULL;
+    }
+    FILE *fp = fopen(o->latency_log, "w");
+    if (fp == NULL) {
+        fprintf(stderr, "%s: cannot write %s: %s\n", prog, o->latency_log, strerror(errno));
+        *failed = 1;
+    }
+    return fp;
+}
+
 static int64_t now_ns(void)
 {
     struct timespec t;

@@ -134,6 +134,10 @@ int rrr_hil_rt_arg(rrr_hil_rt_opts *o, int argc, char **argv, int *i, const char
     "  before each release and then a spin on CLOCK_MONOTONIC (each when permitted: a warning\n"  \
     "  and the fallback otherwise); the latency log has one row per period\n"
 
+/** Open --latency-log for writing when @p realtime (NULL when not asked for); on failure print
+ *  "PROG: cannot write FILE: ..." and set *failed. */
+FILE *rrr_hil_rt_open_log(const rrr_hil_rt_opts *o, int realtime, const char *prog, int *failed);
+
 /** Largest --spin-us (a quarter of the 1 ms period). */
 #define RRR_HIL_RT_MAX_SPIN_US 250
 

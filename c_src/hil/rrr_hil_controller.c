@@ -507,17 +507,15 @@ int main(int argc, char **argv)
         fprintf(c.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u_n[1],u_c[1],u[2],u_n[2],"
                        "u_c[2],u[3],u_n[3],u_c[3],enable\n");
     }
-    FILE *latency_log = NULL;
-    if (o.realtime && o.rt.latency_log != NULL) {
-        latency_log = fopen(o.rt.latency_log, "w");
-        if (latency_log == NULL) {
-            if (c.log) {
-                fclose(c.log);
-            }
-            rrr_hil_reference_free(&c.ref);
-            return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
-                                       o.rt.latency_log);
+    int log_failed = 0;
+    FILE *latency_log = rrr_hil_rt_open_log(&o.rt, o.realtime, PROG, &log_failed);
+    if (log_failed) {
+        if (c.log) {
+            fclose(c.log);
         }
+        rrr_hil_reference_free(&c.ref);
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
+                                   o.rt.latency_log);
     }
     static rrr_hil_link link;
     static rrr_hil_framelog frames;

@@ -565,17 +565,15 @@ int main(int argc, char **argv)
                        "qdd[1],qdd[2],qdd[3],tip.x,tip.y,tip.z\n");
         log_row(&p);
     }
-    FILE *latency_log = NULL;
-    if (o.realtime && o.rt.latency_log != NULL) {
-        latency_log = fopen(o.rt.latency_log, "w");
-        if (latency_log == NULL) {
-            if (p.log) {
-                fclose(p.log);
-            }
-            rrr_hil_fmu_close(&p.fmu);
-            return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
-                                       o.rt.latency_log);
+    int log_failed = 0;
+    FILE *latency_log = rrr_hil_rt_open_log(&o.rt, o.realtime, PROG, &log_failed);
+    if (log_failed) {
+        if (p.log) {
+            fclose(p.log);
         }
+        rrr_hil_fmu_close(&p.fmu);
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
+                                   o.rt.latency_log);
     }
     static rrr_hil_link link;
     static rrr_hil_framelog frames;

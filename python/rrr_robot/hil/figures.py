@@ -42,36 +42,35 @@ def fig_difference(out: Path, bench: CosimResult, other: CosimResult) -> None:
     save_figure(fig, out / "fig_bench_vs_cosim.png")
 
 
-def fig_joint_errors(out: Path, bench: CosimResult, other: CosimResult) -> None:
-    """q - q_ref of the bench (solid) and of the unquantised co-simulation (dashed)."""
+def _against_cosim(out: Path, name: str, t: tuple[FloatArray, FloatArray],
+                   y: tuple[FloatArray, FloatArray], labels: tuple[str, str, str],
+                   ylabel: str, title: str) -> None:
+    """Three channels of the bench (solid) and of the co-simulation (dashed), one colour each."""
     fig = new_figure((10, 4))
     ax = fig.subplots()
     for i in range(3):
         line = ax.plot([], [])[0]
-        plot_series(ax, bench.t, bench.q[:, i] - bench.q_ref[:, i], "-", lw=0.9,
-                    color=line.get_color(), label=f"{JOINTS[i]} bench")
-        plot_series(ax, other.t, other.q[:, i] - other.q_ref[:, i], "--", lw=0.9,
-                    color=line.get_color(), label=f"{JOINTS[i]} co-simulation")
-    ax.set(xlabel="t [s]", ylabel="q - q_ref [rad]", title="Joint errors")
+        for (tt, yy), style, who in (((t[0], y[0]), "-", "bench"),
+                                     ((t[1], y[1]), "--", "co-simulation")):
+            plot_series(ax, tt, yy[:, i], style, lw=0.9, color=line.get_color(),
+                        label=f"{labels[i]} {who}")
+    ax.set(xlabel="t [s]", ylabel=ylabel, title=title)
     ax.grid(True)
     ax.legend(ncol=3, fontsize="small")
-    save_figure(fig, out / "fig_joint_errors.png")
+    save_figure(fig, out / name)
+
+
+def fig_joint_errors(out: Path, bench: CosimResult, other: CosimResult) -> None:
+    """q - q_ref of the bench (solid) and of the unquantised co-simulation (dashed)."""
+    _against_cosim(out, "fig_joint_errors.png", (bench.t, other.t),
+                   (bench.q - bench.q_ref, other.q - other.q_ref), JOINTS, "q - q_ref [rad]",
+                   "Joint errors")
 
 
 def fig_voltages(out: Path, bench: CosimResult, other: CosimResult) -> None:
     """Commanded voltages of the bench (solid) and of the co-simulation (dashed)."""
-    fig = new_figure((10, 4))
-    ax = fig.subplots()
-    for i in range(3):
-        line = ax.plot([], [])[0]
-        plot_series(ax, bench.t, bench.u[:, i], "-", lw=0.9, color=line.get_color(),
-                    label=f"u{i + 1} bench")
-        plot_series(ax, other.t, other.u[:, i], "--", lw=0.9, color=line.get_color(),
-                    label=f"u{i + 1} co-simulation")
-    ax.set(xlabel="t [s]", ylabel="V", title="Motor voltages commanded over CAN")
-    ax.grid(True)
-    ax.legend(ncol=3, fontsize="small")
-    save_figure(fig, out / "fig_voltages.png")
+    _against_cosim(out, "fig_voltages.png", (bench.t, other.t), (bench.u, other.u),
+                   ("u1", "u2", "u3"), "V", "Motor voltages commanded over CAN")
 
 
 def fig_latency(out: Path, latencies_ns: Mapping[str, FloatArray],
