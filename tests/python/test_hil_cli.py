@@ -18,9 +18,9 @@ def run_hil(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_a_failed_side_gives_a_nonzero_exit(tmp_path: Path) -> None:
-    ok = run_hil("plant", "--text", "a", "--out", str(tmp_path / "ok"))
+    ok = run_hil("plant", "--text", "a", "--out", str(tmp_path / "ok"), "--no-figures")
     assert ok.returncode == 0, ok.stderr
-    bad = run_hil("plant", "--text", "a", "--drop-commands-from", "200",
+    bad = run_hil("plant", "--text", "a", "--drop-commands-from", "200", "--no-figures",
                   "--out", str(tmp_path / "bad"))
     assert bad.returncode == 3, bad.stdout + bad.stderr  # the plant's status: controller lost
     assert "python plant: exit 3" in bad.stdout

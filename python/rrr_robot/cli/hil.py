@@ -199,70 +199,22 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
 
 
 def _external(args: argparse.Namespace) -> bool:
-    """The other node runs elsewhere (--connect, --interface socketcan): its logs are not
-    here."""
-    return bool(args.connect) or args.interface == "socketcan"
+    """'controller' or 'plant' against a node that runs elsewhere (--connect, --interface
+    socketcan): its logs are not here. ('bench' always starts both C nodes.)"""
+    return args.side in ("controller", "plant") and (bool(args.connect)
+                                                      or args.interface == "socketcan")
 
 
 def _results(args: argparse.Namespace, ref: Reference, run: BenchRun,
              ctrl_values: Mapping[str, float | bool], model: Model, rs: ResultSet,
              can_log: Path | None, nodes: Mapping[str, Mapping[str, Any]]) -> None:
     """summary.json, the figures and the standard frame log of a run, into the result set."""
-    from ..core.outputs import strict_json, to_strict_json_value
-    from ..hil import framelog as fl
-    from ..hil.busload import measured_load, schedule_load
-    from ..hil.protocol import DBC_PATH, database
-    from ..hil.results import (
-        bench_result,
-        bench_summary,
-        extend_reference,
-        latency_stats,
-        read_latency_log,
-        read_plant_log,
-        unquantised_cosim,
-    )
+    from ..hil.results import RunInfo, write_results
 
-    work = rs.staging
-    plant_log = read_plant_log(work / "plant.csv")
-    bench = bench_result(ref, run, plant_log)
-    if bench.t.shape[0] < 2:
-        from ..hil.protocol import HilError
-
-        raise HilError(f"the bench ran {bench.t.shape[0]} periods: nothing to evaluate")
-    ref_run = extend_reference(ref, float(bench.t[-1] - bench.t[0]))
-    unq = unquantised_cosim(ref_run, model, ctrl_values)
-    records = fl.read_node_log(work / NODE_FRAMES)
-    mode = "realtime" if args.realtime else "lockstep"
-    bus: dict[str, Any] = {"node_log": NODE_FRAMES, "view": _VIEW[args.side],
-                           **fl.rates(records)}
-    bus["measured_1mbit"] = measured_load(fl.frames(records), bench.t.shape[0])
-    bus["schedule_worst_percent_1mbit"] = schedule_load(
-        database(), lockstep=mode == "lockstep", dbc_name=str(DBC_PATH)).worst_percent
-    if can_log is not None:
-        inside = can_log.parent.resolve() == rs.folder.resolve()
-        fl.write_can_log(records, rs.path(can_log.name) if inside else can_log)
-        bus["can_log"] = can_log.name if inside else str(can_log)
-    realtime: dict[str, Any] | None = None
-    latencies: dict[str, Any] | None = None
-    if args.realtime:
-        latencies = {}
-        realtime = {}
-        for node in ("controller", "plant"):
-            lat = read_latency_log(work / f"latency_{node}.csv")
-            latencies[node] = lat[:, 0]
-            realtime[node] = {**latency_stats(lat[:, 0]), **nodes[node].get("rt", {})}
-        realtime["goal_p99_us"] = 50.0
-    summary = bench_summary(side=args.side, mode=mode, scenario=args.scenario, ref=ref_run,
-                            bench=bench, unquantised=unq, plant=nodes["plant"],
-                            controller=nodes["controller"], bus=bus, realtime=realtime)
-    if not args.no_figures:
-        from ..hil.figures import write_bench_figures
-
-        write_bench_figures(work, ref_run, bench, unq, latencies,
-                            None if realtime is None else
-                            {k: v for k, v in realtime.items() if isinstance(v, dict)})
-    summary["files"] = sorted([*rs.names(), "summary.json"])
-    rs.write_text("summary.json", strict_json(to_strict_json_value(summary)) + "\n")
+    info = RunInfo(side=args.side, mode="realtime" if args.realtime else "lockstep",
+                   scenario=args.scenario, node_log=NODE_FRAMES, view=_VIEW[args.side])
+    summary = write_results(rs, info, ref, run, model, ctrl_values, nodes, can_log=can_log,
+                            figures=not args.no_figures)
     _report(summary, rs.folder)
 
 

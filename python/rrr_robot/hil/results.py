@@ -21,6 +21,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
+from ..core.outputs import ResultSet, strict_json, to_strict_json_value
 from ..core.param_names import model_fmu_values
 from ..sim.cosim import CosimOptions, CosimResult
 from ..sim.native import simulate
@@ -29,8 +30,9 @@ from ..writing.trajectory import Reference
 from .bench import BenchRun
 from .protocol import PERIOD, HilError
 
-__all__ = ["PLANT_LOG_COLUMNS", "bench_result", "bench_summary", "comparison", "extend_reference",
-           "latency_stats", "read_latency_log", "read_plant_log", "unquantised_cosim"]
+__all__ = ["PLANT_LOG_COLUMNS", "RunInfo", "bench_result", "bench_summary", "comparison",
+           "extend_reference", "latency_stats", "read_latency_log", "read_plant_log",
+           "unquantised_cosim", "write_results"]
 
 #: Columns of the plant log (the C plant node's --log and the Python plant's), by name.
 PLANT_LOG_COLUMNS: dict[str, slice] = {
@@ -172,3 +174,64 @@ def bench_summary(*, side: str, mode: str, scenario: str, ref: Reference, bench:
     if realtime is not None:
         s["realtime"] = dict(realtime)
     return s
+
+
+@dataclass(frozen=True)
+class RunInfo:
+    """What a run was: its side (bench, controller, plant), mode (lockstep, realtime),
+    scenario, the node's frame log in the staging folder and whose view that log is."""
+
+    side: str
+    mode: str
+    scenario: str
+    node_log: str
+    view: str
+
+
+def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, model: Model,
+                  controller_values: Mapping[str, float | bool],
+                  nodes: Mapping[str, Mapping[str, Any]], *, can_log: Path | None,
+                  figures: bool = True) -> dict[str, Any]:
+    """Evaluate a run whose logs (plant.csv, the node's frame log, in real time the latency
+    logs) are in the result set's staging folder: the unquantised co-simulation, the standard
+    frame log (``can_log``: in the output folder, or elsewhere, written atomically), the
+    figures and summary.json. Returns the summary."""
+    from . import framelog as fl
+    from .busload import measured_load, schedule_load
+    from .protocol import DBC_PATH, database
+
+    work = rs.staging
+    bench = bench_result(ref, run, read_plant_log(work / "plant.csv"))
+    if bench.t.shape[0] < 2:
+        raise HilError(f"the bench ran {bench.t.shape[0]} periods: nothing to evaluate")
+    ref_run = extend_reference(ref, float(bench.t[-1] - bench.t[0]))
+    unq = unquantised_cosim(ref_run, model, controller_values)
+    records = fl.read_node_log(work / info.node_log)
+    bus: dict[str, Any] = {"node_log": info.node_log, "view": info.view, **fl.rates(records)}
+    bus["measured_1mbit"] = measured_load(fl.frames(records), bench.t.shape[0])
+    bus["schedule_worst_percent_1mbit"] = schedule_load(
+        database(), lockstep=info.mode == "lockstep", dbc_name=str(DBC_PATH)).worst_percent
+    if can_log is not None:
+        inside = can_log.parent.resolve() == rs.folder.resolve()
+        fl.write_can_log(records, rs.path(can_log.name) if inside else can_log)
+        bus["can_log"] = can_log.name if inside else str(can_log)
+    realtime: dict[str, Any] | None = None
+    latencies: dict[str, FloatArray] = {}
+    stats: dict[str, dict[str, Any]] = {}
+    if info.mode == "realtime":
+        for node in ("controller", "plant"):
+            lat = read_latency_log(work / f"latency_{node}.csv")
+            latencies[node] = lat[:, 0]
+            stats[node] = {**latency_stats(lat[:, 0]), **nodes[node].get("rt", {})}
+        realtime = {**stats, "goal_p99_us": 50.0}
+    summary = bench_summary(side=info.side, mode=info.mode, scenario=info.scenario, ref=ref_run,
+                            bench=bench, unquantised=unq, plant=nodes["plant"],
+                            controller=nodes["controller"], bus=bus, realtime=realtime)
+    if figures:
+        from .figures import write_bench_figures
+
+        write_bench_figures(work, ref_run, bench, unq, latencies or None, stats)
+    summary["files"] = sorted([*rs.names(), "summary.json"])
+    strict: dict[str, Any] = to_strict_json_value(summary)
+    rs.write_text("summary.json", strict_json(strict) + "\n")
+    return strict
