@@ -1,79 +1,98 @@
-"""Real-time mode of the CAN bench: jitter and deadline misses of both C nodes over a run.
+"""Real-time mode of the CAN bench: wake-up latency and deadline misses of both C nodes, with and
+without SCHED_FIFO, in alternating blocks.
 
-Runs the C plant node (socketcand server) and the C controller node in real-time mode (1 kHz,
-clock_nanosleep TIMER_ABSTIME on CLOCK_MONOTONIC, timer slack 1 ns; --fifo/--mlock add
-SCHED_FIFO and mlockall, which need root or CAP_SYS_NICE / CAP_IPC_LOCK) on the writing task
-followed by holding its last pose, for --duration seconds (default 60), and prints per node the
-wake-up latency p50/p99/max, the deadline misses (a period's work ending after the next release),
-plus the controller's stale periods (no fresh joint state for more than 3 periods: it then
-commands 0 V) and the plant's fault counters (a silent controller: 0 V and a latched timeout).
+Each block runs the writing task (held at its last pose after 5.9 s) for --duration seconds on
+both C nodes in real time at 1 kHz over the socketcand transport (rrr_robot.hil.bench.run_c_bench
+with RealTime), twice: once plain (the default scheduler, clock_nanosleep only: the nodes' old
+mode) and once tuned (SCHED_FIFO 80, mlockall, one CPU per node, sleep-then-spin --spin-us). It
+prints per configuration and node the wake-up latency p50 / p99 / p99.9 / max (us) and the
+deadline misses as min / median / max over the blocks, and the plant's latched faults (a stall
+longer than 3 periods makes the plant's supervisor apply 0 V and latch a timeout, as it
+should).
 
-    python bench/bench_hil_realtime.py [--duration 60] [--fifo 80] [--mlock] [--json out.json]
+    python bench/bench_hil_realtime.py [--blocks 3] [--duration 20] [--spin-us 100] [--json F]
 
-Needs the C nodes (pip install . puts them in rrr_robot/bin; or RRR_HIL_BIN_DIR). Not a test: the
-numbers depend on the machine (a 2-vCPU VM shows multi-millisecond stalls, see
-docs/can.md#lockstep-and-real-time); lockstep mode is what the tests use.
+Needs the C nodes (pip install . puts them in rrr_robot/bin; or RRR_HIL_BIN_DIR) and, for the
+tuned runs, root or CAP_SYS_NICE (without it the nodes warn and run plain). Not a test: the
+numbers are this machine's.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
-import numpy as np
-from rrr_robot.hil.nodes import export_reference, start_controller, start_plant
+from rrr_robot.hil.bench import RealTime, run_c_bench
+from rrr_robot.hil.results import extend_reference
 from rrr_robot.writing.job import WritingJob, prepare
 
+KEYS = ("rt_latency_p50_us", "rt_latency_p99_us", "rt_latency_p999_us", "rt_latency_max_us",
+        "rt_deadline_misses")
 
-def reference(duration: float) -> tuple[np.ndarray, ...]:
-    ref = prepare(WritingJob(out=Path("."), scenarios=["ctc"]))[3]
-    n = round(duration / 1e-3)
-    t = np.arange(n) * 1e-3
-    idx = np.minimum(np.arange(n), ref.t.size - 1)
-    q = ref.q[idx]
-    qd = np.where((np.arange(n) < ref.t.size)[:, None], ref.qd[idx], 0.0)
-    qdd = np.where((np.arange(n) < ref.t.size)[:, None], ref.qdd[idx], 0.0)
-    return t, q, qd, qdd
+
+def one_run(ref: Any, realtime: RealTime) -> dict[str, Any]:
+    with tempfile.TemporaryDirectory(prefix="rrr_hil_rt_") as tmp:
+        try:
+            run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=Path(tmp),
+                              realtime=realtime, timeout=realtime.duration + 120)
+        except Exception as exc:  # a node that failed: report it, keep benchmarking
+            return {"error": " ".join(str(exc).split())[:300]}
+    return {"controller": run.controller_summary.get("rt", {}),
+            "plant": run.plant_summary.get("rt", {}),
+            "plant_faults": run.plant_summary.get("faults"),
+            "stale": run.controller_summary.get("stale")}
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--duration", type=float, default=60.0, help="seconds (default 60)")
-    ap.add_argument("--fifo", type=int, default=0, help="SCHED_FIFO priority (0: off)")
-    ap.add_argument("--mlock", action="store_true", help="mlockall in both nodes")
-    ap.add_argument("--json", type=Path, help="also write the figures to this file")
+    ap.add_argument("--blocks", type=int, default=3, help="alternating blocks (default 3)")
+    ap.add_argument("--duration", type=float, default=20.0, help="seconds per run (default 20)")
+    ap.add_argument("--spin-us", type=int, default=100, help="tuned runs' spin (default 100)")
+    ap.add_argument("--json", type=Path, help="also write every run's figures to this file")
     args = ap.parse_args()
-    t, q, qd, qdd = reference(args.duration)
-    rt = ["--realtime"] + (["--fifo", str(args.fifo)] if args.fifo else []) + \
-        (["--mlock"] if args.mlock else [])
-    with tempfile.TemporaryDirectory(prefix="rrr_hil_rt_") as tmp:
-        ref_csv = export_reference(t, q, qd, qdd, Path(tmp) / "reference.csv")
-        with start_plant(q0=q[0], qd0=qd[0],
-                         extra=[*rt, "--duration", f"{args.duration + 5:.3f}"]) as plant, \
-                start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
-                                 extra=rt) as ctrl:
-            cs = ctrl.wait(args.duration + 60)
-            ps = plant.wait(args.duration + 60)
-    print(f"CAN bench, real-time mode, {args.duration:.0f} s at 1 kHz (socketcand over TCP "
-          f"loopback); {cs.get('rt', {}).get('rt_setup', '')}")
-    print(f"{'node':>10} {'periods':>8} {'p50 us':>8} {'p99 us':>8} {'max us':>9} "
-          f"{'misses':>7} {'work max us':>12}")
-    for name, s in (("controller", cs), ("plant", ps)):
-        r = s.get("rt", {})
-        print(f"{name:>10} {r.get('rt_periods', 0):>8} {r.get('rt_latency_p50_us', 0):8.1f} "
-              f"{r.get('rt_latency_p99_us', 0):8.1f} {r.get('rt_latency_max_us', 0):9.1f} "
-              f"{r.get('rt_deadline_misses', 0):>7} {r.get('rt_work_max_us', 0):12.1f}")
-    print(f"controller: {cs.get('states')} joint states received, {cs.get('stale')} stale periods"
-          f" (0 V commanded), exit {cs['exit']}")
-    print(f"plant: {ps.get('periods')} periods, {ps.get('cmd_missed')} without a command, "
-          f"faults latched {ps.get('faults')} (fault events {ps.get('fault_events')}, "
-          f"timeouts {ps.get('timeout')}), exit {ps['exit']}")
+    ref = extend_reference(prepare(WritingJob(out=Path("."), scenarios=["ctc"]))[3],
+                           args.duration)
+    configs = {
+        "plain": RealTime(duration=args.duration + 5, fifo=0, mlock=False, cpus=None, spin_us=0),
+        "tuned": RealTime(duration=args.duration + 5, fifo=80, mlock=True, cpus=(1, 0),
+                          spin_us=args.spin_us),
+    }
+    runs: dict[str, list[dict[str, Any]]] = {name: [] for name in configs}
+    for block in range(args.blocks):
+        for name, cfg in configs.items():
+            r = one_run(ref, cfg)
+            runs[name].append(r)
+            print(f"block {block + 1} {name}: " + (r["error"] if "error" in r else
+                  f"controller p99 {r['controller'].get('rt_latency_p99_us', 0):.1f} us, plant "
+                  f"p99 {r['plant'].get('rt_latency_p99_us', 0):.1f} us, plant faults "
+                  f"{r['plant_faults']}"), flush=True)
+    print(f"\nCAN bench real time, {args.blocks} alternating blocks of {args.duration:g} s per "
+          "configuration (min / median / max over the blocks)")
+    print(f"{'config':>6} {'node':>10} {'p50 us':>20} {'p99 us':>22} {'p99.9 us':>24} "
+          f"{'max us':>26} {'misses':>14}")
+    for name, rs in runs.items():
+        ok = [r for r in rs if "error" not in r]
+        for node in ("controller", "plant"):
+            cells = []
+            for key in KEYS:
+                v = [float(r[node].get(key, float("nan"))) for r in ok]
+                cells.append(f"{min(v):.1f} / {statistics.median(v):.1f} / {max(v):.1f}"
+                             if v else "n/a")
+            print(f"{name:>6} {node:>10} {cells[0]:>20} {cells[1]:>22} {cells[2]:>24} "
+                  f"{cells[3]:>26} {cells[4]:>14}")
+        faults = [r["plant_faults"] for r in ok]
+        print(f"{name:>6} plant faults latched per run: {faults}; failed runs "
+              f"{len(rs) - len(ok)}")
+        if ok:
+            print(f"{name:>6} setup: {ok[0]['controller'].get('rt_setup', '')}")
     if args.json:
-        args.json.write_text(json.dumps({"controller": cs, "plant": ps}, indent=2) + "\n")
-    return 0 if cs["exit"] == 0 and ps["exit"] == 0 else 1
+        args.json.write_text(json.dumps(runs, indent=2) + "\n")
+    return 0
 
 
 if __name__ == "__main__":

@@ -166,7 +166,9 @@ int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const 
     const int is_channel = strcmp(a, "--channel") == 0;
     const int is_handshake = strcmp(a, "--handshake-timeout-ms") == 0;
     const int is_idle = strcmp(a, "--idle-timeout-ms") == 0;
-    if (!is_listen && !is_connect && !is_sc && !is_channel && !is_handshake && !is_idle) {
+    const int is_log = strcmp(a, "--frame-log") == 0;
+    if (!is_listen && !is_connect && !is_sc && !is_channel && !is_handshake && !is_idle &&
+        !is_log) {
         return 0;
     }
     if (*i + 1 >= argc) {
@@ -174,6 +176,14 @@ int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const 
         return -1;
     }
     const char *v = argv[++*i];
+    if (is_log) {
+        if (v[0] == '\0') {
+            fprintf(stderr, "%s: --frame-log: empty path\n", prog);
+            return -1;
+        }
+        o->frame_log = v;
+        return 1;
+    }
     if (is_handshake || is_idle) {
         char *end;
         errno = 0;
@@ -217,8 +227,16 @@ int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const 
 }
 
 int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_t *rx_ids,
-                      unsigned n_rx, const char *prog)
+                      unsigned n_rx, const char *prog, rrr_hil_framelog *log)
 {
+    memset(log, 0, sizeof *log);
+    if (o->frame_log != NULL) {
+        char err[320];
+        if (rrr_hil_framelog_open(log, o->frame_log, err, sizeof err) != 0) {
+            fprintf(stderr, "%s: %s\n", prog, err);
+            return -1;
+        }
+    }
     const char *channel = o->channel[0] ? o->channel : "bench0";
     const int handshake_ms =
         o->handshake_timeout_ms > 0 ? o->handshake_timeout_ms : RRR_HIL_SCD_HANDSHAKE_TIMEOUT_MS;
@@ -254,8 +272,10 @@ int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_
     }
     if (rc != 0) {
         fprintf(stderr, "%s: %s\n", prog, l->base.last_error);
+        (void)rrr_hil_framelog_close(log);
         return -1;
     }
+    l->base.framelog = o->frame_log != NULL ? log : NULL;
     return 0;
 }
 
@@ -276,6 +296,11 @@ void rrr_hil_link_json(FILE *out, const rrr_hil_transport *t)
             (unsigned long long)e->tx_frames, e->rx_malformed, e->tx_dropped, e->tx_failed,
             e->bus_off, e->bus_errors, e->disconnects, e->connects, e->refused,
             e->handshake_timeouts, e->idle_timeouts);
+    if (t->framelog != NULL) {
+        fprintf(out, ", \"frames_logged\": %llu, \"frame_log_error\": \"%s\"",
+                (unsigned long long)t->framelog->frames,
+                t->framelog->error != 0 ? strerror(t->framelog->error) : "");
+    }
 }
 
 /* ---- real time ------------------------------------------------------------------------------- */
@@ -292,27 +317,159 @@ static void ts_add(struct timespec *t, int64_t ns)
     t->tv_nsec = (long)(v % 1000000000);
 }
 
-int rrr_hil_rt_init(rrr_hil_rt *rt, double period_s, uint32_t max_periods, int fifo_prio, int lock)
+void rrr_hil_rt_opts_default(rrr_hil_rt_opts *o)
 {
-    memset(rt, 0, sizeof *rt);
-    rt->period_ns = (int64_t)llround(period_s * 1e9);
-    rt->cap = max_periods;
-    rt->lat_ns = calloc(max_periods > 0u ? max_periods : 1u, sizeof *rt->lat_ns);
-    if (rt->lat_ns == NULL) {
+    memset(o, 0, sizeof *o);
+    o->cpu = -1;
+}
+
+int rrr_hil_rt_arg(rrr_hil_rt_opts *o, int argc, char **argv, int *i, const char *prog)
+{
+    const char *a = argv[*i];
+    if (strcmp(a, "--mlock") == 0) {
+        o->mlock = 1;
+        return 1;
+    }
+    const int is_fifo = strcmp(a, "--fifo") == 0;
+    const int is_cpu = strcmp(a, "--cpu") == 0;
+    const int is_spin = strcmp(a, "--spin-us") == 0;
+    const int is_log = strcmp(a, "--latency-log") == 0;
+    if (!is_fifo && !is_cpu && !is_spin && !is_log) {
+        return 0;
+    }
+    if (*i + 1 >= argc) {
+        fprintf(stderr, "%s: %s needs a value\n", prog, a);
         return -1;
     }
-    int n = snprintf(rt->setup, sizeof rt->setup, "timer slack 1 ns: %s",
-                     prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL) == 0 ? "yes" : strerror(errno));
-    if (lock) {
-        n += snprintf(rt->setup + n, sizeof rt->setup - (size_t)n, "; mlockall: %s",
-                      mlockall(MCL_CURRENT | MCL_FUTURE) == 0 ? "yes" : strerror(errno));
+    const char *v = argv[++*i];
+    if (is_log) {
+        if (v[0] == '\0') {
+            fprintf(stderr, "%s: --latency-log: empty path\n", prog);
+            return -1;
+        }
+        o->latency_log = v;
+        return 1;
     }
-    if (fifo_prio > 0) {
+    const long lo = is_fifo ? 0 : is_cpu ? -1 : 0;
+    const long hi = is_fifo ? 99 : is_cpu ? CPU_SETSIZE - 1 : RRR_HIL_RT_MAX_SPIN_US;
+    char *end;
+    errno = 0;
+    const long x = strtol(v, &end, 10);
+    if (end == v || *end != '\0' || errno != 0 || x < lo || x > hi) {
+        fprintf(stderr, "%s: %s: expected an integer %ld..%ld, got '%s'\n", prog, a, lo, hi, v);
+        return -1;
+    }
+    *(is_fifo ? &o->fifo_prio : is_cpu ? &o->cpu : &o->spin_us) = (int)x;
+    return 1;
+}
+
+FILE *rrr_hil_rt_open_log(const rrr_hil_rt_opts *o, int realtime, const char *prog, int *failed)
+{
+    *failed = 0;
+    if (!realtime || o->latency_log == NULL) {
+        return NULL;
+    }
+    FILE *fp = fopen(o->latency_log, "w");
+    if (fp == NULL) {
+        fprintf(stderr, "%s: cannot write %s: %s\n", prog, o->latency_log, strerror(errno));
+        *failed = 1;
+    }
+    return fp;
+}
+
+static int64_t now_ns(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return ts_ns(&t);
+}
+
+/* Append to rt->setup. */
+static void setup_note(rrr_hil_rt *rt, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+static void setup_note(rrr_hil_rt *rt, const char *fmt, ...)
+{
+    const size_t used = strlen(rt->setup);
+    if (used + 1u >= sizeof rt->setup) {
+        return;
+    }
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(rt->setup + used, sizeof rt->setup - used, fmt, ap);
+    va_end(ap);
+}
+
+static const char *perm_hint(int e)
+{
+    return e == EPERM ? " (needs root, or CAP_SYS_NICE / CAP_IPC_LOCK and a limit: ulimit -r, -l)"
+                      : "";
+}
+
+int rrr_hil_rt_init(rrr_hil_rt *rt, double period_s, uint32_t max_periods,
+                    const rrr_hil_rt_opts *o, FILE *latency_log, const char *prog)
+{
+    memset(rt, 0, sizeof *rt);
+    rt->cpu = -1;
+    rt->latency_log = latency_log;
+    rt->period_ns = (int64_t)llround(period_s * 1e9);
+    rt->spin_ns = (int64_t)o->spin_us * 1000;
+    rt->cap = max_periods;
+    rt->lat_ns = calloc(max_periods > 0u ? max_periods : 1u, sizeof *rt->lat_ns);
+    rt->work_ns = calloc(max_periods > 0u ? max_periods : 1u, sizeof *rt->work_ns);
+    if (rt->lat_ns == NULL || rt->work_ns == NULL) {
+        rrr_hil_rt_free(rt);
+        return -1;
+    }
+    setup_note(rt, "timer slack 1 ns: %s",
+               prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL) == 0 ? "yes" : strerror(errno));
+    if (o->cpu >= 0) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET((size_t)o->cpu, &set);
+        if (sched_setaffinity(0, sizeof set, &set) == 0) {
+            rt->cpu = o->cpu;
+            setup_note(rt, "; CPU %d: yes", o->cpu);
+        } else {
+            const int e = errno;
+            setup_note(rt, "; CPU %d: %s", o->cpu, strerror(e));
+            fprintf(stderr, "%s: warning: cannot pin to CPU %d: %s; running on any CPU\n", prog,
+                    o->cpu, strerror(e));
+        }
+    }
+    if (o->mlock) {
+        if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
+            rt->mlocked = 1;
+            setup_note(rt, "; mlockall: yes");
+            /* touch the statistics now, so that the loop takes no page fault on them */
+            memset(rt->lat_ns, 0, (size_t)rt->cap * sizeof *rt->lat_ns);
+            memset(rt->work_ns, 0, (size_t)rt->cap * sizeof *rt->work_ns);
+        } else {
+            const int e = errno;
+            setup_note(rt, "; mlockall: %s", strerror(e));
+            fprintf(stderr, "%s: warning: mlockall refused: %s%s; memory may be paged\n", prog,
+                    strerror(e), perm_hint(e));
+        }
+    }
+    if (o->fifo_prio > 0) {
         struct sched_param sp;
         memset(&sp, 0, sizeof sp);
-        sp.sched_priority = fifo_prio;
-        snprintf(rt->setup + n, sizeof rt->setup - (size_t)n, "; SCHED_FIFO %d: %s", fifo_prio,
-                 sched_setscheduler(0, SCHED_FIFO, &sp) == 0 ? "yes" : strerror(errno));
+        sp.sched_priority = o->fifo_prio;
+        if (sched_setscheduler(0, SCHED_FIFO, &sp) == 0) {
+            rt->fifo = o->fifo_prio;
+            setup_note(rt, "; SCHED_FIFO %d: yes", o->fifo_prio);
+        } else {
+            const int e = errno;
+            setup_note(rt, "; SCHED_FIFO %d: %s", o->fifo_prio, strerror(e));
+            fprintf(stderr, "%s: warning: SCHED_FIFO %d refused: %s%s; running under the default "
+                            "scheduler\n", prog, o->fifo_prio, strerror(e), perm_hint(e));
+        }
+    }
+    setup_note(rt, "; wake-up: %s", rt->spin_ns > 0 ? "sleep, then spin" : "sleep");
+    if (rt->spin_ns > 0) {
+        setup_note(rt, " %d us", o->spin_us);
     }
     clock_gettime(CLOCK_MONOTONIC, &rt->next);
     ts_add(&rt->next, rt->period_ns);
@@ -326,27 +483,37 @@ void rrr_hil_rt_shift(rrr_hil_rt *rt, double shift_s)
 
 void rrr_hil_rt_wait(rrr_hil_rt *rt)
 {
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &rt->next, NULL) == EINTR) {
+    const int64_t release = ts_ns(&rt->next);
+    struct timespec wake = rt->next;
+    ts_add(&wake, -rt->spin_ns);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, NULL) == EINTR) {
     }
-    clock_gettime(CLOCK_MONOTONIC, &rt->woke);
+    int64_t now = now_ns();
+    while (now < release) { /* the spin: at most spin_ns when the sleep woke in time */
+        now = now_ns();
+    }
+    rt->woke.tv_sec = (time_t)(now / 1000000000);
+    rt->woke.tv_nsec = (long)(now % 1000000000);
     if (rt->n < rt->cap) {
-        rt->lat_ns[rt->n++] = ts_ns(&rt->woke) - ts_ns(&rt->next);
+        rt->lat_ns[rt->n++] = now - release;
     }
 }
 
 void rrr_hil_rt_done(rrr_hil_rt *rt)
 {
-    struct timespec now;
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    const int64_t work = ts_ns(&now) - ts_ns(&rt->woke);
+    const int64_t now = now_ns();
+    const int64_t work = now - ts_ns(&rt->woke);
     if (work > rt->work_max_ns) {
         rt->work_max_ns = work;
     }
+    if (rt->n_work < rt->cap) {
+        rt->work_ns[rt->n_work++] = work;
+    }
     ts_add(&rt->next, rt->period_ns);
-    if (ts_ns(&now) > ts_ns(&rt->next)) {
+    if (now > ts_ns(&rt->next)) {
         ++rt->misses;
         /* catch up: skip the releases already past instead of bursting through them */
-        while (ts_ns(&now) > ts_ns(&rt->next)) {
+        while (now > ts_ns(&rt->next)) {
             ts_add(&rt->next, rt->period_ns);
             ++rt->skipped;
         }
@@ -360,32 +527,72 @@ static int cmp_i64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+int64_t rrr_hil_percentile(const int64_t *sorted, uint32_t n, double p)
+{
+    if (n == 0u) {
+        return 0;
+    }
+    double rank = ceil(p * (double)n);
+    if (rank < 1.0) {
+        rank = 1.0;
+    }
+    if (rank > (double)n) {
+        rank = (double)n;
+    }
+    return sorted[(uint32_t)rank - 1u];
+}
+
+static void write_latency_log(rrr_hil_rt *rt)
+{
+    if (rt->latency_log == NULL) {
+        return;
+    }
+    int ok = fprintf(rt->latency_log, "k,latency_ns,work_ns\n") > 0;
+    for (uint32_t k = 0; k < rt->n && ok; ++k) {
+        ok = fprintf(rt->latency_log, "%u,%lld,%lld\n", k, (long long)rt->lat_ns[k],
+                     k < rt->n_work ? (long long)rt->work_ns[k] : -1LL) > 0;
+    }
+    rt->latency_log_ok = (fclose(rt->latency_log) == 0) && ok;
+    rt->latency_log = NULL;
+}
+
 void rrr_hil_rt_report(rrr_hil_rt *rt, FILE *out, const char *prog)
 {
-    double p50 = 0.0, p99 = 0.0, mx = 0.0;
+    write_latency_log(rt); /* before the sort below: one row per period, in order */
+    double p50 = 0.0, p99 = 0.0, p999 = 0.0, mx = 0.0;
     if (rt->n > 0u) {
         qsort(rt->lat_ns, rt->n, sizeof *rt->lat_ns, cmp_i64);
-        p50 = (double)rt->lat_ns[(rt->n - 1u) / 2u] * 1e-3;
-        p99 = (double)rt->lat_ns[(uint32_t)((double)(rt->n - 1u) * 0.99)] * 1e-3;
+        p50 = (double)rrr_hil_percentile(rt->lat_ns, rt->n, 0.50) * 1e-3;
+        p99 = (double)rrr_hil_percentile(rt->lat_ns, rt->n, 0.99) * 1e-3;
+        p999 = (double)rrr_hil_percentile(rt->lat_ns, rt->n, 0.999) * 1e-3;
         mx = (double)rt->lat_ns[rt->n - 1u] * 1e-3;
     }
     fprintf(stderr,
             "%s: real time: %u periods of %.0f us; wake-up latency p50 %.1f us, p99 %.1f us, "
-            "max %.1f us; %u deadline misses (%u releases skipped); longest work %.1f us; %s\n",
-            prog, rt->n, (double)rt->period_ns * 1e-3, p50, p99, mx, rt->misses, rt->skipped,
-            (double)rt->work_max_ns * 1e-3, rt->setup);
+            "p99.9 %.1f us, max %.1f us; %u deadline misses (%u releases skipped); longest work "
+            "%.1f us; %s\n",
+            prog, rt->n, (double)rt->period_ns * 1e-3, p50, p99, p999, mx, rt->misses,
+            rt->skipped, (double)rt->work_max_ns * 1e-3, rt->setup);
     fprintf(out,
             "\"rt_periods\": %u, \"rt_latency_p50_us\": %.3f, \"rt_latency_p99_us\": %.3f, "
-            "\"rt_latency_max_us\": %.3f, \"rt_deadline_misses\": %u, \"rt_skipped\": %u, "
-            "\"rt_work_max_us\": %.3f, \"rt_setup\": \"%s\"",
-            rt->n, p50, p99, mx, rt->misses, rt->skipped, (double)rt->work_max_ns * 1e-3,
+            "\"rt_latency_p999_us\": %.3f, \"rt_latency_max_us\": %.3f, \"rt_deadline_misses\": "
+            "%u, \"rt_skipped\": %u, \"rt_work_max_us\": %.3f, \"rt_fifo\": %d, \"rt_mlock\": %d, "
+            "\"rt_cpu\": %d, \"rt_spin_us\": %.3f, \"rt_latency_log_ok\": %d, \"rt_setup\": \"%s\"",
+            rt->n, p50, p99, p999, mx, rt->misses, rt->skipped, (double)rt->work_max_ns * 1e-3,
+            rt->fifo, rt->mlocked, rt->cpu, (double)rt->spin_ns * 1e-3, rt->latency_log_ok,
             rt->setup);
 }
 
 void rrr_hil_rt_free(rrr_hil_rt *rt)
 {
     free(rt->lat_ns);
+    free(rt->work_ns);
     rt->lat_ns = NULL;
+    rt->work_ns = NULL;
+    if (rt->latency_log != NULL) {
+        fclose(rt->latency_log);
+        rt->latency_log = NULL;
+    }
 }
 
 /* ---- reference table ------------------------------------------------------------------------- */

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <time.h>
 
+#include "hil_framelog.h"
 #include "hil_transport.h"
 #include "rrr/rrr_model.h"
 
@@ -61,6 +62,7 @@ typedef struct rrr_hil_link_opts {
     int handshake_timeout_ms; ///< socketcand server: --handshake-timeout-ms (0: default, 2000)
     int idle_timeout_ms;      ///< --idle-timeout-ms (0: default, 5000): socketcand idle timeout,
                               ///< and the plant's limit on a silent controller
+    const char *frame_log;    ///< --frame-log FILE: every frame sent and received (hil_framelog.h)
 } rrr_hil_link_opts;
 
 /** Storage for any transport. */
@@ -88,50 +90,100 @@ int rrr_hil_parse_vec3(const char *s, double v[3]);
  *  message in err. */
 int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, size_t err_len);
 /** Handle a transport option (argv[*i] and its value: --listen, --connect, --socketcan,
- *  --channel, --handshake-timeout-ms, --idle-timeout-ms); 1 consumed, 0 not a transport option,
- *  -1 bad value (message printed). */
+ *  --channel, --handshake-timeout-ms, --idle-timeout-ms, --frame-log); 1 consumed, 0 not a
+ *  transport option, -1 bad value (message printed). */
 int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog);
-/** Open the transport; SocketCAN receives only @p rx_ids. Prints "PROG: listening on H:P" for a
- *  server. 0 or -1 (message printed to stderr). */
+/** Open the frame log of --frame-log (before the transport: a path that cannot be written fails
+ *  before anything listens or connects) and then the transport, which logs into @p log; SocketCAN
+ *  receives only @p rx_ids. Prints "PROG: listening on H:P" for a server. 0 or -1 (message
+ *  printed to stderr; nothing left open). Close the log with rrr_hil_framelog_close after the
+ *  run, before rrr_hil_link_json reports it. */
 int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_t *rx_ids,
-                      unsigned n_rx, const char *prog);
+                      unsigned n_rx, const char *prog, rrr_hil_framelog *log);
 /** The idle timeout in effect, ms (--idle-timeout-ms or RRR_HIL_SCD_IDLE_TIMEOUT_MS). */
 int rrr_hil_link_idle_ms(const rrr_hil_link_opts *o);
 /** Usage lines of the transport options. */
 #define RRR_HIL_LINK_USAGE                                                                        \
     "       [--channel NAME] [--handshake-timeout-ms N] [--idle-timeout-ms N]\n"                \
     "  socketcand server: one session; a client must finish the handshake within\n"            \
-    "  --handshake-timeout-ms (2000) and may stay silent at most --idle-timeout-ms (5000)\n"
-/** Print the transport's counters as JSON members (no braces). */
+    "  --handshake-timeout-ms (2000) and may stay silent at most --idle-timeout-ms (5000)\n"    \
+    "       [--frame-log FILE]: every frame sent and received, timestamped (hil_framelog.h)\n"
+/** Print the transport's counters, and its frame log's, as JSON members (no braces). */
 void rrr_hil_link_json(FILE *out, const rrr_hil_transport *t);
 
 /* ---- real-time loop -------------------------------------------------------------------------- */
 
+/** Real-time options of a node (--fifo, --mlock, --cpu, --spin-us, --latency-log). */
+typedef struct rrr_hil_rt_opts {
+    int fifo_prio;           ///< SCHED_FIFO priority 1..99, 0: the default scheduler
+    int mlock;               ///< mlockall(MCL_CURRENT | MCL_FUTURE)
+    int cpu;                 ///< pin to this CPU (sched_setaffinity), -1: no affinity
+    int spin_us;             ///< sleep until this long before each release, then spin on
+                             ///< CLOCK_MONOTONIC up to it (0: sleep only)
+    const char *latency_log; ///< CSV of every period's wake-up latency and work time
+} rrr_hil_rt_opts;
+
+/** No SCHED_FIFO, no mlockall, no affinity, no spin, no log. */
+void rrr_hil_rt_opts_default(rrr_hil_rt_opts *o);
+/** Handle a real-time option (argv[*i] and its value); 1 consumed, 0 not one, -1 bad value. */
+int rrr_hil_rt_arg(rrr_hil_rt_opts *o, int argc, char **argv, int *i, const char *prog);
+/** Usage lines of the real-time options. */
+#define RRR_HIL_RT_USAGE                                                                          \
+    "       [--fifo PRIO] [--mlock] [--cpu N] [--spin-us N] [--latency-log FILE.csv]\n"         \
+    "  real time: SCHED_FIFO priority 1..99, mlockall, pinned to CPU N, clock_nanosleep to N us\n" \
+    "  before each release and then a spin on CLOCK_MONOTONIC (each when permitted: a warning\n"  \
+    "  and the fallback otherwise); the latency log has one row per period\n"
+
+/** Open --latency-log for writing when @p realtime (NULL when not asked for); on failure print
+ *  "PROG: cannot write FILE: ..." and set *failed. */
+FILE *rrr_hil_rt_open_log(const rrr_hil_rt_opts *o, int realtime, const char *prog, int *failed);
+
+/** Largest --spin-us (a quarter of the 1 ms period). */
+#define RRR_HIL_RT_MAX_SPIN_US 250
+
 /** Periodic loop on CLOCK_MONOTONIC with absolute-time sleeps and its statistics. */
 typedef struct rrr_hil_rt {
     int64_t period_ns;   ///< period
+    int64_t spin_ns;     ///< spin before each release (sleep-then-spin), 0: sleep only
     struct timespec next; ///< next release time
     int64_t *lat_ns;     ///< wake-up latency of each period (heap, cap entries)
+    int64_t *work_ns;    ///< work time of each period (heap, cap entries)
     uint32_t n, cap;     ///< periods recorded, capacity
+    uint32_t n_work;     ///< work times recorded
     uint32_t misses;     ///< periods whose work ended after the next release (deadline misses)
     uint32_t skipped;    ///< releases skipped to catch up after a miss
     int64_t work_max_ns; ///< longest work time of a period
     struct timespec woke; ///< wake-up time of the current period
-    char setup[160];     ///< what was applied: SCHED_FIFO, mlockall, timer slack (or why not)
+    int fifo, mlocked, cpu; ///< applied: SCHED_FIFO priority (0: no), mlockall, CPU (-1: none)
+    FILE *latency_log;   ///< written and closed by rrr_hil_rt_report
+    int latency_log_ok;  ///< 1 once written completely
+    char setup[320];     ///< what was applied: SCHED_FIFO, mlockall, affinity, timer slack, spin
 } rrr_hil_rt;
 
-/** Prepare: optional SCHED_FIFO priority (0: no), mlockall, timer slack 1 ns. 0 or -1 (no memory). */
-int rrr_hil_rt_init(rrr_hil_rt *rt, double period_s, uint32_t max_periods, int fifo_prio, int lock);
+/**
+ * @brief Prepare: timer slack 1 ns, then what @p o asks (SCHED_FIFO, mlockall, CPU affinity,
+ *        spin). What is refused (EPERM without root / CAP_SYS_NICE / CAP_IPC_LOCK, a CPU that
+ *        is not ours) is printed as one warning line on stderr ("PROG: warning: ...") and the
+ *        node goes on without it; rt->setup says what was applied. @p latency_log (may be NULL)
+ *        is an open file for the per-period log, owned by rt from here on.
+ * @return 0 or -1 (no memory).
+ */
+int rrr_hil_rt_init(rrr_hil_rt *rt, double period_s, uint32_t max_periods,
+                    const rrr_hil_rt_opts *o, FILE *latency_log, const char *prog);
 /** Move every later release by @p shift_s (phase against another node's loop). */
 void rrr_hil_rt_shift(rrr_hil_rt *rt, double shift_s);
-/** Sleep until the next release (clock_nanosleep TIMER_ABSTIME) and record the latency. */
+/** Wait for the next release (clock_nanosleep TIMER_ABSTIME, to spin_ns before it and then a
+ *  spin on CLOCK_MONOTONIC when spin_ns > 0) and record the wake-up latency. */
 void rrr_hil_rt_wait(rrr_hil_rt *rt);
-/** End of the period's work: count a miss if it ended after the next release. */
+/** End of the period's work: record its time, count a miss if it ended after the next release. */
 void rrr_hil_rt_done(rrr_hil_rt *rt);
-/** Print p50/p99/max latency, misses, as text on stderr and as JSON members on out. */
+/** Write the latency log (if any), then print p50/p99/p99.9/max latency and misses as text on
+ *  stderr and as JSON members on out. */
 void rrr_hil_rt_report(rrr_hil_rt *rt, FILE *out, const char *prog);
-/** Free the statistics buffer. */
+/** Free the statistics buffers (and close a latency log not written). */
 void rrr_hil_rt_free(rrr_hil_rt *rt);
+/** Percentile @p p (0..1) of n sorted values: the value of rank ceil(p n) (nearest rank). */
+int64_t rrr_hil_percentile(const int64_t *sorted, uint32_t n, double p);
 
 /* ---- reference table ------------------------------------------------------------------------- */
 

@@ -2,6 +2,7 @@
 #define _DEFAULT_SOURCE /* struct ifreq, IFNAMSIZ (net/if.h); implies POSIX.1-2008 */
 
 #include "hil_transport.h"
+#include "hil_framelog.h"
 
 #include <errno.h>
 #include <linux/can.h>
@@ -22,7 +23,12 @@ rrr_hil_io rrr_hil_send(rrr_hil_transport *t, const rrr_hil_frame *f)
                  t->name ? t->name : "transport");
         return RRR_HIL_IO_ERROR;
     }
-    return t->vt->send(t, f);
+    const uint64_t sent = t->err.tx_frames;
+    const rrr_hil_io io = t->vt->send(t, f);
+    if (io == RRR_HIL_IO_OK && t->err.tx_frames != sent) {
+        rrr_hil_framelog_put(t->framelog, f, RRR_HIL_FRAME_TX);
+    }
+    return io;
 }
 
 rrr_hil_io rrr_hil_recv(rrr_hil_transport *t, rrr_hil_frame *f, int timeout_us)
@@ -32,7 +38,11 @@ rrr_hil_io rrr_hil_recv(rrr_hil_transport *t, rrr_hil_frame *f, int timeout_us)
                  t->name ? t->name : "transport");
         return RRR_HIL_IO_ERROR;
     }
-    return t->vt->recv(t, f, timeout_us);
+    const rrr_hil_io io = t->vt->recv(t, f, timeout_us);
+    if (io == RRR_HIL_IO_OK) {
+        rrr_hil_framelog_put(t->framelog, f, RRR_HIL_FRAME_RX);
+    }
+    return io;
 }
 
 void rrr_hil_close(rrr_hil_transport *t)

@@ -47,6 +47,7 @@ typedef struct rrr_hil_transport_err {
 } rrr_hil_transport_err;
 
 typedef struct rrr_hil_transport rrr_hil_transport;
+struct rrr_hil_framelog;
 
 /** Implementation hooks. */
 typedef struct rrr_hil_transport_vt {
@@ -61,11 +62,14 @@ struct rrr_hil_transport {
     const char *name;               ///< "socketcan" or "socketcand"
     rrr_hil_transport_err err;      ///< counters
     char last_error[200];           ///< text of the last error, "" if none
+    struct rrr_hil_framelog *framelog; ///< every frame sent or received is logged here (NULL:
+                                    ///< none; set after open, which clears the struct)
 };
 
-/** Send one frame. */
+/** Send one frame (logged in framelog when it went out: a server's frame dropped before its
+ *  client's first frame is not). */
 rrr_hil_io rrr_hil_send(rrr_hil_transport *t, const rrr_hil_frame *f);
-/** Receive one frame; timeout_us < 0 blocks, 0 polls. */
+/** Receive one frame (logged in framelog); timeout_us < 0 blocks, 0 polls. */
 rrr_hil_io rrr_hil_recv(rrr_hil_transport *t, rrr_hil_frame *f, int timeout_us);
 /** Close (idempotent). socketcand: a lingering close (our FIN, then the peer's data is read away
  *  until it closes, at most 500 ms), so the peer reads our last frames rather than a reset. */

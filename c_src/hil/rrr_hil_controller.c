@@ -2,7 +2,7 @@
  * rrr_hil_controller: the controller node of the CAN bench. Runs the core's computed-torque law
  * (rrr_ctc, eq 15) at 1 kHz along a reference table (CSV: t, q_ref, qd_ref, qdd_ref, one row per
  * period; `rrr hil export-reference` writes it) on the joint states it receives, and sends
- * VoltageCmd + Sync every period. By default it connects to the plant node as a socketcand
+ * VoltageCmd (+ Sync in lockstep) every period. By default it connects to the plant node as a socketcand
  * client.
  *
  * Lockstep (default): heartbeat "operational" first; then for k = 0 .. n-1: wait for the three
@@ -12,8 +12,10 @@
  * sequence as the FMPy master (cosim.run_cosim): the controller sees the plant's state at t_k,
  * the plant integrates over [t_k, t_k+1] with u_k held. A run that ends early (signal, fault,
  * plant lost) still sends StopCmd, with the reason, when it can.
- * Real time: every 1 ms of CLOCK_MONOTONIC (clock_nanosleep TIMER_ABSTIME) with the newest
- * complete joint state; a state older than 3 periods is stale: the controller then sends
+ * Real time: every 1 ms of CLOCK_MONOTONIC (hil_node.h: clock_nanosleep TIMER_ABSTIME, optionally
+ * sleep-then-spin, SCHED_FIFO, mlockall, a CPU) with the newest complete joint state, VoltageCmd
+ * only (no Sync: the lockstep time base is not needed on a timed bus, and leaving it out keeps
+ * the bus load of the schedule within 70 % of 1 Mbit/s, `rrr hil busload`); a state older than 3 periods is stale: the controller then sends
  * Enable = 0 (0 V). Jitter and deadline misses are printed at exit.
  *
  * Output: a summary on stderr and "RRR_HIL_SUMMARY {json}" on stdout, then one line on stderr
@@ -45,8 +47,7 @@ typedef struct opts {
     int realtime;
     int timeout_ms;
     rrr_ctc_gains gains;
-    int fifo_prio;
-    int mlock;
+    rrr_hil_rt_opts rt;
     const char *sets[64]; /* "NAME=VALUE" model parameters (--set), applied in order */
     int n_sets;
 } opts;
@@ -80,13 +81,16 @@ static void usage(void)
     fprintf(stderr,
             "usage: " PROG " --reference REF.csv (--connect HOST:PORT | --listen HOST:PORT |\n"
             "       --socketcan IF)\n" RRR_HIL_LINK_USAGE
-            "       [--realtime [--fifo PRIO] [--mlock]]\n"
+            "       [--realtime [--fifo PRIO] [--mlock] [--cpu N] [--spin-us N]\n"
+            "       [--latency-log FILE.csv]]\n"
             "       [--kp a,b,c] [--kd a,b,c] [--no-feedforward] [--set NAME=VALUE]...\n"
             "       [--timeout-ms N] [--log FILE.csv]\n"
             "  the model is the default robot (rrr_model_default) with the --set parameters\n"
             "  (named as in the FMUs: d1, a2, a3, d2, d3, g, u_max, p[k], kt[i], b[i], f[i,k],\n"
             "  w[i,k]), so the controller's model may differ from the plant's; gains default\n"
             "  to rrr_ctc_gains_default; --timeout-ms (5000): longest wait for a joint state\n"
+            "  real time: Sync is not sent (it is the lockstep time base)\n"
+            RRR_HIL_RT_USAGE
             "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault\n");
 }
 
@@ -95,8 +99,12 @@ static int parse_args(int argc, char **argv, opts *o)
     memset(o, 0, sizeof *o);
     (void)rrr_ctc_gains_default(&o->gains);
     o->timeout_ms = 5000;
+    rrr_hil_rt_opts_default(&o->rt);
     for (int i = 1; i < argc; ++i) {
-        const int r = rrr_hil_link_arg(&o->link, argc, argv, &i, PROG);
+        int r = rrr_hil_link_arg(&o->link, argc, argv, &i, PROG);
+        if (r == 0) {
+            r = rrr_hil_rt_arg(&o->rt, argc, argv, &i, PROG);
+        }
         if (r < 0) {
             return -1;
         }
@@ -106,8 +114,6 @@ static int parse_args(int argc, char **argv, opts *o)
         const char *a = argv[i];
         if (strcmp(a, "--realtime") == 0) {
             o->realtime = 1;
-        } else if (strcmp(a, "--mlock") == 0) {
-            o->mlock = 1;
         } else if (strcmp(a, "--no-feedforward") == 0) {
             o->gains.feedforward = 0;
         } else if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
@@ -135,13 +141,13 @@ static int parse_args(int argc, char **argv, opts *o)
                     fprintf(stderr, PROG ": %s: expected three numbers a,b,c, got '%s'\n", a, v);
                     return -1;
                 }
-            } else if (strcmp(a, "--timeout-ms") == 0 || strcmp(a, "--fifo") == 0) {
+            } else if (strcmp(a, "--timeout-ms") == 0) {
                 const long x = strtol(v, &end, 10);
                 if (*end != '\0' || x < 0 || x > 3600000) {
                     fprintf(stderr, PROG ": %s: expected a non-negative integer, got '%s'\n", a, v);
                     return -1;
                 }
-                *(a[2] == 't' ? &o->timeout_ms : &o->fifo_prio) = (int)x;
+                o->timeout_ms = (int)x;
             } else {
                 fprintf(stderr, PROG ": unknown option %s\n", a);
                 return -1;
@@ -393,10 +399,11 @@ static int run_lockstep(ctrl *c, const opts *o)
     return finish(c, rc);
 }
 
-static int run_realtime(ctrl *c, const opts *o)
+static int run_realtime(ctrl *c, const opts *o, FILE *latency_log)
 {
     rrr_hil_rt rt;
-    if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, (uint32_t)c->ref.n, o->fifo_prio, o->mlock) != 0) {
+    if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, (uint32_t)c->ref.n, &o->rt, latency_log, PROG) !=
+        0) {
         return end_run(c, RRR_HIL_EXIT_SETUP, "out of memory");
     }
     int rc = wait_for_peer(c, o);
@@ -428,7 +435,7 @@ static int run_realtime(ctrl *c, const opts *o)
         }
         rrr_hil_voltage_cmd cmd;
         command(c, o, k, ok, &cmd);
-        rc = send_period(c, &cmd, (uint32_t)k, 1);
+        rc = send_period(c, &cmd, (uint32_t)k, 0); /* no Sync: the plant keeps its own time */
         rrr_hil_rt_done(&rt);
     }
     if (rc == 0) {
@@ -500,16 +507,32 @@ int main(int argc, char **argv)
         fprintf(c.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u_n[1],u_c[1],u[2],u_n[2],"
                        "u_c[2],u[3],u_n[3],u_c[3],enable\n");
     }
+    int log_failed = 0;
+    FILE *latency_log = rrr_hil_rt_open_log(&o.rt, o.realtime, PROG, &log_failed);
+    if (log_failed) {
+        if (c.log) {
+            fclose(c.log);
+        }
+        rrr_hil_reference_free(&c.ref);
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
+                                   o.rt.latency_log);
+    }
     static rrr_hil_link link;
+    static rrr_hil_framelog frames;
     const uint32_t rx_ids[] = {RRR_BENCH_JOINT_STATE1_FRAME_ID, RRR_BENCH_JOINT_STATE2_FRAME_ID,
                                RRR_BENCH_JOINT_STATE3_FRAME_ID, RRR_BENCH_PLANT_STATUS_FRAME_ID,
                                RRR_BENCH_HEARTBEAT_PLANT_FRAME_ID};
     int rc = end_run(&c, RRR_HIL_EXIT_SETUP, "the transport did not open");
-    if (rrr_hil_link_open(&o.link, &link, rx_ids, 5u, PROG) == 0) {
+    if (rrr_hil_link_open(&o.link, &link, rx_ids, 5u, PROG, &frames) == 0) {
         c.tr = &link.base;
-        rc = o.realtime ? run_realtime(&c, &o) : run_lockstep(&c, &o);
+        rc = o.realtime ? run_realtime(&c, &o, latency_log) : run_lockstep(&c, &o);
+        latency_log = NULL; /* the real-time loop owns it */
+        (void)rrr_hil_framelog_close(&frames); /* reported in the summary */
         summary(&c, rc);
         rrr_hil_close(c.tr);
+    }
+    if (latency_log != NULL) {
+        fclose(latency_log);
     }
     if (c.log) {
         fclose(c.log);

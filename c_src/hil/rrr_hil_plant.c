@@ -17,7 +17,8 @@
  *
  * Output: a summary on stderr and one line "RRR_HIL_SUMMARY {json}" on stdout at exit, then one
  * line on stderr that says how the run ended ("rrr_hil_plant: exit 3 (peer lost) at period 57:
- * ..."); with --log, one CSV row per period (k, t, q, qd, applied u, zero, faults).
+ * ..."); with --log, one CSV row per period (k, t, q, qd, applied u, zero, faults, and the FMU's
+ * qdd and tip).
  * Exit status (rrr_hil_exit, hil_node.h): 0 the controller's StopCmd "end of run" (or --duration
  * in real time); 1 usage; 2 setup failed (FMU, transport); 3 the controller was lost (hang-up,
  * silence, transport error); 4 SIGINT/SIGTERM; 5 the FMU failed; 6 the controller's StopCmd
@@ -51,15 +52,16 @@ typedef struct opts {
     double set_value[MAX_SETS];
     int n_set;
     rrr_hil_sup_config sup;
-    int fifo_prio;
-    int mlock;
+    rrr_hil_rt_opts rt;
 } opts;
 
 typedef struct plant {
     rrr_hil_fmu fmu;
     fmi2ValueReference vr_u[3];
     fmi2ValueReference vr_x[6]; /* q[1..3], qd[1..3] */
+    fmi2ValueReference vr_y[6]; /* qdd[1..3], tip.x, tip.y, tip.z (logged only) */
     double x[6];
+    double y[6];
     double u[3];
     rrr_hil_sup sup;
     rrr_hil_transport *tr;
@@ -83,10 +85,12 @@ static void usage(void)
     fprintf(stderr,
             "usage: " PROG " --fmu DIR (--listen HOST:PORT | --connect HOST:PORT | --socketcan IF)\n"
             RRR_HIL_LINK_USAGE
-            "       [--realtime --duration S [--fifo PRIO] [--mlock]]\n"
+            "       [--realtime --duration S [--fifo PRIO] [--mlock] [--cpu N] [--spin-us N]\n"
+            "       [--latency-log FILE.csv]]\n"
             "       [--q0 a,b,c] [--qd0 a,b,c] [--set NAME=VALUE]... [--max-missed N]\n"
             "       [--max-delta-counter N] [--log FILE.csv]\n"
             "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n"
+            RRR_HIL_RT_USAGE
             "  exit: 0 end of run (the controller's StopCmd), 1 usage, 2 setup, 3 controller lost,\n"
             "  4 SIGINT/SIGTERM, 5 FMU failed, 6 the controller stopped early\n");
 }
@@ -95,8 +99,12 @@ static int parse_args(int argc, char **argv, opts *o)
 {
     memset(o, 0, sizeof *o);
     o->sup = rrr_hil_sup_config_default();
+    rrr_hil_rt_opts_default(&o->rt);
     for (int i = 1; i < argc; ++i) {
-        const int r = rrr_hil_link_arg(&o->link, argc, argv, &i, PROG);
+        int r = rrr_hil_link_arg(&o->link, argc, argv, &i, PROG);
+        if (r == 0) {
+            r = rrr_hil_rt_arg(&o->rt, argc, argv, &i, PROG);
+        }
         if (r < 0) {
             return -1;
         }
@@ -106,10 +114,6 @@ static int parse_args(int argc, char **argv, opts *o)
         const char *a = argv[i];
         if (strcmp(a, "--realtime") == 0) {
             o->realtime = 1;
-            continue;
-        }
-        if (strcmp(a, "--mlock") == 0) {
-            o->mlock = 1;
             continue;
         }
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
@@ -153,16 +157,13 @@ static int parse_args(int argc, char **argv, opts *o)
             names[o->n_set][n] = '\0';
             o->set_name[o->n_set] = names[o->n_set];
             o->set_value[o->n_set++] = x;
-        } else if (strcmp(a, "--max-missed") == 0 || strcmp(a, "--max-delta-counter") == 0 ||
-                   strcmp(a, "--fifo") == 0) {
+        } else if (strcmp(a, "--max-missed") == 0 || strcmp(a, "--max-delta-counter") == 0) {
             const long x = strtol(v, &end, 10);
             if (*end != '\0' || x < 0 || x > 99) {
                 fprintf(stderr, PROG ": %s: expected an integer 0..99, got '%s'\n", a, v);
                 return -1;
             }
-            if (a[2] == 'f') {
-                o->fifo_prio = (int)x;
-            } else if (a[6] == 'm') {
+            if (a[6] == 'm') {
                 o->sup.max_missed = (unsigned)x;
             } else {
                 o->sup.max_delta_counter = (unsigned)x;
@@ -255,6 +256,15 @@ static int setup_fmu(plant *p, const opts *o)
     }
     static const char *const xn[6] = {"q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]"};
     static const char *const un[3] = {"u[1]", "u[2]", "u[3]"};
+    static const char *const yn[6] = {"qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"};
+    for (int i = 0; i < 6; ++i) {
+        const long vr = rrr_hil_fmu_vr(&p->fmu, yn[i]);
+        if (vr < 0) {
+            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+            return -1;
+        }
+        p->vr_y[i] = (fmi2ValueReference)vr;
+    }
     for (int i = 0; i < 6; ++i) {
         const long vr = rrr_hil_fmu_vr(&p->fmu, xn[i]);
         if (vr < 0) {
@@ -290,7 +300,8 @@ static int setup_fmu(plant *p, const opts *o)
             return -1;
         }
     }
-    if (rrr_hil_fmu_init(&p->fmu, 0.0) != 0 || rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0) {
+    if (rrr_hil_fmu_init(&p->fmu, 0.0) != 0 || rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0 ||
+        rrr_hil_fmu_get(&p->fmu, p->vr_y, 6, p->y) != 0) {
         fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
         return -1;
     }
@@ -309,7 +320,11 @@ static void log_row(plant *p)
     for (int i = 0; i < 3; ++i) {
         fprintf(p->log, ",%.17g", p->u[i]);
     }
-    fprintf(p->log, ",%u,%u\n", (unsigned)p->sup.zero_applied, (unsigned)p->sup.faults);
+    fprintf(p->log, ",%u,%u", (unsigned)p->sup.zero_applied, (unsigned)p->sup.faults);
+    for (int i = 0; i < 6; ++i) {
+        fprintf(p->log, ",%.17g", p->y[i]);
+    }
+    fputc('\n', p->log);
 }
 
 /* Publish the state of period k: JointState1..3 then PlantStatus. */
@@ -345,7 +360,8 @@ static int advance(plant *p)
     (void)rrr_hil_sup_next_period(&p->sup, p->u);
     if (rrr_hil_fmu_set(&p->fmu, p->vr_u, 3, p->u) != 0 ||
         rrr_hil_fmu_step(&p->fmu, RRR_HIL_PERIOD_S) != 0 ||
-        rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0) {
+        rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0 ||
+        (p->log != NULL && rrr_hil_fmu_get(&p->fmu, p->vr_y, 6, p->y) != 0)) {
         (void)end_run(p, RRR_HIL_EXIT_FAULT, "the FMU failed: %s", p->fmu.last_error);
         return -1;
     }
@@ -429,28 +445,34 @@ static int run_lockstep(plant *p, const opts *o)
     }
 }
 
-static int run_realtime(plant *p, const opts *o)
+static int run_realtime(plant *p, const opts *o, FILE *latency_log)
 {
     const uint32_t n = (uint32_t)(o->duration_s / RRR_HIL_PERIOD_S + 0.5);
     const int idle_ms = rrr_hil_link_idle_ms(&o->link);
     rrr_hil_rt rt;
     int rc = -1;
     /* the plant is held (brakes on, not integrated) until the controller's first frame */
-    for (int waited_ms = 0; !p->started; waited_ms += 200) {
-        if (rrr_hil_stop_requested()) {
-            return interrupted(p);
-        }
+    for (int waited_ms = 0; !p->started && rc < 0; waited_ms += 200) {
         rrr_hil_frame f;
-        const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 200000);
-        if (io == RRR_HIL_IO_OK) {
+        const rrr_hil_io io =
+            rrr_hil_stop_requested() ? RRR_HIL_IO_TIMEOUT : rrr_hil_recv(p->tr, &f, 200000);
+        if (rrr_hil_stop_requested()) {
+            rc = interrupted(p);
+        } else if (io == RRR_HIL_IO_OK) {
             (void)handle(p, &f, 0); /* no StopCmd can be honoured before a command */
         } else if (io != RRR_HIL_IO_TIMEOUT) {
-            return transport_lost(p, io);
+            rc = transport_lost(p, io);
         } else if (waited_ms > (int)(o->duration_s * 1000.0)) {
-            return lost(p, "no controller within --duration");
+            rc = lost(p, "no controller within --duration");
         }
     }
-    if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, n, o->fifo_prio, o->mlock) != 0) {
+    if (rc >= 0) {
+        if (latency_log != NULL) {
+            fclose(latency_log); /* nothing to log: the loop never started */
+        }
+        return rc;
+    }
+    if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, n, &o->rt, latency_log, PROG) != 0) {
         return end_run(p, RRR_HIL_EXIT_SETUP, "out of memory");
     }
     /* the controller's loop started when it sent that frame: run half a period out of phase,
@@ -539,13 +561,28 @@ int main(int argc, char **argv)
             return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
                                        o.log_path);
         }
-        fprintf(p.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u[2],u[3],zero,faults\n");
+        fprintf(p.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u[2],u[3],zero,faults,"
+                       "qdd[1],qdd[2],qdd[3],tip.x,tip.y,tip.z\n");
         log_row(&p);
     }
+    int log_failed = 0;
+    FILE *latency_log = rrr_hil_rt_open_log(&o.rt, o.realtime, PROG, &log_failed);
+    if (log_failed) {
+        if (p.log) {
+            fclose(p.log);
+        }
+        rrr_hil_fmu_close(&p.fmu);
+        return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
+                                   o.rt.latency_log);
+    }
     static rrr_hil_link link;
+    static rrr_hil_framelog frames;
     const uint32_t rx_ids[] = {RRR_BENCH_SYNC_FRAME_ID, RRR_BENCH_VOLTAGE_CMD_FRAME_ID,
                                RRR_BENCH_STOP_CMD_FRAME_ID, RRR_BENCH_HEARTBEAT_CTRL_FRAME_ID};
-    if (rrr_hil_link_open(&o.link, &link, rx_ids, 4u, PROG) != 0) {
+    if (rrr_hil_link_open(&o.link, &link, rx_ids, 4u, PROG, &frames) != 0) {
+        if (latency_log != NULL) {
+            fclose(latency_log);
+        }
         if (p.log) {
             fclose(p.log);
         }
@@ -561,7 +598,8 @@ int main(int argc, char **argv)
         }
     }
     p.last_rx_ms = now_ms();
-    const int rc = o.realtime ? run_realtime(&p, &o) : run_lockstep(&p, &o);
+    const int rc = o.realtime ? run_realtime(&p, &o, latency_log) : run_lockstep(&p, &o);
+    (void)rrr_hil_framelog_close(&frames); /* reported in the summary */
     summary(&p, rc);
     rrr_hil_close(p.tr);
     if (p.log) {

@@ -99,6 +99,28 @@ CASES: dict[str, tuple[list[str], str]] = {
     "urdf-out-is-a-folder": (["urdf", "--out", "folder"], "is a folder"),
     "urdf-out-in-missing-folder": (["urdf", "--out", "nowhere/rrr.urdf"], "does not exist"),
     "urdf-no-out": (["urdf", "--out"], "--out"),
+    "hil-duration-negative": (["hil", "bench", "--duration", "-1"], "--duration"),
+    "hil-duration-absurd": (["hil", "bench", "--realtime", "--duration", "1e9"], "--duration"),
+    "hil-duration-nan": (["hil", "bench", "--duration", "nan"], "--duration"),
+    "hil-duration-zero": (["hil", "bench", "--duration", "0"], "--duration"),
+    "hil-can-log-missing-folder": (["hil", "bench", "--can-log", "nowhere/f.blf"],
+                                   "does not exist"),
+    "hil-can-log-below-a-file": (["hil", "bench", "--can-log", "a_file/f.blf"],
+                                 "not a folder"),
+    "hil-can-log-is-a-folder": (["hil", "bench", "--can-log", "folder.asc"], "is a folder"),
+    "hil-can-log-format": (["hil", "bench", "--can-log", "frames.txt"], ".asc or .blf"),
+    "hil-can-log-and-none": (["hil", "bench", "--can-log", "f.blf", "--no-can-log"],
+                             "--no-can-log"),
+    "hil-realtime-plant": (["hil", "plant", "--realtime"], "--realtime"),
+    "hil-spin-too-long": (["hil", "bench", "--realtime", "--spin-us", "1000"], "--spin-us"),
+    "hil-bitrate-on-bench": (["hil", "bench", "--bitrate", "500000"], "--bitrate"),
+    "busload-bitrate-0": (["hil", "busload", "--bitrate", "0"], "--bitrate"),
+    "busload-bitrate-negative": (["hil", "busload", "--bitrate", "-5"], "--bitrate"),
+    "busload-bitrate-too-high": (["hil", "busload", "--bitrate", "2000000"], "--bitrate"),
+    "busload-bitrate-not-a-number": (["hil", "busload", "--bitrate", "fast"], "--bitrate"),
+    "busload-fd-below-nominal": (["hil", "busload", "--fd", "100000"], "--fd"),
+    "busload-binary-dbc": (["hil", "busload", "--dbc", "binary.toml"], "--dbc"),
+    "busload-missing-dbc": (["hil", "busload", "--dbc", "missing.dbc"], "missing.dbc"),
     # rrr, rrr fmus
     "no-command": ([], "command"),
     "unknown-command": (["paint"], "paint"),
@@ -114,6 +136,7 @@ def make_workdir(folder: Path) -> None:
     (folder / "binary.toml").write_bytes(b"\xff\xfe\x00\x81binary\x00")
     (folder / "broken.toml").write_text("[scenario\nname = \n")
     (folder / "folder").mkdir(exist_ok=True)
+    (folder / "folder.asc").mkdir(exist_ok=True)
     (folder / "a_file").write_text("not a folder")
     robot = DEFAULT_ROBOT_TOML.read_text().replace("g = 9.81", "g = nan", 1)
     assert "g = nan" in robot

@@ -4,9 +4,12 @@ controller's stop arrives out of sequence) exits with the plant's status, a clea
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
+
+from rrr_robot.hil import framelog as fl
 
 
 def run_hil(*args: str) -> subprocess.CompletedProcess[str]:
@@ -15,10 +18,33 @@ def run_hil(*args: str) -> subprocess.CompletedProcess[str]:
 
 
 def test_a_failed_side_gives_a_nonzero_exit(tmp_path: Path) -> None:
-    ok = run_hil("plant", "--text", "a", "--out", str(tmp_path / "ok"))
+    ok = run_hil("plant", "--text", "a", "--out", str(tmp_path / "ok"), "--no-figures")
     assert ok.returncode == 0, ok.stderr
-    bad = run_hil("plant", "--text", "a", "--drop-commands-from", "200",
+    bad = run_hil("plant", "--text", "a", "--drop-commands-from", "200", "--no-figures",
                   "--out", str(tmp_path / "bad"))
     assert bad.returncode == 3, bad.stdout + bad.stderr  # the plant's status: controller lost
     assert "python plant: exit 3" in bad.stdout
     assert "Traceback" not in bad.stderr
+    # both runs wrote their results; the failed one says what went wrong
+    good = json.loads((tmp_path / "ok" / "summary.json").read_text())
+    assert good["side"] == "plant" and good["faults"]["faults"] == 0
+    assert good["bench"]["tip_error_max"] < 1e-3
+    s = json.loads((tmp_path / "bad" / "summary.json").read_text())
+    assert s["plant_exit"] == 3 and s["faults"]["timeout"] == 1 and s["missed_commands"] > 800
+    assert s["bench"]["tip_error_max"] > 0.1  # 0 V from period 202 on: the arm fell
+    records = fl.read_node_log(tmp_path / "bad" / "frames.rrrcan")
+    assert fl.compare(records, fl.read_can_log(tmp_path / "bad" / "frames.blf")) is None
+
+
+def test_controller_side_writes_results(tmp_path: Path) -> None:
+    """The controller FMU (FMPy, python-can) against the C plant node: the plant node's frame
+    log (Tx: its frames), the controller log written from Python, the summary."""
+    run = run_hil("controller", "--text", "a", "--out", str(tmp_path), "--no-figures", "-q")
+    assert run.returncode == 0, run.stderr
+    s = json.loads((tmp_path / "summary.json").read_text())
+    assert s["side"] == "controller" and s["faults"]["faults"] == 0
+    assert max(s["difference_to_unquantised"]["q_max_abs"]) < 1e-5
+    records = fl.read_node_log(tmp_path / "frames.rrrcan")
+    tx = records[records["dir"] == 1]
+    assert set(int(i) for i in tx["id"]) == {0x201, 0x202, 0x203, 0x300, 0x702}
+    assert fl.compare(records, fl.read_can_log(tmp_path / "frames.blf")) is None

@@ -8,10 +8,11 @@ the DBC's quantisation). The Python plant is in :mod:`rrr_robot.hil.plant`.
 
 from __future__ import annotations
 
+import contextlib
 import shutil
 import tempfile
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +21,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core.outputs import atomic_path
-from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, run_cosim
+from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, CosimResult, run_cosim
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from .nodes import controller_node_args, export_reference, start_controller, start_plant
@@ -36,7 +37,14 @@ from .protocol import (
     quantise_state,
 )
 
-__all__ = ["BenchRun", "quantised_cosim", "run_c_bench", "run_fmu_controller"]
+__all__ = ["BenchRun", "LogProgress", "RealTime", "quantised_cosim", "quantised_cosim_result",
+           "run_c_bench", "run_fmu_controller", "write_controller_log"]
+
+#: Columns of the controller log (the C controller node's --log; run_fmu_controller's too).
+CONTROLLER_LOG_HEADER = ("k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u_n[1],u_c[1],u[2],u_n[2],"
+                         "u_c[2],u[3],u_n[3],u_c[3],enable")
+#: Progress of a run: progress(periods done, periods in all).
+Progress = Callable[[int, int], None]
 
 
 @dataclass(frozen=True)
@@ -49,6 +57,70 @@ class BenchRun:
     u: FloatArray        # (n, 3) commanded voltage
     plant_summary: dict[str, Any]
     controller_summary: dict[str, Any]
+    u_n: FloatArray | None = None   # (n, 3) model part of u (the controller's log)
+    u_c: FloatArray | None = None   # (n, 3) PD part of u
+    wall_time: float = float("nan")  # s from the nodes' start to their end
+
+
+@dataclass(frozen=True)
+class RealTime:
+    """The real-time mode of both C nodes (each option applied when permitted: the node warns
+    and falls back otherwise, rrr_hil_rt_init): SCHED_FIFO priority (0: off), mlockall, the
+    CPUs of the controller and the plant (None: no affinity), the spin before each release (us,
+    sleep-then-spin; 0: sleep only), and the plant's --duration."""
+
+    duration: float
+    fifo: int = 80
+    mlock: bool = True
+    cpus: tuple[int, int] | None = None
+    spin_us: int = 100
+
+    def args(self, cpu: int | None) -> list[str]:
+        a = ["--realtime", "--spin-us", str(self.spin_us)]
+        if self.fifo:
+            a += ["--fifo", str(self.fifo)]
+        if self.mlock:
+            a.append("--mlock")
+        if cpu is not None:
+            a += ["--cpu", str(cpu)]
+        return a
+
+
+class LogProgress:
+    """Reports the rows a node has written to its --log CSV (its periods done) while it runs:
+    ``poll()`` reads what was appended since the last call (up to the node's stdio buffer)."""
+
+    def __init__(self, path: Path, total: int, progress: Progress | None) -> None:
+        self.path, self.total, self.progress = Path(path), total, progress
+        self._offset = 0
+        self._rows = -1  # the header line
+
+    def poll(self) -> None:
+        if self.progress is None:
+            return
+        try:
+            with open(self.path, "rb") as fh:
+                fh.seek(self._offset)
+                chunk = fh.read()
+        except OSError:
+            return
+        self._offset += len(chunk)
+        self._rows += chunk.count(b"\n")
+        self.progress(max(0, min(self._rows, self.total)), self.total)
+
+
+def _wait(node: Any, timeout: float, poll: LogProgress | None) -> dict[str, Any]:
+    """node.wait(timeout), reporting progress every 0.2 s."""
+    if poll is None or poll.progress is None:
+        result: dict[str, Any] = node.wait(timeout)
+        return result
+    deadline = time.monotonic() + timeout
+    while node.running() and time.monotonic() < deadline:
+        poll.poll()
+        time.sleep(0.2)
+    poll.poll()
+    done: dict[str, Any] = node.wait(max(1.0, deadline - time.monotonic()))
+    return done
 
 
 class _StateWaiter:
@@ -84,12 +156,16 @@ class _StateWaiter:
 
 def run_fmu_controller(bus: Any, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                        qdd_ref: FloatArray, controller_values: Mapping[str, float | bool] = {},
-                       timeout: float = 5.0, controller_fmu: Path | None = None) -> BenchRun:
+                       timeout: float = 5.0, controller_fmu: Path | None = None,
+                       progress: Progress | None = None) -> BenchRun:
     """Lockstep: the controller FMU (FMPy) drives the plant node on ``bus`` along the reference."""
     n = t.shape[0]
     ref = np.hstack([q_ref, qd_ref, qdd_ref])
-    q_rec, qd_rec, u_rec = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+    q_rec, qd_rec = np.empty((n, 3)), np.empty((n, 3))
+    out_rec = np.empty((n, 9))  # u, u_n, u_c
     waiter = _StateWaiter(bus, timeout)
+    every = max(1, n // 100)
+    start = time.perf_counter()
     with FmuSlave(controller_fmu or fmu_path("controller"), "controller") as ctrl:
         ctrl.initialize(float(t[0]), controller_values)
         c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)
@@ -100,68 +176,131 @@ def run_fmu_controller(bus: Any, t: FloatArray, q_ref: FloatArray, qd_ref: Float
             c_in.values[9:12], c_in.values[12:15] = q_rec[k], qd_rec[k]
             ctrl.set_block(c_in)
             ctrl.get_block(c_out)
-            u_rec[k] = c_out.values[:3]
-            u = {f"U{i + 1}": float(u_rec[k, i]) for i in range(3)}
+            out_rec[k] = c_out.values[:9]
+            u = {f"U{i + 1}": float(out_rec[k, i]) for i in range(3)}
             bus.send(encode("VoltageCmd", {"AliveCounter": k & 15, "Enable": 1,
                                            "ResetFault": 0, **u}))
             if k < n - 1:
                 bus.send(encode("Sync", {"Cycle": k}))
                 ctrl.do_step(PERIOD)
+            if progress is not None and (k % every == 0 or k == n - 1):
+                progress(k + 1, n)
         # the stop request: E2E-protected, the next alive counter after the last VoltageCmd
         bus.send(encode("StopCmd", {"AliveCounter": n & 15, "Reason": 0}))
         bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
-    return BenchRun(t=t, q=q_rec, qd=qd_rec, u=u_rec, plant_summary=dict(waiter.status),
-                    controller_summary={"rejected": waiter.rejected})
+    return BenchRun(t=t, q=q_rec, qd=qd_rec, u=out_rec[:, 0:3], plant_summary=dict(waiter.status),
+                    controller_summary={"rejected": waiter.rejected}, u_n=out_rec[:, 3:6],
+                    u_c=out_rec[:, 6:9], wall_time=time.perf_counter() - start)
+
+
+def write_controller_log(run: BenchRun, path: Path) -> Path:
+    """The controller log of a run (the C controller node's --log columns), atomically."""
+    from ..core.outputs import atomic_open
+
+    assert run.u_n is not None and run.u_c is not None
+    k = np.arange(run.t.shape[0], dtype=float)
+    u = np.stack([run.u, run.u_n, run.u_c], axis=2).reshape(-1, 9)  # u[i], u_n[i], u_c[i]
+    rows = np.column_stack([k, run.t, run.q, run.qd, u, np.ones_like(k)])
+    with atomic_open(path) as fh:
+        fh.write(CONTROLLER_LOG_HEADER + "\n")
+        np.savetxt(fh, rows, delimiter=",", fmt="%.17g")
+    return Path(path)
 
 
 def _read_log(path: Path) -> FloatArray:
     return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
 
 
+@contextlib.contextmanager
+def _optional_atomic(path: Path | None) -> Iterator[Path | None]:
+    if path is None:
+        yield None
+    else:
+        with atomic_path(path) as tmp:
+            yield tmp
+
+
 def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
                 workdir: Path | None = None, timeout: float = 300.0,
-                controller_values: Mapping[str, float | bool] = {}) -> BenchRun:
-    """Both C nodes in lockstep over the socketcand transport (plant = server). The plant starts
-    at (q_ref[0], qd_ref[0]) on the default robot; the controller uses the default robot and
-    gains changed by ``controller_values`` (controller FMU names, e.g. a scenario's)."""
+                controller_values: Mapping[str, float | bool] = {}, *,
+                frame_log: str | None = None, realtime: RealTime | None = None,
+                progress: Progress | None = None) -> BenchRun:
+    """Both C nodes in lockstep (or ``realtime``) over the socketcand transport (plant =
+    server). The plant starts at (q_ref[0], qd_ref[0]) on the default robot; the controller uses
+    the default robot and gains changed by ``controller_values`` (controller FMU names, e.g. a
+    scenario's). The logs go to ``workdir``: plant.csv, controller.csv, the controller node's
+    frame log ``frame_log`` (a file name; rrr_robot.hil.framelog) and, in real time,
+    latency_controller.csv and latency_plant.csv."""
     own = workdir is None
     work = Path(tempfile.mkdtemp(prefix="rrr_hil_")) if workdir is None else Path(workdir)
+    n = t.shape[0]
     try:
         ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, work / "reference.csv")
+        rt_plant: list[str] = []
+        rt_ctrl: list[str] = []
+        latency = (work / "latency_controller.csv", work / "latency_plant.csv")
+        if realtime is not None:
+            cpus = realtime.cpus or (None, None)
+            rt_ctrl = realtime.args(cpus[0])
+            rt_plant = [*realtime.args(cpus[1]), "--duration", f"{realtime.duration:.3f}"]
         # the C nodes write their logs themselves: to temporary names, renamed when the run
         # succeeded (core.outputs), so a failed or interrupted run leaves no half log
         with atomic_path(work / "plant.csv") as plant_log, \
-                atomic_path(work / "controller.csv") as ctrl_log:
-            with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log) as plant, \
+                atomic_path(work / "controller.csv") as ctrl_log, \
+                _optional_atomic(work / frame_log if frame_log else None) as frames, \
+                _optional_atomic(latency[0] if realtime else None) as lat_c, \
+                _optional_atomic(latency[1] if realtime else None) as lat_p:
+            if lat_c is not None and lat_p is not None:
+                rt_ctrl += ["--latency-log", str(lat_c)]
+                rt_plant += ["--latency-log", str(lat_p)]
+            start = time.perf_counter()
+            with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log,
+                             extra=rt_plant) as plant, \
                     start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
-                                     log_csv=ctrl_log,
-                                     extra=controller_node_args(controller_values)) as ctrl:
-                cs = ctrl.wait(timeout)
+                                     log_csv=ctrl_log, frame_log=frames,
+                                     extra=[*controller_node_args(controller_values),
+                                            *rt_ctrl]) as ctrl:
+                cs = _wait(ctrl, timeout, LogProgress(ctrl_log, n, progress))
                 if cs["exit"] != 0:  # the plant would wait for a controller that is gone
                     plant.close()
                     raise HilError(f"bench failed: controller exit {cs['exit']}: "
                                    f"{ctrl.stderr.strip()}")
                 ps = plant.wait(timeout)
+            wall = time.perf_counter() - start
             if cs["exit"] != 0 or ps["exit"] != 0:
                 raise HilError(f"bench failed: controller exit {cs['exit']}: "
                                f"{ctrl.stderr.strip()}; plant exit {ps['exit']}: "
                                f"{plant.stderr.strip()}")
+            if frames is not None and cs.get("frame_log_error"):
+                raise HilError(f"the controller's frame log failed: {cs['frame_log_error']}")
             p, c = _read_log(plant_log), _read_log(ctrl_log)
-        return BenchRun(t=p[:, 1], q=p[:, 2:5], qd=p[:, 5:8], u=c[:, [8, 11, 14]],
-                        plant_summary=ps, controller_summary=cs)
+        m = min(p.shape[0], c.shape[0])  # real time: the two loops need not end together
+        return BenchRun(t=p[:m, 1], q=p[:m, 2:5], qd=p[:m, 5:8], u=c[:m, [8, 11, 14]],
+                        plant_summary=ps, controller_summary=cs, u_n=c[:m, [9, 12, 15]],
+                        u_c=c[:m, [10, 13, 16]], wall_time=wall)
     finally:
         if own:
             shutil.rmtree(work, ignore_errors=True)
 
 
-def quantised_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
-                    plant_values: Mapping[str, float] = {},
-                    controller_values: Mapping[str, float | bool] = {}) -> BenchRun:
+def quantised_cosim_result(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
+                           qdd_ref: FloatArray, x_ref: FloatArray | None = None,
+                           plant_values: Mapping[str, float] = {},
+                           controller_values: Mapping[str, float | bool] = {}) -> CosimResult:
     """The FMPy co-simulation (cosim.run_cosim) with the bench's quantisation: the plant's q, qd
     pass through JointState and the controller's u through VoltageCmd (cantools, the same DBC).
     This is the arithmetic of the lockstep bench, so the C bench must match it to rounding."""
     options = CosimOptions(step=PERIOD, plant_values=plant_values,
                            controller_values=controller_values, measure=quantise_state,
                            actuate=quantise_command)
-    r = run_cosim(t, q_ref, qd_ref, qdd_ref, np.zeros_like(q_ref), options)
-    return BenchRun(t=t, q=r.q, qd=r.qd, u=r.u, plant_summary={}, controller_summary={})
+    x = np.zeros_like(q_ref) if x_ref is None else x_ref
+    return run_cosim(t, q_ref, qd_ref, qdd_ref, x, options)
+
+
+def quantised_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
+                    plant_values: Mapping[str, float] = {},
+                    controller_values: Mapping[str, float | bool] = {}) -> BenchRun:
+    """:func:`quantised_cosim_result` as a BenchRun (t, q, qd, u)."""
+    r = quantised_cosim_result(t, q_ref, qd_ref, qdd_ref, None, plant_values, controller_values)
+    return BenchRun(t=t, q=r.q, qd=r.qd, u=r.u, plant_summary={}, controller_summary={},
+                    u_n=r.u_n, u_c=r.u_c)

@@ -99,6 +99,10 @@ class NodeProcess:
                                f"{self.stderr.strip()}")
             self.port = int(m.group(1))
 
+    def running(self) -> bool:
+        """Whether the process has not ended yet."""
+        return self._proc.poll() is None
+
     def wait(self, timeout: float = 120.0) -> dict[str, Any]:
         """Wait for the exit; returns the node's summary (``RRR_HIL_SUMMARY`` JSON) with
         'exit' and, in real-time mode, the timing statistics under 'rt'."""
@@ -175,9 +179,10 @@ def set_args(values: Mapping[str, float | bool]) -> list[str]:
 def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0, 0.0),
                 qd0: Sequence[float] = (0.0, 0.0, 0.0), values: Mapping[str, float] = {},
                 log_csv: Path | None = None, extra: Sequence[str] = (),
-                fmu: Path | None = None) -> NodeProcess:
+                fmu: Path | None = None, frame_log: Path | None = None) -> NodeProcess:
     """Start the C plant node as socketcand server on ``listen`` (port 0: any free port, read
-    back in ``.port``), on the plant FMU (default: the packaged one, unzipped to a temp dir)."""
+    back in ``.port``), on the plant FMU (default: the packaged one, unzipped to a temp dir);
+    ``frame_log``: its log of every frame (rrr_robot.hil.framelog)."""
     from fmpy import extract
 
     unzip = Path(extract(str(fmu or fmu_path("plant"))))
@@ -186,6 +191,8 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
     args += set_args(values)
     if log_csv is not None:
         args += ["--log", str(log_csv)]
+    if frame_log is not None:
+        args += ["--frame-log", str(frame_log)]
     try:
         return NodeProcess("rrr_hil_plant", [*args, *extra], listening=True, cleanup=unzip)
     except BaseException:
@@ -194,24 +201,29 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
 
 
 def start_controller(reference_csv: Path, *, connect: str, log_csv: Path | None = None,
-                     extra: Sequence[str] = ()) -> NodeProcess:
+                     extra: Sequence[str] = (), frame_log: Path | None = None) -> NodeProcess:
     """Start the C controller node as socketcand client of ``connect`` (HOST:PORT)."""
     args = [str(node_executable("controller")), "--reference", str(reference_csv),
             "--connect", connect]
     if log_csv is not None:
         args += ["--log", str(log_csv)]
+    if frame_log is not None:
+        args += ["--frame-log", str(frame_log)]
     return NodeProcess("rrr_hil_controller", [*args, *extra], listening=False)
 
 
 def start_listening_controller(reference_csv: Path, *, listen: str = "127.0.0.1:0",
                                log_csv: Path | None = None,
-                               extra: Sequence[str] = ()) -> NodeProcess:
+                               extra: Sequence[str] = (),
+                               frame_log: Path | None = None) -> NodeProcess:
     """Start the C controller node as socketcand server on ``listen`` (port 0: any free port,
     read back in ``.port``); it waits for the plant's boot-up heartbeat."""
     args = [str(node_executable("controller")), "--reference", str(reference_csv),
             "--listen", listen]
     if log_csv is not None:
         args += ["--log", str(log_csv)]
+    if frame_log is not None:
+        args += ["--frame-log", str(frame_log)]
     return NodeProcess("rrr_hil_controller", [*args, *extra], listening=True)
 
 

@@ -60,7 +60,9 @@ HEARTBEAT_PERIODS = 100
 #: Columns of the plant log (the C plant node's --log): row 0 is the initial state, row k + 1
 #: the state after period k with the voltage applied during period k.
 LOG_HEADER = ["k", "t", "q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]", "u[1]", "u[2]",
-              "u[3]", "zero", "faults"]
+              "u[3]", "zero", "faults", "qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"]
+#: The FMU outputs logged beside the state (the last six columns).
+LOGGED_OUTPUTS = ["qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"]
 
 #: Fault injection between the bus and the plant: (period k, frame) -> the frame to deliver
 #: (possibly modified), or None to drop it.
@@ -117,13 +119,15 @@ class PythonPlant:
                  qd0: Sequence[float] = (0.0, 0.0, 0.0), values: Mapping[str, float] = {},
                  max_missed: int = 3, max_delta_counter: int = 3, timeout: float = 5.0,
                  start_timeout: float = 30.0, rx_filter: RxFilter | None = None,
-                 fmu: Path | None = None) -> None:
+                 fmu: Path | None = None, progress: Callable[[int, int], None] | None = None,
+                 periods: int = 0) -> None:
         self.bus = bus
         self.values = {f"q0[{i + 1}]": float(q0[i]) for i in range(3)}
         self.values |= {f"qd0[{i + 1}]": float(qd0[i]) for i in range(3)} | dict(values)
         self.sup = hl.Supervisor(max_missed, max_delta_counter)
         self.timeout, self.start_timeout = timeout, start_timeout
         self.rx_filter = rx_filter
+        self.progress, self.periods = progress, periods  # progress(k, periods) every 1 %
         self.fmu_path = Path(fmu) if fmu else fmu_path("plant")
         self.k = 0
         self.started = False
@@ -192,9 +196,9 @@ class PythonPlant:
         return False
 
     # ---- the loop ----------------------------------------------------------------------------
-    def _record(self, t: float, x: FloatArray, u: Sequence[float]) -> None:
+    def _record(self, t: float, x: FloatArray, u: Sequence[float], y: Sequence[float]) -> None:
         self._rows.append([self.k, t, *x, *u, float(self.sup.zero_applied),
-                           float(self.sup.faults)])
+                           float(self.sup.faults), *y])
 
     def _recv(self, deadline: float) -> Any | None:
         """The next frame (after the fault-injection filter), or None past the deadline;
@@ -214,10 +218,10 @@ class PythonPlant:
                 return msg
         return None
 
-    def _lockstep(self, slave: Any, p_in: Any, p_out: Any) -> int:
+    def _lockstep(self, slave: Any, p_in: Any, p_out: Any, y_out: Any) -> int:
         """The loop of rrr_hil_plant.c run_lockstep(); raises _BusLost, HilError."""
         x = slave.get_block(p_out).copy()
-        self._record(slave.time, x, (0.0, 0.0, 0.0))
+        self._record(slave.time, x, (0.0, 0.0, 0.0), slave.get_block(y_out))
         self._heartbeat(NMT_BOOT)
         published0 = False
         while True:
@@ -239,7 +243,10 @@ class PythonPlant:
                 slave.do_step(PERIOD)
                 x = slave.get_block(p_out).copy()
                 self.k += 1
-                self._record(slave.time, x, u)
+                self._record(slave.time, x, u, slave.get_block(y_out))
+                if self.progress is not None and self.periods and (
+                        self.k % max(1, self.periods // 100) == 0 or self.k + 1 >= self.periods):
+                    self.progress(min(self.k + 1, self.periods), self.periods)
                 self._publish(x)
 
     def run(self, log_csv: Path | None = None) -> PlantRun:
@@ -249,8 +256,9 @@ class PythonPlant:
             slave.initialize(0.0, self.values)
             p_in = slave.real_block(PLANT_IN)
             p_out = slave.real_block([f"{s}[{i}]" for s in ("q", "qd") for i in (1, 2, 3)])
+            y_out = slave.real_block(LOGGED_OUTPUTS)
             try:
-                rc = self._lockstep(slave, p_in, p_out)
+                rc = self._lockstep(slave, p_in, p_out, y_out)
             except _BusLost as exc:
                 log.error("python plant: period %d: %s", self.k, exc)
                 self.sup.raise_fault(hl.FAULT_BUS)

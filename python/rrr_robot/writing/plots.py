@@ -258,3 +258,9 @@ def write_figures(out: Path, model: Model, robot: RobotFile, ref: Reference,
     """Every figure of one writing-task run, in this process."""
     write_reference_figures(out, model, robot, ref)
     write_result_figures(out, ref, results)
+
+
+# the drawing helpers the CAN bench's figures share (rrr_robot.hil.figures)
+new_figure = _figure
+save_figure = _save
+plot_series = _plot_series

@@ -1,0 +1,100 @@
+"""Bus load of the bench's schedule (rrr_robot.hil.busload): frame lengths against hand-counted
+values, the CRC-15 and the exact stuffing of real frames, the DBC's real-time schedule within
+70 % of a 1 Mbit/s classical CAN bus, and ``rrr hil busload``'s report.
+
+Hand counts (ISO 11898-1 field widths, intermission included): a standard data frame is
+SOF 1 + identifier 11 + RTR 1 + IDE 1 + r0 1 + DLC 4 + 8 n + CRC 15 + delimiter 1 + ACK 2 +
+EOF 7 + IFS 3 = 47 + 8 n bits; stuffing covers the 34 + 8 n bits from SOF to the CRC and adds at
+most floor((34 + 8 n - 1) / 4): 8 bytes 111 and 135 bits, 0 bytes 47 and 55; extended 8 bytes
+131 and 160.
+"""
+
+from __future__ import annotations
+
+import random
+import subprocess
+import sys
+
+import pytest
+from rrr_robot.errors import BadInputError
+from rrr_robot.hil import busload as bl
+from rrr_robot.hil.protocol import database
+
+
+@pytest.mark.parametrize(("n", "extended", "worst", "plain"), [
+    (8, False, 135, 111), (0, False, 55, 47), (2, False, 75, 63), (4, False, 95, 79),
+    (8, True, 160, 131), (0, True, 80, 67),
+])
+def test_classical_frame_lengths(n: int, extended: bool, worst: int, plain: int) -> None:
+    assert bl.classical_bits(n, extended=extended) == worst
+    assert bl.classical_bits(n, extended=extended, stuffing=False) == plain
+
+
+def test_fd_frame_lengths() -> None:
+    # 8 bytes, CRC-17: nominal SOF..BRS 17 + ACK/EOF/IFS 12 = 29; data ESI 1 + DLC 4 + 64 +
+    # stuff count 4 + CRC 17 + 6 fixed stuff bits + delimiter 1 = 97; dynamic stuff bits over
+    # the 86 bits SOF..data at most 21, 4 of them in the 17 arbitration bits
+    assert bl.fd_bits(8, stuffing=False) == (29, 97)
+    assert bl.fd_bits(8) == (33, 114)
+    # 64 bytes, CRC-21 with 7 fixed stuff bits: data 1 + 4 + 512 + 4 + 21 + 7 + 1 = 550
+    assert bl.fd_bits(64, stuffing=False) == (29, 550)
+    with pytest.raises(BadInputError, match="CAN FD"):
+        bl.fd_bits(9)
+    with pytest.raises(BadInputError, match="classical"):
+        bl.classical_bits(9)
+
+
+def test_crc15_check_value() -> None:
+    bits = [int(b) for ch in b"123456789" for b in format(ch, "08b")]
+    assert bl.can_crc15(bits) == 0x059E  # CRC-15/CAN's catalogued check value
+
+
+def test_exact_stuffing_lies_between_no_stuffing_and_the_worst_case() -> None:
+    rng = random.Random(7)
+    for _ in range(300):
+        n = rng.randint(0, 8)
+        ext = rng.random() < 0.3
+        can_id = rng.getrandbits(29 if ext else 11)
+        data = bytes(rng.getrandbits(8) for _ in range(n))
+        bits = bl.stuffed_length(can_id, data, extended=ext)
+        assert bl.classical_bits(n, extended=ext, stuffing=False) <= bits
+        assert bits <= bl.classical_bits(n, extended=ext)
+    # identifier 0 and zero data: runs of five zeros get stuffed all along the frame
+    zeros = bl.stuffed_length(0, bytes(8))
+    assert zeros > bl.classical_bits(8, stuffing=False) + 10
+
+
+def test_real_time_schedule_fits_70_percent_of_1_mbit() -> None:
+    load = bl.schedule_load(database(), 1_000_000)
+    names = {f.name for f in load.frames}
+    assert "Sync" not in names and "StopCmd" not in names
+    assert {"VoltageCmd", "JointState1", "JointState2", "JointState3", "PlantStatus"} <= names
+    # 5 frames of 8 bytes every 1 ms (5 x 135 bits) + two 2-byte heartbeats every 100 ms
+    assert load.worst_percent == pytest.approx(100 * (5 * 135 + 2 * 75 / 100) / 1000)
+    assert load.worst_percent <= 70.0
+    assert load.nominal_percent == pytest.approx(100 * (5 * 111 + 2 * 63 / 100) / 1000)
+    lockstep = bl.schedule_load(database(), 1_000_000, lockstep=True)
+    assert lockstep.worst_percent == pytest.approx(load.worst_percent + 100 * 95 / 1000)
+    # CAN FD at 1/5 Mbit/s: 8-byte frames (33, 114) bits; 2-byte heartbeats 33 nominal bits and
+    # 1 + 4 + 16 + 4 + 17 + 6 + 1 = 49 data bits + (38 - 1) // 4 - 4 = 5 dynamic stuff bits
+    assert bl.fd_bits(2) == (33, 54)
+    fd = bl.schedule_load(database(), 1_000_000, 5_000_000)
+    assert fd.worst_percent == pytest.approx(100 * 5 * (33 / 1e6 + 114 / 5e6) * 1000
+                                             + 100 * 2 * (33 / 1e6 + 54 / 5e6) * 10, rel=1e-9)
+    with pytest.raises(BadInputError, match="--bitrate"):
+        bl.schedule_load(database(), 0)
+    with pytest.raises(BadInputError, match="--fd"):
+        bl.schedule_load(database(), 1_000_000, 500_000)
+
+
+def test_busload_command_ends_with_the_worst_case_load() -> None:
+    proc = subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "busload", "--bitrate",
+                           "1000000"], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    last = proc.stdout.strip().splitlines()[-1]
+    assert last.startswith("worst-case bus load: ") and last.endswith(" %")
+    assert float(last.split()[-2]) <= 70.0
+    fd = subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "busload", "--fd",
+                         "5000000"], capture_output=True, text=True, timeout=60)
+    assert fd.returncode == 0 and "CAN FD" in fd.stdout
+    assert float(fd.stdout.strip().splitlines()[-1].split()[-2]) < 40.0

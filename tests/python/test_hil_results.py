@@ -1,0 +1,143 @@
+"""``rrr hil bench --out DIR``: summary.json with the writing task's metrics, the figures and a
+frame log in a standard format.
+
+- The metrics of the lockstep bench equal those of the FMPy co-simulation with the DBC's
+  quantisation exactly (the same plant FMU binary, the same rrr_ctc, the same rounding), and the
+  summary states the difference to the unquantised co-simulation (rr.simulate) of the scenario.
+- The .blf (default) and .asc (--can-log) logs, read back with python-can's can.LogReader, hold
+  the controller node's own frame log (frames.rrrcan) frame for frame: the same count, and per
+  frame identifier, DLC, data, direction and time (within the microsecond ASC prints).
+- The frames per period are the lockstep schedule's: VoltageCmd, Sync (Tx), JointState1..3,
+  PlantStatus (Rx), plus the heartbeats every 100 periods.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from rrr_robot.cli import main
+from rrr_robot.hil import framelog as fl
+from rrr_robot.hil.bench import quantised_cosim_result
+from rrr_robot.hil.results import unquantised_cosim
+from rrr_robot.writing.job import WritingJob, controller_fmu_values, metrics, prepare
+
+
+@pytest.fixture(scope="module")
+def bench_out(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("hil") / "out"
+    assert main(["hil", "bench", "--out", str(out), "-q"]) == 0
+    return out
+
+
+def test_bench_writes_summary_figures_and_logs(bench_out: Path) -> None:
+    s = json.loads((bench_out / "summary.json").read_text())
+    expected = {"summary.json", "plant.csv", "controller.csv", "reference.csv", "frames.blf",
+                "frames.rrrcan", "fig_letters_bench.png", "fig_bench_vs_cosim.png",
+                "fig_joint_errors.png", "fig_voltages.png"}
+    assert set(s["files"]) == expected
+    assert all((bench_out / f).stat().st_size > 0 for f in expected)
+    assert s["side"] == "bench" and s["mode"] == "lockstep" and s["scenario"] == "ctc"
+    assert s["bench"]["status"] == "ok" and s["faults"]["faults"] == 0
+    assert s["missed_commands"] == 0 and s["plant_exit"] == 0
+    assert "realtime" not in s
+
+
+def test_lockstep_metrics_equal_the_quantised_cosim(bench_out: Path) -> None:
+    s = json.loads((bench_out / "summary.json").read_text())
+    model, robot, scenarios, ref = prepare(WritingJob(out=Path("."), scenarios=["ctc"]))
+    values = controller_fmu_values(scenarios[0], model, robot.control)
+    quantised = quantised_cosim_result(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
+                                       controller_values=values)
+    # the signals the metrics come from are the quantised co-simulation's, bit for bit
+    plant = np.loadtxt(bench_out / "plant.csv", delimiter=",", skiprows=1)
+    ctrl = np.loadtxt(bench_out / "controller.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(plant[:, 2:5], quantised.q)
+    assert np.array_equal(plant[:, 16:19], quantised.tip)
+    for cols, signal in (([8, 11, 14], quantised.u), ([9, 12, 15], quantised.u_n),
+                         ([10, 13, 16], quantised.u_c)):
+        assert np.array_equal(ctrl[:, cols], signal)
+    # and so the metrics: maxima exactly, RMS values to the rounding of numpy's summation,
+    # whose order depends on the arrays' memory layout (the FMU master's u_n is a strided view)
+    want = metrics(quantised)
+    assert s["bench"]["tip_error_max"] == want["tip_error_max"]
+    for key in ("rms_u_n", "rms_u_c", "tip_error_rms"):
+        assert s["bench"][key] == pytest.approx(want[key], rel=1e-14, abs=0), key
+    e = quantised.q - quantised.q_ref
+    assert s["bench"]["joint_error_max"] == np.abs(e).max(axis=0).tolist()
+    # the difference to the unquantised run: the DBC's quantisation, small against tracking
+    exact = unquantised_cosim(ref, model, values)
+    d = s["difference_to_unquantised"]
+    assert d["q_max_abs"] == np.abs(quantised.q - exact.q).max(axis=0).tolist()
+    assert 0 < max(d["q_max_abs"]) < 1e-5 < max(s["bench"]["joint_error_max"])
+    assert d["tip_error_max_delta_m"] == pytest.approx(
+        want["tip_error_max"] - metrics(exact)["tip_error_max"], abs=1e-15)
+    assert s["unquantised_cosim"]["tip_error_max"] == metrics(exact)["tip_error_max"]
+
+
+def _check_read_back(records: np.ndarray, path: Path) -> None:
+    back = fl.read_can_log(path)
+    assert fl.compare(records, back) is None
+    assert len(back) == len(records)
+
+
+def test_frame_log_reads_back_frame_for_frame(bench_out: Path, tmp_path: Path) -> None:
+    s = json.loads((bench_out / "summary.json").read_text())
+    records = fl.read_node_log(bench_out / "frames.rrrcan")
+    periods = s["reference"]["periods"]
+    tx, rx = records[records["dir"] == 1], records[records["dir"] == 0]
+    # every period VoltageCmd and (but the last) Sync; the plant's 4 frames per state
+    assert np.count_nonzero(tx["id"] == 0x100) == periods
+    assert np.count_nonzero(tx["id"] == 0x080) == periods - 1
+    assert all(np.count_nonzero(rx["id"] == i) == periods for i in (0x201, 0x202, 0x203))
+    # the last PlantStatus follows the last state, after which the controller stops reading
+    assert np.count_nonzero(rx["id"] == 0x300) in (periods - 1, periods)
+    assert s["bus"]["frames"] == len(records) and s["bus"]["tx"] == len(tx)
+    assert np.all(np.diff(records["t_ns"]) >= 0)
+    _check_read_back(records, bench_out / "frames.blf")
+    # the same frames as ASC; and a log that differs is caught
+    asc = fl.write_can_log(records, tmp_path / "frames.asc")
+    _check_read_back(records, asc)
+    changed = records.copy()
+    changed["data"][100, 3] ^= 1
+    assert "frame 100: data" in (fl.compare(changed, fl.read_can_log(asc)) or "")
+    assert "frames read back" in (fl.compare(records[:-1], fl.read_can_log(asc)) or "")
+
+
+def test_can_log_option_writes_asc(tmp_path: Path) -> None:
+    target = tmp_path / "elsewhere" / "bench.asc"
+    target.parent.mkdir()
+    out = tmp_path / "out"
+    assert main(["hil", "bench", "--text", "a", "--out", str(out), "--can-log", str(target),
+                 "--no-figures", "-q"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["bus"]["can_log"] == str(target) and "frames.blf" not in s["files"]
+    _check_read_back(fl.read_node_log(out / "frames.rrrcan"), target)
+
+
+def test_realtime_bench_reports_latencies(tmp_path: Path) -> None:
+    """Both C nodes in real time for 1 s (SCHED_FIFO, mlockall, affinity where permitted: the
+    numbers are the machine's and are not asserted; a benchmark records them)."""
+    out = tmp_path / "rt"
+    assert main(["hil", "bench", "--realtime", "--duration", "1", "--out", str(out),
+                 "--no-can-log", "-q"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    # the periods both loops logged: the controller runs the 1001 rows of the reference; the
+    # plant ends at its StopCmd and skips the releases a stall made it miss (machine-dependent)
+    assert s["mode"] == "realtime" and 0 < s["reference"]["periods"] <= 1001
+    assert s["realtime"]["controller"]["rt_periods"] == 1001
+    assert {"fig_latency.png", "latency_controller.csv", "latency_plant.csv"} <= set(s["files"])
+    for node in ("controller", "plant"):
+        r = s["realtime"][node]
+        assert 0 <= r["p50_us"] <= r["p99_us"] <= r["p999_us"] <= r["max_us"]
+        assert r["rt_latency_p99_us"] == pytest.approx(r["p99_us"], abs=1e-3)
+        assert r["rt_periods"] > 0 and "rt_deadline_misses" in r and r["rt_setup"]
+        assert "sleep, then spin 100 us" in r["rt_setup"]
+    records = fl.read_node_log(out / "frames.rrrcan")
+    # no Sync in real time: the controller sends VoltageCmd every period (and the heartbeats)
+    tx = records[records["dir"] == 1]
+    assert not np.any(tx["id"] == 0x080)
+    assert np.count_nonzero(tx["id"] == 0x100) == s["realtime"]["controller"]["rt_periods"]
+    assert s["bus"]["frames_per_second"] is not None
