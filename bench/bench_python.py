@@ -3,11 +3,12 @@
 Pinocchio's and the Robotics Toolbox's Python APIs, on the same robot and the same inputs.
 
 Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk`` against
-``ets.eval``; ``Model.ik`` (every branch) against ``ets.ik_LM`` (one solution); a batch of 1e5
-states of ``Model.inverse_dynamics`` against the Robotics Toolbox's batch ``rne`` and against
-librrr's ``rrr_inverse_dynamics`` in a plain C loop (bench/batch_floor.c, built with the system C
-compiler against the package's librrr.so: the floor of the batch); and, for the record, one
-state of ``inverse_dynamics`` through the ctypes binding the extension replaced.
+``ets.eval``; ``Model.ik`` (every branch) against ``ets.ik_LM`` (one solution);
+``Model.forward_dynamics`` against ``accel``; a batch of 1e5 states of ``Model.inverse_dynamics``
+against the Robotics Toolbox's batch ``rne`` and against librrr's ``rrr_inverse_dynamics`` in a
+plain C loop (bench/batch_floor.c, built with the system C compiler against the package's
+librrr.so: the floor of the batch); and, for the record, one state of ``inverse_dynamics``
+through the ctypes binding the extension replaced.
 
 Interleaved: each repeat times a block of ours and a block of the reference on the same inputs
 back to back (the order alternating between repeats), so both see the same machine load; each
@@ -205,6 +206,9 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
             back = model.fk(np.asarray(sol.q, dtype=float))[0]
             lm_err = max(lm_err, float(np.abs(back - xs[k]).max()))
     fk_back = max(float(np.abs(model.fk(model.ik(x))[0] - x).max()) for x in xs)
+    fd_rows = [(q[k], qd[k], tau[k]) for k in range(n)]
+    fd_accel = np.array([robot.accel(*fd_rows[k]) for k in range(min(n, 200))], dtype=float)
+    fd_ours = model.forward_dynamics(q, qd, tau)
     ct_tau = np.array([ctypes_kernels.inverse_dynamics(*rows[k]) for k in range(n)])
 
     per_call = args.calls
@@ -223,6 +227,11 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
              target=">= 5x", target_ratio=5.0,
              agreement=f"FK(IK(x)) - x: {fk_back:.1e} m; LM ({lm_solved}/{min(n, 200)} "
                        f"solved): {lm_err:.1e} m"),
+        Pair("forward dynamics, one state", "Model.forward_dynamics",
+             lambda k: model.forward_dynamics(*fd_rows[k % n]), "RTB accel",
+             lambda k: robot.accel(*fd_rows[k % n]), max(per_call // 20, 10),
+             agreement=f"{np.abs(fd_accel - fd_ours[: len(fd_accel)]).max():.1e} (RTB), "
+                       f"{np.abs(fd_ours - qdd).max():.1e} (qdd back)"),
         Pair(f"tau = R p, batch of {nb:,} states (per state)", "Model.inverse_dynamics",
              lambda k: model.inverse_dynamics(bq, bqd, bqdd), "RTB rne (batch)",
              lambda k: robot.rne(bq, bqd, bqdd), 1, per=nb,
@@ -271,7 +280,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats per row")
     parser.add_argument("--states", type=int, default=1000, help="single-state inputs")
     parser.add_argument("--calls", type=int, default=2000,
-                        help="calls per block of a single-state row (IK LM: 1/20 of it)")
+                        help="calls per block of a single-state row (IK LM, accel: 1/20 of it)")
     parser.add_argument("--batch", type=int, default=100_000, help="states of the batch row")
     parser.add_argument("--ik-tol", type=float, default=1e-12, help="ets.ik_LM tol")
     parser.add_argument("--seed", type=int, default=1)
