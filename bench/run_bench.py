@@ -11,15 +11,17 @@ c_src/rrr/src/rrr_kinematics.c, checked against the source text), and prints mar
 
 Interleaved: each repeat times one block of ours and one block of the reference back to back on
 the same inputs (the order reversed every other repeat), so a change of machine load hits both;
-every cell is min / median / max over the repeats and each ratio is taken within a repeat. The
-Python API of rrr_robot against the references' Python APIs is bench/bench_python.py.
+every cell is min / median / max over the repeats and each ratio is taken within a repeat.
+Blocks are timed by the CPU time of the timing thread (``--clock wall``: the wall clock), so the
+time this process waits for a core on a loaded machine is not counted. The Python API of
+rrr_robot against the references' Python APIs is bench/bench_python.py.
 
 This is a measurement, not a test: nothing fails when a target is missed.
 
 Usage:
     python bench/run_bench.py [--build-dir DIR] [--calls N] [--repeats N] [--states N]
                               [--py-states N] [--py-repeats N] [--c-loop-calls N]
-                              [--ik-tol E] [--skip-build] [--json FILE]
+                              [--ik-tol E] [--clock cpu|wall] [--skip-build] [--json FILE]
 """
 
 from __future__ import annotations
@@ -98,7 +100,7 @@ def build(build_dir: Path, cmake: str) -> None:
 def run_core(exe: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
     cmd = [
         str(exe), "--states", str(args.states), "--calls", str(args.calls),
-        "--repeats", str(args.repeats), "--ik-tol", repr(args.ik_tol),
+        "--repeats", str(args.repeats), "--ik-tol", repr(args.ik_tol), "--clock", args.clock,
     ]
     log("run: " + " ".join(cmd))
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
@@ -131,6 +133,9 @@ class Series:
         return Series(tuple(a / b for a, b in zip(self.values, other.values, strict=True)))
 
 
+CLOCKS: dict[str, Callable[[], int]] = {"cpu": time.thread_time_ns, "wall": time.perf_counter_ns}
+
+
 def interleaved(blocks: Sequence[Callable[[], float]], repeats: int) -> list[Series]:
     """Run one block of each callable per repeat (in order on even repeats, reversed on odd
     ones), after one warm-up block each; each block returns its ns per call."""
@@ -148,25 +153,27 @@ def interleaved(blocks: Sequence[Callable[[], float]], repeats: int) -> list[Ser
     return [Series(tuple(v)) for v in ns]
 
 
-def per_call_block(fn: Callable[[int], object], n: int) -> Callable[[], float]:
+def per_call_block(fn: Callable[[int], object], n: int, clock: Callable[[], int]
+                   ) -> Callable[[], float]:
     """A block of Python calls fn(0), ..., fn(n - 1): ns per call."""
 
     def run() -> float:
-        t0 = time.perf_counter_ns()
+        t0 = clock()
         for k in range(n):
             fn(k)
-        return (time.perf_counter_ns() - t0) / n
+        return (clock() - t0) / n
 
     return run
 
 
-def c_loop_block(fn: Callable[[], int], calls: int, what: str) -> Callable[[], float]:
+def c_loop_block(fn: Callable[[], int], calls: int, what: str, clock: Callable[[], int]
+                 ) -> Callable[[], float]:
     """A block of one ctypes call of a C loop of ``calls`` librrr calls: ns per librrr call."""
 
     def run() -> float:
-        t0 = time.perf_counter_ns()
+        t0 = clock()
         failed = fn()
-        elapsed = time.perf_counter_ns() - t0
+        elapsed = clock() - t0
         if failed != -1:
             sys.exit(f"run_bench: {what} failed on row {failed}")
         return elapsed / calls
@@ -304,19 +311,20 @@ def rtb_side(args: argparse.Namespace, loops_path: Path) -> RtbResults:
                          f"inputs; accel: {passes_acc * n_acc} over {n_acc})")
 
     rep = args.py_repeats
+    clk = CLOCKS[args.clock]
     log(f"RTB against librrr in C loops ({n} inputs, {rep} interleaved repeats)")
     ik_ours, branch_ours, ik_ref = interleaved([
-        c_loop_block(lambda: c_ik(passes), passes * n, "rrr_ik"),
-        c_loop_block(lambda: c_branch(passes), passes * n, "rrr_ik_branch"),
-        per_call_block(ik_lm, n),
+        c_loop_block(lambda: c_ik(passes), passes * n, "rrr_ik", clk),
+        c_loop_block(lambda: c_branch(passes), passes * n, "rrr_ik_branch", clk),
+        per_call_block(ik_lm, n, clk),
     ], rep)
     tau_ours, tau_ref = interleaved([
-        c_loop_block(lambda: c_tau(passes), passes * n, "rrr_inverse_dynamics"),
-        per_call_block(lambda k: robot.rne(q[k], qd[k], qdd[k]), n),
+        c_loop_block(lambda: c_tau(passes), passes * n, "rrr_inverse_dynamics", clk),
+        per_call_block(lambda k: robot.rne(q[k], qd[k], qdd[k]), n, clk),
     ], rep)
     fd_ours, fd_ref = interleaved([
-        c_loop_block(lambda: c_fd(passes_acc), passes_acc * n_acc, "rrr_forward_dynamics"),
-        per_call_block(lambda k: robot.accel(q[k], qd[k], tau[k]), n_acc),
+        c_loop_block(lambda: c_fd(passes_acc), passes_acc * n_acc, "rrr_forward_dynamics", clk),
+        per_call_block(lambda k: robot.accel(q[k], qd[k], tau[k]), n_acc, clk),
     ], rep)
     res.series.update({
         "ik.ours": ik_ours, "ik_branch.ours": branch_ours, "ik.rtb": ik_ref,
@@ -599,9 +607,12 @@ def report(
         f"Eigen {meta['eigen']}, {py.info['versions']}, Python {platform.python_version()}")
     calls = groups["tau"]["ops"][0]["calls"]
     lm_calls = groups["ik"]["ops"][2]["calls"]
-    add(f"- interleaved: {meta['repeats']} repeats; each repeat times one block of ours and one "
-        "of the reference back to back (order reversed every other repeat) on the same inputs; "
-        "every cell is min / median / max over the repeats, the ratio is taken per repeat")
+    clock = ("the CPU time of the thread (time spent waiting for a core is left out)"
+             if meta.get("clock", "cpu") == "cpu" else "the wall clock")
+    add(f"- interleaved: {meta['repeats']} repeats (RTB rows: {args.py_repeats}); each repeat "
+        "times one block of ours and one of the reference back to back (order reversed every "
+        "other repeat) on the same inputs; every cell is min / median / max over the repeats, "
+        f"the ratio is taken per repeat; blocks timed by {clock}")
     add(f"- C/C++ rows: {meta['states']} random states (q in [-pi, pi], qd in [-3, 3], "
         f"qdd in [-10, 10]), the same for ours and Pinocchio; blocks of {calls} calls "
         f"(the C++ LM: {lm_calls}), ns/call (throughput loop; empty loop "
@@ -614,8 +625,8 @@ def report(
         add(f"- diagnostic: the tau kernel alone (rrr_trig_of + generated code, no argument "
             f"checks, called from the driver) {mmm(d['kernel.tau'], fmt_ns)} ns against "
             f"{mmm(d['tau.ours'], fmt_ns)} ns of `rrr_inverse_dynamics` in the same repeats")
-    add(f"- RTB rows: {args.py_states} inputs (accel: {min(args.py_states, 256)}), "
-        f"{args.py_repeats} interleaved repeats; the reference block is one Python call per "
+    add(f"- RTB rows: {args.py_states} inputs (accel: {min(args.py_states, 256)}); "
+        "the reference block is one Python call per "
         f"input, ours one ctypes call of a C loop over the same inputs ({py.info['loops']}, "
         "bench/core_loops.c, the same librrr), so ours is the C call alone")
     add(f"- IK: position only (mask [1,1,1,0,0,0]), targets from q1 in [-pi, pi], "
@@ -700,10 +711,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cmake", default=shutil.which("cmake") or "cmake")
     parser.add_argument("--skip-build", action="store_true", help="reuse an existing build")
     parser.add_argument("--states", type=int, default=1024, help="C++ states (power of 2)")
-    parser.add_argument("--calls", type=int, default=102_400,
+    parser.add_argument("--calls", type=int, default=20_480,
                         help="C++ calls per block, rounded up to whole passes over the states "
                              "(the C++ LM: 1/20 of it); default %(default)s")
-    parser.add_argument("--repeats", type=int, default=21,
+    parser.add_argument("--repeats", type=int, default=31,
                         help="C++ interleaved repeats (blocks of each operation)")
     parser.add_argument("--py-states", type=int, default=512, help="RTB inputs (accel: 256)")
     parser.add_argument("--py-repeats", type=int, default=21, help="RTB interleaved repeats")
@@ -713,6 +724,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ik-tol", type=float, default=1e-12,
                         help="LM tolerance on E = |e|^2/2 (RTB's tol), default %(default)g")
     parser.add_argument("--seed", type=int, default=1, help="seed of the RTB-side inputs")
+    parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
+                        help="time blocks by the CPU time of the thread (default: the time spent "
+                             "waiting for a core on a loaded machine is left out) or the wall "
+                             "clock")
     parser.add_argument("--json", type=Path, help="also write the raw results to this file")
     args = parser.parse_args(argv)
     for name in ("states", "calls", "repeats", "py_states", "py_repeats", "c_loop_calls"):
