@@ -56,13 +56,17 @@ long loops_ik_branch(const rrr_model *m, const double *x, double *q, long n, lon
     return -1;
 }
 
-long loops_inverse_dynamics(const rrr_model *m, const double *q, const double *qd,
-                            const double *qdd, double *tau, long n, long reps)
+/* f(m, q[i], qd[i], in[i], out[i]) over the rows: inlined into both callers below, where f is a
+ * constant, so the calls are direct */
+typedef rrr_status (*dynamics_fn)(const rrr_model *m, const double q[3], const double qd[3],
+                                  const double in[3], double out[3]);
+
+static long loop_dynamics(dynamics_fn f, const rrr_model *m, const double *q, const double *qd,
+                          const double *in, double *out, long n, long reps)
 {
     for (long r = 0; r < reps; ++r) {
         for (long i = 0; i < n; ++i) {
-            if (rrr_inverse_dynamics(m, q + 3 * i, qd + 3 * i, qdd + 3 * i, tau + 3 * i) !=
-                RRR_OK) {
+            if (f(m, q + 3 * i, qd + 3 * i, in + 3 * i, out + 3 * i) != RRR_OK) {
                 return i;
             }
         }
@@ -70,16 +74,14 @@ long loops_inverse_dynamics(const rrr_model *m, const double *q, const double *q
     return -1;
 }
 
+long loops_inverse_dynamics(const rrr_model *m, const double *q, const double *qd,
+                            const double *qdd, double *tau, long n, long reps)
+{
+    return loop_dynamics(rrr_inverse_dynamics, m, q, qd, qdd, tau, n, reps);
+}
+
 long loops_forward_dynamics(const rrr_model *m, const double *q, const double *qd,
                             const double *tau, double *qdd, long n, long reps)
 {
-    for (long r = 0; r < reps; ++r) {
-        for (long i = 0; i < n; ++i) {
-            if (rrr_forward_dynamics(m, q + 3 * i, qd + 3 * i, tau + 3 * i, qdd + 3 * i) !=
-                RRR_OK) {
-                return i;
-            }
-        }
-    }
-    return -1;
+    return loop_dynamics(rrr_forward_dynamics, m, q, qd, tau, qdd, n, reps);
 }
