@@ -7,7 +7,7 @@
 
 #include "rrr/rrr.h"
 
-void loops_sizes(size_t *model, size_t *ik_set);
+void loops_sizes(size_t *model, size_t *inertial, size_t *ik_set);
 int loops_defaults(rrr_model *m, rrr_inertial *in);
 long loops_ik(const rrr_model *m, const double *x, rrr_ik_set *sol, long n, long reps);
 long loops_ik_branch(const rrr_model *m, const double *x, double *q, long n, long reps);
@@ -17,9 +17,10 @@ long loops_forward_dynamics(const rrr_model *m, const double *q, const double *q
                             const double *tau, double *qdd, long n, long reps);
 
 /* sizeof of the structures Python allocates, to check its ctypes mirrors against */
-void loops_sizes(size_t *model, size_t *ik_set)
+void loops_sizes(size_t *model, size_t *inertial, size_t *ik_set)
 {
     *model = sizeof(rrr_model);
+    *inertial = sizeof(rrr_inertial);
     *ik_set = sizeof(rrr_ik_set);
 }
 

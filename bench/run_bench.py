@@ -194,11 +194,12 @@ def load_loops(path: Path) -> tuple[ct.CDLL, Any, Any]:
     from rrr_robot.core import _lib
 
     loops = ct.CDLL(str(path))
-    sizes = (ct.c_size_t(), ct.c_size_t())
-    loops.loops_sizes(ct.byref(sizes[0]), ct.byref(sizes[1]))
-    if (sizes[0].value, sizes[1].value) != (ct.sizeof(_lib.RawModel), ct.sizeof(_lib.RawIkSet)):
-        sys.exit("run_bench: rrr_model / rrr_ik_set of the build differ from the package's "
-                 "ctypes mirrors: reinstall the package from this checkout")
+    sizes = [ct.c_size_t() for _ in range(3)]
+    loops.loops_sizes(*(ct.byref(v) for v in sizes))
+    mirrors = (_lib.RawModel, _lib.RawInertial, _lib.RawIkSet)
+    if [v.value for v in sizes] != [ct.sizeof(t) for t in mirrors]:
+        sys.exit("run_bench: rrr_model / rrr_inertial / rrr_ik_set of the build differ from the "
+                 "package's ctypes mirrors: reinstall the package from this checkout")
     model, inertial = _lib.RawModel(), _lib.RawInertial()
     if loops.loops_defaults(ct.byref(model), ct.byref(inertial)) != 0:
         sys.exit("run_bench: rrr_model_default / rrr_inertial_default failed")
