@@ -1,15 +1,25 @@
 // Benchmark driver: the closed-form core librrr (C) against Pinocchio (C++) on the SAME robot
 // (the default robot of rrr_model_default / rrr_inertial_default) and the SAME pre-generated
-// random states. Prints one JSON object per line (kind = meta | time | check | info); the
+// random states. Prints one JSON object per line (kind = meta | group | check | info); the
 // table is assembled by bench/run_bench.py.
 //
-// Timing: for each operation, `--repeats` repeats of `--calls` calls cycling over `--states`
-// pre-generated states (a throughput loop: consecutive calls are independent); ns/call is the
-// repeat time / calls, the best repeat is reported (the median as well). One output of every call
-// is summed into a sink written to a volatile global, so no call can be optimised away (the calls
-// cross into librrr.a and libpinocchio_default.so anyway: no LTO).
+// Timing, interleaved: the operations compared with each other form a group (ours and the
+// reference, e.g. rrr_inverse_dynamics and rnea). Each of `--repeats` repeats runs one block of
+// every operation of the group back to back (in order on even repeats, in reverse order on odd
+// ones); a block is `--calls` calls (rounded up to whole passes over the `--states`
+// pre-generated states; the numeric IK 1/20 of that) cycling over the states from the first,
+// so every operation sees the same states. Per repeat: ns/call of each block and the ratio
+// reference / ours of the same repeat; printed with min / median / max over the repeats. A
+// throughput loop: consecutive calls are independent. One output of every call is summed into
+// a sink written to a volatile global, so no call can be optimised away (the calls cross into
+// librrr.a and libpinocchio_default.so anyway: no LTO).
+//
+// Blocks are timed by the CPU time of the thread (CLOCK_THREAD_CPUTIME_ID): on a loaded machine
+// the time this process waits for a core is not counted; --clock wall times them by the wall
+// clock instead.
 //
 // Usage: bench_core [--states N (power of 2)] [--calls N] [--repeats N] [--seed N] [--ik-tol E]
+//                   [--clock cpu|wall]
 #include <pinocchio/multibody.hpp>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
@@ -27,9 +37,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <limits>
 #include <random>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "rrr/rrr.h"
@@ -51,10 +64,11 @@ volatile double g_sink = 0.0;  // results of every timed loop end here
 
 struct Options {
     std::size_t states = 1024;  // power of two (index = i & (states - 1))
-    long calls = 200000;        // calls per repeat
-    int repeats = 7;            // best of
+    long calls = 20480;         // calls per block (rounded up to whole passes over the states)
+    int repeats = 31;           // blocks of each operation (interleaved)
     unsigned long seed = 20240601;
     double ik_tol = 1e-12;      // numeric IK stops when 1/2 |e|^2 < ik_tol (as RTB's tol)
+    bool wall_clock = false;    // blocks timed by the thread's CPU time (or the wall clock)
 };
 
 using V3 = std::array<double, 3>;
@@ -67,13 +81,61 @@ struct States {
 // ------------------------------------------------------------------------------------------
 // Output
 // ------------------------------------------------------------------------------------------
-void print_time(const std::string &id, std::vector<double> ns)
+struct Op {
+    const char *id;
+    long calls;  // calls per block
+};
+
+struct Ratio {
+    std::size_t num, den;  // ns[num] / ns[den] of the same repeat
+};
+
+struct Stats {
+    double min, median, max;
+};
+
+Stats stats(std::vector<double> v)
 {
-    std::sort(ns.begin(), ns.end());
-    std::printf("{\"kind\": \"time\", \"id\": \"%s\", \"ns\": %.3f, \"median_ns\": %.3f, \"all_ns\": [",
-                id.c_str(), ns.front(), ns[ns.size() / 2]);
-    for (std::size_t i = 0; i < ns.size(); ++i) {
-        std::printf("%s%.3f", i ? ", " : "", ns[i]);
+    std::sort(v.begin(), v.end());
+    const std::size_t h = v.size() / 2;
+    const double median = v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+    return {v.front(), median, v.back()};
+}
+
+void print_series(const std::vector<double> &v)
+{
+    const Stats st = stats(v);
+    std::printf("\"min\": %.6g, \"median\": %.6g, \"max\": %.6g, \"values\": [", st.min,
+                st.median, st.max);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        std::printf("%s%.6g", i ? ", " : "", v[i]);
+    }
+    std::printf("]");
+}
+
+// One JSON line per group: every operation's ns/call per repeat (in repeat order) and the
+// per-repeat ratios, each with its min / median / max.
+void print_group(const char *group, const std::vector<Op> &ops,
+                 const std::vector<std::vector<double>> &ns, const std::vector<Ratio> &ratios)
+{
+    std::printf("{\"kind\": \"group\", \"id\": \"%s\", \"repeats\": %zu, \"ops\": [", group,
+                ns[0].size());
+    for (std::size_t j = 0; j < ops.size(); ++j) {
+        std::printf("%s{\"id\": \"%s\", \"calls\": %ld, ", j ? ", " : "", ops[j].id,
+                    ops[j].calls);
+        print_series(ns[j]);
+        std::printf("}");
+    }
+    std::printf("], \"ratios\": [");
+    for (std::size_t r = 0; r < ratios.size(); ++r) {
+        std::vector<double> v;
+        for (std::size_t i = 0; i < ns[0].size(); ++i) {
+            v.push_back(ns[ratios[r].num][i] / ns[ratios[r].den][i]);
+        }
+        std::printf("%s{\"id\": \"%s/%s\", ", r ? ", " : "", ops[ratios[r].num].id,
+                    ops[ratios[r].den].id);
+        print_series(v);
+        std::printf("}");
     }
     std::printf("]}\n");
     std::fflush(stdout);
@@ -85,28 +147,82 @@ void print_check(const std::string &id, double max_abs_diff, double scale)
                 id.c_str(), max_abs_diff, scale);
 }
 
-// Best-of-repeats ns/call of f(k), k cycling over the states.
-template <class F>
-void time_op(const std::string &id, const Options &o, F &&f)
+// ------------------------------------------------------------------------------------------
+// Interleaved timing
+// ------------------------------------------------------------------------------------------
+// The clock of the blocks: the CPU time of this thread (default: the time other processes run
+// while this one waits for a core is left out) or the wall clock (steady_clock).
+bool g_wall_clock = false;
+
+double now_ns()
 {
-    const std::size_t mask = o.states - 1;
-    double sink = 0.0;
-    const long warm = std::min<long>(o.calls, 20000);
-    for (long i = 0; i < warm; ++i) {
+    if (g_wall_clock) {
+        return std::chrono::duration<double, std::nano>(
+                   std::chrono::steady_clock::now().time_since_epoch())
+            .count();
+    }
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return 1e9 * static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec);
+}
+
+// One block: `calls` calls of f(k), k cycling over the states from state 0; ns per call.
+template <class F>
+double block(F &f, long calls, std::size_t mask, double &sink)
+{
+    const double t0 = now_ns();
+    for (long i = 0; i < calls; ++i) {
         sink += f(static_cast<std::size_t>(i) & mask);
     }
-    std::vector<double> ns;
+    return (now_ns() - t0) / static_cast<double>(calls);
+}
+
+// The block of operation `which` (the loop of each lambda is its own instantiation, so the
+// calls are inlined into it as in a plain loop).
+template <class Tuple, std::size_t... I>
+double block_at(std::size_t which, Tuple &fs, const std::vector<Op> &ops, std::size_t mask,
+                double &sink, std::index_sequence<I...>)
+{
+    double ns = 0.0;
+    ((which == I ? static_cast<void>(ns = block(std::get<I>(fs), ops[I].calls, mask, sink))
+                 : static_cast<void>(0)),
+     ...);
+    return ns;
+}
+
+// Times the operations of a group interleaved: every repeat runs one block of each, in order
+// on even repeats and in reverse order on odd ones, all on the same states, so a change of
+// machine load hits every operation of the group alike. One warm-up pass over the states each.
+template <class... F>
+void time_group(const char *group, const Options &o, const std::vector<Op> &ops,
+                const std::vector<Ratio> &ratios, F... f)
+{
+    constexpr std::size_t n = sizeof...(F);
+    if (ops.size() != n) {
+        std::fprintf(stderr, "bench_core: group %s: %zu names for %zu operations\n", group,
+                     ops.size(), n);
+        std::exit(2);
+    }
+    auto fs = std::make_tuple(f...);
+    const auto seq = std::index_sequence_for<F...>{};
+    const std::size_t mask = o.states - 1;
+    double sink = 0.0;
+    std::vector<Op> warm = ops;
+    for (Op &w : warm) {
+        w.calls = static_cast<long>(o.states);
+    }
+    for (std::size_t j = 0; j < n; ++j) {
+        block_at(j, fs, warm, mask, sink, seq);
+    }
+    std::vector<std::vector<double>> ns(n);
     for (int r = 0; r < o.repeats; ++r) {
-        const auto t0 = std::chrono::steady_clock::now();
-        for (long i = 0; i < o.calls; ++i) {
-            sink += f(static_cast<std::size_t>(i) & mask);
+        for (std::size_t j = 0; j < n; ++j) {
+            const std::size_t which = r % 2 == 0 ? j : n - 1 - j;
+            ns[which].push_back(block_at(which, fs, ops, mask, sink, seq));
         }
-        const auto t1 = std::chrono::steady_clock::now();
-        ns.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() /
-                     static_cast<double>(o.calls));
     }
     g_sink = g_sink + sink;
-    print_time(id, ns);
+    print_group(group, ops, ns, ratios);
 }
 
 void require_ok(rrr_status st, const char *what)
@@ -188,6 +304,13 @@ struct NumericIk {
         : model(m), data(d), tip(t), tol(e), J(6, m.nv)
     {
         J.setZero();
+    }
+
+    // the random restarts start again from the same seed
+    void reset()
+    {
+        rng.seed(12345);
+        ang.reset();
     }
 
     int solve(const V3 &x, Eigen::VectorXd &q)
@@ -277,6 +400,12 @@ Options parse(int argc, char **argv)
             o.seed = std::strtoul(v, nullptr, 10);
         } else if (a == "--ik-tol") {
             o.ik_tol = std::strtod(v, nullptr);
+        } else if (a == "--clock") {
+            if (std::strcmp(v, "cpu") != 0 && std::strcmp(v, "wall") != 0) {
+                std::fprintf(stderr, "bench_core: --clock is cpu or wall\n");
+                std::exit(1);
+            }
+            o.wall_clock = std::strcmp(v, "wall") == 0;
         } else {
             std::fprintf(stderr, "bench_core: unknown option %s\n", a.c_str());
             std::exit(1);
@@ -294,6 +423,7 @@ Options parse(int argc, char **argv)
 int main(int argc, char **argv)
 {
     const Options o = parse(argc, argv);
+    g_wall_clock = o.wall_clock;
     rrr_model m;
     rrr_inertial in;
     require_ok(rrr_model_default(&m), "rrr_model_default");
@@ -307,10 +437,10 @@ int main(int argc, char **argv)
 
     std::printf("{\"kind\": \"meta\", \"cxx\": \"%s\", \"c\": \"%s\", \"pinocchio\": \"%s\", "
                 "\"eigen\": \"%d.%d.%d\", \"rrr\": \"%s\", \"states\": %zu, \"calls\": %ld, "
-                "\"repeats\": %d, \"seed\": %lu, \"ik_tol\": %.3g}\n",
+                "\"repeats\": %d, \"seed\": %lu, \"ik_tol\": %.3g, \"clock\": \"%s\"}\n",
                 BENCH_CXX_FLAGS, BENCH_C_FLAGS, BENCH_PINOCCHIO_VERSION, EIGEN_WORLD_VERSION,
                 EIGEN_MAJOR_VERSION, EIGEN_MINOR_VERSION, RRR_VERSION_STRING, n, o.calls,
-                o.repeats, o.seed, o.ik_tol);
+                o.repeats, o.seed, o.ik_tol, o.wall_clock ? "wall" : "cpu");
 
     // ---------------------------------------------------------------- agreement checks
     {
@@ -429,118 +559,149 @@ int main(int argc, char **argv)
     }
 
     // ---------------------------------------------------------------- timings
+    // Every group runs its operations in alternating blocks on the same states; `calls` is
+    // rounded up to whole passes over the states so every block sees each state equally often.
     const double zero[3] = {0.0, 0.0, 0.0};
-    time_op("loop.empty", o, [&](std::size_t k) { return s.q[k][0]; });
+    const long passes = (o.calls + static_cast<long>(n) - 1) / static_cast<long>(n);
+    const long calls = passes * static_cast<long>(n);
+    const long lm_calls = std::max<long>(1, passes / 20) * static_cast<long>(n);  // ~20x slower
 
     // libm floor of the closed forms: sin/cos of q2, q3 as in rrr_trig_of (gcc fuses each pair
-    // into one sincos call), and one atan2 (rrr_ik makes 12, rrr_ik_branch 3)
-    time_op("floor.trig", o, [&](std::size_t k) {
+    // into one sincos call), and one atan2 (rrr_ik and rrr_ik_branch make 5 each); the empty loop.
+    auto empty = [&](std::size_t k) { return s.q[k][0]; };
+    auto trig = [&](std::size_t k) {
         const double s2 = std::sin(s.q[k][1]), c2 = std::cos(s.q[k][1]);
         const double s3 = std::sin(s.q[k][2]), c3 = std::cos(s.q[k][2]);
         return (s2 * c3 + c2 * s3) + (c2 * c3 - s2 * s3);
-    });
-    time_op("floor.atan2", o, [&](std::size_t k) { return std::atan2(s.x[k][1], s.x[k][0]); });
-
-    time_op("fk.ours", o, [&](std::size_t k) {
-        double x[3], rot[3][3];
-        rrr_fk(&m, s.q[k].data(), x, rot);
-        return x[0] + rot[0][0];
-    });
-    time_op("fk.pin", o, [&](std::size_t k) {
-        pinocchio::forwardKinematics(model, data, s.eq[k]);
-        const pinocchio::SE3 pose = data.oMi[3] * tip_fixed;
-        return pose.translation()[0] + pose.rotation()(0, 0);
-    });
-
-    time_op("ik.ours", o, [&](std::size_t k) {
-        rrr_ik_set set;
-        rrr_ik(&m, s.x[k].data(), &set);
-        return set.q[0][0] + set.n;
-    });
-    time_op("ik_branch.ours", o, [&](std::size_t k) {
-        double q[3];
-        rrr_ik_branch(&m, s.x[k].data(), RRR_SHOULDER_FRONT, RRR_ELBOW_UP, q);
-        return q[0];
-    });
-    {
-        NumericIk nik(model, data, tip, o.ik_tol);
-        Eigen::VectorXd q(3);
-        Options oc = o;
-        oc.calls = std::max<long>(1, o.calls / 20);  // ~100x slower per call
-        time_op("ik.pin_lm", oc, [&](std::size_t k) {
-            const int it = nik.solve(s.x[k], q);
-            return q[0] + it;
-        });
-    }
-
-    time_op("tau.ours", o, [&](std::size_t k) {
+    };
+    auto atan2_1 = [&](std::size_t k) { return std::atan2(s.x[k][1], s.x[k][0]); };
+    auto tau_ours = [&](std::size_t k) {
         double t[3];
         rrr_inverse_dynamics(&m, s.q[k].data(), s.qd[k].data(), s.qdd[k].data(), t);
         return t[0];
-    });
-    time_op("tau.pin", o, [&](std::size_t k) {
-        return pinocchio::rnea(model, data, s.eq[k], s.eqd[k], s.eqdd[k])[0];
-    });
-
+    };
 #ifdef BENCH_INTERNALS
-    // diagnostic: what rrr_inverse_dynamics costs without its argument checks
-    time_op("kernel.tau", o, [&](std::size_t k) {
+    // what rrr_inverse_dynamics costs without its argument checks
+    auto kernel_tau = [&](std::size_t k) {
         const rrr_trig t = rrr_trig_of(s.q[k].data());
         double out[3];
         rrr_gen_inverse_dynamics(&m, &t, s.qd[k].data(), s.qdd[k].data(), out);
         return out[0];
-    });
+    };
+    time_group("diagnostics", o,
+               {{"tau.ours", calls}, {"kernel.tau", calls}, {"floor.trig", calls},
+                {"floor.atan2", calls}, {"loop.empty", calls}},
+               {{1, 0}}, tau_ours, kernel_tau, trig, atan2_1, empty);
+#else
+    time_group("diagnostics", o,
+               {{"tau.ours", calls}, {"floor.trig", calls}, {"floor.atan2", calls},
+                {"loop.empty", calls}},
+               {}, tau_ours, trig, atan2_1, empty);
 #endif
 
-    time_op("regressor.ours", o, [&](std::size_t k) {
-        double y[3][RRR_NP];
-        rrr_regressor(&m, s.q[k].data(), s.qd[k].data(), s.qdd[k].data(), y);
-        return y[0][0];
-    });
-    time_op("regressor.pin", o, [&](std::size_t k) {
-        return pinocchio::computeJointTorqueRegressor(model, data, s.eq[k], s.eqd[k], s.eqdd[k])(
-            0, 0);
-    });
+    time_group(
+        "fk", o, {{"fk.ours", calls}, {"fk.pin", calls}}, {{1, 0}},
+        [&](std::size_t k) {
+            double x[3], rot[3][3];
+            rrr_fk(&m, s.q[k].data(), x, rot);
+            return x[0] + rot[0][0];
+        },
+        [&](std::size_t k) {
+            pinocchio::forwardKinematics(model, data, s.eq[k]);
+            const pinocchio::SE3 pose = data.oMi[3] * tip_fixed;
+            return pose.translation()[0] + pose.rotation()(0, 0);
+        });
 
-    time_op("mass.ours", o, [&](std::size_t k) {
-        double dm[3][3];
-        rrr_mass_matrix(&m, s.q[k].data(), dm);
-        return dm[0][0];
-    });
-    time_op("mass.pin", o, [&](std::size_t k) {
-        return pinocchio::crba(model, data, s.eq[k])(0, 0);
-    });
+    {
+        NumericIk nik(model, data, tip, o.ik_tol);
+        Eigen::VectorXd q(3);
+        time_group(
+            "ik", o, {{"ik.ours", calls}, {"ik_branch.ours", calls}, {"ik.pin_lm", lm_calls}},
+            {{2, 0}, {2, 1}},
+            [&](std::size_t k) {
+                rrr_ik_set set;
+                rrr_ik(&m, s.x[k].data(), &set);
+                return set.q[0][0] + set.n;
+            },
+            [&](std::size_t k) {
+                double qb[3];
+                rrr_ik_branch(&m, s.x[k].data(), RRR_SHOULDER_FRONT, RRR_ELBOW_UP, qb);
+                return qb[0];
+            },
+            [&](std::size_t k) {
+                if (k == 0) {
+                    nik.reset();  // every pass over the targets draws the same restarts
+                }
+                const int it = nik.solve(s.x[k], q);
+                return q[0] + it;
+            });
+    }
 
-    time_op("coriolis.ours", o, [&](std::size_t k) {
-        double c[3];
-        rrr_coriolis(&m, s.q[k].data(), s.qd[k].data(), c);
-        return c[0];
-    });
-    time_op("gravity.ours", o, [&](std::size_t k) {
-        double h[3];
-        rrr_gravity(&m, s.q[k].data(), h);
-        return h[1];
-    });
-    time_op("gravity.pin", o, [&](std::size_t k) {
-        return pinocchio::computeGeneralizedGravity(model, data, s.eq[k])[1];
-    });
-    time_op("nle.ours", o, [&](std::size_t k) {
-        double b[3];
-        rrr_inverse_dynamics(&m, s.q[k].data(), s.qd[k].data(), zero, b);
-        return b[0];
-    });
-    time_op("nle.pin", o, [&](std::size_t k) {
-        return pinocchio::nonLinearEffects(model, data, s.eq[k], s.eqd[k])[0];
-    });
+    time_group("tau", o, {{"tau.ours", calls}, {"tau.pin", calls}}, {{1, 0}}, tau_ours,
+               [&](std::size_t k) {
+                   return pinocchio::rnea(model, data, s.eq[k], s.eqd[k], s.eqdd[k])[0];
+               });
 
-    time_op("fd.ours", o, [&](std::size_t k) {
-        double a[3];
-        rrr_forward_dynamics(&m, s.q[k].data(), s.qd[k].data(), s.tau[k].data(), a);
-        return a[0];
-    });
-    time_op("fd.pin", o, [&](std::size_t k) {
-        return pinocchio::aba(model, data, s.eq[k], s.eqd[k], s.etau[k])[0];
-    });
+    time_group(
+        "regressor", o, {{"regressor.ours", calls}, {"regressor.pin", calls}}, {{1, 0}},
+        [&](std::size_t k) {
+            double y[3][RRR_NP];
+            rrr_regressor(&m, s.q[k].data(), s.qd[k].data(), s.qdd[k].data(), y);
+            return y[0][0];
+        },
+        [&](std::size_t k) {
+            return pinocchio::computeJointTorqueRegressor(model, data, s.eq[k], s.eqd[k],
+                                                          s.eqdd[k])(0, 0);
+        });
+
+    time_group(
+        "mass", o, {{"mass.ours", calls}, {"mass.pin", calls}}, {{1, 0}},
+        [&](std::size_t k) {
+            double dm[3][3];
+            rrr_mass_matrix(&m, s.q[k].data(), dm);
+            return dm[0][0];
+        },
+        [&](std::size_t k) { return pinocchio::crba(model, data, s.eq[k])(0, 0); });
+
+    // Pinocchio has no c-only call: c and c + h are both compared with nonLinearEffects
+    time_group(
+        "nle", o, {{"coriolis.ours", calls}, {"nle.ours", calls}, {"nle.pin", calls}},
+        {{2, 0}, {2, 1}},
+        [&](std::size_t k) {
+            double c[3];
+            rrr_coriolis(&m, s.q[k].data(), s.qd[k].data(), c);
+            return c[0];
+        },
+        [&](std::size_t k) {
+            double b[3];
+            rrr_inverse_dynamics(&m, s.q[k].data(), s.qd[k].data(), zero, b);
+            return b[0];
+        },
+        [&](std::size_t k) {
+            return pinocchio::nonLinearEffects(model, data, s.eq[k], s.eqd[k])[0];
+        });
+
+    time_group(
+        "gravity", o, {{"gravity.ours", calls}, {"gravity.pin", calls}}, {{1, 0}},
+        [&](std::size_t k) {
+            double h[3];
+            rrr_gravity(&m, s.q[k].data(), h);
+            return h[1];
+        },
+        [&](std::size_t k) {
+            return pinocchio::computeGeneralizedGravity(model, data, s.eq[k])[1];
+        });
+
+    time_group(
+        "fd", o, {{"fd.ours", calls}, {"fd.pin", calls}}, {{1, 0}},
+        [&](std::size_t k) {
+            double a[3];
+            rrr_forward_dynamics(&m, s.q[k].data(), s.qd[k].data(), s.tau[k].data(), a);
+            return a[0];
+        },
+        [&](std::size_t k) {
+            return pinocchio::aba(model, data, s.eq[k], s.eqd[k], s.etau[k])[0];
+        });
 
     std::printf("{\"kind\": \"info\", \"id\": \"sink\", \"value\": %.6e}\n", g_sink);
     return 0;

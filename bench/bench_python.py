@@ -3,21 +3,24 @@
 Pinocchio's and the Robotics Toolbox's Python APIs, on the same robot and the same inputs.
 
 Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk`` against
-``ets.eval``; ``Model.ik`` (every branch) against ``ets.ik_LM`` (one solution); a batch of 1e5
-states of ``Model.inverse_dynamics`` against the Robotics Toolbox's batch ``rne`` and against
-librrr's ``rrr_inverse_dynamics`` in a plain C loop (bench/batch_floor.c, built with the system C
-compiler against the package's librrr.so: the floor of the batch); and, for the record, one
-state of ``inverse_dynamics`` through the ctypes binding the extension replaced.
+``ets.eval``; ``Model.ik`` (every branch) against ``ets.ik_LM`` (one solution);
+``Model.forward_dynamics`` against ``accel``; a batch of 1e5 states of ``Model.inverse_dynamics``
+against the Robotics Toolbox's batch ``rne`` and against librrr's ``rrr_inverse_dynamics`` in a
+plain C loop (bench/batch_floor.c, built with the system C compiler against the package's
+librrr.so: the floor of the batch); and, for the record, one state of ``inverse_dynamics``
+through the ctypes binding the extension replaced.
 
 Interleaved: each repeat times a block of ours and a block of the reference on the same inputs
 back to back (the order alternating between repeats), so both see the same machine load; each
 row reports min / median / max over the repeats of ns per call (per state for batches) and of
-the per-repeat ratio reference / ours. The agreement of every pair is checked first.
+the per-repeat ratio reference / ours. The agreement of every pair is checked first. Blocks are
+timed by the CPU time of the thread (``--clock wall``: the wall clock), so the time this process
+waits for a core on a loaded machine is not counted.
 
 This is a measurement, not a test: nothing fails when a target is missed.
 
 Usage: python bench/bench_python.py [--repeats N] [--states N] [--batch N] [--seed N]
-                                    [--json FILE]
+                                    [--clock cpu|wall] [--json FILE]
 """
 
 from __future__ import annotations
@@ -46,6 +49,9 @@ ROOT = Path(__file__).resolve().parent.parent
 ALPHA = (np.pi / 2, 0.0, 0.0)
 IK_Q0 = np.array([0.1, 0.2, 1.0])  # the start of run_bench.py's LM references
 POSITION_MASK = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
+# the clock of the blocks: the CPU time of this thread (the time spent waiting for a core on a
+# loaded machine is left out; every call timed here runs on the calling thread) or the wall clock
+CLOCKS: dict[str, Callable[[], int]] = {"cpu": time.thread_time_ns, "wall": time.perf_counter_ns}
 
 
 def log(msg: str) -> None:
@@ -70,13 +76,14 @@ class Pair:
     ours_ns: list[float] = field(default_factory=list)
     ref_ns: list[float] = field(default_factory=list)
     agreement: str = ""
+    clock: Callable[[], int] = time.thread_time_ns
 
     def block(self, fn: Callable[[int], object]) -> float:
         """ns per item of one block."""
-        t0 = time.perf_counter_ns()
+        t0 = self.clock()
         for k in range(self.calls):
             fn(k)
-        return (time.perf_counter_ns() - t0) / (self.calls * self.per)
+        return (self.clock() - t0) / (self.calls * self.per)
 
     def run(self, repeats: int) -> None:
         for k in range(min(self.calls, 20)):  # warm-up
@@ -205,6 +212,9 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
             back = model.fk(np.asarray(sol.q, dtype=float))[0]
             lm_err = max(lm_err, float(np.abs(back - xs[k]).max()))
     fk_back = max(float(np.abs(model.fk(model.ik(x))[0] - x).max()) for x in xs)
+    fd_rows = [(q[k], qd[k], tau[k]) for k in range(n)]
+    fd_accel = np.array([robot.accel(*fd_rows[k]) for k in range(min(n, 200))], dtype=float)
+    fd_ours = model.forward_dynamics(q, qd, tau)
     ct_tau = np.array([ctypes_kernels.inverse_dynamics(*rows[k]) for k in range(n)])
 
     per_call = args.calls
@@ -223,6 +233,11 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
              target=">= 5x", target_ratio=5.0,
              agreement=f"FK(IK(x)) - x: {fk_back:.1e} m; LM ({lm_solved}/{min(n, 200)} "
                        f"solved): {lm_err:.1e} m"),
+        Pair("forward dynamics, one state", "Model.forward_dynamics",
+             lambda k: model.forward_dynamics(*fd_rows[k % n]), "RTB accel",
+             lambda k: robot.accel(*fd_rows[k % n]), max(per_call // 20, 10),
+             agreement=f"{np.abs(fd_accel - fd_ours[: len(fd_accel)]).max():.1e} (RTB), "
+                       f"{np.abs(fd_ours - qdd).max():.1e} (qdd back)"),
         Pair(f"tau = R p, batch of {nb:,} states (per state)", "Model.inverse_dynamics",
              lambda k: model.inverse_dynamics(bq, bqd, bqdd), "RTB rne (batch)",
              lambda k: robot.rne(bq, bqd, bqdd), 1, per=nb,
@@ -271,10 +286,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats per row")
     parser.add_argument("--states", type=int, default=1000, help="single-state inputs")
     parser.add_argument("--calls", type=int, default=2000,
-                        help="calls per block of a single-state row (IK LM: 1/20 of it)")
+                        help="calls per block of a single-state row (IK LM, accel: 1/20 of it)")
     parser.add_argument("--batch", type=int, default=100_000, help="states of the batch row")
     parser.add_argument("--ik-tol", type=float, default=1e-12, help="ets.ik_LM tol")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
+                        help="time blocks by the CPU time of the thread (default) or the wall "
+                             "clock")
     parser.add_argument("--json", type=Path, help="also write the raw timings to this file")
     args = parser.parse_args(argv)
 
@@ -283,6 +301,7 @@ def main(argv: list[str] | None = None) -> int:
         pairs, info = build(args, Path(tmp))
         for p in pairs:
             log(f"{p.operation}: {args.repeats} interleaved repeats")
+            p.clock = CLOCKS[args.clock]
             p.run(args.repeats)
     load_end = " ".join(f"{v:.2f}" for v in os.getloadavg())
 
@@ -290,7 +309,9 @@ def main(argv: list[str] | None = None) -> int:
           f"{cpu_model()}, {os.cpu_count()} CPUs, load average {load_start} (start) / "
           f"{load_end} (end)")
     print(f"{info['versions']}; binding: {info['binding']}")
-    print(f"{args.repeats} interleaved repeats; each cell: min / median / max\n")
+    clock = "the thread's CPU time" if args.clock == "cpu" else "the wall clock"
+    print(f"{args.repeats} interleaved repeats, blocks timed by {clock}; each cell: "
+          "min / median / max\n")
     print("| operation | ours | ours (ns) | reference | reference (ns) | ratio ref/ours "
           "| agreement (max abs diff) | target |")
     print("|---|---|---:|---|---:|---:|---|---|")
@@ -300,7 +321,7 @@ def main(argv: list[str] | None = None) -> int:
               f"{p.verdict()} |")
     if args.json:
         args.json.write_text(json.dumps({
-            "info": info, "load": [load_start, load_end],
+            "info": info, "load": [load_start, load_end], "clock": args.clock,
             "rows": [{"operation": p.operation, "ours_ns": p.ours_ns, "ref_ns": p.ref_ns,
                       "reference": p.ref_name, "agreement": p.agreement} for p in pairs],
         }, indent=1), encoding="utf-8")

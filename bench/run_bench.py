@@ -1,19 +1,27 @@
 #!/usr/bin/env python3
 """Benchmark the closed-form core librrr against Pinocchio (C++) and the Robotics Toolbox.
 
-One command, one run: builds the C++ driver bench/bench_core.cpp with CMake (librrr from
-c_src/rrr with the repository's own CMakeLists, Pinocchio from the ``pin`` wheel), runs it, times
-the Robotics Toolbox for Python (``rne``, ``ets.ik_LM`` on a prebuilt ETS, ``ets.eval``,
-``accel``), our Python API (the installed package's compiled binding) and bare ctypes calls of
-the build's librrr.so in the same process, counts the operations of our generated dynamics
-(c_src/rrr/gen/derive_dynamics.py) and of our IK (a hand count of c_src/rrr/src/rrr_kinematics.c,
-checked against the source text), and prints markdown tables.
+One command, one run: builds the C++ driver bench/bench_core.cpp and the C loops
+bench/core_loops.c with CMake (librrr from c_src/rrr with the repository's own CMakeLists,
+Pinocchio from the ``pin`` wheel), runs the driver (librrr against Pinocchio, interleaved), times
+the Robotics Toolbox for Python (``ets.ik_LM`` on a prebuilt ETS, ``rne``, ``accel``) against
+librrr in C loops on the same inputs, interleaved, counts the operations of our generated
+dynamics (c_src/rrr/gen/derive_dynamics.py) and of our IK (a hand count of
+c_src/rrr/src/rrr_kinematics.c, checked against the source text), and prints markdown tables.
+
+Interleaved: each repeat times one block of ours and one block of the reference back to back on
+the same inputs (the order reversed every other repeat), so a change of machine load hits both;
+every cell is min / median / max over the repeats and each ratio is taken within a repeat.
+Blocks are timed by the CPU time of the timing thread (``--clock wall``: the wall clock), so the
+time this process waits for a core on a loaded machine is not counted. The Python API of
+rrr_robot against the references' Python APIs is bench/bench_python.py.
 
 This is a measurement, not a test: nothing fails when a target is missed.
 
 Usage:
     python bench/run_bench.py [--build-dir DIR] [--calls N] [--repeats N] [--states N]
-                              [--py-repeats N] [--ik-tol E] [--skip-build] [--json FILE]
+                              [--py-states N] [--py-repeats N] [--c-loop-calls N]
+                              [--ik-tol E] [--clock cpu|wall] [--skip-build] [--json FILE]
 """
 
 from __future__ import annotations
@@ -21,11 +29,13 @@ from __future__ import annotations
 import argparse
 import ctypes as ct
 import datetime as dt
+import gc
 import json
 import os
 import platform
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import sysconfig
@@ -90,7 +100,7 @@ def build(build_dir: Path, cmake: str) -> None:
 def run_core(exe: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
     cmd = [
         str(exe), "--states", str(args.states), "--calls", str(args.calls),
-        "--repeats", str(args.repeats), "--ik-tol", repr(args.ik_tol),
+        "--repeats", str(args.repeats), "--ik-tol", repr(args.ik_tol), "--clock", args.clock,
     ]
     log("run: " + " ".join(cmd))
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
@@ -98,58 +108,127 @@ def run_core(exe: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
 
 
 # ---------------------------------------------------------------------------------------------
-# Python-side timings: RTB, our Python API (the compiled binding) and bare ctypes calls
+# librrr in C loops (one ctypes call per block) against the Robotics Toolbox, interleaved
 # ---------------------------------------------------------------------------------------------
-def best_ns(fn: Callable[[int], object], n: int, repeats: int) -> float:
-    """Best over repeats of (time of fn(0..n-1)) / n, in ns per call."""
-    for k in range(min(n, 50)):  # warm-up
-        fn(k)
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter_ns()
+@dataclass(frozen=True)
+class Series:
+    """Values per repeat (ns per call, or ratios) with their min / median / max."""
+
+    values: tuple[float, ...]
+
+    @property
+    def min(self) -> float:
+        return min(self.values)
+
+    @property
+    def median(self) -> float:
+        return statistics.median(self.values)
+
+    @property
+    def max(self) -> float:
+        return max(self.values)
+
+    def over(self, other: Series) -> Series:
+        """The per-repeat ratio self / other (both of the same interleaved repeats)."""
+        return Series(tuple(a / b for a, b in zip(self.values, other.values, strict=True)))
+
+
+CLOCKS: dict[str, Callable[[], int]] = {"cpu": time.thread_time_ns, "wall": time.perf_counter_ns}
+
+
+def interleaved(blocks: Sequence[Callable[[], float]], repeats: int) -> list[Series]:
+    """Run one block of each callable per repeat (in order on even repeats, reversed on odd
+    ones), after one warm-up block each; each block returns its ns per call."""
+    for run in blocks:
+        run()
+    ns: list[list[float]] = [[] for _ in blocks]
+    gc.disable()
+    try:
+        for r in range(repeats):
+            order = range(len(blocks)) if r % 2 == 0 else reversed(range(len(blocks)))
+            for j in order:
+                ns[j].append(blocks[j]())
+    finally:
+        gc.enable()
+    return [Series(tuple(v)) for v in ns]
+
+
+def per_call_block(fn: Callable[[int], object], n: int, clock: Callable[[], int]
+                   ) -> Callable[[], float]:
+    """A block of Python calls fn(0), ..., fn(n - 1): ns per call."""
+
+    def run() -> float:
+        t0 = clock()
         for k in range(n):
             fn(k)
-        best = min(best, (time.perf_counter_ns() - t0) / n)
-    return best
+        return (clock() - t0) / n
+
+    return run
+
+
+def c_loop_block(fn: Callable[[], int], calls: int, what: str, clock: Callable[[], int]
+                 ) -> Callable[[], float]:
+    """A block of one ctypes call of a C loop of ``calls`` librrr calls: ns per librrr call."""
+
+    def run() -> float:
+        t0 = clock()
+        failed = fn()
+        elapsed = clock() - t0
+        if failed != -1:
+            sys.exit(f"run_bench: {what} failed on row {failed}")
+        return elapsed / calls
+
+    return run
 
 
 @dataclass
-class PyResults:
-    times: dict[str, float] = field(default_factory=dict)
+class RtbResults:
+    series: dict[str, Series] = field(default_factory=dict)
     checks: dict[str, float] = field(default_factory=dict)
     info: dict[str, str] = field(default_factory=dict)
 
 
-def default_inertial(lib: ct.CDLL, raw_type: type[ct.Structure]) -> Any:
-    raw = raw_type()
-    status = lib.rrr_inertial_default(ct.byref(raw))
-    if status != 0:
-        sys.exit(f"run_bench: rrr_inertial_default returned {status}")
-    return raw
+def load_loops(path: Path) -> tuple[ct.CDLL, Any, Any]:
+    """bench_loops (core_loops.c) of the build, with the default model and its inertias read
+    from it; the structures are the package's ctypes mirrors, checked by size."""
+    from rrr_robot.core import _lib
+
+    loops = ct.CDLL(str(path))
+    sizes = [ct.c_size_t() for _ in range(3)]
+    loops.loops_sizes(*(ct.byref(v) for v in sizes))
+    mirrors = (_lib.RawModel, _lib.RawInertial, _lib.RawIkSet)
+    if [v.value for v in sizes] != [ct.sizeof(t) for t in mirrors]:
+        sys.exit("run_bench: rrr_model / rrr_inertial / rrr_ik_set of the build differ from the "
+                 "package's ctypes mirrors: reinstall the package from this checkout")
+    model, inertial = _lib.RawModel(), _lib.RawInertial()
+    if loops.loops_defaults(ct.byref(model), ct.byref(inertial)) != 0:
+        sys.exit("run_bench: rrr_model_default / rrr_inertial_default failed")
+    for name, pointers in (("loops_ik", 3), ("loops_ik_branch", 3),
+                           ("loops_inverse_dynamics", 5), ("loops_forward_dynamics", 5)):
+        fn = getattr(loops, name)
+        fn.argtypes = [ct.c_void_p] * pointers + [ct.c_long, ct.c_long]
+        fn.restype = ct.c_long
+    return loops, model, inertial
 
 
-def python_side(args: argparse.Namespace) -> PyResults:
+def rtb_side(args: argparse.Namespace, loops_path: Path) -> RtbResults:
     import roboticstoolbox as rtb
     import rrr_robot as rr
     from rrr_robot.core import _lib
-    from rrr_robot.core._arrays import ptr
 
-    res = PyResults()
-    model = rr.Model.default()
-    raw = default_inertial(_lib.LIB, _lib.RawInertial)
-    dh = model.dh
-    a = (0.0, dh["a2"], dh["a3"])
-    d = (dh["d1"], dh["d2"], dh["d3"])
+    loops, raw, inertial = load_loops(loops_path)
+    res = RtbResults()
+    model = rr.Model.default()  # the package's binding: the FK checks of the IK results
     links = [
         rtb.RevoluteDH(
-            d=d[i], a=a[i], alpha=ALPHA[i], m=raw.link[i].mass,
-            r=np.array(raw.link[i].com[:]),
-            I=np.array([raw.link[i].inertia_com[r][:] for r in range(3)]),
-            Jm=raw.rotor_inertia[i], G=1.0, B=0.0, Tc=[0.0, 0.0],
+            d=(raw.d1, raw.d2, raw.d3)[i], a=(0.0, raw.a2, raw.a3)[i], alpha=ALPHA[i],
+            m=inertial.link[i].mass, r=np.array(inertial.link[i].com[:]),
+            I=np.array([inertial.link[i].inertia_com[r][:] for r in range(3)]),
+            Jm=inertial.rotor_inertia[i], G=1.0, B=0.0, Tc=[0.0, 0.0],
         )
         for i in range(3)
     ]
-    robot = rtb.DHRobot(links, gravity=[0.0, 0.0, -model.g])
+    robot = rtb.DHRobot(links, gravity=[0.0, 0.0, -raw.g])
     ets = robot.ets()  # prebuilt once: robot.ik_LM would rebuild it on every call
 
     rng = np.random.default_rng(args.seed)
@@ -157,80 +236,101 @@ def python_side(args: argparse.Namespace) -> PyResults:
     q = rng.uniform(-np.pi, np.pi, (n, 3))
     qd = rng.uniform(-3.0, 3.0, (n, 3))
     qdd = rng.uniform(-10.0, 10.0, (n, 3))
-    tau = model.inverse_dynamics(q, qd, qdd)
     # IK targets: the same distribution as bench_core.cpp (q3 away from 0 and pi)
     q_ik = np.column_stack([
         rng.uniform(-np.pi, np.pi, n), rng.uniform(-np.pi / 2, np.pi / 2, n),
         rng.uniform(0.2, 2.5, n),
     ])
-    x_ik, _ = model.fk(q_ik)
+    x_ik = np.ascontiguousarray(model.fk(q_ik)[0])
     teps = []
     for x in x_ik:
         tep = np.eye(4)
         tep[:3, 3] = x
         teps.append(tep)
-    rep = args.py_repeats
+    n_acc = min(n, 256)  # accel is slow: its rows use the first n_acc states
 
-    # agreement of the references with our model on these states
+    # the C side: whole passes over the same inputs, one ctypes call per block
+    passes = max(1, -(-args.c_loop_calls // n))
+    passes_acc = max(1, -(-args.c_loop_calls // n_acc))
+    ref = ct.addressof(raw)
+    tau = np.empty((n, 3))
+    acc = np.empty((n_acc, 3))
+    q_branch = np.empty((n, 3))
+    sols = (_lib.RawIkSet * n)()
+    p_sols = ct.addressof(sols)
+
+    def addr(a: FloatArray) -> int:
+        return int(a.ctypes.data)
+
+    def c_tau(reps: int) -> int:
+        return int(loops.loops_inverse_dynamics(ref, addr(q), addr(qd), addr(qdd), addr(tau),
+                                                n, reps))
+
+    def c_fd(reps: int) -> int:
+        return int(loops.loops_forward_dynamics(ref, addr(q), addr(qd), addr(tau), addr(acc),
+                                                n_acc, reps))
+
+    def c_ik(reps: int) -> int:
+        return int(loops.loops_ik(ref, addr(x_ik), p_sols, n, reps))
+
+    def c_branch(reps: int) -> int:
+        return int(loops.loops_ik_branch(ref, addr(x_ik), addr(q_branch), n, reps))
+
+    def ik_lm(k: int) -> Any:
+        return ets.ik_LM(teps[k], q0=IK_Q0, tol=args.ik_tol, mask=POSITION_MASK,
+                         joint_limits=False)
+
+    # agreement of the references with librrr on these inputs
+    for what, fn in (("rrr_inverse_dynamics", c_tau), ("rrr_forward_dynamics", c_fd),
+                     ("rrr_ik", c_ik), ("rrr_ik_branch", c_branch)):
+        if fn(1) != -1:
+            sys.exit(f"run_bench: {what} failed in the C loop")
     rne = np.array([robot.rne(q[k], qd[k], qdd[k]) for k in range(n)], dtype=float)
     res.checks["tau_rne"] = float(np.abs(rne - tau).max())
-    n_acc = min(n, 256)
-    acc = np.array([robot.accel(q[k], qd[k], tau[k]) for k in range(n_acc)], dtype=float)
-    res.checks["fd_accel"] = float(np.abs(acc - qdd[:n_acc]).max())
-    fk_rtb = np.array([ets.eval(q[k])[:3, 3] for k in range(n)])
-    res.checks["fk_eval"] = float(np.abs(fk_rtb - model.fk(q)[0]).max())
-    sols = [
-        ets.ik_LM(teps[k], q0=IK_Q0, tol=args.ik_tol, mask=POSITION_MASK, joint_limits=False)
-        for k in range(n)
-    ]
-    ok = [s for s in sols if s.success]
-    err = max(
+    accel = np.array([robot.accel(q[k], qd[k], tau[k]) for k in range(n_acc)], dtype=float)
+    res.checks["fd_accel"] = float(np.abs(accel - qdd[:n_acc]).max())
+    res.checks["fd_ours"] = float(np.abs(acc - qdd[:n_acc]).max())
+    lm = [ik_lm(k) for k in range(n)]
+    ok = [s for s in lm if s.success]
+    res.checks["ik_lm_position"] = max(
         (float(np.abs(model.fk(np.asarray(s.q, dtype=float))[0] - x_ik[k]).max())
-         for k, s in enumerate(sols) if s.success),
+         for k, s in enumerate(lm) if s.success),
         default=float("nan"),
     )
-    res.checks["ik_lm_position"] = err
     res.info["ik_lm"] = (
         f"{len(ok)}/{n} solved, mean {np.mean([s.iterations for s in ok]):.1f} iterations, "
         f"{np.mean([s.searches for s in ok]):.2f} searches"
     )
-    ik_err = max(float(np.abs(model.fk(model.ik(x))[0] - x).max()) for x in x_ik)
-    res.checks["ik_ours_py"] = ik_err
-
-    log(f"Python timings ({n} states, best of {rep})")
-    res.times["rtb.rne"] = best_ns(lambda k: robot.rne(q[k], qd[k], qdd[k]), n, rep)
-    res.times["rtb.ik_lm"] = best_ns(
-        lambda k: ets.ik_LM(teps[k], q0=IK_Q0, tol=args.ik_tol, mask=POSITION_MASK,
-                            joint_limits=False), n, rep)
-    res.times["rtb.eval"] = best_ns(lambda k: ets.eval(q[k]), n, rep)
-    res.times["rtb.accel"] = best_ns(lambda k: robot.accel(q[k], qd[k], tau[k]), n_acc, rep)
-    res.times["py.fk"] = best_ns(lambda k: model.fk(q[k]), n, rep)
-    res.times["py.ik"] = best_ns(lambda k: model.ik(x_ik[k]), n, rep)
-    res.times["py.tau"] = best_ns(lambda k: model.inverse_dynamics(q[k], qd[k], qdd[k]), n, rep)
-    res.times["py.fd"] = best_ns(lambda k: model.forward_dynamics(q[k], qd[k], tau[k]), n, rep)
-    # the same C calls through bare ctypes with every pointer prebuilt: the binding's floor
-    lib = _lib.LIB
-    ref = ct.byref(model.raw)
-    out = np.zeros(3)
-    p_out = ptr(out)
-    p_q = [ptr(row) for row in q]
-    p_qd = [ptr(row) for row in qd]
-    p_qdd = [ptr(row) for row in qdd]
-    x_rows = np.ascontiguousarray(x_ik)
-    p_x = [ptr(row) for row in x_rows]
-    sol = _lib.RawIkSet()
-    p_sol = ct.byref(sol)
-    inv_dyn = lib.rrr_inverse_dynamics
-    ik = lib.rrr_ik
-    res.times["raw.tau"] = best_ns(lambda k: inv_dyn(ref, p_q[k], p_qd[k], p_qdd[k], p_out), n, rep)
-    res.times["raw.ik"] = best_ns(lambda k: ik(ref, p_x[k], p_sol), n, rep)
-    raw_diff = 0.0
+    ik_back = 0.0
     for k in range(n):
-        if inv_dyn(ref, p_q[k], p_qd[k], p_qdd[k], p_out) != 0:
-            sys.exit("run_bench: rrr_inverse_dynamics failed through ctypes")
-        raw_diff = max(raw_diff, float(np.abs(out - tau[k]).max()))
-    res.checks["raw_tau"] = raw_diff
+        branches = np.array(sols[k].q[: sols[k].n], dtype=float)
+        ik_back = max(ik_back, float(np.abs(model.fk(branches)[0] - x_ik[k]).max()))
+    res.checks["ik_ours"] = ik_back
+    res.checks["ik_branch"] = float(np.abs(model.fk(q_branch)[0] - x_ik).max())
     res.info["versions"] = f"roboticstoolbox-python {rtb.__version__}, numpy {np.__version__}"
+    res.info["loops"] = (f"C loops: {passes * n} calls per block ({passes} passes over {n} "
+                         f"inputs; accel: {passes_acc * n_acc} over {n_acc})")
+
+    rep = args.py_repeats
+    clk = CLOCKS[args.clock]
+    log(f"RTB against librrr in C loops ({n} inputs, {rep} interleaved repeats)")
+    ik_ours, branch_ours, ik_ref = interleaved([
+        c_loop_block(lambda: c_ik(passes), passes * n, "rrr_ik", clk),
+        c_loop_block(lambda: c_branch(passes), passes * n, "rrr_ik_branch", clk),
+        per_call_block(ik_lm, n, clk),
+    ], rep)
+    tau_ours, tau_ref = interleaved([
+        c_loop_block(lambda: c_tau(passes), passes * n, "rrr_inverse_dynamics", clk),
+        per_call_block(lambda k: robot.rne(q[k], qd[k], qdd[k]), n, clk),
+    ], rep)
+    fd_ours, fd_ref = interleaved([
+        c_loop_block(lambda: c_fd(passes_acc), passes_acc * n_acc, "rrr_forward_dynamics", clk),
+        per_call_block(lambda k: robot.accel(q[k], qd[k], tau[k]), n_acc, clk),
+    ], rep)
+    res.series.update({
+        "ik.ours": ik_ours, "ik_branch.ours": branch_ours, "ik.rtb": ik_ref,
+        "tau.ours": tau_ours, "tau.rtb": tau_ref, "fd.ours": fd_ours, "fd.rtb": fd_ref,
+    })
     return res
 
 
@@ -364,23 +464,55 @@ def fmt_ns(ns: float) -> str:
     return f"{ns:,.0f}" if ns >= 100 else f"{ns:.1f}"
 
 
+def fmt_ratio(r: float) -> str:
+    return f"{r:,.1f}x" if r < 100 else f"{r:,.0f}x"
+
+
 def fmt_diff(value: float | None) -> str:
     return "" if value is None else f"{value:.1e}"
 
 
+def mmm(s: Series, fmt: Callable[[float], str]) -> str:
+    return " / ".join(fmt(v) for v in (s.min, s.median, s.max))
+
+
+def core_series(core: list[dict[str, Any]]) -> dict[str, Series]:
+    """The driver's groups: every operation's ns per repeat, keyed '<group>:<op id>'."""
+    out: dict[str, Series] = {}
+    for g in core:
+        if g["kind"] == "group":
+            for op in g["ops"]:
+                out[f"{g['id']}:{op['id']}"] = Series(tuple(float(v) for v in op["values"]))
+    return out
+
+
 @dataclass(frozen=True)
 class Row:
+    """One ratio: ours and the reference timed in the same interleaved repeats."""
+
     operation: str
     ours: str
-    ours_ns: float
+    ours_ns: Series
     ref: str
-    ref_ns: float
+    ref_ns: Series
     diff: str
     target: float | None = None
 
     @property
-    def ratio(self) -> float:
-        return self.ref_ns / self.ours_ns
+    def ratio(self) -> Series:
+        return self.ref_ns.over(self.ours_ns)
+
+    def verdict(self) -> str:
+        if self.target is None:
+            return ""
+        r = self.ratio
+        if r.min >= self.target:
+            verdict = "met (every repeat)"
+        elif r.median >= self.target:
+            verdict = f"met (median; min {fmt_ratio(r.min)})"
+        else:
+            verdict = "NOT met"
+        return f">= {self.target:g}x: {verdict}"
 
 
 def render_rows(rows: Sequence[Row]) -> list[str]:
@@ -390,81 +522,75 @@ def render_rows(rows: Sequence[Row]) -> list[str]:
         "|---|---|---:|---|---:|---:|---|---|",
     ]
     for r in rows:
-        target = ""
-        if r.target is not None:
-            verdict = "met" if r.ratio >= r.target else "MISSED"
-            target = f">= {r.target:g}x: {verdict}"
         out.append(
-            f"| {r.operation} | {r.ours} | {fmt_ns(r.ours_ns)} | {r.ref} | {fmt_ns(r.ref_ns)} "
-            f"| {r.ratio:,.1f}x | {r.diff} | {target} |"
+            f"| {r.operation} | {r.ours} | {mmm(r.ours_ns, fmt_ns)} | {r.ref} "
+            f"| {mmm(r.ref_ns, fmt_ns)} | {mmm(r.ratio, fmt_ratio)} | {r.diff} | {r.verdict()} |"
         )
     return out
 
 
 def report(
-    args: argparse.Namespace, core: list[dict[str, Any]], py: PyResults, gen: GenCount,
+    args: argparse.Namespace, core: list[dict[str, Any]], py: RtbResults, gen: GenCount,
     load: tuple[str, str],
-) -> tuple[str, dict[str, float]]:
+) -> tuple[str, dict[str, dict[str, float]]]:
     meta = next(r for r in core if r["kind"] == "meta")
-    t = {r["id"]: float(r["ns"]) for r in core if r["kind"] == "time"}
+    t = core_series(core)
+    groups = {r["id"]: r for r in core if r["kind"] == "group"}
     chk = {r["id"]: float(r["max_abs_diff"]) for r in core if r["kind"] == "check"}
     info = {r["id"]: r for r in core if r["kind"] == "info"}
     lm = info["ik.pin_lm"]
     lm_txt = (f"{lm['success']}/{lm['targets']} solved, "
               f"mean {lm['mean_iterations']:.1f} iterations")
+    p = py.series
 
     def c(*ids: str) -> str:
         return fmt_diff(max(chk[i] for i in ids))
 
     ik_diff = f"FK(IK(x)) - x: {c('ik_fk')}"
     rows_c = [
-        Row("FK (position + orientation)", "`rrr_fk`", t["fk.ours"],
-            "Pinocchio `forwardKinematics` + tip placement", t["fk.pin"],
+        Row("FK (position + orientation)", "`rrr_fk`", t["fk:fk.ours"],
+            "Pinocchio `forwardKinematics` + tip placement", t["fk:fk.pin"],
             c("fk_position", "fk_rotation")),
-        Row("IK, all branches (4 solutions)", "`rrr_ik`", t["ik.ours"],
-            "RTB `ets.ik_LM` (1 solution; Python -> C++)", py.times["rtb.ik_lm"],
-            f"{ik_diff}; LM: {fmt_diff(py.checks['ik_lm_position'])}", TARGET_IK_VS_LM),
-        Row("IK, all branches (4 solutions)", "`rrr_ik`", t["ik.ours"],
-            "same LM on Pinocchio kinematics (C++, this bench)", t["ik.pin_lm"],
-            f"{ik_diff}; LM: {fmt_diff(lm['max_position_error'])}"),
-        Row("IK, one branch (1 solution each)", "`rrr_ik_branch`", t["ik_branch.ours"],
-            "RTB `ets.ik_LM` (Python -> C++)", py.times["rtb.ik_lm"], "a branch of `rrr_ik`",
-            TARGET_IK_VS_LM),
-        Row("tau = R p (inverse dynamics)", "`rrr_inverse_dynamics`", t["tau.ours"],
-            "Pinocchio `rnea`", t["tau.pin"], c("tau"), TARGET_TAU_VS_RNEA),
-        Row("tau = R p (inverse dynamics)", "`rrr_inverse_dynamics`", t["tau.ours"],
-            "RTB `rne` (Python -> C)", py.times["rtb.rne"], fmt_diff(py.checks["tau_rne"])),
-        Row("regressor R (3 x 16)", "`rrr_regressor`", t["regressor.ours"],
-            "Pinocchio `computeJointTorqueRegressor` (3 x 30)", t["regressor.pin"],
+        Row("IK, all branches (4 solutions)", "`rrr_ik`", t["ik:ik.ours"],
+            "the LM of `ets.ik_LM` on Pinocchio kinematics (C++, this bench; 1 solution)",
+            t["ik:ik.pin_lm"], f"{ik_diff}; LM: {fmt_diff(lm['max_position_error'])}"),
+        Row("IK, one branch (1 solution each)", "`rrr_ik_branch`", t["ik:ik_branch.ours"],
+            "the same LM (C++)", t["ik:ik.pin_lm"], "a branch of `rrr_ik`"),
+        Row("tau = R p (inverse dynamics)", "`rrr_inverse_dynamics`", t["tau:tau.ours"],
+            "Pinocchio `rnea`", t["tau:tau.pin"], c("tau"), TARGET_TAU_VS_RNEA),
+        Row("regressor R (3 x 16)", "`rrr_regressor`", t["regressor:regressor.ours"],
+            "Pinocchio `computeJointTorqueRegressor` (3 x 30)", t["regressor:regressor.pin"],
             f"R p vs rnea: {c('regressor')}"),
-        Row("D(q)", "`rrr_mass_matrix`", t["mass.ours"],
-            "Pinocchio `crba` (upper triangle)", t["mass.pin"], c("mass")),
-        Row("c(q, qd)", "`rrr_coriolis`", t["coriolis.ours"],
-            "Pinocchio `nonLinearEffects` (c + h)", t["nle.pin"], f"vs nle - g: {c('coriolis')}"),
-        Row("h(q)", "`rrr_gravity`", t["gravity.ours"],
-            "Pinocchio `computeGeneralizedGravity`", t["gravity.pin"], c("gravity")),
-        Row("c + h", "`rrr_inverse_dynamics`, qdd = 0", t["nle.ours"],
-            "Pinocchio `nonLinearEffects`", t["nle.pin"], c("nle")),
-        Row("forward dynamics", "`rrr_forward_dynamics`", t["fd.ours"],
-            "Pinocchio `aba`", t["fd.pin"], c("fd")),
-        Row("forward dynamics", "`rrr_forward_dynamics`", t["fd.ours"],
-            "RTB `accel` (Python)", py.times["rtb.accel"], fmt_diff(py.checks["fd_accel"])),
+        Row("D(q)", "`rrr_mass_matrix`", t["mass:mass.ours"],
+            "Pinocchio `crba` (upper triangle)", t["mass:mass.pin"], c("mass")),
+        Row("c(q, qd)", "`rrr_coriolis`", t["nle:coriolis.ours"],
+            "Pinocchio `nonLinearEffects` (c + h)", t["nle:nle.pin"],
+            f"vs nle - g: {c('coriolis')}"),
+        Row("h(q)", "`rrr_gravity`", t["gravity:gravity.ours"],
+            "Pinocchio `computeGeneralizedGravity`", t["gravity:gravity.pin"], c("gravity")),
+        Row("c + h", "`rrr_inverse_dynamics`, qdd = 0", t["nle:nle.ours"],
+            "Pinocchio `nonLinearEffects`", t["nle:nle.pin"], c("nle")),
+        Row("forward dynamics", "`rrr_forward_dynamics`", t["fd:fd.ours"],
+            "Pinocchio `aba`", t["fd:fd.pin"], c("fd")),
     ]
-    rows_py = [
-        Row("FK", "`Model.fk`", py.times["py.fk"], "RTB `ets.eval`", py.times["rtb.eval"],
-            fmt_diff(py.checks["fk_eval"])),
-        Row("IK, all branches", "`Model.ik`", py.times["py.ik"], "RTB `ets.ik_LM`",
-            py.times["rtb.ik_lm"], f"FK(IK(x)) - x: {fmt_diff(py.checks['ik_ours_py'])}"),
-        Row("IK, all branches", "bare ctypes `rrr_ik`, pointers prebuilt", py.times["raw.ik"],
-            "RTB `ets.ik_LM`", py.times["rtb.ik_lm"], ""),
-        Row("tau = R p", "`Model.inverse_dynamics`", py.times["py.tau"], "RTB `rne`",
-            py.times["rtb.rne"], fmt_diff(py.checks["tau_rne"])),
-        Row("tau = R p", "bare ctypes `rrr_inverse_dynamics`, pointers prebuilt",
-            py.times["raw.tau"], "RTB `rne`", py.times["rtb.rne"], fmt_diff(py.checks["raw_tau"])),
-        Row("forward dynamics", "`Model.forward_dynamics`", py.times["py.fd"], "RTB `accel`",
-            py.times["rtb.accel"], fmt_diff(py.checks["fd_accel"])),
+    ik_lm_diff = (f"FK(IK(x)) - x: {fmt_diff(py.checks['ik_ours'])}; "
+                  f"LM: {fmt_diff(py.checks['ik_lm_position'])}")
+    rows_rtb = [
+        Row("IK, all branches (4 solutions)", "`rrr_ik`", p["ik.ours"],
+            "RTB `ets.ik_LM` (1 solution; Python -> C++)", p["ik.rtb"], ik_lm_diff,
+            TARGET_IK_VS_LM),
+        Row("IK, one branch (1 solution each)", "`rrr_ik_branch`", p["ik_branch.ours"],
+            "RTB `ets.ik_LM` (Python -> C++)", p["ik.rtb"],
+            f"FK(q) - x: {fmt_diff(py.checks['ik_branch'])}", TARGET_IK_VS_LM),
+        Row("tau = R p (inverse dynamics)", "`rrr_inverse_dynamics`", p["tau.ours"],
+            "RTB `rne` (Python -> C)", p["tau.rtb"], fmt_diff(py.checks["tau_rne"])),
+        Row("forward dynamics", "`rrr_forward_dynamics`", p["fd.ours"],
+            "RTB `accel` (Python)", p["fd.rtb"],
+            f"{fmt_diff(py.checks['fd_accel'])} (ours: {fmt_diff(py.checks['fd_ours'])})"),
     ]
 
+    diag = groups["diagnostics"]["ops"]
+    d = {op["id"]: Series(tuple(op["values"])) for op in diag}
     ik_all = ik_count([(back, up) for back in (False, True) for up in (True, False)])
     ik_one = ik_count([(False, True)])
     tau_ops = gen.ops["rrr_gen_inverse_dynamics"] + TRIG_PROLOGUE_OPS
@@ -475,40 +601,51 @@ def report(
     add(f"- date: {dt.datetime.now().astimezone().isoformat(timespec='seconds')}")
     add(f"- machine: {cpu_model()}, nproc {os.cpu_count()} "
         f"(usable {len(os.sched_getaffinity(0))}), {platform.system()} {platform.release()}; "
-        f"load average at start {load[0]}, at end {load[1]}")
+        f"load average {load[0]} (start) / {load[1]} (end)")
     add(f"- C (librrr): {meta['c']}; C++ (driver + Pinocchio headers): {meta['cxx']}; "
         "no -march=native (the prebuilt libpinocchio crashes with it)")
     add(f"- Pinocchio {meta['pinocchio']} (prebuilt libpinocchio_default from the pin wheel), "
         f"Eigen {meta['eigen']}, {py.info['versions']}, Python {platform.python_version()}")
+    calls = groups["tau"]["ops"][0]["calls"]
+    lm_calls = groups["ik"]["ops"][2]["calls"]
+    clock = ("the CPU time of the thread (time spent waiting for a core is left out)"
+             if meta.get("clock", "cpu") == "cpu" else "the wall clock")
+    add(f"- interleaved: {meta['repeats']} repeats (RTB rows: {args.py_repeats}); each repeat "
+        "times one block of ours and one of the reference back to back (order reversed every "
+        "other repeat) on the same inputs; every cell is min / median / max over the repeats, "
+        f"the ratio is taken per repeat; blocks timed by {clock}")
     add(f"- C/C++ rows: {meta['states']} random states (q in [-pi, pi], qd in [-3, 3], "
-        f"qdd in [-10, 10]), the same for ours and Pinocchio; {meta['calls']} calls x "
-        f"{meta['repeats']} repeats, best repeat in ns/call (throughput loop; empty loop "
-        f"{t['loop.empty']:.1f} ns, not subtracted)")
+        f"qdd in [-10, 10]), the same for ours and Pinocchio; blocks of {calls} calls "
+        f"(the C++ LM: {lm_calls}), ns/call (throughput loop; empty loop "
+        f"{mmm(d['loop.empty'], fmt_ns)} ns, not subtracted)")
     add(f"- libm floor in the same driver: sin + cos of q2 and q3 as in rrr_trig_of "
-        f"(two sincos calls) {t['floor.trig']:.1f} ns, one atan2 {t['floor.atan2']:.1f} ns "
-        f"(`rrr_ik` calls atan2 {ik_all.atan2} times, `rrr_ik_branch` {ik_one.atan2} times)")
-    if "kernel.tau" in t:
+        f"(two sincos calls) {mmm(d['floor.trig'], fmt_ns)} ns, one atan2 "
+        f"{mmm(d['floor.atan2'], fmt_ns)} ns (`rrr_ik` calls atan2 {ik_all.atan2} times, "
+        f"`rrr_ik_branch` {ik_one.atan2} times)")
+    if "kernel.tau" in d:
         add(f"- diagnostic: the tau kernel alone (rrr_trig_of + generated code, no argument "
-            f"checks, called from the driver) {t['kernel.tau']:.1f} ns of the "
-            f"{t['tau.ours']:.1f} ns of `rrr_inverse_dynamics`")
-    add(f"- Python rows: {args.py_states} states, best of {args.py_repeats} passes; "
-        "includes interpreter and binding overhead on both sides (`Model`: the compiled binding "
-        "rrr_robot.core._ext of the installed package; bare ctypes: this build's librrr.so)")
+            f"checks, called from the driver) {mmm(d['kernel.tau'], fmt_ns)} ns against "
+            f"{mmm(d['tau.ours'], fmt_ns)} ns of `rrr_inverse_dynamics` in the same repeats")
+    add(f"- RTB rows: {args.py_states} inputs (accel: {min(args.py_states, 256)}); "
+        "the reference block is one Python call per "
+        f"input, ours one ctypes call of a C loop over the same inputs ({py.info['loops']}, "
+        "bench/core_loops.c, the same librrr), so ours is the C call alone")
     add(f"- IK: position only (mask [1,1,1,0,0,0]), targets from q1 in [-pi, pi], "
         f"q2 in [-pi/2, pi/2], q3 in [0.2, 2.5]; LM solvers: q0 = (0.1, 0.2, 1.0), "
         f"tol = {args.ik_tol:g} on E = |e|^2/2, ilimit 30, slimit 100, joint_limits off. "
         f"RTB: {py.info['ik_lm']}; C++ LM: {lm_txt}. "
         f"Ours returns all {info['ik.ours']['mean_solutions']:.0f} branches per target.")
     add("- ratio = reference time / our time (> 1: ours is faster). "
-        "Noisy shared VM: compare ratios, not absolute times.")
+        "Noisy shared VM: compare ratios, not absolute times. The Python API (`rrr_robot`) "
+        "against the references' Python APIs: bench/bench_python.py.")
     add("")
-    add("## Compiled: librrr (C) vs Pinocchio (C++) and RTB")
+    add("## Compiled: librrr (C) vs Pinocchio (C++)")
     add("")
     lines.extend(render_rows(rows_c))
     add("")
-    add("## Through Python: our binding (`rrr_robot`) vs RTB")
+    add("## librrr (C) vs the Robotics Toolbox (Python)")
     add("")
-    lines.extend(render_rows(rows_py))
+    lines.extend(render_rows(rows_rtb))
     add("")
     add("## Operation counts vs the paper")
     add("")
@@ -523,13 +660,15 @@ def report(
         f"| {PAPER_DYN_FLOPS} | SymPy count_ops after CSE |")
     for name, label in (
         ("rrr_gen_regressor", "regressor R"),
+        ("rrr_gen_bias", "c + h, the plant's forward dynamics"),
         ("rrr_gen_mass_matrix", "D(q)"),
         ("rrr_gen_coriolis", "c(q, qd)"),
         ("rrr_gen_gravity", "h(q)"),
     ):
-        add(f"| {label} (`{name}`) | {gen.ops[name] + TRIG_PROLOGUE_OPS} ops + "
-            f"{TRIG_PROLOGUE_CALLS} sin/cos ({gen.ops[name]} generated: {gen.detail[name]}) "
-            "| | SymPy count_ops after CSE |")
+        if name in gen.ops:
+            add(f"| {label} (`{name}`) | {gen.ops[name] + TRIG_PROLOGUE_OPS} ops + "
+                f"{TRIG_PROLOGUE_CALLS} sin/cos ({gen.ops[name]} generated: "
+                f"{gen.detail[name]}) | | SymPy count_ops after CSE |")
     add("")
     add("- Generated dynamics: `derive_dynamics.py --output-dir <tmp>`, its \"operations after "
         "CSE\" (SymPy `count_ops`: each binary +, -, *, / and unary minus is 1, x**2 is 1 "
@@ -545,19 +684,23 @@ def report(
         + (", ".join(f"`{s}`" for s in ik_all.stale) if ik_all.stale else "none")
         + ".")
     add("")
-    key = {
-        "tau_vs_rnea": rows_c[4].ratio,
-        "ik_vs_ik_lm": rows_c[1].ratio,
-        "ik_branch_vs_ik_lm": rows_c[3].ratio,
-        "ik_py_vs_ik_lm": rows_py[1].ratio,
-        "tau_py_vs_rne": rows_py[3].ratio,
-        "fd_vs_aba": rows_c[11].ratio,
-        "mass_vs_crba": rows_c[7].ratio,
+    key_rows = {
+        "tau_vs_rnea": rows_c[3],
+        "ik_vs_cpp_lm": rows_c[1],
+        "fd_vs_aba": rows_c[9],
+        "mass_vs_crba": rows_c[5],
+        "ik_vs_ik_lm": rows_rtb[0],
+        "ik_branch_vs_ik_lm": rows_rtb[1],
+        "tau_vs_rne": rows_rtb[2],
+        "fd_vs_accel": rows_rtb[3],
     }
-    add(f"Key ratios: tau = R p vs rnea {key['tau_vs_rnea']:.1f}x (target >= "
-        f"{TARGET_TAU_VS_RNEA:g}x); IK (C, all branches) vs ets.ik_LM {key['ik_vs_ik_lm']:,.0f}x, "
-        f"one branch {key['ik_branch_vs_ik_lm']:,.0f}x (target >= {TARGET_IK_VS_LM:g}x); "
-        f"IK through the Python API vs ets.ik_LM {key['ik_py_vs_ik_lm']:,.1f}x.")
+    key = {name: {"min": r.ratio.min, "median": r.ratio.median, "max": r.ratio.max}
+           for name, r in key_rows.items()}
+    add(f"Key ratios (min / median / max): tau = R p vs rnea "
+        f"{mmm(key_rows['tau_vs_rnea'].ratio, fmt_ratio)} ({key_rows['tau_vs_rnea'].verdict()}); "
+        f"IK (C, all branches) vs ets.ik_LM {mmm(key_rows['ik_vs_ik_lm'].ratio, fmt_ratio)} "
+        f"({key_rows['ik_vs_ik_lm'].verdict()}), one branch "
+        f"{mmm(key_rows['ik_branch_vs_ik_lm'].ratio, fmt_ratio)}.")
     return "\n".join(lines), key
 
 
@@ -569,38 +712,49 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cmake", default=shutil.which("cmake") or "cmake")
     parser.add_argument("--skip-build", action="store_true", help="reuse an existing build")
     parser.add_argument("--states", type=int, default=1024, help="C++ states (power of 2)")
-    parser.add_argument("--calls", type=int, default=200_000, help="C++ calls per repeat")
-    parser.add_argument("--repeats", type=int, default=7, help="C++ repeats (best of)")
-    parser.add_argument("--py-states", type=int, default=512, help="Python states/targets")
-    parser.add_argument("--py-repeats", type=int, default=7, help="Python passes (best of)")
+    parser.add_argument("--calls", type=int, default=20_480,
+                        help="C++ calls per block, rounded up to whole passes over the states "
+                             "(the C++ LM: 1/20 of it); default %(default)s")
+    parser.add_argument("--repeats", type=int, default=31,
+                        help="C++ interleaved repeats (blocks of each operation)")
+    parser.add_argument("--py-states", type=int, default=512, help="RTB inputs (accel: 256)")
+    parser.add_argument("--py-repeats", type=int, default=21, help="RTB interleaved repeats")
+    parser.add_argument("--c-loop-calls", type=int, default=20_480,
+                        help="librrr calls per C-loop block against RTB, rounded up to whole "
+                             "passes over the inputs; default %(default)s")
     parser.add_argument("--ik-tol", type=float, default=1e-12,
                         help="LM tolerance on E = |e|^2/2 (RTB's tol), default %(default)g")
-    parser.add_argument("--seed", type=int, default=1, help="seed of the Python-side states")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the RTB-side inputs")
+    parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
+                        help="time blocks by the CPU time of the thread (default: the time spent "
+                             "waiting for a core on a loaded machine is left out) or the wall "
+                             "clock")
     parser.add_argument("--json", type=Path, help="also write the raw results to this file")
     args = parser.parse_args(argv)
+    for name in ("states", "calls", "repeats", "py_states", "py_repeats", "c_loop_calls"):
+        if getattr(args, name) <= 0:
+            parser.error(f"--{name.replace('_', '-')} must be positive")
 
     load_start = load_average()
     build_dir = args.build_dir.resolve()
     if not args.skip_build:
         build(build_dir, args.cmake)
     exe = build_dir / "bench_core"
-    lib = build_dir / "rrr" / "librrr.so"
-    if not exe.is_file() or not lib.is_file():
-        sys.exit(f"run_bench: {exe} or {lib} missing: run without --skip-build")
-
-    # bare ctypes calls use the librrr.so of this very build; Model, the installed package (pip
-    # install .[bench]: its compiled binding, which this checkout's sources alone do not have)
-    os.environ["RRR_LIBRARY"] = str(lib)
+    loops = build_dir / "libbench_loops.so"
+    if not exe.is_file() or not loops.is_file():
+        sys.exit(f"run_bench: {exe} or {loops} missing: run without --skip-build")
 
     core = run_core(exe, args)
-    py = python_side(args)
+    rtb_results = rtb_side(args, loops)
     gen = dynamics_count()
     load_end = load_average()
-    text, key = report(args, core, py, gen, (load_start, load_end))
+    text, key = report(args, core, rtb_results, gen, (load_start, load_end))
     print(text)
     if args.json:
         args.json.write_text(
-            json.dumps({"core": core, "python": py.times, "python_checks": py.checks,
+            json.dumps({"load": [load_start, load_end], "core": core,
+                        "rtb": {k: list(s.values) for k, s in rtb_results.series.items()},
+                        "rtb_checks": rtb_results.checks, "rtb_info": rtb_results.info,
                         "ops": gen.ops, "key_ratios": key}, indent=1),
             encoding="utf-8",
         )
