@@ -368,7 +368,7 @@ static void hermite5(double h, double s, double p0, double v0, double a0, double
     const double c4 = -15.0 * d + h * (8.0 * v0 + 7.0 * v1) + 0.5 * hh * (3.0 * a0 - 2.0 * a1);
     const double c5 = 6.0 * d - 3.0 * h * (v0 + v1) - 0.5 * hh * (a0 - a1);
     out[0] = p0 + s * (h * v0 + s * (0.5 * hh * a0 + s * (c3 + s * (c4 + s * c5))));
-    out[1] = v0 + s * (h * a0 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5))) / h;
+    out[1] = v0 + s * (hh * a0 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5))) / h;
     out[2] = a0 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5)) / hh;
 }
 

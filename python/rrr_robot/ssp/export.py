@@ -48,7 +48,7 @@ REF_OUT = {**{f"{s}[{i}]": u for s, u in (("q_ref", "rad"), ("qd_ref", "rad/s"),
            **{f"x_ref.{a}": "m" for a in "xyz"}}
 CTRL_IN = {**{f"{s}[{i}]": u for s, u in (("q_ref", "rad"), ("qd_ref", "rad/s"),
                                           ("qdd_ref", "rad/s2"), ("q", "rad"),
-                                          ("qd", "rad/s")) for i in _J}}
+                                          ("qd", "rad/s"), ("qdd", "rad/s2")) for i in _J}}
 CTRL_OUT = {f"{s}[{i}]": "V" for s in ("u", "u_n", "u_c") for i in _J}
 PLANT_IN = {f"u[{i}]": "V" for i in _J}
 PLANT_OUT = {**{f"{s}[{i}]": u for s, u in (("q", "rad"), ("qd", "rad/s"), ("qdd", "rad/s2"))
@@ -72,11 +72,12 @@ class SspJob:
 
 
 def connections() -> list[Connection]:
-    """reference -> controller, plant -> controller, controller u -> plant u."""
+    """reference -> controller (q_ref, qd_ref, qdd_ref), plant -> controller (q, qd, qdd),
+    controller u -> plant u."""
     out = [Connection("reference", n, "controller", n)
            for n in REF_OUT if not n.startswith("x_ref")]
     out += [Connection("plant", f"{s}[{i}]", "controller", f"{s}[{i}]")
-            for s in ("q", "qd") for i in _J]
+            for s in ("q", "qd", "qdd") for i in _J]
     out += [Connection("controller", f"u[{i}]", "plant", f"u[{i}]") for i in _J]
     return out
 
@@ -118,8 +119,9 @@ def export_ssp(job: SspJob) -> dict[str, Any]:
     plant_values: dict[str, float | bool] = {f"q0[{i}]": float(ref.q[0, i - 1]) for i in _J}
     plant_values |= {f"qd0[{i}]": float(ref.qd[0, i - 1]) for i in _J}
     plant_values |= model_fmu_values(model)
-    ctrl_values = controller_fmu_values(scn, model, robot.require_control())
     lookahead = job.lookahead_steps * step
+    ctrl_values = controller_fmu_values(scn, model, robot.require_control())
+    ctrl_values["lead"] = lookahead
     info = {
         "scenario": scn.name, "text": ref.spec.text, "scale": repr(job.scale),
         "robot": job.robot.name, "lookahead_steps": str(job.lookahead_steps),

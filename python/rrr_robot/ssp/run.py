@@ -217,6 +217,8 @@ def run_ssp(job: SspRun, progress: Progress = None) -> dict[str, Any]:
             "fmi_version": "2.0",
             "ssp": {"file": str(job.ssp), "tool": job.tool, "rows": int(sig.t.size),
                     "first_row_time": float(sig.t[0]), "simulated_time": simulated,
+                    "wall_time": sig.wall_time,
+                    "real_time_factor": simulated / sig.wall_time if sig.wall_time > 0 else None,
                     "lookahead_steps": arch.info.get("lookahead_steps"), **sig.details},
             "paper_eq16": {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)},
         }
