@@ -81,7 +81,9 @@ def _libcosim(arch: SspArchive, real_time: bool, progress: Progress) -> Signals:
     except ImportError as exc:
         raise BadInputError("--tool libcosim needs libcosimpy: pip install 'rrr_robot[ssp]' "
                             f"({exc})") from exc
-    log_output_level(CosimLogLevel.WARNING)  # libcosim's and FMI Library's warnings and errors
+    # libcosim's and the FMI Library's warnings and errors; with rrr -v also their progress
+    log_output_level(CosimLogLevel.INFO if log.isEnabledFor(logging.DEBUG)
+                     else CosimLogLevel.WARNING)
     try:
         ex = CosimExecution.from_ssp_file(str(arch.path))
     except AssertionError as exc:

@@ -13,11 +13,19 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
+
 from ..core._arrays import FloatArray
 from ..core.tables import write_csv
 from ..writing.trajectory import Reference
 
-__all__ = ["TABLE_COLUMNS", "TABLE_FILE", "reference_columns", "write_reference_table"]
+__all__ = [
+    "TABLE_COLUMNS",
+    "TABLE_FILE",
+    "placeholder_columns",
+    "reference_columns",
+    "write_reference_table",
+]
 
 #: The table's file name in the FMU's resources/ folder (REF_TABLE_FILE in fmu/reference).
 TABLE_FILE = "reference.csv"
@@ -48,3 +56,16 @@ def write_reference_table(path: str | os.PathLike[str], ref: Reference) -> Path:
     """Write the table of ``ref`` (every value with 17 significant digits: the FMU reads back the
     float64 samples bit for bit), atomically."""
     return write_csv(path, reference_columns(ref))
+
+
+def placeholder_columns(ref: Reference, duration: float = 1.0) -> dict[str, FloatArray]:
+    """The table the packaged reference FMU ships (fmu/reference/resources/reference.csv, written
+    by tools/make_reference_table.py): the first sample of ``ref`` (the default writing task's
+    start pose and tip position) held at rest from t = 0 to ``duration``, so that the FMU on its
+    own simulates its default experiment; ``rrr ssp`` replaces it with the whole reference."""
+    cols = reference_columns(ref)
+    out: dict[str, FloatArray] = {"t": np.array([0.0, duration])}
+    for name in TABLE_COLUMNS[1:]:
+        at_rest = name.startswith(("qd", "xd"))  # qd_ref, qdd_ref, xd_ref, xdd_ref
+        out[name] = np.zeros(2) if at_rest else np.full(2, cols[name][0])
+    return out
