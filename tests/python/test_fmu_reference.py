@@ -7,6 +7,7 @@ through FMPy's FMU2Slave (tests/python/fmu_support.py keeps the FMU's log messag
 
 from __future__ import annotations
 
+import itertools
 import shutil
 import zipfile
 from collections.abc import Callable
@@ -58,7 +59,7 @@ def play(folder: Path, times: np.ndarray, params: dict[str, float] | None = None
     with Slave("reference", unzip_dir=folder).instantiate() as s:
         s.to_step_mode(params)
         out = [s.get(OUT)]
-        for a, b in zip(times[:-1], times[1:], strict=True):
+        for a, b in itertools.pairwise(times):
             s.fmu.doStep(float(a), float(b - a))
             out.append(s.get(OUT))
     return np.array(out)

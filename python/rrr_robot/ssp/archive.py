@@ -8,7 +8,7 @@ missing or its FMU missing from the archive, a connector that is no variable of 
 the wrong causality), a connection whose ends do not exist or do not go from an output to an
 input, an input connected twice or not at all, a parameter value that is not a finite number or
 a Boolean, no default experiment or fixed step, and a reference FMU without its table.
-The structure is read with FMPy's SSD reader (``fmpy.ssp.ssd.read_ssd``) after our checks.
+The SSD is checked against FMPy's copy of the SSP 1.0 schemas, then read with lxml.
 """
 
 from __future__ import annotations
@@ -219,13 +219,13 @@ def read_ssp(path: str | Path) -> SspArchive:
             a = (conn.get("startElement"), conn.get("startConnector"))
             b = (conn.get("endElement"), conn.get("endConnector"))
             text = f"{a[0]}.{a[1]} -> {b[0]}.{b[1]}"
-            if kinds.get(a) != "output" or kinds.get(b) != "input":  # type: ignore[arg-type]
+            if kinds.get(a) != "output" or kinds.get(b) != "input":
                 raise BadInputError(
                     f"{where}: bad connection {text}: it must go from an output connector to "
                     "an input connector of the components "
-                    f"(start is {kinds.get(a, 'not a connector')}, end is "  # type: ignore[arg-type]
-                    f"{kinds.get(b, 'not a connector')})")  # type: ignore[arg-type]
-            fed[b] = fed.get(b, 0) + 1  # type: ignore[index]
+                    f"(start is {kinds.get(a, 'not a connector')}, end is "
+                    f"{kinds.get(b, 'not a connector')})")
+            fed[b] = fed.get(b, 0) + 1
             connections.append((*a, *b))
         for key, kind in kinds.items():
             if kind == "input" and fed.get(key, 0) != 1:
