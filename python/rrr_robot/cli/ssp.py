@@ -37,10 +37,9 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
         print(f"{name:>10}: {_scenario_line(s)}")
     info = summary["ssp"]
     if job.real_time:
-        lc = info["libcosim_real_time_factor"]
-        print(f"real time: {info['real_time_factor']:.4f} over {info['simulated_time']:.3f} s "
-              f"(simulated / wall-clock time); libcosim's rolling factor {lc['min']:.3f} to "
-              f"{lc['max']:.3f}")
+        print(f"real-time factor {info['real_time_factor']:.4f} over "
+              f"{info['simulated_time']:.3f} s (simulated / wall-clock time; libcosim's own "
+              f"figure at the end: {info['libcosim_real_time_factor']:.4f})")
     print(f"results in {job.out}/ (summary.json, {', '.join(summary['scenarios'])}.csv)")
     return 0
 
