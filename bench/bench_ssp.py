@@ -66,7 +66,8 @@ def main() -> int:
                     s = run_ssp(SspRun(ssp=ssp, tool=tool, out=root / f"{ssp.stem}-{tool}"))
                     m = s["scenarios"][scn]
                     cells.append(f"{1e3 * m['tip_error_max']:.3f} / "
-                                 f"{1e3 * m['tip_error_rms']:.3f}")
+                                 f"{1e3 * m['tip_error_rms']:.3f} "
+                                 f"({s['ssp']['real_time_factor']:.0f}x real time)")
                 print(f"| `{scn}` | {1e3 * w['tip_error_max']:.3f} / "
                       f"{1e3 * w['tip_error_rms']:.3f} | {label} | {cells[0]} | {cells[1]} |")
         if not args.no_real_time:
