@@ -11,9 +11,11 @@ sample); a default experiment over the reference at its sample period.
 
 The masters of other tools pass a step's outputs to the other FMUs only after every FMU took the
 step (libcosim, FMPy: a Jacobi data flow), so the plant integrates each step with the voltage
-computed one step earlier. The reference FMU's ``lookahead`` (one step by default) gives the
-controller the reference of the step the plant will integrate, so the reference is not late;
-the measured state still is (README, "The writing task as an SSP system").
+computed from the reference and the measurement of one step earlier. The archive compensates it
+inside the system, by ``lookahead_steps`` communication steps (default 1): the reference FMU's
+``lookahead`` gives the controller the reference of the step the plant will integrate, and the
+controller's ``lead`` carries the measured state forward by as much (``rrr_predict_state``)
+(README, "The writing task as an SSP system").
 """
 
 from __future__ import annotations
@@ -61,7 +63,8 @@ MAX_LOOKAHEAD_STEPS = 10
 @dataclass(frozen=True)
 class SspJob:
     """What to export: the archive's path, the writing task's text, one scenario, the robot file,
-    the letter scale, and the reference FMU's look-ahead in communication steps."""
+    the letter scale, and the compensation in communication steps (the reference FMU's
+    ``lookahead`` and the controller's ``lead``; 0: none)."""
 
     out: Path
     text: str | None = None
@@ -149,6 +152,7 @@ def export_ssp(job: SspJob) -> dict[str, Any]:
     with tempfile.TemporaryDirectory(prefix="rrr-ssp-") as tmp:
         table = write_reference_table(Path(tmp) / TABLE_FILE, ref)
         reference_fmu = _reference_fmu(table)
+    job.out.parent.mkdir(parents=True, exist_ok=True)  # check_folder: it can be created
     with atomic_path(job.out) as part, zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
         z.writestr("SystemStructure.ssd", ssd)
         z.writestr(f"resources/{COMPONENTS['reference']}", reference_fmu)

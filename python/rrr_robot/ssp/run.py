@@ -223,13 +223,14 @@ def run_ssp(job: SspRun, progress: Progress = None) -> dict[str, Any]:
             "paper_eq16": {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)},
         }
         log.info("%s in %s: tip error max %.3f mm, %.1fx real time", name, job.tool,
-                 1e3 * res_max(res), simulated / sig.wall_time if sig.wall_time > 0 else np.inf)
+                 1e3 * _tip_error_max(res),
+                 simulated / sig.wall_time if sig.wall_time > 0 else np.inf)
         summary["files"] = sorted([*rs.names(), "summary.json"])
         summary = to_strict_json_value(summary)
         rs.write_text("summary.json", strict_json(summary) + "\n")
     return summary
 
 
-def res_max(res: CosimResult) -> float:
+def _tip_error_max(res: CosimResult) -> float:
     """The maximum tip error of a result, m."""
     return float(np.max(np.linalg.norm(res.tip - res.x_ref, axis=1)))
