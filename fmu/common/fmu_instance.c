@@ -11,6 +11,7 @@
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* ---- logging --------------------------------------------------------------------------------- */
@@ -72,20 +73,6 @@ static int blank(const char *s)
     return 1;
 }
 
-static int hex_digit(char c)
-{
-    if (c >= '0' && c <= '9') {
-        return c - '0';
-    }
-    if (c >= 'a' && c <= 'f') {
-        return c - 'a' + 10;
-    }
-    if (c >= 'A' && c <= 'F') {
-        return c - 'A' + 10;
-    }
-    return -1;
-}
-
 /* The local folder of the importer's resource location, ending in a separator, allocated with
  * host->alloc; NULL when there is none, or (FMI 2) it is not a local file URI: "file:///p",
  * "file://localhost/p" or "file:/p", percent-escapes decoded; on Windows "file:///C:/p" is
@@ -129,11 +116,10 @@ static char *resource_folder(const fmu_host *host)
     }
     size_t k = 0;
     for (size_t i = 0; i < n; ++i) {
-        int hi = -1;
-        int lo = -1;
         if (host->resources_is_uri && loc[i] == '%' && i + 2 < n &&
-            (hi = hex_digit(loc[i + 1])) >= 0 && (lo = hex_digit(loc[i + 2])) >= 0) {
-            out[k++] = (char)(hi * 16 + lo);
+            isxdigit((unsigned char)loc[i + 1]) && isxdigit((unsigned char)loc[i + 2])) {
+            const char hex[3] = {loc[i + 1], loc[i + 2], '\0'};
+            out[k++] = (char)strtol(hex, NULL, 16);
             i += 2;
         } else {
             out[k++] = loc[i];
