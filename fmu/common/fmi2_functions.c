@@ -127,11 +127,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               const fmi2CallbackFunctions *functions, fmi2Boolean visible,
                               fmi2Boolean loggingOn)
 {
-    (void)fmuResourceLocation; /* no resources */
-    (void)visible;             /* no user interface */
+    (void)visible; /* no user interface */
     fmu_host host;
     memset(&host, 0, sizeof host);
     host.log = host_log;
+    host.resources = fmuResourceLocation; /* a URI (file:///.../resources) */
+    host.resources_is_uri = 1;
     if (functions != NULL) {
         host.logger = (void (*)(void))functions->logger;
         host.env = functions->componentEnvironment;

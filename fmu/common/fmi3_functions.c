@@ -130,10 +130,12 @@ static void host_log(const fmu_instance *S, fmu_status status, const char *categ
     }
 }
 
-static fmu_host make_host(fmi3InstanceEnvironment env, fmi3LogMessageCallback log_message)
+static fmu_host make_host(fmi3InstanceEnvironment env, fmi3LogMessageCallback log_message,
+                          fmi3String resource_path)
 {
     fmu_host host;
     memset(&host, 0, sizeof host);
+    host.resources = resource_path; /* a path (FMI 3.0 section 2.3.1) */
     host.log = host_log;
     host.logger = (void (*)(void))log_message;
     host.env = env;
@@ -160,9 +162,8 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3InstanceEnvironment instanceEnvironment,
                                           fmi3LogMessageCallback logMessage)
 {
-    (void)resourcePath; /* no resources */
-    (void)visible;      /* no user interface */
-    const fmu_host host = make_host(instanceEnvironment, logMessage);
+    (void)visible; /* no user interface */
+    const fmu_host host = make_host(instanceEnvironment, logMessage, resourcePath);
     return fmu_create("fmi3InstantiateModelExchange", &host, 3, FMU_MODEL_EXCHANGE, instanceName,
                       instantiationToken, loggingOn);
 }
@@ -174,12 +175,11 @@ fmi3Instance fmi3InstantiateCoSimulation(
     size_t nRequiredIntermediateVariables, fmi3InstanceEnvironment instanceEnvironment,
     fmi3LogMessageCallback logMessage, fmi3IntermediateUpdateCallback intermediateUpdate)
 {
-    (void)resourcePath;
     (void)visible;
     (void)earlyReturnAllowed; /* a permission: this FMU never returns early */
     (void)requiredIntermediateVariables;
     (void)intermediateUpdate;
-    const fmu_host host = make_host(instanceEnvironment, logMessage);
+    const fmu_host host = make_host(instanceEnvironment, logMessage, resourcePath);
     if (eventModeUsed) {
         refuse_early(&host, instanceName,
                      "fmi3InstantiateCoSimulation: eventModeUsed must be false (hasEventMode="
@@ -209,7 +209,7 @@ fmi3Instance fmi3InstantiateScheduledExecution(
     (void)clockUpdate;
     (void)lockPreemption;
     (void)unlockPreemption;
-    const fmu_host host = make_host(instanceEnvironment, logMessage);
+    const fmu_host host = make_host(instanceEnvironment, logMessage, NULL);
     refuse_early(&host, instanceName,
                  "fmi3InstantiateScheduledExecution: not provided (the FMU implements Model "
                  "Exchange and Co-Simulation)");

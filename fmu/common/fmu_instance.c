@@ -11,6 +11,7 @@
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* ---- logging --------------------------------------------------------------------------------- */
@@ -72,6 +73,65 @@ static int blank(const char *s)
     return 1;
 }
 
+/* The local folder of the importer's resource location, ending in a separator, allocated with
+ * host->alloc; NULL when there is none, or (FMI 2) it is not a local file URI: "file:///p",
+ * "file://localhost/p" or "file:/p", percent-escapes decoded; on Windows "file:///C:/p" is
+ * "C:/p". FMI 3 passes a path, taken as it is. */
+static char *resource_folder(const fmu_host *host)
+{
+    const char *loc = host->resources;
+    if (loc == NULL || loc[0] == '\0') {
+        return NULL;
+    }
+    if (host->resources_is_uri) {
+        static const char scheme[] = "file:";
+        for (size_t i = 0; i + 1 < sizeof scheme; ++i) {
+            if (tolower((unsigned char)loc[i]) != scheme[i]) {
+                return NULL;
+            }
+        }
+        loc += sizeof scheme - 1;
+        if (loc[0] == '/' && loc[1] == '/') {
+            loc += 2;
+            if (strncmp(loc, "localhost/", 10) == 0) {
+                loc += 9;
+            }
+            if (loc[0] != '/') {
+                return NULL; /* another host */
+            }
+        }
+        if (loc[0] != '/') {
+            return NULL;
+        }
+#if defined(_WIN32)
+        if (isalpha((unsigned char)loc[1]) && loc[2] == ':') {
+            ++loc; /* /C:/... */
+        }
+#endif
+    }
+    const size_t n = strlen(loc);
+    char *out = host->alloc(n + 2, 1);
+    if (out == NULL) {
+        return NULL;
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (host->resources_is_uri && loc[i] == '%' && i + 2 < n &&
+            isxdigit((unsigned char)loc[i + 1]) && isxdigit((unsigned char)loc[i + 2])) {
+            const char hex[3] = {loc[i + 1], loc[i + 2], '\0'};
+            out[k++] = (char)strtol(hex, NULL, 16);
+            i += 2;
+        } else {
+            out[k++] = loc[i];
+        }
+    }
+    if (k == 0 || (out[k - 1] != '/' && out[k - 1] != '\\')) {
+        out[k++] = '/';
+    }
+    out[k] = '\0';
+    return out;
+}
+
 fmu_instance *fmu_create(const char *fn, const fmu_host *host, int fmi_version,
                          fmu_interface interface, const char *name, const char *token,
                          int logging_on)
@@ -120,6 +180,8 @@ fmu_instance *fmu_create(const char *fn, const fmu_host *host, int fmi_version,
     S->interface = interface;
     S->name = name_copy;
     S->data = data;
+    S->resources = resource_folder(host);
+    S->host.resources = NULL; /* borrowed: valid during instantiation only */
     S->log_mask = logging_on ? FMU_LOG_ALL_MASK : FMU_LOG_DEFAULT_MASK;
     if (fmu_reset_instance(S) > FMU_WARNING) {
         log_early(host, fmi_version, name, "%s: %s could not set its start values", fn,
@@ -146,14 +208,21 @@ void fmu_destroy(fmu_instance *S)
         return;
     }
     void (*release)(void *) = S->host.release;
+    if (S->model->release != NULL) {
+        S->model->release(S);
+    }
     release(S->data);
     release(S->name);
+    release(S->resources);
     memset(S, 0, sizeof *S);
     release(S);
 }
 
 fmu_status fmu_reset_instance(fmu_instance *S)
 {
+    if (S->model->release != NULL) {
+        S->model->release(S); /* e.g. a table read from resources/: read again when needed */
+    }
     memset(S->data, 0, S->model->data_size);
     S->state = FMU_INSTANTIATED;
     S->time = 0.0;

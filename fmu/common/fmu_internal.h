@@ -46,12 +46,6 @@ int fmu_derivative_index(const fmu_model *m, fmu_vr vr);
  */
 void fmu_states_str(int fmi_version, unsigned mask, char *buf, size_t n);
 
-/** @brief 64-bit FNV-1a hash of n bytes, continuing from h (start with FMU_FNV_OFFSET). */
-uint64_t fmu_fnv1a(uint64_t h, const void *bytes, size_t n);
-
-/** FNV-1a 64-bit offset basis. */
-#define FMU_FNV_OFFSET 14695981039346656037ull
-
 /* ---- instances (fmu_instance.c) ---------------------------------------------------------- */
 
 /** Log categories enabled in every new instance: warnings, discards, errors, fatals. */

@@ -142,6 +142,10 @@ typedef struct fmu_model {
     /** 1 when unknown (an output or a state derivative) depends directly on known (an input or
      *  a continuous state): ModelStructure, XML only. */
     int (*depends)(fmu_vr unknown, fmu_vr known);
+    /** Optional (NULL: none): free what the model keeps in fmu_instance.work (memory outside
+     *  the model data, e.g. a table read from resources/) and set work to NULL; called at
+     *  reset and when the instance is freed. */
+    void (*release)(fmu_instance *inst);
 } fmu_model;
 
 /** The one model linked into this binary (defined in fmu/<model>/model.c). */
@@ -159,6 +163,10 @@ typedef struct fmu_host {
     void *env;                        ///< the importer's environment pointer for the logger
     void *(*alloc)(size_t n, size_t size); ///< zero-filling allocator (importer's or calloc)
     void (*release)(void *p);         ///< its deallocator
+    /** The importer's resource location as it passed it (borrowed, may be NULL): a URI
+     *  ("file:///C:/fmu/resources", FMI 2) or a path ending in a separator (FMI 3). */
+    const char *resources;
+    int resources_is_uri;             ///< nonzero: `resources` is a file URI (FMI 2)
 } fmu_host;
 
 /** @brief One instance. Models read `data`, `state` and `time`; everything else belongs to the glue. */
@@ -177,6 +185,12 @@ struct fmu_instance {
     int dirty;                        ///< nonzero: outputs may be stale (input/state/parameter set)
     char token[FMU_TOKEN_SIZE];       ///< the instantiation token (GUID) of this model
     void *data;                       ///< model data, data_size bytes (host.alloc)
+    /** The FMU's resources/ folder as a local path ending in '/' (owned), or NULL when the
+     *  importer passed no resource location or one that is not a local file URI. */
+    char *resources;
+    /** Memory the model owns outside `data` (host.alloc; freed by the model's release hook):
+     *  not part of FMU state snapshots, which hold `data` only. NULL until the model sets it. */
+    void *work;
 };
 
 /** @brief Log categories declared in the XML, indices of fmu_instance.log_mask bits. */
@@ -236,6 +250,12 @@ int fmu_model_check(const fmu_model *m, const char **msg, size_t *row);
  * @param[out] out  at least FMU_TOKEN_SIZE bytes
  */
 void fmu_model_token(const fmu_model *m, const void *data, char out[]);
+
+/** @brief 64-bit FNV-1a hash of n bytes, continuing from h (start with FMU_FNV_OFFSET). */
+uint64_t fmu_fnv1a(uint64_t h, const void *bytes, size_t n);
+
+/** FNV-1a 64-bit offset basis. */
+#define FMU_FNV_OFFSET 14695981039346656037ull
 
 /** @brief Address of the value of row v in data (double for Real, int for Boolean). */
 static inline void *fmu_var_ptr(void *data, const fmu_variable *v)

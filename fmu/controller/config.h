@@ -5,7 +5,9 @@
  *
  * Direct feedthrough: the outputs u, u_n, u_c are rrr_ctc() of the current inputs (reference
  * q_ref, qd_ref, qdd_ref and measurement q, qd), recomputed whenever an input or parameter has
- * changed and an output is read. The controller has its own copy of the model parameters, with
+ * changed and an output is read. With lead > 0 the law acts on the measured state carried lead
+ * seconds forward along qd and the measured qdd (rrr_predict_state): for masters that pass the
+ * plant's outputs on one step late. The controller has its own copy of the model parameters, with
  * the plant's names, so a model mismatch is set per FMU.
  */
 #ifndef RRR_FMU_CONTROLLER_CONFIG_H
@@ -30,7 +32,9 @@ typedef enum controller_vr {
     vr_kd = vr_kp + RRR_NJ,                    ///< kd[1..3], parameter, V s/rad
     vr_feedforward = vr_kd + RRR_NJ,           ///< feedforward, Boolean parameter
     vr_model,                                  ///< first of the RRR_MV_COUNT model parameters
-    vr_time = vr_model + RRR_MV_COUNT,         ///< time, independent variable, s
+    vr_qdd = vr_model + RRR_MV_COUNT,          ///< qdd[1..3], input (measured), rad/s2
+    vr_lead = vr_qdd + RRR_NJ,                 ///< lead, parameter, s (measurement predictor)
+    vr_time,                                   ///< time, independent variable, s
     vr_count
 } controller_vr;
 
@@ -43,6 +47,9 @@ typedef struct controller_data {
     double qdd_ref[RRR_NJ];                    ///< reference acceleration, rad/s2
     double q[RRR_NJ];                          ///< measured position, rad
     double qd[RRR_NJ];                         ///< measured velocity, rad/s
+    double qdd[RRR_NJ];                        ///< measured acceleration, rad/s2 (for lead)
+    double lead;                               ///< the law acts on (q, qd) carried lead s
+                                               ///< forward (rrr_predict_state); 0: as measured
     rrr_ctc_output out;                        ///< u, u_n, u_c of the current inputs
 } controller_data;
 

@@ -38,13 +38,20 @@ static const fmu_variable controller_vars[] = {
     JOINT_OUTPUTS(vr_u_n, "u_n",
                   "feedforward voltage (eq 10 along the reference; 0 if feedforward is off)",
                   out.u_n),
-    JOINT_OUTPUTS(vr_u_c, "u_c", "PD voltage kp (q_ref - q) + kd (qd_ref - qd)", out.u_c),
+    JOINT_OUTPUTS(vr_u_c, "u_c", "PD voltage kp (q_ref - q) + kd (qd_ref - qd), q and qd predicted by lead",
+                  out.u_c),
     JOINT_PARAMS(vr_kp, "kp", "proportional gain", "V/rad", gains.kp),
     JOINT_PARAMS(vr_kd, "kd", "derivative gain", "V.s/rad", gains.kd),
     FMU_ROW(vr_feedforward, FMU_BOOLEAN, FMU_PARAMETER, FMU_FIXED, "feedforward",
             "add the model feedforward u_n (computed-torque); false: PD only", NULL, T,
             gains.feedforward),
     RRR_MODEL_VARS
+    JOINT_INPUTS(vr_qdd, "qdd", "measured acceleration (used when lead > 0)", "rad/s2", qdd),
+    FMU_PARAM(vr_lead, "lead",
+              "predictor: the law acts on q + lead qd + lead^2/2 qdd and qd + lead qdd, in [0, "
+              "1]; one communication step compensates a master that passes the plant's "
+              "outputs on one step late; 0: q and qd as measured",
+              "s", T, lead),
     FMU_TIME_ROW(vr_time),
 };
 
@@ -95,6 +102,11 @@ static fmu_status initialize(fmu_instance *inst)
                     : "");
         return FMU_ERROR;
     }
+    if (!(c->lead >= 0.0 && c->lead <= 1.0)) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR, "%s: parameter lead must be in [0, 1] s, got %.17g",
+                FMU_FN(inst, "ExitInitializationMode"), c->lead);
+        return FMU_ERROR;
+    }
     return check_gains(inst, FMU_FN(inst, "ExitInitializationMode"));
 }
 
@@ -105,8 +117,12 @@ static fmu_status calculate(fmu_instance *inst)
         return FMU_ERROR;
     }
     rrr_ctc_output out;
-    const rrr_status st =
-        rrr_ctc(&c->model, &c->gains, c->q_ref, c->qd_ref, c->qdd_ref, c->q, c->qd, &out);
+    double q[RRR_NJ];
+    double qd[RRR_NJ];
+    rrr_status st = rrr_predict_state(c->q, c->qd, c->qdd, c->lead, q, qd);
+    if (st == RRR_OK) {
+        st = rrr_ctc(&c->model, &c->gains, c->q_ref, c->qd_ref, c->qdd_ref, q, qd, &out);
+    }
     if (st != RRR_OK) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
                 "%s: rrr_ctc failed at t = %.17g: %s (q_ref = [%.17g, %.17g, %.17g], q = [%.17g, "
@@ -128,13 +144,18 @@ static fmu_status do_step(fmu_instance *inst, double h)
 }
 
 /* u_n(i) depends on the whole reference (D(q_ref) couples the joints); u_c(i) on joint i's
- * q_ref, qd_ref, q, qd; u = sat(u_n + u_c) on both sets. Unsigned wrap-around:
- * vr - first < n  <=>  first <= vr < first + n. */
+ * q_ref, qd_ref, q, qd and qdd (through the predictor, when lead > 0); u = sat(u_n + u_c) on
+ * both sets. Unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n. */
+_Static_assert(vr_q_ref % RRR_NJ == 0 && vr_q % RRR_NJ == 0 && vr_qdd % RRR_NJ == 0 &&
+                   vr_u % RRR_NJ == 0 && vr_u_n % RRR_NJ == 0 && vr_u_c % RRR_NJ == 0,
+               "joint i of every vector at a value reference = i - 1 (mod 3)");
+
 static int depends(fmu_vr out_vr, fmu_vr in_vr)
 {
     const int ref = in_vr - vr_q_ref < 3 * RRR_NJ;                  /* q_ref, qd_ref, qdd_ref */
     const int same_joint = in_vr % RRR_NJ == out_vr % RRR_NJ;
-    const int pd = same_joint && (in_vr - vr_q_ref < 2 * RRR_NJ || in_vr - vr_q < 2 * RRR_NJ);
+    const int pd = same_joint && (in_vr - vr_q_ref < 2 * RRR_NJ || in_vr - vr_q < 2 * RRR_NJ ||
+                                  in_vr - vr_qdd < RRR_NJ);
     if (out_vr - vr_u_n < RRR_NJ) {
         return ref;
     }

@@ -36,6 +36,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "fmi2FunctionTypes.h"
 #include "rrr/rrr.h"
@@ -73,6 +75,7 @@ typedef struct fmu_api {
     char *xml;       /* modelDescription.xml */
     char id[64];     /* modelIdentifier */
     char guid[64];
+    char resources[1100]; /* fmuResourceLocation: file://<unzip dir>/resources */
     fmi2GetTypesPlatformTYPE *GetTypesPlatform;
     fmi2GetVersionTYPE *GetVersion;
     fmi2SetDebugLoggingTYPE *SetDebugLogging;
@@ -257,6 +260,7 @@ static int fmu_load(fmu_api *api, const char *dir)
         fprintf(stderr, "cannot read modelIdentifier and guid from %s\n", path);
         return 1;
     }
+    snprintf(api->resources, sizeof api->resources, "file://%s/resources", dir);
     snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", dir, api->id);
     api->dl = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (api->dl == NULL) {
@@ -387,8 +391,23 @@ static int inst_new_type(inst *x, const fmu_api *api, const char *name, fmi2Type
     x->cb.freeMemory = count_free;
     x->cb.stepFinished = NULL;
     x->cb.componentEnvironment = &x->log;
-    x->c = api->Instantiate(name, type, api->guid, "file:///nonexistent/resources", &x->cb,
-                            fmi2False, fmi2False);
+    x->c = api->Instantiate(name, type, api->guid, api->resources, &x->cb, fmi2False,
+                            fmi2False);
+    CHECK(x->c != NULL);
+    return x->c == NULL;
+}
+
+/* Instantiate a Co-Simulation instance with another resource location (NULL allowed). */
+static int inst_new_at(inst *x, const fmu_api *api, const char *name, const char *resources)
+{
+    memset(x, 0, sizeof *x);
+    x->api = api;
+    x->cb.logger = logger;
+    x->cb.allocateMemory = count_calloc;
+    x->cb.freeMemory = count_free;
+    x->cb.componentEnvironment = &x->log;
+    x->c = api->Instantiate(name, fmi2CoSimulation, api->guid, resources, &x->cb, fmi2False,
+                            fmi2False);
     CHECK(x->c != NULL);
     return x->c == NULL;
 }
@@ -740,6 +759,15 @@ static const char *const state_names[ST_COUNT] = {"Instantiated", "Initializatio
 #define S_E (1u << ST_ERR)
 #define S_ALL (S_I | S_IN | S_SC | S_SF | S_T | S_E)
 
+/* A parameter of the FMU whose value -1 exitInitializationMode refuses. */
+static const char *bad_param(const fmu_api *a)
+{
+    if (strcmp(a->id, "rrr_plant") == 0) {
+        return "a2";
+    }
+    return strcmp(a->id, "rrr_reference") == 0 ? "lookahead" : "kp[1]";
+}
+
 /* Put a fresh instance into a state; returns 1 when the state is not reachable for this FMU. */
 static int drive(inst *x, int state)
 {
@@ -749,11 +777,11 @@ static int drive(inst *x, int state)
         return 0;
     }
     if (state == ST_FAILED && !is_plant) {
-        return 1; /* the controller never discards a step */
+        return 1; /* the controller and the reference never discard a step */
     }
     if (state == ST_ERR) {
         /* an invalid parameter makes exitInitializationMode fail */
-        CHECK(set1(x, is_plant ? "a2" : "kp[1]", -1.0) == fmi2OK);
+        CHECK(set1(x, bad_param(a), -1.0) == fmi2OK);
     }
     if (state == ST_FAILED) {
         /* the step below cannot be taken with the fixed-step RK4 (the adaptive default would
@@ -886,12 +914,11 @@ static const char *const me_state_names[MS_COUNT] = {"Instantiated", "Initializa
 static int drive_me(inst *x, int state)
 {
     const fmu_api *a = x->api;
-    const int is_plant = strcmp(a->id, "rrr_plant") == 0;
     if (state == MS_INST) {
         return 0;
     }
     if (state == MS_ERR) {
-        CHECK(set1(x, is_plant ? "a2" : "kp[1]", -1.0) == fmi2OK);
+        CHECK(set1(x, bad_param(a), -1.0) == fmi2OK);
     }
     CHECK(a->SetupExperiment(x->c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
     CHECK(a->EnterInitializationMode(x->c) == fmi2OK);
@@ -2223,10 +2250,199 @@ static void test_me_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
     inst_free(&c);
 }
 
+/* ==== the reference FMU (rrr_reference) ======================================================= */
+
+static const char ref_header[] =
+    "t,q_ref[1],q_ref[2],q_ref[3],qd_ref[1],qd_ref[2],qd_ref[3],qdd_ref[1],qdd_ref[2],"
+    "qdd_ref[3],x_ref.x,x_ref.y,x_ref.z,xd_ref.x,xd_ref.y,xd_ref.z,xdd_ref.x,xdd_ref.y,"
+    "xdd_ref.z\n";
+
+/* A folder <tmp>/<name>/resources/ holding reference.csv with `body` after the header (no
+ * header when header is 0); uri receives file://<folder>/resources with spaces as %20. */
+static int ref_folder(const char *tmp, const char *name, int header, const char *body,
+                      char *uri, size_t n)
+{
+    char dir[700];
+    char path[800];
+    snprintf(dir, sizeof dir, "%s/%s", tmp, name);
+    if (mkdir(dir, 0700) != 0) {
+        return 1;
+    }
+    snprintf(path, sizeof path, "%s/resources", dir);
+    if (mkdir(path, 0700) != 0) {
+        return 1;
+    }
+    snprintf(path, sizeof path, "%s/resources/reference.csv", dir);
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        return 1;
+    }
+    fprintf(f, "%s%s", header ? ref_header : "", body);
+    fclose(f);
+    size_t k = (size_t)snprintf(uri, n, "file://");
+    for (const char *p = dir; *p != '\0' && k + 4 < n; ++p) {
+        if (*p == ' ') {
+            memcpy(uri + k, "%20", 3);
+            k += 3;
+        } else {
+            uri[k++] = *p;
+        }
+    }
+    snprintf(uri + k, n - k, "/resources");
+    return 0;
+}
+
+static void rm_folder(const char *tmp, const char *name)
+{
+    char path[800];
+    snprintf(path, sizeof path, "%s/%s/resources/reference.csv", tmp, name);
+    remove(path);
+    snprintf(path, sizeof path, "%s/%s/resources", tmp, name);
+    rmdir(path);
+    snprintf(path, sizeof path, "%s/%s", tmp, name);
+    rmdir(path);
+}
+
+/* exitInitializationMode of an instance at `uri`: its status and (in msg) its last error. */
+static fmi2Status ref_init(const fmu_api *api, const char *uri, char *msg, size_t n)
+{
+    inst x;
+    if (inst_new_at(&x, api, "ref_init", uri)) {
+        return fmi2Fatal;
+    }
+    CHECK(api->SetupExperiment(x.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+    CHECK(api->EnterInitializationMode(x.c) == fmi2OK);
+    const fmi2Status st = api->ExitInitializationMode(x.c);
+    snprintf(msg, n, "%s", x.log.last_error);
+    if (st == fmi2Error) {
+        CHECK(api->DoStep(x.c, 0.0, H, fmi2True) == fmi2Error); /* Error state: no step */
+    }
+    inst_free(&x);
+    return st;
+}
+
+#define REF_ROW(T, Q) #T "," #Q ",0.2,0.3,1,0,0,0,0,0,0.5,-0.25,0.4,0,0,0,0,0,0\n"
+
+/* Tables in resources/: missing, malformed ones refused at exitInitializationMode with a message
+ * naming the problem; a percent-escaped resource URI; FMU state set into a fresh instance (the
+ * table is read on first use) and refused by an instance with another table. */
+static void test_reference(const fmu_api *api)
+{
+    char tmp[] = "/tmp/rrr ref harness XXXXXX"; /* a space: the URI escapes it */
+    if (mkdtemp(tmp) == NULL) {
+        CHECK(0);
+        return;
+    }
+    char uri[1100];
+    char msg[1024];
+    static const struct {
+        const char *name;
+        int header;
+        const char *body;
+        const char *needle;
+    } bad[] = {
+        {"nan", 1, REF_ROW(0, 0.1) "0.01,nan,0.2,0.3,1,0,0,0,0,0,0.5,-0.25,0.4,0,0,0,0,0,0\n",
+         "line 3, column q_ref[1]: \"nan\" is not a finite decimal number"},
+        {"unsorted", 1, REF_ROW(0.02, 0.1) REF_ROW(0.01, 0.2),
+         "line 3: t = 0.01 is not after t = 0.02 of line 2"},
+        {"columns", 1, "0,1,2\n1,2,3\n", "line 2 has 3 values, expected 19"},
+        {"header", 0, REF_ROW(0, 0.1) REF_ROW(0.01, 0.2), "line 1: column 1 must be \"t\""},
+        {"one row", 1, REF_ROW(0, 0.1), "has 1 sample(s)"},
+        {"empty", 0, "", "is empty (no header)"},
+        {"extra", 1, "0,0.1,0.2,0.3,1,0,0,0,0,0,0.5,-0.25,0.4,0,0,0,0,0,0,7\n" REF_ROW(1, 0),
+         "line 2 has more than 19 values"},
+        {"blank", 1, REF_ROW(0, 0.1) "\n" REF_ROW(0.01, 0.2), "line 3 is empty"},
+        {"comma", 1, REF_ROW(0, 0.1) "0.01,0\xef\xbc\x8c" "2,0.2,0.3,1,0,0,0,0,0,0.5,-0.25,0.4,"
+                     "0,0,0,0,0,0\n", "is not a finite decimal number"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        if (ref_folder(tmp, bad[k].name, bad[k].header, bad[k].body, uri, sizeof uri) != 0) {
+            CHECK(0);
+            continue;
+        }
+        const fmi2Status st = ref_init(api, uri, msg, sizeof msg);
+        if (st != fmi2Error || strstr(msg, bad[k].needle) == NULL) {
+            fprintf(stderr, "reference table %s: status %d, message \"%s\", expected \"%s\"\n",
+                    bad[k].name, (int)st, msg, bad[k].needle);
+            rrr_test_failures++;
+        }
+        rm_folder(tmp, bad[k].name);
+    }
+    /* no table, no resource location, a location that is not a local folder */
+    snprintf(uri, sizeof uri, "file://%s/nothing/resources", tmp);
+    CHECK(ref_init(api, uri, msg, sizeof msg) == fmi2Error &&
+          strstr(msg, "cannot open the reference table") != NULL);
+    CHECK(ref_init(api, NULL, msg, sizeof msg) == fmi2Error &&
+          strstr(msg, "no reference table") != NULL);
+    CHECK(ref_init(api, "http://example.invalid/resources", msg, sizeof msg) == fmi2Error &&
+          strstr(msg, "no reference table") != NULL);
+
+    /* a good table behind a percent-escaped URI, played at 2 ms steps */
+    CHECK(ref_folder(tmp, "good", 1, REF_ROW(0, 0.1) REF_ROW(0.01, 0.2) REF_ROW(0.02, 0.4),
+                     uri, sizeof uri) == 0);
+    char other[1100];
+    CHECK(ref_folder(tmp, "other", 1, REF_ROW(0, 0.1) REF_ROW(0.01, 0.3), other,
+                     sizeof other) == 0);
+    inst a;
+    inst b;
+    inst c;
+    if (inst_new_at(&a, api, "ref_a", uri) == 0 && inst_new_at(&b, api, "ref_b", uri) == 0 &&
+        inst_new_at(&c, api, "ref_c", other) == 0) {
+        CHECK(api->SetupExperiment(a.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+        CHECK(api->EnterInitializationMode(a.c) == fmi2OK);
+        CHECK(get1(&a, "q_ref[1]") == 0.1 && get1(&a, "qd_ref[1]") == 1.0);
+        CHECK(api->ExitInitializationMode(a.c) == fmi2OK);
+        CHECK(api->DoStep(a.c, 0.0, 0.005, fmi2True) == fmi2OK);
+        const double mid = get1(&a, "q_ref[1]");
+        CHECK(mid > 0.1 && mid < 0.2);
+        fmi2FMUstate s = NULL;
+        CHECK(api->GetFMUstate(a.c, &s) == fmi2OK);
+        size_t n = 0;
+        CHECK(api->SerializedFMUstateSize(a.c, s, &n) == fmi2OK && n > 0);
+        fmi2Byte *bytes = malloc(n);
+        CHECK(bytes != NULL && api->SerializeFMUstate(a.c, s, bytes, n) == fmi2OK);
+        CHECK(api->DoStep(a.c, 0.005, 0.01, fmi2True) == fmi2OK);
+        const double later = get1(&a, "q_ref[1]");
+        CHECK(get1(&a, "q_ref[1]") != mid);
+        /* into a fresh instance with the same table: the same continuation */
+        fmi2FMUstate sb = NULL;
+        CHECK(bytes != NULL && api->DeSerializeFMUstate(b.c, bytes, n, &sb) == fmi2OK);
+        CHECK(api->SetFMUstate(b.c, sb) == fmi2OK);
+        CHECK(get1(&b, "q_ref[1]") == mid);
+        CHECK(api->DoStep(b.c, 0.005, 0.01, fmi2True) == fmi2OK && get1(&b, "q_ref[1]") == later);
+        /* into an instance with another table: refused at the next evaluation */
+        fmi2FMUstate sc = NULL;
+        CHECK(bytes != NULL && api->DeSerializeFMUstate(c.c, bytes, n, &sc) == fmi2OK);
+        CHECK(api->SetFMUstate(c.c, sc) == fmi2OK);
+        log_clear(&c);
+        CHECK(api->DoStep(c.c, 0.005, 0.01, fmi2True) == fmi2Error);
+        CHECK(strstr(c.log.last_error, "another reference table") != NULL);
+        api->FreeFMUstate(a.c, &s);
+        api->FreeFMUstate(b.c, &sb);
+        api->FreeFMUstate(c.c, &sc);
+        free(bytes);
+        /* reset forgets the table and reads it again */
+        CHECK(api->Reset(a.c) == fmi2OK);
+        CHECK(api->SetupExperiment(a.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+        CHECK(api->EnterInitializationMode(a.c) == fmi2OK);
+        CHECK(api->ExitInitializationMode(a.c) == fmi2OK && get1(&a, "q_ref[1]") == 0.1);
+    }
+    inst_free(&a);
+    inst_free(&b);
+    inst_free(&c);
+    rm_folder(tmp, "good");
+    rm_folder(tmp, "other");
+    rmdir(tmp);
+    printf("rrr_reference: %zu malformed tables and 3 missing ones refused with a message; FMU "
+           "state across instances and tables checked\n",
+           sizeof bad / sizeof bad[0]);
+}
+
 int main(int argc, char **argv)
 {
-    if (argc != 3) {
-        fprintf(stderr, "usage: %s <plant unzip dir> <controller unzip dir>\n", argv[0]);
+    if (argc != 3 && argc != 4) {
+        fprintf(stderr, "usage: %s <plant unzip dir> <controller unzip dir> [<reference unzip "
+                "dir>]\n", argv[0]);
         return 2;
     }
     fmu_api plant, ctrl;
@@ -2261,6 +2477,20 @@ int main(int argc, char **argv)
     test_illegal_sequences(&ctrl, &me_machine);
     test_me_bad_values(&plant, &ctrl);
     test_me_fmu_state(&plant, &ctrl);
+
+    if (argc == 4) {
+        fmu_api ref;
+        if (fmu_load(&ref, argv[3])) {
+            return 2;
+        }
+        CHECK(strcmp(ref.id, "rrr_reference") == 0);
+        test_instantiate(&ref);
+        test_illegal_sequences(&ref, &cs_machine);
+        test_illegal_sequences(&ref, &me_machine);
+        test_logging(&ref);
+        test_reference(&ref);
+        fmu_unload(&ref);
+    }
 
     if (n_live_blocks != 0) {
         fprintf(stderr, "%ld block(s) allocated through the callbacks were not freed\n",

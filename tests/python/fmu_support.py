@@ -26,6 +26,7 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 COMMITTED_XML = {
     "plant": REPO_ROOT / "modelDescription.xml",
     "controller": REPO_ROOT / "fmu" / "controller" / "modelDescription.xml",
+    "reference": REPO_ROOT / "fmu" / "reference" / "modelDescription.xml",
 }
 STEP = 1e-3  # DefaultExperiment stepSize of both FMUs, s
 
@@ -85,14 +86,17 @@ def unzipped(path: Path) -> str:
 class Slave:
     """An FMPy FMU2Slave addressed by variable names, with its log messages."""
 
-    def __init__(self, which: str, guid: str | None = None) -> None:
+    def __init__(self, which: str, guid: str | None = None,
+                 unzip_dir: str | Path | None = None) -> None:
+        """``unzip_dir``: an unzipped copy of the FMU to load instead (e.g. with other
+        resources)."""
         path = fmu_file(which)
         self.md: ModelDescription = read_model_description(str(path))
         self.vr: dict[str, int] = {v.name: v.valueReference for v in self.md.modelVariables}
         self.name = f"{which}-{next(_COUNTER)}"
         self.fmu = FMU2Slave(
             guid=guid if guid is not None else self.md.guid,
-            unzipDirectory=unzipped(path),
+            unzipDirectory=str(unzip_dir) if unzip_dir is not None else unzipped(path),
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=self.name,
         )

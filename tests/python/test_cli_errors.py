@@ -125,10 +125,26 @@ CASES: dict[str, tuple[list[str], str]] = {
     "no-command": ([], "command"),
     "unknown-command": (["paint"], "paint"),
     "fmus-extra-argument": (["fmus", "extra"], "extra"),
+    # rrr ssp (its --out is a file) and rrr run-ssp (OUT is the results folder)
+    "ssp-out-not-ssp": (["ssp", "--out", "out.zip"], "must name an .ssp file"),
+    "ssp-unknown-scenario": (["ssp", "--out", "out.ssp", "--scenario", "nope"],
+                             "unknown scenario"),
+    "ssp-malformed-robot": (["ssp", "--out", "out.ssp", "--robot", "broken.toml"],
+                            "broken.toml"),
+    "ssp-negative-lookahead": (["ssp", "--out", "out.ssp", "--lookahead", "-1"],
+                               "--lookahead"),
+    "ssp-lookahead-too-long": (["ssp", "--out", "out.ssp", "--lookahead", "11"],
+                               "look-ahead must be 0 to 10 steps"),
+    "run-ssp-missing": (["run-ssp", "missing.ssp", "--tool", "fmpy"], "no such SSP file"),
+    "run-ssp-not-a-zip": (["run-ssp", "broken.toml", "--tool", "libcosim"],
+                          "not an SSP archive"),
+    "run-ssp-unknown-tool": (["run-ssp", "broken.toml", "--tool", "omsimulator"], "--tool"),
+    "run-ssp-real-time-fmpy": (["run-ssp", "broken.toml", "--tool", "fmpy", "--real-time"],
+                               "--real-time needs --tool libcosim"),
 }
 
 #: the commands that take an output (appended as --out OUT unless the case gives --out)
-TAKES_OUT = ("writing", "identify", "identify-experiment", "hil", "urdf")
+TAKES_OUT = ("writing", "identify", "identify-experiment", "hil", "urdf", "run-ssp")
 
 
 def make_workdir(folder: Path) -> None:

@@ -46,11 +46,12 @@ EXPECTED: dict[str, dict[str, tuple[str, str | None]]] = {
     "controller": {
         **{n: ("input", "rad") for n in joint("q_ref") + joint("q")},
         **{n: ("input", "rad/s") for n in joint("qd_ref") + joint("qd")},
-        **{n: ("input", "rad/s2") for n in joint("qdd_ref")},
+        **{n: ("input", "rad/s2") for n in joint("qdd_ref") + joint("qdd")},
         **{n: ("output", "V") for n in joint("u") + joint("u_n") + joint("u_c")},
         **{n: ("parameter", "V/rad") for n in joint("kp")},
         **{n: ("parameter", "V.s/rad") for n in joint("kd")},
         "feedforward": ("parameter", None),
+        "lead": ("parameter", "s"),
         **{n: ("parameter", u) for n, u in MODEL_PARAMS},
     },
 }
@@ -159,7 +160,8 @@ def test_model_structure() -> None:
     assert not c.md.derivatives  # the controller has no states
     ref = set(joint("q_ref") + joint("qd_ref") + joint("qdd_ref"))
     for i in (1, 2, 3):
-        pd = {f"q_ref[{i}]", f"qd_ref[{i}]", f"q[{i}]", f"qd[{i}]"}
+        # qdd[i] through the predictor (parameter lead)
+        pd = {f"q_ref[{i}]", f"qd_ref[{i}]", f"q[{i}]", f"qd[{i}]", f"qdd[{i}]"}
         assert ctrl[f"u_n[{i}]"] == ref
         assert ctrl[f"u_c[{i}]"] == pd
         assert ctrl[f"u[{i}]"] == ref | pd

@@ -60,7 +60,7 @@ def simulate(path: Path | str, which: str, fmi_type: str, stop: float = 1.0,
 
 def test_rrr_fmus_lists_every_variant() -> None:
     found = {(v.which, v.fmi_version): v for v in variants()}
-    assert set(found) == {(w, v) for w in NAMES for v in VERSIONS}
+    assert set(found) == {(w, v) for w in (*NAMES, "reference") for v in VERSIONS}
     for (_, version), v in found.items():
         assert v.interfaces == ("ModelExchange", "CoSimulation")
         assert LINUX[version] in v.platforms
@@ -68,7 +68,7 @@ def test_rrr_fmus_lists_every_variant() -> None:
     cli = subprocess.run([sys.executable, "-m", "rrr_robot", "fmus"], capture_output=True,
                          text=True, check=True)
     lines = cli.stdout.strip().splitlines()
-    assert len(lines) == 4 and sum("FMI 3.0" in x for x in lines) == 2, cli.stdout
+    assert len(lines) == 6 and sum("FMI 3.0" in x for x in lines) == 3, cli.stdout
 
 
 @pytest.mark.parametrize("version", VERSIONS)

@@ -61,6 +61,28 @@ rrr_status rrr_ctc(const rrr_model *m, const rrr_ctc_gains *gains, const double 
     return RRR_OK;
 }
 
+rrr_status rrr_predict_state(const double q[3], const double qd[3], const double qdd[3],
+                             double lead, double q_pred[3], double qd_pred[3])
+{
+    if (q == NULL || qd == NULL || qdd == NULL || q_pred == NULL || qd_pred == NULL ||
+        !(isfinite(lead) && lead >= 0.0) || !rrr_finite_n(q, 3) || !rrr_finite_n(qd, 3) ||
+        !rrr_finite_n(qdd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    double qp[3];
+    double qdp[3];
+    for (int i = 0; i < RRR_NJ; ++i) {
+        qp[i] = lead == 0.0 ? q[i] : q[i] + lead * (qd[i] + 0.5 * lead * qdd[i]);
+        qdp[i] = lead == 0.0 ? qd[i] : qd[i] + lead * qdd[i];
+    }
+    if (!rrr_finite_n(qp, 3) || !rrr_finite_n(qdp, 3)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(q_pred, qp, sizeof qp);
+    memcpy(qd_pred, qdp, sizeof qdp);
+    return RRR_OK;
+}
+
 double rrr_sample_time_default(void)
 {
     return RRR_SAMPLE_TIME_DEFAULT;

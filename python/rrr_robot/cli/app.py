@@ -1,5 +1,5 @@
 """The ``rrr`` parser and entry point (also ``python -m rrr_robot``): ``rrr fmus`` here, the
-other command groups in their modules (writing, identify, hil)."""
+other command groups in their modules (writing, identify, hil, urdf, ssp)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from .. import __version__
 from ..errors import RrrError
 from .hil import register_cli as register_hil
 from .identify import register_cli as register_identify
+from .ssp import register_cli as register_ssp
 from .urdf import register_cli as register_urdf
 from .writing import register_cli as register_writing
 
@@ -50,6 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     register_identify(sub)
     register_hil(sub)
     register_urdf(sub)
+    register_ssp(sub)
     return parser
 
 

@@ -16,7 +16,8 @@ from pathlib import Path
 from ..core._package import PACKAGE_DIR
 from ..errors import BadInputError, RrrError
 
-FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu"}
+FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu",
+             "reference": "rrr_reference.fmu"}
 FMI_VERSIONS = (2, 3)
 
 
@@ -27,7 +28,7 @@ def fmu_dir() -> Path:
 
 
 def fmu_path(which: str, fmi_version: int = 2) -> Path:
-    """Path of the 'plant' or 'controller' FMU for FMI version 2 or 3.
+    """Path of the 'plant', 'controller' or 'reference' FMU for FMI version 2 or 3.
 
     $RRR_FMU_DIR (e.g. a CMake build's ``fmus/`` folder) takes precedence over the copies
     installed with the package.
@@ -79,5 +80,5 @@ def describe(which: str, fmi_version: int) -> FmuVariant:
 
 
 def variants() -> list[FmuVariant]:
-    """Every FMU the package provides: plant and controller, FMI 2.0 and 3.0."""
+    """Every FMU the package provides: plant, controller and reference, FMI 2.0 and 3.0."""
     return [describe(which, v) for v in FMI_VERSIONS for which in FMU_NAMES]

@@ -44,6 +44,21 @@ RRR_API rrr_status rrr_ctc(const rrr_model *m, const rrr_ctc_gains *gains, const
                    const double qd_ref[3], const double qdd_ref[3], const double q[3],
                    const double qd[3], rrr_ctc_output *out);
 
+/**
+ * @brief The measured state carried `lead` seconds forward along its own velocity and
+ *        acceleration: q_pred = q + lead qd + lead^2 / 2 qdd, qd_pred = qd + lead qdd.
+ *
+ * The predictor of a sampled loop whose measurement arrives one sample late (a co-simulation
+ * master that passes every output on only at the next step): with lead = one sample, the law
+ * acts on the state at the time its output is applied. lead = 0 gives q and qd exactly.
+ * @param q, qd, qdd measured position (rad), velocity (rad/s), acceleration (rad/s2)
+ * @param lead       s, finite and >= 0
+ * @param[out] q_pred, qd_pred the predicted position and velocity (may alias q and qd)
+ * @return RRR_OK, RRR_BAD_INPUT (NULL, non-finite input, lead negative or not finite)
+ */
+RRR_API rrr_status rrr_predict_state(const double q[3], const double qd[3], const double qdd[3],
+                                     double lead, double q_pred[3], double qd_pred[3]);
+
 #ifdef __cplusplus
 }
 #endif

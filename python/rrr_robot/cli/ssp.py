@@ -1,0 +1,85 @@
+"""``rrr ssp`` and ``rrr run-ssp``: the writing task as an SSP 1.0 archive, and its run in
+libcosim or FMPy (registered by :mod:`rrr_robot.cli.app`; the library is :mod:`rrr_robot.ssp`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from ._args import nonnegative_int, output_path
+from ._progress import Bars, shown
+from .writing import _scenario_line
+
+
+def _cmd_ssp(args: argparse.Namespace) -> int:
+    from ..ssp.export import SspJob, export_ssp
+
+    job = SspJob(out=Path(args.out), text=args.text, scenario=args.scenario,
+                 robot=Path(args.robot) if args.robot else SspJob.robot, scale=args.scale,
+                 lookahead_steps=args.lookahead)
+    info = export_ssp(job)
+    print(f"{job.out}: scenario {info['scenario']}, {info['duration']:.3f} s at "
+          f"{info['step']:g} s ({info['samples']} samples), look-ahead "
+          f"{info['lookahead_steps']} step(s); run it with: rrr run-ssp {job.out} --tool "
+          "libcosim|fmpy --out DIR")
+    return 0
+
+
+def _cmd_run_ssp(args: argparse.Namespace) -> int:
+    from ..ssp.run import SspRun, run_ssp
+
+    job = SspRun(ssp=Path(args.ssp), tool=args.tool, out=Path(args.out),
+                 real_time=args.real_time)
+    with Bars(shown(args.quiet)) as bars:
+        summary = run_ssp(job, progress=bars.callback(args.tool))
+    for name, s in summary["scenarios"].items():
+        print(f"{name:>10}: {_scenario_line(s)}")
+    info = summary["ssp"]
+    if job.real_time:
+        print(f"real-time factor {info['real_time_factor']:.4f} over "
+              f"{info['simulated_time']:.3f} s (simulated / wall-clock time; libcosim's own "
+              f"figure at the end: {info['libcosim_real_time_factor']:.4f})")
+    print(f"results in {job.out}/ (summary.json, {', '.join(summary['scenarios'])}.csv)")
+    return 0
+
+
+def register_cli(subparsers: Any) -> None:
+    """Add the ``ssp`` and ``run-ssp`` subcommands to the ``rrr`` command line."""
+    p = subparsers.add_parser(
+        "ssp", help="write the writing task's closed loop as an SSP 1.0 archive",
+        description="Write the writing task (reference, controller and plant FMUs, their "
+        "connections and parameter values, a default experiment) for one scenario as an SSP 1.0 "
+        "archive that libcosim and FMPy run (rrr run-ssp).",
+    )
+    p.add_argument("--out", required=True, type=output_path, metavar="FILE.ssp",
+                   help="the archive to write")
+    p.add_argument("--text", help="text to write (default: the paper-like default text)")
+    p.add_argument("--scenario", default="ctc", metavar="S",
+                   help="pd, ctc (default), mismatch or a scenario .toml file")
+    p.add_argument("--robot", help="robot TOML file (default: the packaged default robot)")
+    p.add_argument("--scale", type=float, default=1.0,
+                   help="factor on the letter height (default 1)")
+    p.add_argument("--lookahead", type=nonnegative_int, default=1, metavar="STEPS",
+                   help="steps the reference FMU plays ahead and the controller predicts the "
+                   "measured state (default 1: compensates the one-step delay of masters that "
+                   "pass outputs on at the next step, as libcosim and FMPy do; 0: none)")
+    p.set_defaults(func=_cmd_ssp)
+
+    r = subparsers.add_parser(
+        "run-ssp", help="run an SSP archive of rrr ssp in libcosim or FMPy",
+        description="Run an archive written by rrr ssp in libcosim (CosimExecution."
+        "from_ssp_file) or in FMPy's SSP support (simulate_ssp) and write summary.json and "
+        "<scenario>.csv with the metrics and columns of rrr writing into --out.",
+    )
+    r.add_argument("ssp", metavar="FILE.ssp", help="the archive")
+    r.add_argument("--tool", required=True, choices=("libcosim", "fmpy"),
+                   help="the co-simulation tool that runs the archive")
+    r.add_argument("--out", required=True, type=output_path,
+                   help="output folder; its previous results stay as they were unless the run "
+                   "succeeds")
+    r.add_argument("--real-time", action="store_true",
+                   help="libcosim's real-time mode (the run takes the simulated time); reports "
+                   "the achieved real-time factor")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_run_ssp)

@@ -1,0 +1,164 @@
+"""``rrr ssp``: the writing task's closed loop for one scenario as an SSP 1.0 archive.
+
+The archive holds ``SystemStructure.ssd`` (:mod:`.ssd`) and, in ``resources/``, the three FMI 2.0
+Co-Simulation FMUs: ``rrr_reference.fmu`` (the packaged reference FMU with the writing
+reference's table in its ``resources/``), ``rrr_controller.fmu`` and ``rrr_plant.fmu`` as they
+are installed. Components ``reference``, ``controller`` and ``plant``; connections reference ->
+controller (q_ref, qd_ref, qdd_ref), plant -> controller (q, qd), controller u -> plant u; the
+parameter values that ``rrr writing`` gives each FMU (the same functions compute them:
+``model_fmu_values``, ``controller_fmu_values``, the plant starting at the reference's first
+sample); a default experiment over the reference at its sample period.
+
+The masters of other tools pass a step's outputs to the other FMUs only after every FMU took the
+step (libcosim, FMPy: a Jacobi data flow), so the plant integrates each step with the voltage
+computed from the reference and the measurement of one step earlier. The archive compensates it
+inside the system, by ``lookahead_steps`` communication steps (default 1): the reference FMU's
+``lookahead`` gives the controller the reference of the step the plant will integrate, and the
+controller's ``lead`` carries the measured state forward by as much (``rrr_predict_state``)
+(README, "The writing task as an SSP system").
+"""
+
+from __future__ import annotations
+
+import logging
+import tempfile
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .. import __version__
+from ..core.model import DEFAULT_ROBOT_TOML
+from ..core.outputs import atomic_path, check_folder
+from ..core.param_names import model_fmu_values
+from ..errors import BadInputError
+from ..sim.fmus import fmu_path
+from ..writing.job import WritingJob, controller_fmu_values, prepare
+from .ssd import Component, Connection, System, write_ssd
+from .table import TABLE_FILE, write_reference_table
+
+log = logging.getLogger(__name__)
+
+__all__ = ["COMPONENTS", "SspJob", "export_ssp"]
+
+_J = (1, 2, 3)
+#: Component name -> FMU file in the archive's resources/.
+COMPONENTS = {"reference": "rrr_reference.fmu", "controller": "rrr_controller.fmu",
+              "plant": "rrr_plant.fmu"}
+REF_OUT = {**{f"{s}[{i}]": u for s, u in (("q_ref", "rad"), ("qd_ref", "rad/s"),
+                                          ("qdd_ref", "rad/s2")) for i in _J},
+           **{f"x_ref.{a}": "m" for a in "xyz"}}
+CTRL_IN = {**{f"{s}[{i}]": u for s, u in (("q_ref", "rad"), ("qd_ref", "rad/s"),
+                                          ("qdd_ref", "rad/s2"), ("q", "rad"),
+                                          ("qd", "rad/s"), ("qdd", "rad/s2")) for i in _J}}
+CTRL_OUT = {f"{s}[{i}]": "V" for s in ("u", "u_n", "u_c") for i in _J}
+PLANT_IN = {f"u[{i}]": "V" for i in _J}
+PLANT_OUT = {**{f"{s}[{i}]": u for s, u in (("q", "rad"), ("qd", "rad/s"), ("qdd", "rad/s2"))
+                for i in _J},
+             **{f"tip.{a}": "m" for a in "xyz"}}
+#: Most steps of look-ahead (the reference FMU allows up to 1 s).
+MAX_LOOKAHEAD_STEPS = 10
+
+
+@dataclass(frozen=True)
+class SspJob:
+    """What to export: the archive's path, the writing task's text, one scenario, the robot file,
+    the letter scale, and the compensation in communication steps (the reference FMU's
+    ``lookahead`` and the controller's ``lead``; 0: none)."""
+
+    out: Path
+    text: str | None = None
+    scenario: str = "ctc"
+    robot: Path = DEFAULT_ROBOT_TOML
+    scale: float = 1.0
+    lookahead_steps: int = 1
+
+
+def connections() -> list[Connection]:
+    """reference -> controller (q_ref, qd_ref, qdd_ref), plant -> controller (q, qd, qdd),
+    controller u -> plant u."""
+    out = [Connection("reference", n, "controller", n)
+           for n in REF_OUT if not n.startswith("x_ref")]
+    out += [Connection("plant", f"{s}[{i}]", "controller", f"{s}[{i}]")
+            for s in ("q", "qd", "qdd") for i in _J]
+    out += [Connection("controller", f"u[{i}]", "plant", f"u[{i}]") for i in _J]
+    return out
+
+
+def _check_out(out: Path) -> None:
+    if out.suffix.lower() != ".ssp":
+        raise BadInputError(f"--out must name an .ssp file, got {str(out)!r}")
+    if out.is_dir():
+        raise BadInputError(f"--out {str(out)!r} is a folder; name the .ssp file to write")
+    check_folder(out.parent if str(out.parent) else Path("."))
+
+
+def _reference_fmu(table: Path) -> bytes:
+    """The packaged reference FMU with ``table`` as its resources/reference.csv."""
+    src = fmu_path("reference", 2)
+    with tempfile.TemporaryDirectory(prefix="rrr-ssp-") as tmp:
+        dst = Path(tmp) / "rrr_reference.fmu"
+        with zipfile.ZipFile(src) as zin, \
+                zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
+            for item in zin.infolist():
+                if item.filename != f"resources/{TABLE_FILE}":
+                    zout.writestr(item, zin.read(item.filename))
+            zout.write(table, f"resources/{TABLE_FILE}")
+        return dst.read_bytes()
+
+
+def export_ssp(job: SspJob) -> dict[str, Any]:
+    """Write the SSP archive of ``job`` atomically; returns what it holds (for the CLI):
+    scenario, duration, step, samples, lookahead."""
+    _check_out(job.out)
+    if not 0 <= job.lookahead_steps <= MAX_LOOKAHEAD_STEPS:
+        raise BadInputError(f"the look-ahead must be 0 to {MAX_LOOKAHEAD_STEPS} steps, got "
+                            f"{job.lookahead_steps}")
+    prepared = prepare(WritingJob(out=job.out.parent, text=job.text, scenarios=[job.scenario],
+                                  robot=job.robot, scale=job.scale, figures=False))
+    model, robot, (scn,), ref = prepared
+    fmus = {name: fmu_path(name, 2) for name in ("controller", "plant", "reference")}
+    step = float(ref.t[1] - ref.t[0])
+    plant_values: dict[str, float | bool] = {f"q0[{i}]": float(ref.q[0, i - 1]) for i in _J}
+    plant_values |= {f"qd0[{i}]": float(ref.qd[0, i - 1]) for i in _J}
+    plant_values |= model_fmu_values(model)
+    lookahead = job.lookahead_steps * step
+    ctrl_values = controller_fmu_values(scn, model, robot.require_control())
+    ctrl_values["lead"] = lookahead
+    info = {
+        "scenario": scn.name, "text": ref.spec.text, "scale": repr(job.scale),
+        "robot": job.robot.name, "lookahead_steps": str(job.lookahead_steps),
+        "min_workspace_margin_m": repr(ref.min_margin_m),
+        "min_elbow_margin": repr(ref.min_elbow_margin),
+        "min_shoulder_margin_m": repr(ref.min_shoulder_margin_m),
+    }
+    system = System(
+        name=f"rrr_writing_{scn.name}", system_name="writing",
+        description=f"RRR arm writing task, scenario {scn.name}: reference -> computed-torque "
+                    "controller -> plant",
+        components=[
+            Component("reference", f"resources/{COMPONENTS['reference']}", outputs=REF_OUT,
+                      parameters={"lookahead": lookahead}),
+            Component("controller", f"resources/{COMPONENTS['controller']}", inputs=CTRL_IN,
+                      outputs=CTRL_OUT, parameters=ctrl_values),
+            Component("plant", f"resources/{COMPONENTS['plant']}", inputs=PLANT_IN,
+                      outputs=PLANT_OUT, parameters=plant_values),
+        ],
+        connections=connections(),
+        start_time=float(ref.t[0]), stop_time=float(ref.t[-1]), step=step,
+        generation_tool=f"rrr_robot {__version__} (rrr ssp)", info=info,
+    )
+    ssd = write_ssd(system)
+    with tempfile.TemporaryDirectory(prefix="rrr-ssp-") as tmp:
+        table = write_reference_table(Path(tmp) / TABLE_FILE, ref)
+        reference_fmu = _reference_fmu(table)
+    job.out.parent.mkdir(parents=True, exist_ok=True)  # check_folder: it can be created
+    with atomic_path(job.out) as part, zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        z.writestr(f"resources/{COMPONENTS['reference']}", reference_fmu)
+        for name in ("controller", "plant"):
+            z.write(fmus[name], f"resources/{COMPONENTS[name]}")
+    log.info("%s: scenario %s, %.2f s at %g s (%d samples), look-ahead %d step(s)", job.out,
+             scn.name, ref.t[-1] - ref.t[0], step, ref.t.size, job.lookahead_steps)
+    return {"scenario": scn.name, "duration": float(ref.t[-1] - ref.t[0]), "step": step,
+            "samples": int(ref.t.size), "lookahead_steps": job.lookahead_steps}
