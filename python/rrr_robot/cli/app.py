@@ -1,5 +1,5 @@
 """The ``rrr`` parser and entry point (also ``python -m rrr_robot``): ``rrr fmus`` here, the
-other command groups in their modules (writing, identify, hil)."""
+other command groups in their modules (writing, identify, hil, sweep)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from .. import __version__
 from ..errors import RrrError
 from .hil import register_cli as register_hil
 from .identify import register_cli as register_identify
+from .sweep import register_cli as register_sweep
 from .writing import register_cli as register_writing
 
 log = logging.getLogger("rrr_robot")
@@ -48,6 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
     register_writing(sub)
     register_identify(sub)
     register_hil(sub)
+    register_sweep(sub)
     return parser
 
 

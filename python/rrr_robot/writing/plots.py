@@ -87,6 +87,11 @@ def _figure(figsize: tuple[float, float]) -> Figure:
     return fig
 
 
+#: The figure helpers for the figures of other jobs (rrr_robot.sweep.figures): the same canvas,
+#: dpi, layout pass and atomic save.
+new_figure = _figure
+
+
 def _plot_series(ax: Any, t: FloatArray, y: FloatArray, *args: Any, **kwargs: Any) -> None:
     ax.plot(*envelope(t, y), *args, **kwargs)
 
@@ -107,6 +112,9 @@ def _save(fig: Figure, path: Path,
     with atomic_path(path) as tmp:  # tmp ends in .part: the format is given
         fig.savefig(tmp, format=path.suffix.lstrip(".") or "png", dpi=DPI)
     log.info("drew %s", path.name)
+
+
+save_figure = _save
 
 
 def fig_reference(out: Path, ref: Reference) -> None:
