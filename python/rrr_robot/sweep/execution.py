@@ -73,6 +73,8 @@ def _check_workers(client: Any, where: str) -> None:
         if version != __version__:
             raise RrrError(f"the Dask worker {worker} has rrr_robot {version}, this client "
                            f"{__version__}: install the same version on every machine")
+    # the workers import what a run needs now, not during their first batch
+    client.run(importlib.import_module, "rrr_robot.sweep.runs")
 
 
 @contextlib.contextmanager
@@ -85,8 +87,8 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
     with _quiet_distributed(), contextlib.ExitStack() as stack:
         if scheduler is None:
             n = workers or os.cpu_count() or 1
-            cluster = stack.enter_context(LocalCluster(
-                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
+            cluster = stack.enter_context(LocalCluster(  # its web server on a free port
+                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                 silence_logs=logging.WARNING))
             client = stack.enter_context(Client(cluster))
             where = f"the local cluster of {n} worker processes"
@@ -99,8 +101,9 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
                                     ) from None
             where = f"the Dask scheduler at {scheduler}"
         _check_workers(client, where)
-        log.info("running on %s: %d workers, %d threads", where,
-                 len(client.scheduler_info()["workers"]), worker_threads(client))
+        log.info("running on %s: %d workers, %d threads (dashboard: %s)", where,
+                 len(client.scheduler_info()["workers"]), worker_threads(client),
+                 client.dashboard_link)
         yield client
 
 
