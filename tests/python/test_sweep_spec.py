@@ -322,3 +322,19 @@ def test_the_robot_file_is_read_once_on_the_client_for_the_workers(
     assert plan.robot == load_toml(DEFAULT_ROBOT_TOML, "robot file", rr.RobotFileError)
     assert plan.base["scenario"]["name"] == "ctc" and plan.engine == "native"
     assert len(plan.fingerprint) == 64
+
+
+def test_a_scheduler_that_cannot_be_reached_stops_the_sweep_before_anything_is_written(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from rrr_robot.sweep import execution
+
+    monkeypatch.setattr(execution, "CONNECT_TIMEOUT", 1.0)
+    path = spec_file(tmp_path, HEAD)
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--out", str(out), "--scheduler", "tcp://127.0.0.1:1",
+                 "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["rrr: error: cannot connect to the Dask scheduler at tcp://127.0.0.1:1: "
+                   "Timed out trying to connect to tcp://127.0.0.1:1 after 1 s"], err
+    assert not out.exists()

@@ -6,5 +6,5 @@ sampling (each run's values, from the spec and the run's index only), runs (one 
 worker: a scenario with some fields changed, through the writing job's pieces), execution (the
 batches on a Dask cluster), results (the Parquet dataset, one part per batch), sensitivity (the
 ranking of the inputs), figures, job (the sweep end to end: ``run_sweep``). Needs the
-``sweep`` extra (dask, distributed, pyarrow, pandas).
+``sweep`` extra (dask, distributed, pyarrow).
 """

@@ -15,6 +15,7 @@ running Dask cluster by its scheduler's address.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import importlib.metadata
 import logging
 import math
@@ -73,8 +74,13 @@ def _check_workers(client: Any, where: str) -> None:
         if version != __version__:
             raise RrrError(f"the Dask worker {worker} has rrr_robot {version}, this client "
                            f"{__version__}: install the same version on every machine")
-    # the workers import what a run needs now, not during their first batch
-    client.run(importlib.import_module, "rrr_robot.sweep.runs")
+    client.run(_import_runs)
+
+
+def _import_runs() -> None:
+    """Run on each worker before the first batch: import what a run needs (numpy, scipy, the
+    binding, the writing job), so that the first batch's runs do not pay for it."""
+    importlib.import_module("rrr_robot.sweep.runs")
 
 
 @contextlib.contextmanager
@@ -89,7 +95,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
             n = workers or os.cpu_count() or 1
             cluster = stack.enter_context(LocalCluster(  # its web server on a free port
                 n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                silence_logs=logging.WARNING))
+                silence_logs=logging.ERROR))
             client = stack.enter_context(Client(cluster))
             where = f"the local cluster of {n} worker processes"
         else:

@@ -48,7 +48,7 @@ from ..writing.scenarios import BUILTIN, read_scenario_file, scenario_from_dict
 from ..writing.trajectory import make_reference
 from .results import RESULTS, finished_runs, read_results, schema, write_part
 from .runs import STATUSES, SweepPlan
-from .sampling import design
+from .sampling import RunInput, design
 from .sensitivity import inputs, rank
 from .spec import SweepSpec, read_spec
 
@@ -59,7 +59,7 @@ __all__ = ["SPEC_COPY", "SWEEP_META", "SweepJob", "require_dependencies", "run_s
 SPEC_COPY = "spec.toml"
 SWEEP_META = "sweep.json"
 #: The packages a sweep needs beyond the base install (the ``sweep`` extra).
-DEPENDENCIES = ("dask", "distributed", "pyarrow", "pandas")
+DEPENDENCIES = ("dask", "distributed", "pyarrow")
 
 
 @dataclass(frozen=True)
@@ -212,6 +212,44 @@ def _finish(job: SweepJob, spec: SweepSpec, table: Any, timing: dict[str, Any]) 
     return summary
 
 
+def _run_missing(job: SweepJob, spec: SweepSpec, plan: SweepPlan, todo: list[RunInput],
+                 recorded: int, fresh: bool, progress: Callable[[int, int], None] | None,
+                 ) -> dict[str, Any]:
+    """Run ``todo`` on the cluster, recording each batch as it finishes; the sweep's
+    description is written (``fresh``) once the cluster is there, so a cluster that cannot be
+    reached leaves nothing behind. Returns the invocation's timing; RrrError when batches were
+    lost (after every finished batch was recorded)."""
+    from .execution import batch_size, batches, dask_client, execute, worker_threads
+
+    arrow_schema = schema(spec.vary)
+    start = time.perf_counter()
+    with dask_client(job.workers, job.scheduler) as client:
+        connect = time.perf_counter() - start
+        if fresh:
+            _write_description(job.out, job, plan, spec)
+        start = time.perf_counter()
+        threads = worker_threads(client)
+        size = job.batch or batch_size(len(todo), threads, job.engine)
+
+        def record(rows: list[dict[str, Any]]) -> None:
+            nonlocal recorded
+            write_part(job.out / RESULTS, rows, arrow_schema)
+            recorded += len(rows)
+            if progress is not None:
+                progress(recorded, spec.samples)
+
+        lost = execute(client, plan, batches(todo, size), record)
+        elapsed = time.perf_counter() - start
+    if lost:
+        n = sum(len(r) for r, _ in lost)
+        raise RrrError(f"{n} of {len(todo)} runs were not recorded: {len(lost)} batches lost "
+                       f"(first: {lost[0][1]}); the {recorded} recorded runs are in "
+                       f"{job.out / RESULTS}: rerun with --resume to run the others")
+    return {"runs": len(todo), "cluster_start": connect, "wall_time": elapsed,
+            "runs_per_second": len(todo) / elapsed if elapsed > 0 else None,
+            "worker_threads": threads}
+
+
 def run_sweep(job: SweepJob, progress: Callable[[int, int], None] | None = None,
               ) -> dict[str, Any]:
     """Run the sweep (the runs not yet recorded, with ``resume``) and write its outputs;
@@ -224,45 +262,15 @@ def run_sweep(job: SweepJob, progress: Callable[[int, int], None] | None = None,
     plan = make_plan(spec, job.engine)
     arrow_schema = schema(spec.vary)
     resumed = _check_folder_state(job.out, plan, spec, job.resume)
-    runs = design(spec)
     done = finished_runs(job.out / RESULTS, arrow_schema) if resumed else set()
-    if not resumed:
-        _write_description(job.out, job, plan, spec)
-    todo = [r for r in runs if r.run not in done]
+    todo = [r for r in design(spec) if r.run not in done]
     log.info("%d runs (%s), %d recorded, %d to run on the %s engine", spec.samples,
              spec.method, len(done), len(todo), job.engine)
-    recorded = len(done)
     if progress is not None:
-        progress(recorded, spec.samples)
-    lost: list[tuple[list[int], str]] = []
-    threads, connect, elapsed = 0, 0.0, 0.0
+        progress(len(done), spec.samples)
+    timing: dict[str, Any] = {"runs": 0, "cluster_start": 0.0, "wall_time": 0.0,
+                              "runs_per_second": None, "worker_threads": 0}
     if todo:
-        from .execution import batch_size, batches, dask_client, execute, worker_threads
-
-        start = time.perf_counter()
-        with dask_client(job.workers, job.scheduler) as client:
-            connect = time.perf_counter() - start
-            start = time.perf_counter()
-            threads = worker_threads(client)
-            size = job.batch or batch_size(len(todo), threads, job.engine)
-
-            def record(rows: list[dict[str, Any]]) -> None:
-                nonlocal recorded
-                write_part(job.out / RESULTS, rows, arrow_schema)
-                recorded += len(rows)
-                if progress is not None:
-                    progress(recorded, spec.samples)
-
-            lost = execute(client, plan, batches(todo, size), record)
-            elapsed = time.perf_counter() - start
-    if lost:
-        n = sum(len(r) for r, _ in lost)
-        raise RrrError(f"{n} of {len(todo)} runs were not recorded: {len(lost)} batches lost "
-                       f"(first: {lost[0][1]}); the {recorded} recorded runs are in "
-                       f"{job.out / RESULTS}: rerun with --resume to run the others")
+        timing = _run_missing(job, spec, plan, todo, len(done), not resumed, progress)
     table = read_results(job.out / RESULTS, arrow_schema)
-    timing = {"this_invocation": {
-        "runs": len(todo), "cluster_start": connect, "wall_time": elapsed,
-        "runs_per_second": len(todo) / elapsed if elapsed > 0 and todo else None,
-        "worker_threads": threads}}
-    return _finish(job, spec, table, timing)
+    return _finish(job, spec, table, {"this_invocation": timing})

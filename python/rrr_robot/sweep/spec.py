@@ -5,7 +5,7 @@
     [sweep]
     base = "ctc"          # a built-in scenario (pd, ctc, mismatch) or a scenario file
     samples = 200         # number of runs (grid: optional, the size of the grid)
-    seed = 1              # 0 to 4294967295 (default 0)
+    seed = 1              # 0 to 1e9 (default 0)
     method = "random"     # "random" (default), "lhs" (Latin hypercube) or "grid"
     robot = "robot.toml"  # optional: the robot file (default: the packaged robot)
 
@@ -56,7 +56,7 @@ DISTRIBUTIONS = ("uniform", "loguniform", "normal", "values")
 MAX_SAMPLES = 1_000_000
 #: Entries of one ``values`` list.
 MAX_VALUES = 10_000
-SEED_MAX = 2**32 - 1
+SEED_MAX = 1_000_000_000
 
 SWEEP_FIELDS = {
     "base": Text(max_len=4096, nonblank=True),
