@@ -8,11 +8,11 @@ and the wall time of a 1,000-run sweep with the native engine and with the FMUs.
    each block submitted in batches and recorded as the sweep records them (one Parquet part
    per batch): runs per second of each, and their ratio per pair of blocks.
 2. Overhead: blocks of the same runs alternate between the one-worker cluster (as above) and a
-   plain loop over ``rrr_robot.sweep.runs.run_one`` in this process (the reference: a direct run,
-   no Dask, no recording); overhead = time through the cluster / direct time - 1, per pair, in
-   wall time and in CPU time (this process, where a local cluster's scheduler and nannies run,
-   plus the worker processes, against this process's CPU time of the direct loop: on a loaded
-   machine the CPU time is the steadier measure of the work added).
+   plain loop over ``rrr_robot.sweep.runs.run_one`` in a process of its own (the reference: a
+   direct run, no Dask, no recording); overhead = time through the cluster / direct time - 1,
+   per pair, in wall time and in CPU time (this process, where a local cluster's scheduler and
+   nannies run, plus the worker processes, against the CPU time of the direct loop: on a
+   loaded machine the CPU time is the steadier measure of the work added).
 3. ``rrr sweep SPEC --out DIR --engine native|fmpy -q`` (default cluster: one worker per core)
    on a 1,000-run spec, as processes: the command's wall time, and the runs' wall time and the
    cluster's start-up from its summary.json.
@@ -26,12 +26,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import os
 import platform
 import subprocess
 import sys
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -83,7 +85,8 @@ def through_cluster(client: object, plan: object, inputs: list, folder: Path,
     return elapsed, cpu
 
 
-def direct(plan: object, inputs: list) -> tuple[float, float]:
+def direct_loop(plan: object, inputs: list) -> tuple[float, float]:
+    """Wall and CPU seconds of the runs made one after the other in this process."""
     cpu = time.process_time()
     start = time.perf_counter()
     for inp in inputs:
@@ -91,54 +94,76 @@ def direct(plan: object, inputs: list) -> tuple[float, float]:
     return time.perf_counter() - start, time.process_time() - cpu
 
 
+def direct(pool: ProcessPoolExecutor, plan: object, inputs: list) -> tuple[float, float]:
+    """The direct runs, in a plain process of their own (not this one, whose threads serve
+    the local clusters' schedulers and nannies)."""
+    return pool.submit(direct_loop, plan, inputs).result()
+
+
+def rates(args: argparse.Namespace, case: tuple, one: object) -> None:
+    """Runs per second on one and on two workers, alternating blocks."""
+    plan, inputs, folder, arrow_schema = case
+    t0 = time.perf_counter()
+    with dask_client(2) as two:
+        print(f"local cluster of 2 workers: ready (run module imported) in "
+              f"{time.perf_counter() - t0:.2f} s")
+        print(f"\n{args.runs} runs per block, engine {args.engine}, {args.repeats} pairs of "
+              "blocks; min / median / max\n")
+        print("| measure | value |\n|---|---|")
+        clusters = {1: one, 2: two}
+        through_cluster(two, plan, inputs[:8], folder, arrow_schema, args.engine)  # warm-up
+        rate: dict[int, list[float]] = {1: [], 2: []}
+        ratio = []
+        for r in range(args.repeats):
+            order = (1, 2) if r % 2 == 0 else (2, 1)
+            t = {w: through_cluster(clusters[w], plan, inputs, folder, arrow_schema,
+                                    args.engine)[0] for w in order}
+            for w in order:
+                rate[w].append(len(inputs) / t[w])
+            ratio.append(t[1] / t[2])
+    print(f"| runs/s, 1 worker | {mmm(rate[1])} |")
+    print(f"| runs/s, 2 workers | {mmm(rate[2])} |")
+    print(f"| speed-up, 2 workers / 1 worker (per pair) | {mmm(ratio)} |")
+
+
+def overheads(args: argparse.Namespace, case: tuple, one: object) -> None:
+    """The one-worker cluster against direct runs in a plain process, alternating blocks (only
+    this cluster is running: its scheduler and nanny are the only ones in this process)."""
+    plan, inputs, folder, arrow_schema = case
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        direct(pool, plan, inputs[:2])  # warm-up
+        overhead, cpu_overhead, per_run_direct = [], [], []
+        for r in range(args.repeats):
+            pair = ("direct", "cluster") if r % 2 == 0 else ("cluster", "direct")
+            times = {}
+            for what in pair:
+                times[what] = (direct(pool, plan, inputs) if what == "direct" else
+                               through_cluster(one, plan, inputs, folder, arrow_schema,
+                                               args.engine))
+            per_run_direct.append(times["direct"][0] / len(inputs))
+            overhead.append(times["cluster"][0] / times["direct"][0] - 1.0)
+            cpu_overhead.append(times["cluster"][1] / times["direct"][1] - 1.0)
+    print(f"| direct run (a plain process), ms per run | "
+          f"{mmm([1e3 * x for x in per_run_direct])} |")
+    print(f"| scheduling overhead per run, 1 worker against direct, wall time (goal <= 10 %) | "
+          f"{mmm([100 * x for x in overhead], '.1f')} % |")
+    print(f"| the same in CPU time (client, scheduler, nanny and worker against the direct loop) | "
+          f"{mmm([100 * x for x in cpu_overhead], '.1f')} % |")
+
+
 def blocks(args: argparse.Namespace, work: Path) -> None:
     spec_path = work / "bench.toml"
     spec_path.write_text(SPEC.format(samples=args.runs))
     spec = read_spec(spec_path)
-    plan = make_plan(spec, args.engine)
-    inputs = design(spec)
-    arrow_schema = schema(spec.vary)
-    folder = work / "results.parquet"
+    case = (make_plan(spec, args.engine), design(spec), work / "results.parquet",
+            schema(spec.vary))
     t0 = time.perf_counter()
     with dask_client(1) as one:
-        t1 = time.perf_counter()
-        with dask_client(2) as two:
-            t2 = time.perf_counter()
-            print(f"local cluster start-up (workers ready, run module imported): 1 worker "
-                  f"{t1 - t0:.2f} s, 2 workers {t2 - t1:.2f} s")
-            clusters = {1: one, 2: two}
-            for c in clusters.values():  # warm-up: each worker plans the reference once
-                through_cluster(c, plan, inputs[:8], folder, arrow_schema, args.engine)
-            direct(plan, inputs[:2])
-            rate: dict[int, list[float]] = {1: [], 2: []}
-            ratio, overhead, cpu_overhead, per_run_direct = [], [], [], []
-            for r in range(args.repeats):
-                order = (1, 2) if r % 2 == 0 else (2, 1)
-                t = {w: through_cluster(clusters[w], plan, inputs, folder, arrow_schema,
-                                        args.engine)[0] for w in order}
-                for w in order:
-                    rate[w].append(len(inputs) / t[w])
-                ratio.append(t[1] / t[2])
-                pair = ("direct", "cluster") if r % 2 == 0 else ("cluster", "direct")
-                times = {}
-                for what in pair:
-                    times[what] = (direct(plan, inputs) if what == "direct" else
-                                   through_cluster(one, plan, inputs, folder, arrow_schema,
-                                                   args.engine))
-                per_run_direct.append(times["direct"][0] / len(inputs))
-                overhead.append(times["cluster"][0] / times["direct"][0] - 1.0)
-                cpu_overhead.append(times["cluster"][1] / times["direct"][1] - 1.0)
-    print(f"\n{args.runs} runs per block, engine {args.engine}, {args.repeats} pairs of blocks; "
-          "min / median / max\n")
-    print("| measure | value |\n|---|---|")
-    print(f"| runs/s, 1 worker | {mmm(rate[1])} |")
-    print(f"| runs/s, 2 workers | {mmm(rate[2])} |")
-    print(f"| speed-up, 2 workers / 1 worker (per pair) | {mmm(ratio)} |")
-    print(f"| direct run in this process, ms per run | {mmm([1e3 * x for x in per_run_direct])} |")
-    print(f"| scheduling overhead per run, 1 worker against direct, wall time (goal <= 10 %) | "
-          f"{mmm([100 * x for x in overhead], '.1f')} % |")
-    print(f"| the same in CPU time (client, scheduler, nanny and worker against this process) | "
-          f"{mmm([100 * x for x in cpu_overhead], '.1f')} % |")
+        print(f"local cluster of 1 worker: ready (run module imported) in "
+              f"{time.perf_counter() - t0:.2f} s")
+        through_cluster(one, case[0], case[1][:8], case[2], case[3], args.engine)  # warm-up
+        rates(args, case, one)
+        overheads(args, case, one)
 
 
 def big(args: argparse.Namespace, work: Path) -> None:

@@ -77,6 +77,19 @@ def _check_workers(client: Any, where: str) -> None:
     client.run(_import_runs)
 
 
+def _worker_environ() -> dict[str, Any]:
+    """The environment Dask gives the local cluster's worker processes, without
+    MALLOC_TRIM_THRESHOLD_: Dask sets it (to 64 KiB, against fragmentation), which turns off
+    glibc's adaptive mmap threshold, so that every run's half-megabyte arrays are mapped and
+    unmapped again; the runs took 10 % more CPU time with it (bench/bench_sweep.py). A run
+    allocates the same sizes each time, which the adaptive threshold serves from the heap."""
+    import dask
+
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
+    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    return environ
+
+
 def _import_runs() -> None:
     """Run on each worker before the first batch: import what a run needs (numpy, scipy, the
     binding, the writing job), so that the first batch's runs do not pay for it."""
@@ -88,14 +101,16 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
     """A Dask client: of a new local cluster of ``workers`` processes (default: one per core),
     or of the running cluster whose scheduler is at ``scheduler``. Closed (the local cluster
     stopped) when the block ends."""
+    import dask
     from distributed import Client, LocalCluster
 
     with _quiet_distributed(), contextlib.ExitStack() as stack:
         if scheduler is None:
             n = workers or os.cpu_count() or 1
-            cluster = stack.enter_context(LocalCluster(  # its web server on a free port
-                n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                silence_logs=logging.ERROR))
+            with dask.config.set({"distributed.nanny.pre-spawn-environ": _worker_environ()}):
+                cluster = stack.enter_context(LocalCluster(  # its web server on a free port
+                    n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                    silence_logs=logging.ERROR))
             client = stack.enter_context(Client(cluster))
             where = f"the local cluster of {n} worker processes"
         else:
