@@ -35,7 +35,8 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rrr",
-        description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench.",
+        description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench, "
+        "sweeps.",
         epilog="examples:\n  rrr fmus\n  rrr writing --out results",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )

@@ -75,7 +75,7 @@ def register_cli(subparsers: Any) -> None:
                    "of a local cluster; rrr_robot must be installed on its workers")
     p.add_argument("--engine", choices=("fmpy", "native"), default="fmpy",
                    help="fmpy (default): the FMUs through FMPy; native: the same closed loop "
-                   "in the C library (rr.simulate), bit-identical, about ten times faster")
+                   "in the C library (rr.simulate), bit-identical, several times faster")
     p.add_argument("--resume", action="store_true",
                    help="complete the sweep in --out: skip the runs it recorded")
     p.add_argument("--batch", type=positive_int, metavar="N",
