@@ -112,9 +112,12 @@ def test_a_sweep_through_a_running_scheduler_records_failing_and_saturated_runs(
     assert df["status"].tolist() == ["ok", "saturated", "ok", "saturated", "invalid", "invalid"]
     invalid = df[df["status"] == "invalid"]
     assert invalid["error"].str.contains("RRR_NOT_POSITIVE_DEFINITE").all()
-    assert invalid["tip_error_max"].isna().all() and df.loc[:3, "error"].isna().all()
+    assert invalid["tip_error_max"].isna().all() and df.loc[[0, 2], "error"].isna().all()
     saturated = df[df["status"] == "saturated"]
     assert (saturated["saturated_fraction"] > 0).all()
+    assert saturated["error"].str.fullmatch(
+        r"u\[1\], u\[2\], u\[3\] reached \+-0\.5 V \(the controller's model's u_max\) on "
+        r"[0-9.]+ % of the samples").all(), saturated["error"].tolist()
     assert (df.loc[[0, 2], "saturated_fraction"] == 0).all()
     assert (df["wall_time"] > 0).all()
     assert (out / "spec.toml").read_bytes() == spec.read_bytes()

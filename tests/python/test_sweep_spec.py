@@ -256,12 +256,14 @@ def test_a_run_that_raises_in_the_closed_loop_is_a_failed_row(
 def test_a_saturated_run_is_recorded_with_its_peak_voltage_and_time_at_the_limit(
         plan: sweep_runs.SweepPlan) -> None:
     ok = run_one(plan, RunInput(0, 1, ()))
-    assert ok["status"] == "ok" and ok["saturated_fraction"] == 0.0
+    assert ok["status"] == "ok" and ok["saturated_fraction"] == 0.0 and ok["error"] is None
     u_max = rr.Model.default().u_max
     assert 0 < ok["u_peak[2]"] < u_max
     # the controller believes its voltage limit is 5 % of the true one: u is clipped there
     row = run_one(plan, RunInput(1, 1, (("mismatch.u_max_rel", -0.95),)))
     assert row["status"] == "saturated", row["error"]
+    assert row["error"].startswith("u[1], u[2], u[3] reached +-0.5 V (the controller's model's "
+                                   "u_max) on ") and row["error"].endswith(" % of the samples")
     limit = 0.05 * u_max
     assert max(row[f"u_peak[{i}]"] for i in (1, 2, 3)) == pytest.approx(limit, rel=1e-12)
     assert 0 < row["saturated_fraction[2]"] <= row["saturated_fraction"] <= 1

@@ -20,9 +20,12 @@ Status of a run (never an exception: a failing run is a row):
   controller model that is no longer positive definite, a text that leaves the workspace);
 - ``failed``: the closed loop raised (an FMU error, a numeric failure of the plant).
 
-``error`` holds the message of invalid and failed runs. The workers keep the robot and the
-references they built (the same inputs give the same reference bit for bit), so a reference is
-planned once per worker and writing setting, not once per run.
+``error`` holds the message of a run that is not ok: why it was invalid or failed, which
+metrics were not finite, which voltages reached which limit for how long.
+
+The workers keep the robot and the references they built (the same inputs give the same
+reference bit for bit), so a reference is planned once per worker and writing setting, not once
+per run.
 """
 
 from __future__ import annotations
@@ -131,12 +134,22 @@ def _finite(x: float) -> float | None:
     return x if np.isfinite(x) else None
 
 
-def _outcome(res: Any, u_limit: float) -> tuple[str, dict[str, float | None]]:
-    """The status and metric columns of a run that ran."""
+def _limit_text(controller: float, actuator: float) -> str:
+    if controller < actuator:
+        return f"+-{controller:g} V (the controller's model's u_max)"
+    if actuator < controller:
+        return f"+-{actuator:g} V (the actuator's u_max)"
+    return f"+-{actuator:g} V (u_max)"
+
+
+def _outcome(res: Any, limits: tuple[float, float],
+             ) -> tuple[str, str | None, dict[str, float | None]]:
+    """The status, its message and the metric columns of a run that ran; ``limits``: the
+    controller's and the actuator's u_max."""
     m = metrics(res)
-    status = "diverged" if scenario_summary(m)["status"] == "diverged" else "ok"
+    summary = scenario_summary(m)
     u = np.abs(res.u)
-    saturated = u >= u_limit
+    saturated = u >= min(limits)
     row: dict[str, float | None] = {
         "tip_error_max": _finite(m["tip_error_max"]), "tip_error_rms": _finite(m["tip_error_rms"]),
     }
@@ -144,10 +157,15 @@ def _outcome(res: Any, u_limit: float) -> tuple[str, dict[str, float | None]]:
         row |= {f"{name}[{i}]": _finite(float(m[name][i - 1])) for i in J}
     row |= {f"u_peak[{i}]": _finite(float(u[:, i - 1].max())) for i in J}
     row |= {f"saturated_fraction[{i}]": float(saturated[:, i - 1].mean()) for i in J}
-    row["saturated_fraction"] = float(saturated.any(axis=1).mean())
-    if status == "ok" and saturated.any():
-        status = "saturated"
-    return status, row
+    fraction = float(saturated.any(axis=1).mean())
+    row["saturated_fraction"] = fraction
+    if summary["status"] == "diverged":
+        return "diverged", f"not finite: {', '.join(summary['non_finite'])}", row
+    if saturated.any():
+        joints = ", ".join(f"u[{i}]" for i in J if saturated[:, i - 1].any())
+        return "saturated", (f"{joints} reached {_limit_text(*limits)} on "
+                             f"{100 * fraction:.3g} % of the samples"), row
+    return "ok", None, row
 
 
 def run_one(plan: SweepPlan, inp: RunInput) -> dict[str, Any]:
@@ -163,7 +181,7 @@ def run_one(plan: SweepPlan, inp: RunInput) -> dict[str, Any]:
         ref = _reference(plan, robot, writing)
         scenario = scenario_from_dict(_scenario_tables(plan, inp.values),
                                       f"{plan.base_source} (run {inp.run})")
-        u_limit = min(scenario.controller_model(robot.model).u_max, robot.model.u_max)
+        limits = (scenario.controller_model(robot.model).u_max, robot.model.u_max)
         options = scenario_options(scenario, robot.model, robot, ref)
     except Exception as exc:  # a run's values that the checks refuse: a row, not an error
         log.debug("run %d invalid: %s", inp.run, exc)
@@ -175,7 +193,7 @@ def run_one(plan: SweepPlan, inp: RunInput) -> dict[str, Any]:
             log.debug("run %d failed: %s", inp.run, exc)
             row |= {"status": "failed", "error": _one_line(exc)}
         else:
-            row["status"], values = _outcome(res, u_limit)
+            row["status"], row["error"], values = _outcome(res, limits)
             row |= values
     row["wall_time"] = time.perf_counter() - start
     return row
