@@ -7,6 +7,7 @@ dataset reads back as written (tests/python/test_sweep_dask.py runs sweeps on Da
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import numpy as np
@@ -253,6 +254,23 @@ def test_a_run_that_raises_in_the_closed_loop_is_a_failed_row(
     assert row["mismatch.p_rel"] == 0.05 and row["tip_error_max"] is None
 
 
+def test_a_run_whose_motion_is_not_finite_is_a_diverged_row(
+        plan: sweep_runs.SweepPlan, monkeypatch: pytest.MonkeyPatch) -> None:
+    engine = sweep_runs.run_engine
+
+    def blown_up(name: str, ref: object, options: object) -> object:
+        res = engine(name, ref, options)  # type: ignore[arg-type]
+        res.tip[100:, 2] = np.inf  # the tip leaves for infinity at sample 100
+        return res
+
+    monkeypatch.setattr(sweep_runs, "run_engine", blown_up)
+    row = run_one(plan, RunInput(4, 2, ()))
+    assert row["status"] == "diverged"
+    assert row["error"] == "not finite: tip_error_max, tip_error_rms"
+    assert row["tip_error_max"] is None and row["tip_error_rms"] is None
+    assert row["rms_u_n[2]"] is not None and row["u_peak[1]"] is not None
+
+
 def test_a_saturated_run_is_recorded_with_its_peak_voltage_and_time_at_the_limit(
         plan: sweep_runs.SweepPlan) -> None:
     ok = run_one(plan, RunInput(0, 1, ()))
@@ -340,3 +358,50 @@ def test_a_scheduler_that_cannot_be_reached_stops_the_sweep_before_anything_is_w
     assert err == ["rrr: error: cannot connect to the Dask scheduler at tcp://127.0.0.1:1: "
                    "Timed out trying to connect to tcp://127.0.0.1:1 after 1 s"], err
     assert not out.exists()
+
+
+def test_a_lost_batch_is_not_recorded_and_resume_runs_it(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A task that does not come back (its worker died more often than Dask retries) ends the
+    command with an error after the other batches are recorded; --resume runs the rest. Here
+    the cluster is in this process, so that the task can be made to fail."""
+    import contextlib
+    from collections.abc import Iterator
+
+    from distributed import Client, LocalCluster
+    from rrr_robot.sweep import execution
+
+    @contextlib.contextmanager
+    def in_process(workers: int | None = None, scheduler: str | None = None) -> Iterator[Client]:
+        with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                          dashboard_address=":0") as cluster, Client(cluster) as client:
+            yield client
+
+    def lost_at_run_2(plan: sweep_runs.SweepPlan, inputs: list[RunInput]) -> list[dict]:
+        if inputs[0].run == 2:
+            raise RuntimeError("the worker running it died")
+        return sweep_runs.run_batch(plan, inputs)
+
+    monkeypatch.setattr(execution, "dask_client", in_process)
+    monkeypatch.setattr(execution, "run_batch", lost_at_run_2)
+    path = spec_file(tmp_path, HEAD.replace("samples = 5", "samples = 4") +
+                     '[vary]\n"mismatch.p_rel" = { uniform = [0.0, 0.1] }\n')
+    out = tmp_path / "out"
+    args = ["sweep", str(path), "--out", str(out), "--engine", "native", "--batch", "1", "-q",
+            "--no-figures"]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("rrr: error: 1 of 4 runs were not recorded: 1 "
+                                               "batch lost (first: RuntimeError: the worker "
+                                               "running it died)"), err
+    assert "rerun with --resume" in err[0]
+    import pandas as pd
+
+    assert sorted(pd.read_parquet(out / "results.parquet")["run"]) == [0, 1, 3]
+    assert not (out / "summary.json").exists()
+    monkeypatch.setattr(execution, "run_batch", sweep_runs.run_batch)  # the worker is back
+    assert main([*args, "--resume"]) == 0
+    assert sorted(pd.read_parquet(out / "results.parquet")["run"]) == [0, 1, 2, 3]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["runs"] == 4 and summary["this_invocation"]["runs"] == 1

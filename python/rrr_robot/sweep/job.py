@@ -242,7 +242,8 @@ def _run_missing(job: SweepJob, spec: SweepSpec, plan: SweepPlan, todo: list[Run
         elapsed = time.perf_counter() - start
     if lost:
         n = sum(len(r) for r, _ in lost)
-        raise RrrError(f"{n} of {len(todo)} runs were not recorded: {len(lost)} batches lost "
+        batches_lost = f"{len(lost)} batch{'es' if len(lost) != 1 else ''} lost"
+        raise RrrError(f"{n} of {len(todo)} runs were not recorded: {batches_lost} "
                        f"(first: {lost[0][1]}); the {recorded} recorded runs are in "
                        f"{job.out / RESULTS}: rerun with --resume to run the others")
     return {"runs": len(todo), "cluster_start": connect, "wall_time": elapsed,
