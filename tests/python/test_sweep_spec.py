@@ -405,3 +405,18 @@ def test_a_lost_batch_is_not_recorded_and_resume_runs_it(
     assert sorted(pd.read_parquet(out / "results.parquet")["run"]) == [0, 1, 2, 3]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["runs"] == 4 and summary["this_invocation"]["runs"] == 1
+
+
+def test_every_varied_key_has_its_panel_in_the_dependence_figure() -> None:
+    from rrr_robot.sweep.figures import MAX_PANELS, _panels
+    from rrr_robot.sweep.sensitivity import Sensitivity
+
+    names = [f"mismatch.f_rel[{i},{k}]" for i in (1, 2, 3) for k in (1, 2, 3)]
+    names += ["mismatch.p_rel[1]", "mismatch.p_rel[2]", "mismatch.p_rel[3]", "mismatch.p_rel[4]",
+              "gains.kp", "writing.text"]
+    ranking = [Sensitivity(n, 1.0 - 0.01 * i, None, 50, 7, 0.1) for i, n in enumerate(names)]
+    shown = [s.input for s in _panels(ranking)]
+    assert len(shown) == MAX_PANELS == 12
+    assert {"gains.kp", "writing.text", "mismatch.p_rel[1]"} <= set(shown)
+    assert shown == [n for n in names if n in shown]  # in ranking order
+    assert "mismatch.f_rel[3,3]" in shown and "mismatch.p_rel[2]" not in shown

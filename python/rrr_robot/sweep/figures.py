@@ -2,8 +2,9 @@
 
 - ``fig_sweep_tip_error.png``: the distribution of the maximum and RMS tip error over the runs
   (histogram and empirical distribution function), with the runs of each status;
-- ``fig_sweep_dependence.png``: the maximum tip error against each input of the ranking (at
-  most :data:`MAX_PANELS`, the most sensitive first), saturated runs marked;
+- ``fig_sweep_dependence.png``: the maximum tip error against the inputs of the ranking (every
+  varied key's most sensitive input, then the next ones, at most :data:`MAX_PANELS`, in ranking
+  order), saturated runs marked;
 - ``fig_sweep_sensitivity.png``: the ranking (S1 of each input, with its noise floor).
 """
 
@@ -63,9 +64,24 @@ def fig_tip_error(out: Path, tip_max: np.ndarray, tip_rms: np.ndarray,
     save_figure(fig, out / FIGURES[0])
 
 
+def _panels(ranking: Sequence[Sensitivity]) -> list[Sensitivity]:
+    """The inputs drawn: each varied key's most sensitive input first (so every key has its
+    panel), then the next most sensitive ones, at most MAX_PANELS, in ranking order."""
+    firsts: dict[str, Sensitivity] = {}
+    for s in ranking:
+        firsts.setdefault(s.input.split("[", 1)[0], s)
+    chosen = {s.input for s in list(firsts.values())[:MAX_PANELS]}
+    for s in ranking:
+        if len(chosen) >= MAX_PANELS:
+            break
+        chosen.add(s.input)
+    return [s for s in ranking if s.input in chosen]
+
+
 def fig_dependence(out: Path, inputs: Mapping[str, Input], ranking: Sequence[Sensitivity],
                    tip_max: np.ndarray, status: Sequence[str]) -> None:
-    shown = [inputs[s.input] for s in ranking[:MAX_PANELS]]
+    ranking = _panels(ranking)
+    shown = [inputs[s.input] for s in ranking]
     cols = min(3, len(shown))
     rows = math.ceil(len(shown) / cols)
     fig = new_figure((4.2 * cols, 3.2 * rows))
