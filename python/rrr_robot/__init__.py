@@ -4,7 +4,8 @@ The model is computed by the C core librrr; this package binds it, builds and ru
 and provides the writing task, identification, HIL bench and the ``rrr`` command line.
 
 Subpackages, each importing only from those below it: ``cli`` (the ``rrr`` command line) above
-``hil`` (CAN bench) and ``identify`` (identification), above ``writing`` (the writing task), above
+``hil`` (CAN bench), ``identify`` (identification) and ``sweep`` (Monte Carlo scenario sweeps
+on Dask), above ``writing`` (the writing task), above
 ``sim`` (FMUs and co-simulation), above ``core`` (the binding of librrr and the model);
 ``errors`` (the exceptions) is below them all.
 """
@@ -23,6 +24,7 @@ from .errors import (
     RrrError,
     ScenarioError,
     SingularError,
+    SweepSpecError,
     UnreachableError,
 )
 
@@ -88,6 +90,7 @@ __all__ = [
     "ScenarioError",
     "SingularError",
     "Singularity",
+    "SweepSpecError",
     "UnreachableError",
     "__version__",
     "bps_from_inertia",

@@ -11,6 +11,7 @@ __all__ = [
     "RrrError",
     "ScenarioError",
     "SingularError",
+    "SweepSpecError",
     "UnreachableError",
 ]
 
@@ -48,6 +49,15 @@ class RobotFileError(ModelError, BadInputError):
 class ScenarioError(BadInputError):
     """A scenario file (TOML) of the writing task that cannot be read or breaks its schema, or a
     set of scenarios whose names collide; named like :class:`RobotFileError`."""
+
+    def __init__(self, message: str, source: str = "", table: str = "", key: str = "") -> None:
+        super().__init__(message)
+        self.source, self.table, self.key = source, table, key
+
+
+class SweepSpecError(BadInputError):
+    """A sweep spec (TOML, ``rrr sweep``) that cannot be read or breaks its schema; named like
+    :class:`RobotFileError`."""
 
     def __init__(self, message: str, source: str = "", table: str = "", key: str = "") -> None:
         super().__init__(message)

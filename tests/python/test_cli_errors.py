@@ -121,6 +121,21 @@ CASES: dict[str, tuple[list[str], str]] = {
     "busload-fd-below-nominal": (["hil", "busload", "--fd", "100000"], "--fd"),
     "busload-binary-dbc": (["hil", "busload", "--dbc", "binary.toml"], "--dbc"),
     "busload-missing-dbc": (["hil", "busload", "--dbc", "missing.dbc"], "missing.dbc"),
+    # rrr sweep
+    "sweep-missing-spec": (["sweep", "missing.toml"], "missing.toml"),
+    "sweep-binary-spec": (["sweep", "binary.toml"], "binary.toml"),
+    "sweep-malformed-spec": (["sweep", "broken.toml"], "broken.toml"),
+    "sweep-unknown-key": (["sweep", "sweep_unknown_key.toml"], "mismatch.q_rel"),
+    "sweep-samples-0": (["sweep", "sweep_samples_0.toml"], "samples"),
+    "sweep-workers-0": (["sweep", "sweep_ok.toml", "--workers", "0"], "--workers"),
+    "sweep-bad-scheduler": (["sweep", "sweep_ok.toml", "--scheduler", "nowhere"],
+                            "--scheduler"),
+    "sweep-workers-and-scheduler": (["sweep", "sweep_ok.toml", "--workers", "2",
+                                     "--scheduler", "tcp://127.0.0.1:8786"], "--workers"),
+    "sweep-bad-engine": (["sweep", "sweep_ok.toml", "--engine", "fast"], "--engine"),
+    "sweep-out-below-a-file": (["sweep", "sweep_ok.toml", "--out", "a_file/out"],
+                               "output folder"),
+    "sweep-no-out": (["sweep", "sweep_ok.toml", "--out", ""], "--out"),
     # rrr, rrr fmus
     "no-command": ([], "command"),
     "unknown-command": (["paint"], "paint"),
@@ -144,7 +159,7 @@ CASES: dict[str, tuple[list[str], str]] = {
 }
 
 #: the commands that take an output (appended as --out OUT unless the case gives --out)
-TAKES_OUT = ("writing", "identify", "identify-experiment", "hil", "urdf", "run-ssp")
+TAKES_OUT = ("writing", "identify", "identify-experiment", "hil", "urdf", "run-ssp", "sweep")
 
 
 def make_workdir(folder: Path) -> None:
@@ -158,6 +173,11 @@ def make_workdir(folder: Path) -> None:
     assert "g = nan" in robot
     (folder / "nan_robot.toml").write_text(robot)
     rr.Model.default().to_toml(folder / "bp_robot.toml")  # [base_parameters], no link tables
+    sweep = ('[sweep]\nbase = "ctc"\nsamples = 2\n'
+             '[vary]\n"mismatch.p_rel" = { uniform = [0, 0.1] }\n')
+    (folder / "sweep_ok.toml").write_text(sweep)
+    (folder / "sweep_unknown_key.toml").write_text(sweep.replace("p_rel", "q_rel"))
+    (folder / "sweep_samples_0.toml").write_text(sweep.replace("samples = 2", "samples = 0"))
     t = np.arange(300) * 1e-3
     rows = np.column_stack([t, np.zeros((300, 6))])
     (folder / "log.csv").write_text("t,q[1],q[2],q[3],u[1],u[2],u[3]\n" + "\n".join(

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import copy
 import json
-import math
 import re
 import subprocess
 import sys
@@ -85,6 +84,28 @@ def test_mismatch_model_is_the_documented_perturbation() -> None:
         Scenario("bad", "", True, mismatch={"p_rel": 5.0}).controller_model(true)
 
 
+def test_mismatch_per_value_is_the_documented_perturbation(tmp_path: Path) -> None:
+    """One error per value of a group (in its shape): v (1 + rel_v), no alternating sign."""
+    true = rr.Model.default()
+    rel_p = [0.01 * k - 0.08 for k in range(16)]
+    rel_f = [[0.1, -0.2, 0.3], [0.0, 0.5, -0.5], [0.25, 0.0, 1.0]]
+    path = tmp_path / "per_value.toml"
+    path.write_text('[scenario]\nname = "pv"\nfeedforward = true\n[mismatch]\n'
+                    f"p_rel = {rel_p!r}\nf_rel = {rel_f!r}\nkt_rel = [0.1, 0.0, -0.1]\n")
+    scn = load_scenario(str(path))
+    assert scn.mismatch["p_rel"] == tuple(rel_p)
+    believed = scn.controller_model(true)
+    np.testing.assert_array_equal(believed.p, true.p * (1.0 + np.array(rel_p)))
+    np.testing.assert_array_equal(believed.f, true.f * (1.0 + np.array(rel_f)))
+    np.testing.assert_array_equal(believed.kt, true.kt * (1.0 + np.array([0.1, 0.0, -0.1])))
+    np.testing.assert_array_equal(believed.w, true.w)
+    # the same error for every value, as one number or as an array, differs only for p's signs
+    same = Scenario("s", "", True, mismatch={"kt_rel": (0.2, 0.2, 0.2), "p_rel": (0.1,) * 16})
+    one = Scenario("o", "", True, mismatch={"kt_rel": 0.2, "p_rel": 0.1})
+    np.testing.assert_array_equal(same.controller_model(true).kt, one.controller_model(true).kt)
+    np.testing.assert_array_equal(same.controller_model(true).p, true.p * 1.1)
+
+
 @pytest.mark.parametrize(("text", "message"), [
     # wrong types
     ('[scenario]\nname = 5\nfeedforward = true\n', r"\[scenario\] name must be a safe file name"),
@@ -95,7 +116,17 @@ def test_mismatch_model_is_the_documented_perturbation() -> None:
     ('[scenario]\nname = "x"\nfeedforward = true\n[gains]\nkp = "x"\n',
      r"\[gains\] kp must be an array of 3 numbers, got \"x\""),
     ('[scenario]\nname = "x"\nfeedforward = true\n[mismatch]\np_rel = "0.1"\n',
-     r"\[mismatch\] p_rel must be a finite number > -1 and <= 10, got \"0.1\""),
+     r"\[mismatch\] p_rel must be a finite number > -1 and <= 10, or an array of 16 numbers, "
+     r"got \"0.1\""),
+    ('[scenario]\nname = "x"\nfeedforward = true\n[mismatch]\nkt_rel = [0.1, 0.2]\n',
+     r"\[mismatch\] kt_rel must be an array of 3 numbers, got \[0.1, 0.2\]"),
+    ('[scenario]\nname = "x"\nfeedforward = true\n[mismatch]\nkt_rel = [0.1, 0.2, -1.5]\n',
+     r"\[mismatch\] kt_rel\[3\] must be a finite number > -1 and <= 10, got -1.5"),
+    ('[scenario]\nname = "x"\nfeedforward = true\n[mismatch]\n'
+     'f_rel = [[0, 0, 0], [0, 0, 0], [0, 1]]\n',
+     r"\[mismatch\] f_rel\[3\] must be an array of 3 numbers, got \[0, 1\]"),
+    ('[scenario]\nname = "x"\nfeedforward = true\n[mismatch]\nu_max_rel = [0.1]\n',
+     r"\[mismatch\] u_max_rel must be a finite number > -1 and <= 10, got \[0.1\]"),
     ('[scenario]\nname = "x"\ndescription = 3\nfeedforward = true\n',
      r"\[scenario\] description must be a string"),
     # wrong shapes
@@ -260,8 +291,9 @@ def test_property_perturbed_scenarios(tmp_path: Path, case: Any) -> None:
     if (table, key) == ("scenario", "name"):
         assert "/" not in intended and "\\" not in intended and intended not in (".", "..")
         assert re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}", intended)
-    if table == "mismatch":
-        assert math.isfinite(intended) and -1 < intended <= 10
+    if table == "mismatch":  # one error, or one per value of the group
+        errors = np.asarray(intended, dtype=float)
+        assert np.all(np.isfinite(errors)) and np.all((errors > -1) & (errors <= 10))
 
 
 @settings(max_examples=200, deadline=None)

@@ -11,7 +11,8 @@ import sys
 
 import pytest
 
-HEAVY = ("numpy", "scipy", "matplotlib", "fmpy", "cantools", "can", "pandas", "pyarrow")
+HEAVY = ("numpy", "scipy", "matplotlib", "fmpy", "cantools", "can", "pandas", "pyarrow",
+         "dask", "distributed")
 
 
 def _loaded_after(code: str, tmp_path) -> list[str]:

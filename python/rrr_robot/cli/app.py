@@ -1,5 +1,5 @@
 """The ``rrr`` parser and entry point (also ``python -m rrr_robot``): ``rrr fmus`` here, the
-other command groups in their modules (writing, identify, hil, urdf, ssp)."""
+other command groups in their modules (writing, identify, hil, urdf, ssp, sweep)."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from ..errors import RrrError
 from .hil import register_cli as register_hil
 from .identify import register_cli as register_identify
 from .ssp import register_cli as register_ssp
+from .sweep import register_cli as register_sweep
 from .urdf import register_cli as register_urdf
 from .writing import register_cli as register_writing
 
@@ -36,7 +37,8 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rrr",
-        description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench.",
+        description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench, "
+        "sweeps.",
         epilog="examples:\n  rrr fmus\n  rrr writing --out results",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -52,6 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
     register_hil(sub)
     register_urdf(sub)
     register_ssp(sub)
+    register_sweep(sub)
     return parser
 
 

@@ -8,7 +8,8 @@ file, the table and the key (and the index in an array), what was expected and w
 not TOML or nested deeper than the parser handles. :class:`Document` checks the parsed tables
 against a schema: unknown tables and keys are errors that name them and list the allowed ones,
 and each value passes a field check (:class:`Number`, :class:`Vector`, :class:`Matrix`,
-:class:`Text`, :class:`Flag`) that returns it converted (float, tuple of floats, str, bool).
+:class:`Text`, :class:`Flag`, :class:`ScalarOrArray`) that returns it converted (float, tuple of
+floats, str, bool).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ __all__ = [
     "Invalid",
     "Matrix",
     "Number",
+    "ScalarOrArray",
     "Text",
     "Vector",
     "load_toml",
@@ -217,6 +219,27 @@ class Matrix(Field):
                     raise Invalid(exc.requirement, item, f"[{i + 1},{k + 1}]") from None
             out.append(tuple(cells))
         return tuple(out)
+
+
+@dataclass(frozen=True)
+class ScalarOrArray(Field):
+    """One number for every element (``scalar``), or an array with one per element (``array``,
+    a :class:`Vector` or :class:`Matrix` whose elements pass the same check): a float or the
+    array's tuple."""
+
+    scalar: Number
+    array: Vector | Matrix
+
+    def describe(self) -> str:
+        return f"{self.scalar.describe()}, or {self.array.describe()}"
+
+    def check(self, value: Any) -> float | tuple[Any, ...]:
+        if isinstance(value, list | tuple):
+            result: tuple[Any, ...] = self.array.check(value)
+            return result
+        if not _is_number(value):
+            raise Invalid(f"must be {self.describe()}", value)
+        return self.scalar.check(value)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -75,6 +75,27 @@ def controller_fmu_values(scenario: Scenario, true_model: Model,
     return values
 
 
+def scenario_options(scenario: Scenario, model: Model, robot: RobotFile, ref: Reference,
+                     **settings: Any) -> CosimOptions:
+    """The co-simulation of one scenario along ``ref``: the plant is the true ``model``, the
+    controller has the scenario's model, gains (else the robot file's) and feedforward switch;
+    ``settings`` are further CosimOptions fields (progress, fmi_version)."""
+    return CosimOptions(
+        step=float(ref.t[1] - ref.t[0]),
+        plant_values=model_fmu_values(model),
+        controller_values=controller_fmu_values(scenario, model, robot.require_control()),
+        **settings,
+    )
+
+
+def run_engine(engine: str, ref: Reference, options: CosimOptions) -> CosimResult:
+    """The closed loop along ``ref`` on one of :data:`ENGINES` (the same numbers on both)."""
+    if engine not in ENGINES:
+        raise BadInputError(f"unknown engine {engine!r}: one of {', '.join(ENGINES)}")
+    run = run_cosim if engine == "fmpy" else simulate
+    return run(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
+
+
 def metrics(result: CosimResult) -> dict[str, Any]:
     """Per-scenario figures of summary.json (eq 16 RMS values, tip error, timing)."""
     err = np.linalg.norm(result.tip - result.x_ref, axis=1)
@@ -116,6 +137,24 @@ def _describe(s: dict[str, Any]) -> str:
             + (f"{rtf:.0f}x real time" if rtf is not None else "real-time factor unavailable"))
 
 
+def writing_spec(robot: RobotFile, text: str | None = None, scale: float = 1.0,
+                 changes: Mapping[str, Any] | None = None) -> WritingSpec:
+    """What a job writes: the robot file's [writing] values, with ``changes`` (WritingSpec
+    fields), the ``text`` (None: as they say) and the letter height it is written at (fitted to
+    the writing area) times ``scale`` (the ``--text`` and ``--scale`` of ``rrr writing``).
+    BadInputError for a value out of range."""
+    spec = WritingSpec.from_robot(robot)
+    if changes:
+        spec = replace(spec, **changes)
+    if text is not None:
+        spec = replace(spec, text=text)
+    if scale != 1.0:
+        # the factor on the height the text is written at (fitted to the writing area), and
+        # that height exactly: a scaled text that does not fit is refused
+        spec = replace(spec, letter_height=fit_letter_height(spec) * scale, fit_to_area=False)
+    return spec
+
+
 class Prepared(NamedTuple):
     """What :func:`prepare` checked and built: the true model, the robot file it came from, the
     scenarios and the reference (sampled at the robot file's [control] sample_time)."""
@@ -134,15 +173,7 @@ def prepare(job: WritingJob) -> Prepared:
     check_run(scenarios)
     robot = read_robot_file(job.robot)
     robot.require_control()
-    spec = WritingSpec.from_robot(robot)
-    if job.text is not None:
-        spec = replace(spec, text=job.text)
-    if job.scale != 1.0:
-        # the factor on the height the text is written at (fitted to the writing area), and
-        # that height exactly: a scaled text that does not fit is refused
-        spec = replace(spec, letter_height=fit_letter_height(spec) * job.scale,
-                       fit_to_area=False)
-    reference = make_reference(robot.model, spec)
+    reference = make_reference(robot.model, writing_spec(robot, job.text, job.scale))
     for s in scenarios:
         s.controller_model(robot.model)  # a perturbed model that is invalid fails here
     return Prepared(robot.model, robot, scenarios, reference)
@@ -175,15 +206,9 @@ def run_writing(job: WritingJob,
             def report(k: int, n: int, name: str = scn.name) -> None:
                 if progress is not None:
                     progress(name, k, n)
-            options = CosimOptions(
-                step=float(ref.t[1] - ref.t[0]),
-                plant_values=model_fmu_values(model),
-                controller_values=controller_fmu_values(scn, model, robot.require_control()),
-                progress=report,
-                fmi_version=job.fmi_version,
-            )
-            run = run_cosim if job.engine == "fmpy" else simulate
-            res = run(ref.t, ref.q, ref.qd, ref.qdd, ref.x, options)
+            options = scenario_options(scn, model, robot, ref, progress=report,
+                                       fmi_version=job.fmi_version)
+            res = run_engine(job.engine, ref, options)
             results[scn.name] = res
             start = time.perf_counter()
             res.write(rs.path(f"{scn.name}.{fmt}"), fmt)

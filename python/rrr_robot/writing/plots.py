@@ -88,6 +88,11 @@ def _figure(figsize: tuple[float, float]) -> Figure:
     return fig
 
 
+#: The figure helpers for the figures of other jobs (rrr_robot.sweep.figures): the same canvas,
+#: dpi, layout pass and atomic save.
+new_figure = _figure
+
+
 def _plot_series(ax: Any, t: FloatArray, y: FloatArray, *args: Any, **kwargs: Any) -> None:
     ax.plot(*envelope(t, y), *args, **kwargs)
 
@@ -117,6 +122,9 @@ def _bottom_legend(fig: Figure, pad_points: float = 4.0) -> float:
     legend = fig.legend(loc="lower center", ncol=2, frameon=False)
     box = legend.get_window_extent(fig.canvas.get_renderer())  # type: ignore[attr-defined]
     return float((box.y1 + pad_points * fig.dpi / 72.0) / fig.bbox.height)
+
+
+save_figure = _save
 
 
 def fig_reference(out: Path, ref: Reference) -> None:

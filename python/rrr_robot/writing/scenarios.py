@@ -14,7 +14,9 @@ One schema, every table and key checked (unknown ones are errors that name them)
 - ``[mismatch]`` (optional): ``<group>_rel`` for each group of the C parameter table (p_rel,
   kt_rel, f_rel, w_rel, b_rel, u_max_rel, g_rel, d1_rel, a2_rel, ...), a relative error of the
   controller's model, > -1 and <= 10: every value of the group is scaled by (1 + rel), the base
-  parameters with alternating sign, p_k (1 + rel (-1)^k).
+  parameters with alternating sign, p_k (1 + rel (-1)^k). A group with several values (p, kt,
+  f, w, b) also takes one error per value, in the group's shape (16 numbers for p, 3 arrays of 3
+  for f): value v of the group becomes v (1 + rel_v), with no alternating sign.
 
 The names of one run must differ (ignoring case: they name files) and a run has at most
 :data:`MAX_SCENARIOS` scenarios (:func:`check_run`).
@@ -29,9 +31,19 @@ from typing import Any
 
 from ..core import _lib
 from ..core._package import DATA_DIR
-from ..core.checked import Document, Field, Flag, Number, Text, Vector, load_toml
+from ..core.checked import (
+    Document,
+    Field,
+    Flag,
+    Matrix,
+    Number,
+    ScalarOrArray,
+    Text,
+    Vector,
+    load_toml,
+)
 from ..core.model import Model
-from ..core.param_names import GROUPS, PARAMS, set_values
+from ..core.param_names import GROUPS, PARAMS, ParamInfo, group_shape, set_values
 from ..core.robot_file import GAIN
 from ..errors import ModelError, ScenarioError
 
@@ -46,6 +58,19 @@ _DEVICE_NAMES = frozenset({"con", "prn", "aux", "nul", *(f"com{i}" for i in rang
 #: A [mismatch] value: the factor 1 + rel stays positive and at most 11.
 MISMATCH = Number(lo=-1.0, lo_open=True, hi=10.0)
 
+
+
+def _mismatch_field(group: str) -> Field:
+    """A [mismatch] key: one error for the group, or (a group of several values) one per value
+    in the group's shape."""
+    shape = group_shape(group)
+    if not shape:
+        return MISMATCH
+    if len(shape) == 1:
+        return ScalarOrArray(MISMATCH, Vector(shape[0], MISMATCH))
+    return ScalarOrArray(MISMATCH, Matrix(shape[0], shape[1], lambda i, k: MISMATCH))
+
+
 SCHEMA: dict[str, dict[str, Field]] = {
     "scenario": {
         "name": Text(max_len=64, pattern=NAME_PATTERN, pattern_text=(
@@ -55,7 +80,7 @@ SCHEMA: dict[str, dict[str, Field]] = {
         "feedforward": Flag(),
     },
     "gains": {"kp": Vector(3, GAIN), "kd": Vector(3, GAIN)},
-    "mismatch": {f"{group}_rel": MISMATCH for group in GROUPS},
+    "mismatch": {f"{group}_rel": _mismatch_field(group) for group in GROUPS},
 }
 
 
@@ -68,7 +93,8 @@ class Scenario:
     feedforward: bool
     kp: tuple[float, float, float] | None = None
     kd: tuple[float, float, float] | None = None
-    mismatch: Mapping[str, float] = field(default_factory=dict)
+    # <group>_rel: one relative error for the group, or one per value in the group's shape
+    mismatch: Mapping[str, float | tuple[Any, ...]] = field(default_factory=dict)
     source: str = ""
 
     def controller_model(self, true_model: Model) -> Model:
@@ -80,14 +106,25 @@ class Scenario:
             rel = self.mismatch.get(f"{info.group}_rel")
             if rel is None:
                 continue
-            sign = (-1.0) ** info.index[0] if info.group == "p" else 1.0
-            changes[info.name] = _lib.param_get(true_model.raw, info.row) * (1.0 + rel * sign)
+            changes[info.name] = _lib.param_get(true_model.raw, info.row) * _factor(info, rel)
         try:
             return Model(set_values(true_model.raw, changes))
         except ModelError as exc:
             src = self.source or f"scenario {self.name}"
             raise ScenarioError(f"{src}: scenario {self.name}: [mismatch] makes the controller's "
                                 f"model invalid: {exc}", src, "mismatch", "") from exc
+
+
+def _factor(info: ParamInfo, rel: float | tuple[Any, ...]) -> float:
+    """1 + rel for one parameter: rel for the whole group (p: with alternating sign, (-1)^k), or
+    the parameter's own element of rel."""
+    if isinstance(rel, tuple):
+        element: Any = rel
+        for i in info.index:
+            element = element[i - 1]
+        return 1.0 + float(element)
+    sign = (-1.0) ** info.index[0] if info.group == "p" else 1.0
+    return 1.0 + rel * sign
 
 
 def scenario_from_dict(data: Mapping[str, Any], src: str) -> Scenario:
@@ -112,8 +149,10 @@ def scenario_from_dict(data: Mapping[str, Any], src: str) -> Scenario:
     )
 
 
-def load_scenario(name_or_path: str) -> Scenario:
-    """A built-in scenario by name (pd, ctc, mismatch) or a scenario TOML file by path."""
+def read_scenario_file(name_or_path: str) -> tuple[dict[str, Any], str]:
+    """The parsed tables of a built-in scenario (pd, ctc, mismatch) or a scenario TOML file,
+    not yet checked (:func:`scenario_from_dict` checks them), and the file's name for messages.
+    Raises ScenarioError for an unknown name and a file that is not TOML."""
     path = SCENARIO_DIR / f"{name_or_path}.toml"
     if name_or_path not in BUILTIN:
         path = Path(name_or_path)
@@ -121,7 +160,12 @@ def load_scenario(name_or_path: str) -> Scenario:
             raise ScenarioError(
                 f"unknown scenario {name_or_path!r}: use one of {', '.join(BUILTIN)} "
                 "or the path of a scenario .toml file", name_or_path, "", "")
-    return scenario_from_dict(load_toml(path, "scenario file", ScenarioError), str(path))
+    return load_toml(path, "scenario file", ScenarioError), str(path)
+
+
+def load_scenario(name_or_path: str) -> Scenario:
+    """A built-in scenario by name (pd, ctc, mismatch) or a scenario TOML file by path."""
+    return scenario_from_dict(*read_scenario_file(name_or_path))
 
 
 def check_run(scenarios: Sequence[Scenario]) -> None:
