@@ -106,11 +106,11 @@ def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Floa
     plant_rec = np.empty((n, 12))
     ctrl_rec = np.empty((n, 9))
     done = ct.c_size_t(0)
-    start = time.perf_counter()
+    start, start_cpu = time.perf_counter(), time.thread_time()
     status = _lib.FUNCS["rrr_sim_closed_loop"](
         ct.byref(plant), ct.byref(integ), ptr(q0), ptr(qd0), ct.byref(ctrl), ct.byref(gains),
         n, float(options.step), ptr(ref), ptr(plant_rec), ptr(ctrl_rec), ct.byref(done))
-    wall = time.perf_counter() - start
+    wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
     if status != 0:
         k = int(done.value)  # 0 also when the setup (models, settings, initial state) failed
         where = f"sample {k} (t = {t[min(k, n - 1)]:.6f} s)" + (" or its setup" if k == 0 else "")
@@ -121,4 +121,5 @@ def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Floa
         t=t, q_ref=q_ref, qd_ref=qd_ref, x_ref=x_ref,
         q=plant_rec[:, 0:3], qd=plant_rec[:, 3:6], qdd=plant_rec[:, 6:9], tip=plant_rec[:, 9:12],
         u=ctrl_rec[:, 0:3], u_n=ctrl_rec[:, 3:6], u_c=ctrl_rec[:, 6:9], wall_time=wall,
+        cpu_time=cpu,
     )
