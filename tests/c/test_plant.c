@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "rrr/rrr.h"
+#include "rrr_internal.h"
 #include "rrr_test.h"
 
 static double total_energy(const rrr_model *m, const rrr_plant_state *x, double *kin)
@@ -346,6 +347,69 @@ static void test_tanh(void)
     CHECK(worst_m <= 2.0);
 }
 
+/* The inner Runge-Kutta stages' trig (rrr_trig_near: angle sums from a nearby state) against
+ * the x87 sinl/cosl, next to libm's own error, over random angles in [-100, 100] rad and
+ * differences up to the series' limit: the absolute error, in units of 2^-52 (one ulp of 1.0),
+ * the error that an angle rounded to double (ulp >= 2^-52 beyond 1 rad) carries anyway; the
+ * relative error near a zero of sin or cos is larger than libm's there. Beyond the limit (and
+ * for NaN) it is libm's bit for bit. */
+static void test_trig_near(void)
+{
+    rrr_rng rng = {0x2545f4914f6cdd1dULL};
+    double worst = 0.0, worst_libm = 0.0;
+    for (int i = 0; i < 400000; ++i) {
+        const double q0[3] = {0.0, rrr_rng_uniform(&rng, -100.0, 100.0),
+                              rrr_rng_uniform(&rng, -100.0, 100.0)};
+        const double lim = (i % 4 == 0) ? RRR_TRIG_NEAR_MAX : 2e-3;
+        const double q[3] = {0.0, q0[1] + rrr_rng_uniform(&rng, -lim, lim),
+                             q0[2] + rrr_rng_uniform(&rng, -lim, lim)};
+        const rrr_trig t0 = rrr_trig_of(q0);
+        const rrr_trig t = rrr_trig_near(&t0, q0, q);
+        const rrr_trig ref = rrr_trig_of(q);
+        const double got[4] = {t.s2, t.c2, t.s3, t.c3};
+        const double lib[4] = {ref.s2, ref.c2, ref.s3, ref.c3};
+        const long double exact[4] = {sinl((long double)q[1]), cosl((long double)q[1]),
+                                      sinl((long double)q[2]), cosl((long double)q[2])};
+        for (int k = 0; k < 4; ++k) {
+            worst = fmax(worst, (double)(fabsl((long double)got[k] - exact[k]) / 0x1p-52L));
+            worst_libm = fmax(worst_libm,
+                              (double)(fabsl((long double)lib[k] - exact[k]) / 0x1p-52L));
+        }
+    }
+    printf("trig near a state over 400000 pairs: |error| at most %.3f x 2^-52 against sinl/cosl "
+           "(libm: %.3f)\n", worst, worst_libm);
+    CHECK(worst <= 1.0);
+    const double q0[3] = {0.0, 0.3, -1.2};
+    const rrr_trig t0 = rrr_trig_of(q0);
+    const double far[3] = {0.0, 0.3 + 2.0 * RRR_TRIG_NEAR_MAX, -1.2};
+    const double nan3[3] = {0.0, (double)NAN, -1.2};
+    const rrr_trig a = rrr_trig_near(&t0, q0, far), b = rrr_trig_of(far);
+    CHECK(memcmp(&a, &b, sizeof a) == 0);
+    const rrr_trig c = rrr_trig_near(&t0, q0, nan3);
+    CHECK(isnan(c.s2) && isnan(c.c2) && isnan(c.s23));
+}
+
+/* The qdd a step returns is that of a fresh rrr_plant_accel at its end state, bit for bit (the
+ * end stage takes libm's trig), along a 2 s open-loop run. */
+static void test_step_qdd_is_accel(void)
+{
+    rrr_model m;
+    rrr_model_default(&m);
+    rrr_plant_integrator s;
+    rrr_plant_integrator_default(&s);
+    const double q0[3] = {0.1, 0.4, 1.0}, qd0[3] = {0.0, 0.0, 0.0}, u[3] = {0.5, 1.0, 0.3};
+    rrr_plant_state x;
+    CHECK_STATUS(rrr_plant_state_init(q0, qd0, &x), RRR_OK);
+    int same = 1;
+    for (int k = 0; k < 2000; ++k) {
+        double qdd[3], again[3];
+        CHECK_STATUS(rrr_plant_step(&m, &s, u, 1e-3, &x, qdd, NULL), RRR_OK);
+        CHECK_STATUS(rrr_plant_accel(&m, &x, u, again), RRR_OK);
+        same = same && memcmp(qdd, again, sizeof qdd) == 0;
+    }
+    CHECK(same);
+}
+
 static void test_bad_input(void)
 {
     rrr_model m;
@@ -438,6 +502,8 @@ static void test_bad_input(void)
 int main(void)
 {
     test_tanh();
+    test_trig_near();
+    test_step_qdd_is_accel();
     test_energy();
     test_order();
     test_accuracy();

@@ -162,12 +162,24 @@ static int pivot_ok(double v)
 void rrr_fd_factorize(const rrr_model *m, const double q[3], const double qd[3],
                       rrr_fd_factor *f)
 {
-    f->st = RRR_OK;
     if (!isfinite(q[0])) {
         f->st = RRR_BAD_INPUT;
         return;
     }
     const rrr_trig t = rrr_trig_of(q);
+    rrr_fd_factorize_trig(m, q, &t, qd, f);
+}
+
+void rrr_fd_factorize_trig(const rrr_model *m, const double q[3], const rrr_trig *tq,
+                           const double qd[3], rrr_fd_factor *f)
+{
+    f->st = RRR_OK;
+    if (!isfinite(q[0])) {
+        f->st = RRR_BAD_INPUT;
+        return;
+    }
+    f->t = *tq;
+    const rrr_trig t = *tq;
     /* bias c(q, qd) + h(q) = tau(q, qd, 0): one fused generated call (82 operations against
      * the 132 of tau with qdd = 0). A non-finite input shows in the bias or in D (the inertial
      * parameters that multiply qdd only, in D): both are checked before the pivots, where a NaN

@@ -49,6 +49,50 @@ static inline rrr_trig rrr_trig_of(const double q[3])
     return t;
 }
 
+/** Largest |q_i - q0_i| (rad) for which rrr_trig_near uses the series. */
+#define RRR_TRIG_NEAR_MAX 0.015625
+
+/* sin d and cos d - 1 for |d| <= RRR_TRIG_NEAR_MAX: Taylor series through d^7 and d^8 (the first
+ * omitted terms, d^9/9! and d^10/10!, are below 1e-21 of the result), in Horner form. */
+static inline void rrr_sincos_small(double d, double *s, double *cm1)
+{
+    const double z = d * d;
+    *s = d * (1.0 - z / 6.0 * (1.0 - z / 20.0 * (1.0 - z / 42.0)));
+    *cm1 = -0.5 * z * (1.0 - z / 12.0 * (1.0 - z / 30.0 * (1.0 - z / 56.0)));
+}
+
+/* sin/cos of a + d from those of a: sin a + (sin a (cos d - 1) + cos a sin d), and the same for
+ * cos; the correction is of the size of d, so the result is within about 1 ulp of libm's. */
+static inline void rrr_angle_step(double s0, double c0, double d, double *s, double *c)
+{
+    double sd, cm1;
+    rrr_sincos_small(d, &sd, &cm1);
+    *s = s0 + (s0 * cm1 + c0 * sd);
+    *c = c0 + (c0 * cm1 - s0 * sd);
+}
+
+/**
+ * The trig of q from that of a nearby q0 (t0 = rrr_trig_of(q0) or rrr_trig_near): the
+ * angle-sum identities with the sines and cosines of q - q0 by their series, about a tenth of
+ * the cost of libm's sin and cos; rrr_trig_of(q) when a difference exceeds RRR_TRIG_NEAR_MAX
+ * or is not finite. Used for the inner stages of the plant's Runge-Kutta steps, whose states
+ * differ from the step's start by a step times a velocity.
+ */
+static inline rrr_trig rrr_trig_near(const rrr_trig *t0, const double q0[3], const double q[3])
+{
+    const double d2 = q[1] - q0[1];
+    const double d3 = q[2] - q0[2];
+    if (!(fabs(d2) <= RRR_TRIG_NEAR_MAX && fabs(d3) <= RRR_TRIG_NEAR_MAX)) {
+        return rrr_trig_of(q); /* also NaN */
+    }
+    rrr_trig t;
+    rrr_angle_step(t0->s2, t0->c2, d2, &t.s2, &t.c2);
+    rrr_angle_step(t0->s3, t0->c3, d3, &t.s3, &t.c3);
+    t.s23 = t.s2 * t.c3 + t.c2 * t.s3;
+    t.c23 = t.c2 * t.c3 - t.s2 * t.s3;
+    return t;
+}
+
 /* ---- the plant's right-hand side in two halves ------------------------------------------------
  * Forward dynamics and the motor mapping split into what depends on the state (q, qd) only and
  * what the input adds: the plant evaluates both halves each time, except that a caller that
@@ -57,6 +101,7 @@ static inline rrr_trig rrr_trig_of(const double q[3])
 
 /** The state-only half of rrr_forward_dynamics: bias c + h and the Cholesky factor of D. */
 typedef struct rrr_fd_factor {
+    rrr_trig t;    /* the sines and cosines of q it was made with (set unless q1 is not finite) */
     double bias[3];
     double l00, l10, l20, l11, l21, l22;
     rrr_status st; /* RRR_OK; RRR_BAD_INPUT (q1); RRR_NUMERIC (the bias is not finite: the solve
@@ -65,6 +110,10 @@ typedef struct rrr_fd_factor {
 
 /** Fill f for (q, qd); m, q, qd non-NULL. */
 void rrr_fd_factorize(const rrr_model *m, const double q[3], const double qd[3], rrr_fd_factor *f);
+
+/** rrr_fd_factorize with the trig of q given (rrr_trig_of or rrr_trig_near of the same q). */
+void rrr_fd_factorize_trig(const rrr_model *m, const double q[3], const rrr_trig *t,
+                           const double qd[3], rrr_fd_factor *f);
 
 /** qdd = D^-1 (tau - bias) from f (of the same m, q, qd), with rrr_forward_dynamics' statuses. */
 rrr_status rrr_fd_solve(const rrr_model *m, const double q[3], const double qd[3],
@@ -94,6 +143,9 @@ typedef struct rrr_plant_prep {
 
 void rrr_plant_prepare(const rrr_model *m, int params_ok, const double q[3], const double qd[3],
                        rrr_plant_prep *p);
+/** rrr_plant_prepare with the trig of q given (as rrr_fd_factorize_trig). */
+void rrr_plant_prepare_trig(const rrr_model *m, int params_ok, const double q[3],
+                            const rrr_trig *t, const double qd[3], rrr_plant_prep *p);
 rrr_status rrr_plant_accel_prepared(const rrr_model *m, const rrr_plant_prep *p,
                                     const double u[3], double qdd[3]);
 

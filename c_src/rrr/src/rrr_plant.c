@@ -15,6 +15,17 @@ void rrr_plant_prepare(const rrr_model *m, int params_ok, const double q[3], con
     }
 }
 
+void rrr_plant_prepare_trig(const rrr_model *m, int params_ok, const double q[3],
+                            const rrr_trig *t, const double qd[3], rrr_plant_prep *p)
+{
+    memcpy(p->q, q, sizeof p->q);
+    memcpy(p->qd, qd, sizeof p->qd);
+    p->input_ok = rrr_actuator_friction(m, params_ok, qd, p->uf);
+    if (p->input_ok) {
+        rrr_fd_factorize_trig(m, q, t, qd, &p->fd);
+    }
+}
+
 /* rrr_torque_from_voltage then rrr_forward_dynamics, with their statuses in their order */
 rrr_status rrr_plant_accel_prepared(const rrr_model *m, const rrr_plant_prep *p,
                                     const double u[3], double qdd[3])
@@ -215,6 +226,22 @@ static rrr_status deriv(const rhs *r, const double y[NY], double f[NY])
     return accel(r, y, y + 3, f + 3);
 }
 
+/* deriv at a stage y of a step from y0, whose trig is t0: the trig of y from t0
+ * (rrr_trig_near), not from libm. For the inner stages only: the end state's evaluation (the
+ * output qdd and the next step's first stage) takes libm's, as rrr_plant_accel does. */
+static rrr_status deriv_near(const rhs *r, const double y[NY], const rrr_trig *t0,
+                             const double y0[NY], double f[NY])
+{
+    if (!rrr_finite_n(y, NY)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(f, y + 3, 3 * sizeof f[0]);
+    const rrr_trig t = rrr_trig_near(t0, y0, y);
+    rrr_plant_prep p;
+    rrr_plant_prepare_trig(r->m, r->params_ok, y, &t, y + 3, &p);
+    return rrr_plant_accel_prepared(r->m, &p, r->u, f + 3);
+}
+
 /* deriv, leaving the first half of the right-hand side at y in *p (when y is finite) */
 static rrr_status deriv_keep(const rhs *r, const double y[NY], double f[NY], rrr_plant_prep *p)
 {
@@ -260,10 +287,12 @@ static double scale(const rrr_plant_integrator *s, double a, double b)
 #define E6 (22.0 / 525.0)
 #define E7 (-1.0 / 40.0)
 
-/* One trial step of length h from y, k1 = f(y): the 5th-order y5, k7 = f(y5) (and its first
- * half in *p7) and the scaled RMS error. A stage that is not finite or whose acceleration is RRR_NUMERIC makes err infinite (the
+/* One trial step of length h from y (ty: its trig), k1 = f(y): the 5th-order y5, k7 = f(y5) (and
+ * its first half in *p7) and the scaled RMS error. Stages 2-6 take their trig from ty
+ * (deriv_near); k7 from libm, so the end state's qdd and first half are those of a fresh
+ * evaluation there. A stage that is not finite or whose acceleration is RRR_NUMERIC makes err infinite (the
  * step is rejected); any other failure is returned. */
-static rrr_status dp5_trial(const rhs *r, const rrr_plant_integrator *s, double h, const double y[NY], const double k1[NY], double y5[NY],
+static rrr_status dp5_trial(const rhs *r, const rrr_plant_integrator *s, double h, const double y[NY], const rrr_trig *ty, const double k1[NY], double y5[NY],
                             double k7[NY], rrr_plant_prep *p7, double *err)
 {
     double k2[NY], k3[NY], k4[NY], k5[NY], k6[NY], ys[NY];
@@ -271,31 +300,31 @@ static rrr_status dp5_trial(const rhs *r, const rrr_plant_integrator *s, double 
     for (int i = 0; i < NY; ++i) {
         ys[i] = y[i] + h * (A21 * k1[i]);
     }
-    st = deriv(r, ys, k2);
+    st = deriv_near(r, ys, ty, y, k2);
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A31 * k1[i] + A32 * k2[i]);
         }
-        st = deriv(r, ys, k3);
+        st = deriv_near(r, ys, ty, y, k3);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A41 * k1[i] + A42 * k2[i] + A43 * k3[i]);
         }
-        st = deriv(r, ys, k4);
+        st = deriv_near(r, ys, ty, y, k4);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A51 * k1[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
         }
-        st = deriv(r, ys, k5);
+        st = deriv_near(r, ys, ty, y, k5);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
             ys[i] = y[i] + h * (A61 * k1[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] +
                                 A65 * k5[i]);
         }
-        st = deriv(r, ys, k6);
+        st = deriv_near(r, ys, ty, y, k6);
     }
     if (st == RRR_OK) {
         for (int i = 0; i < NY; ++i) {
@@ -401,7 +430,7 @@ static rrr_status step_adaptive(const rhs *r, const rrr_plant_integrator *s, dou
             return RRR_NUMERIC; /* the step size underflowed */
         }
         double err = 0.0;
-        st = dp5_trial(r, s, hs, y, k1, y5, k7, &trial, &err);
+        st = dp5_trial(r, s, hs, y, &prep->fd.t, k1, y5, k7, &trial, &err);
         ++attempts;
         evals += 6;
         if (st != RRR_OK) {
