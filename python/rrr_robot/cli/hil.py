@@ -6,8 +6,6 @@ Registered by :mod:`rrr_robot.cli.app`; the library is :mod:`rrr_robot.hil`.
 from __future__ import annotations
 
 import argparse
-import errno
-import logging
 import math
 import os
 from collections.abc import Mapping
@@ -20,6 +18,7 @@ if TYPE_CHECKING:
     from ..core.model import Model
     from ..core.outputs import ResultSet
     from ..hil.bench import BenchRun
+    from ..hil.sides import SideRun
     from ..writing.trajectory import Reference
 
 
@@ -140,10 +139,11 @@ def _cpus() -> tuple[int, int] | None:
 
 def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, float | bool],
               model: Model, rs: ResultSet, out: Path, can_log: Path | None) -> int:
-    """One side of ``rrr hil``, writing its files into the result set (they end up in
-    ``out``)."""
-    from ..hil.bench import RealTime, run_c_bench, run_fmu_controller, write_controller_log
-    from ..hil.nodes import export_reference, start_plant
+    """One side of ``rrr hil`` (rrr_robot.hil.sides), its files written into the result set
+    (they end up in ``out``)."""
+    from ..hil import sides
+    from ..hil.bench import RealTime
+    from ..hil.nodes import export_reference
     from ._progress import Bars, shown
 
     work = rs.staging
@@ -151,58 +151,50 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
         export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv")
         print(f"reference: {out / 'reference.csv'} ({ref.t.size} periods)")
         return 0
-    bars = Bars(shown(args.quiet), unit="period")
-    with bars:
+    conn = sides.Connection(args.interface, args.connect, args.channel)
+    with Bars(shown(args.quiet), unit="period") as bars:
+        progress = bars.callback("CAN bench")
         if args.side == "plant":
-            rc, run, nodes = _cmd_plant(args, ref, work, ctrl_values, out, bars)
+            side = sides.run_plant_side(ref, ctrl_values, work, conn, frame_log=NODE_FRAMES,
+                                        drop_from=args.drop_commands_from, progress=progress,
+                                        announce=lambda text: print(text, flush=True))
+            _plant_lines(side, ref, out)
         elif args.side == "bench":
             realtime = None
             if args.realtime:
                 realtime = RealTime(duration=float(ref.t[-1] - ref.t[0]) + 5.0,
                                     fifo=0 if args.no_fifo else 80, mlock=True, cpus=_cpus(),
                                     spin_us=args.spin_us)
-            run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=work,
-                              controller_values=ctrl_values, frame_log=NODE_FRAMES,
-                              realtime=realtime, progress=bars.callback("CAN bench"))
-            rc, nodes = 0, {"plant": run.plant_summary, "controller": run.controller_summary}
+            side = sides.run_bench(ref, ctrl_values, work, frame_log=NODE_FRAMES,
+                                   realtime=realtime, progress=progress)
         else:  # controller: the controller FMU under FMPy against a plant node
-            plant = None
-            host, port = "127.0.0.1", 0
-            try:
-                if _external(args):
-                    # the plant node runs elsewhere (--connect, or rrr_hil_plant --socketcan IF)
-                    host, _, given = (args.connect or "127.0.0.1:0").rpartition(":")
-                    port = int(given)
-                else:
-                    plant = start_plant(q0=ref.q[0], qd0=ref.qd[0], log_csv=work / "plant.csv",
-                                        frame_log=work / NODE_FRAMES)
-                    port = int(plant.port or 0)
-                with _open(args.interface, host, port, args.channel) as bus:
-                    run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd, ctrl_values,
-                                             progress=bars.callback("CAN bench"))
-                summary = plant.wait() if plant is not None else dict(run.plant_summary)
-            finally:
-                if plant is not None:
-                    plant.close()
-            write_controller_log(run, work / "controller.csv")
-            rc = int(summary.get("exit", 0))  # the exit status reflects every node's
-            nodes = {"plant": summary, "controller": run.controller_summary}
-    if _external(args):
+            side = sides.run_controller_side(ref, ctrl_values, work, conn,
+                                             frame_log=NODE_FRAMES, progress=progress)
+    if args.side != "bench" and conn.external:
         import numpy as np
 
+        run = side.run
         print(f"{args.side} side against an external node: {run.t.size} periods, max |q - "
               f"q_ref| {np.abs(run.q - ref.q[: run.q.shape[0]]).max():.3e} rad; the other "
               "node keeps its logs (its frame log among them): no summary.json or figures")
-        return rc
-    _results(args, ref, run, ctrl_values, model, rs, can_log, nodes)
-    return rc
+        return side.rc
+    _results(args, ref, side.run, ctrl_values, model, rs, can_log, side.nodes)
+    return side.rc
 
 
-def _external(args: argparse.Namespace) -> bool:
-    """'controller' or 'plant' against a node that runs elsewhere (--connect, --interface
-    socketcan): its logs are not here. ('bench' always starts both C nodes.)"""
-    return args.side in ("controller", "plant") and (bool(args.connect)
-                                                      or args.interface == "socketcan")
+def _plant_lines(side: SideRun, ref: Reference, out: Path) -> None:
+    """What ``rrr hil plant`` prints of the Python plant and the controller node."""
+    import numpy as np
+
+    s, cs, run = side.nodes["plant"], side.nodes["controller"], side.run
+    err = np.abs(run.q[: ref.q.shape[0]] - ref.q[: run.q.shape[0]]).max()
+    print(f"python plant: exit {s['exit']}, {s['periods']} periods, max |q - q_ref| "
+          f"{err:.3e} rad, faults latched {s['faults']} (events {s['fault_events']}, "
+          f"timeout {s['timeout']}, crc {s['crc']}, counter {s['counter']}, "
+          f"range {s['range']}, bus {s['bus']}), periods at 0 V {s['zero_periods']}; "
+          f"log {out / 'plant.csv'}")
+    if "plant_faults" in cs:
+        print(f"controller node: exit {cs['exit']}, plant faults seen {cs['plant_faults']}")
 
 
 def _results(args: argparse.Namespace, ref: Reference, run: BenchRun,
@@ -272,90 +264,6 @@ def _cmd_busload(args: argparse.Namespace) -> int:
                          dbc_name=str(args.dbc or DBC_PATH))
     print(format_report(load))
     return 0
-
-
-def _open(interface: str, host: str, port: int, channel: str) -> Any:
-    import can
-
-    from ..hil.nodes import open_bus
-    from ..hil.protocol import HilError
-
-    # python-can's socketcand client logs a warning per failed connection attempt (thousands in
-    # its 10 s of retries); the one error raised at the end says it all
-    retries = logging.getLogger("can.interfaces.socketcand.socketcand")
-    level = retries.level
-    if not logging.getLogger("rrr_robot").isEnabledFor(logging.DEBUG):
-        retries.setLevel(logging.ERROR)
-    try:
-        return open_bus(interface, host=host, port=port, channel=channel)
-    except can.CanError as exc:
-        raise HilError(f"cannot open the {interface} bus {channel or ''} at {host}:{port}: "
-                       f"{exc}") from exc
-    except OSError as exc:
-        hint = (" (this kernel has no AF_CAN: use --interface socketcand)"
-                if exc.errno == errno.EAFNOSUPPORT else "")
-        raise HilError(f"cannot open the {interface} bus {channel or ''}: {exc}{hint}") from exc
-    finally:
-        retries.setLevel(level)
-
-
-def _cmd_plant(args: argparse.Namespace, ref: Reference, work: Path,
-               controller_values: Mapping[str, float | bool], out: Path,
-               bars: Any) -> tuple[int, BenchRun, dict[str, Any]]:
-    """``rrr hil plant``: the Python plant against the C controller node along ``ref``. Without
-    --connect (socketcand) the controller is started here with --listen; with --connect it is a
-    running ``rrr_hil_controller --listen HOST:PORT``; with --interface socketcan it is a running
-    ``rrr_hil_controller --socketcan IF`` started after this plant. The files go to ``work``
-    (the staging folder of the run's result set) and end up in ``out``. Returns the exit status
-    (the plant's first, then the controller node's), the run and the nodes' summaries."""
-    import numpy as np
-
-    from ..hil.bench import BenchRun
-    from ..hil.nodes import controller_node_args, export_reference, start_listening_controller
-    from ..hil.plant import PythonPlant, drop_commands_from
-
-    rx_filter = None if args.drop_commands_from is None else drop_commands_from(
-        args.drop_commands_from)
-    ctrl = None
-    try:
-        if _external(args):
-            host, _, port = (args.connect or "127.0.0.1:0").rpartition(":")
-        else:
-            ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv")
-            ctrl = start_listening_controller(ref_csv, log_csv=work / "controller.csv",
-                                              extra=controller_node_args(controller_values),
-                                              frame_log=work / NODE_FRAMES)
-            host, port = "127.0.0.1", str(ctrl.port)
-        with _open(args.interface, host, int(port), args.channel) as bus:
-            if args.interface == "socketcan":
-                print(f"python plant on {args.channel}: start rrr_hil_controller --socketcan "
-                      f"{args.channel} now", flush=True)
-            plant = PythonPlant(bus, q0=ref.q[0], qd0=ref.qd[0], rx_filter=rx_filter,
-                                start_timeout=120.0, progress=bars.callback("CAN bench"),
-                                periods=ref.t.shape[0])
-            prun = plant.run(work / "plant.csv")
-        cs: dict[str, Any] = ctrl.wait() if ctrl is not None else {"exit": 0}
-    finally:
-        if ctrl is not None:
-            ctrl.close()
-    s = prun.summary
-    err = np.abs(prun.q[: ref.q.shape[0]] - ref.q[: prun.q.shape[0]]).max()
-    print(f"python plant: exit {s['exit']}, {s['periods']} periods, max |q - q_ref| "
-          f"{err:.3e} rad, faults latched {s['faults']} (events {s['fault_events']}, "
-          f"timeout {s['timeout']}, crc {s['crc']}, counter {s['counter']}, "
-          f"range {s['range']}, bus {s['bus']}), periods at 0 V {s['zero_periods']}; "
-          f"log {out / 'plant.csv'}")
-    if ctrl is not None:
-        print(f"controller node: exit {cs['exit']}, plant faults seen {cs['plant_faults']}")
-        c = np.loadtxt(work / "controller.csv", delimiter=",", skiprows=1, ndmin=2)
-    else:  # the controller's log stays with it
-        c = np.zeros((prun.log.shape[0], 17))
-    run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, [8, 11, 14]],
-                   plant_summary=s, controller_summary=cs, u_n=c[:, [9, 12, 15]],
-                   u_c=c[:, [10, 13, 16]])
-    # the exit status reflects every side's: the plant's first, then the controller node's
-    rc = int(s["exit"]) if s["exit"] != 0 else int(cs["exit"])
-    return rc, run, {"plant": s, "controller": cs}
 
 
 def register_cli(subparsers: Any) -> None:

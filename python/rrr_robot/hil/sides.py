@@ -1,0 +1,177 @@
+"""The sides of a CAN bench run as library calls (``rrr hil bench|controller|plant``): each starts
+what it needs (C nodes, a python-can bus), runs the writing reference and returns a
+:class:`SideRun` (the exit status, the run, the nodes' summaries). The command line only chooses a
+side and prints; the files go to a working folder (a result set's staging folder).
+
+- bench: the C controller node against the C plant node (lockstep, or real time);
+- controller: the controller FMU under FMPy over python-can against the C plant node;
+- plant: the Python plant (the plant FMU behind the C supervisor) against the C controller node.
+
+With :attr:`Connection.connect` (or SocketCAN) the other node runs elsewhere and keeps its logs.
+"""
+
+from __future__ import annotations
+
+import errno
+import logging
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..writing.trajectory import Reference
+from .bench import BenchRun, RealTime, run_c_bench, run_fmu_controller, write_controller_log
+from .nodes import (
+    controller_node_args,
+    export_reference,
+    open_bus,
+    start_listening_controller,
+    start_plant,
+)
+from .plant import PythonPlant, drop_commands_from
+from .protocol import HilError
+
+__all__ = ["Connection", "SideRun", "open_checked_bus", "run_bench", "run_controller_side",
+           "run_plant_side"]
+
+Progress = Callable[[int, int], None]
+
+#: The columns of u, u_n and u_c in the C controller node's log (controller.csv).
+_U, _U_N, _U_C = [8, 11, 14], [9, 12, 15], [10, 13, 16]
+_CONTROLLER_COLUMNS = 17
+
+
+@dataclass(frozen=True)
+class Connection:
+    """How the Python side reaches the other node: a python-can ``interface`` (socketcand or
+    socketcan), the ``connect`` address of a socketcand server started elsewhere (None: start
+    the node here), and the ``channel`` (socketcand bus name or SocketCAN interface)."""
+
+    interface: str = "socketcand"
+    connect: str | None = None
+    channel: str = "bench0"
+
+    @property
+    def external(self) -> bool:
+        """The other node runs elsewhere (its logs are not here)."""
+        return bool(self.connect) or self.interface == "socketcan"
+
+    def address(self) -> tuple[str, int]:
+        """HOST, PORT of --connect (127.0.0.1, 0 without it)."""
+        host, _, port = (self.connect or "127.0.0.1:0").rpartition(":")
+        return host, int(port)
+
+
+@dataclass(frozen=True)
+class SideRun:
+    """One side's outcome: the exit status (the Python side's first, then the other node's),
+    the run and the nodes' summaries."""
+
+    rc: int
+    run: BenchRun
+    nodes: dict[str, Mapping[str, Any]]
+
+
+def open_checked_bus(conn: Connection, host: str, port: int) -> Any:
+    """The python-can bus of ``conn`` at HOST:PORT; HilError saying why it cannot be opened."""
+    import can
+
+    # python-can's socketcand client logs a warning per failed connection attempt (thousands in
+    # its 10 s of retries); the one error raised at the end says it all
+    retries = logging.getLogger("can.interfaces.socketcand.socketcand")
+    level = retries.level
+    if not logging.getLogger("rrr_robot").isEnabledFor(logging.DEBUG):
+        retries.setLevel(logging.ERROR)
+    try:
+        return open_bus(conn.interface, host=host, port=port, channel=conn.channel)
+    except can.CanError as exc:
+        raise HilError(f"cannot open the {conn.interface} bus {conn.channel or ''} at "
+                       f"{host}:{port}: {exc}") from exc
+    except OSError as exc:
+        hint = (" (this kernel has no AF_CAN: use --interface socketcand)"
+                if exc.errno == errno.EAFNOSUPPORT else "")
+        raise HilError(f"cannot open the {conn.interface} bus {conn.channel or ''}: "
+                       f"{exc}{hint}") from exc
+    finally:
+        retries.setLevel(level)
+
+
+def run_bench(ref: Reference, controller_values: Mapping[str, float | bool], work: Path, *,
+              frame_log: str, realtime: RealTime | None = None,
+              progress: Progress | None = None) -> SideRun:
+    """Both C nodes over the socketcand transport along ``ref``; logs in ``work``."""
+    run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=work,
+                      controller_values=dict(controller_values), frame_log=frame_log,
+                      realtime=realtime, progress=progress)
+    return SideRun(0, run, {"plant": run.plant_summary, "controller": run.controller_summary})
+
+
+def run_controller_side(ref: Reference, controller_values: Mapping[str, float | bool],
+                        work: Path, conn: Connection, *, frame_log: str,
+                        progress: Progress | None = None) -> SideRun:
+    """The controller FMU under FMPy against the C plant node (started here with its logs in
+    ``work`` unless ``conn`` is external); the controller's log is written to ``work``."""
+    plant = None
+    try:
+        if conn.external:
+            host, port = conn.address()
+        else:
+            plant = start_plant(q0=ref.q[0], qd0=ref.qd[0], log_csv=work / "plant.csv",
+                                frame_log=work / frame_log)
+            host, port = "127.0.0.1", int(plant.port or 0)
+        with open_checked_bus(conn, host, port) as bus:
+            run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd, dict(controller_values),
+                                     progress=progress)
+        summary = plant.wait() if plant is not None else dict(run.plant_summary)
+    finally:
+        if plant is not None:
+            plant.close()
+    write_controller_log(run, work / "controller.csv")
+    return SideRun(int(summary.get("exit", 0)), run,
+                   {"plant": summary, "controller": run.controller_summary})
+
+
+def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool], work: Path,
+                   conn: Connection, *, frame_log: str, drop_from: int | None = None,
+                   progress: Progress | None = None,
+                   announce: Callable[[str], None] | None = None) -> SideRun:
+    """The Python plant against the C controller node: started here (``--listen``, its logs in
+    ``work``) unless ``conn`` is external (``rrr_hil_controller --listen HOST:PORT``, or with
+    SocketCAN ``rrr_hil_controller --socketcan IF`` started after this plant: ``announce`` is
+    told when). ``drop_from``: fault injection, VoltageCmd frames of periods >= it do not reach
+    the plant."""
+    rx_filter = None if drop_from is None else drop_commands_from(drop_from)
+    ctrl = None
+    try:
+        if conn.external:
+            host, port = conn.address()
+        else:
+            ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv")
+            ctrl = start_listening_controller(ref_csv, log_csv=work / "controller.csv",
+                                              extra=controller_node_args(controller_values),
+                                              frame_log=work / frame_log)
+            host, port = "127.0.0.1", int(ctrl.port or 0)
+        with open_checked_bus(conn, host, port) as bus:
+            if conn.interface == "socketcan" and announce is not None:
+                announce(f"python plant on {conn.channel}: start rrr_hil_controller --socketcan "
+                         f"{conn.channel} now")
+            plant = PythonPlant(bus, q0=ref.q[0], qd0=ref.qd[0], rx_filter=rx_filter,
+                                start_timeout=120.0, progress=progress,
+                                periods=ref.t.shape[0])
+            prun = plant.run(work / "plant.csv")
+        cs: dict[str, Any] = ctrl.wait() if ctrl is not None else {"exit": 0}
+    finally:
+        if ctrl is not None:
+            ctrl.close()
+    s = prun.summary
+    if ctrl is not None:
+        c = np.loadtxt(work / "controller.csv", delimiter=",", skiprows=1, ndmin=2)
+    else:  # the controller's log stays with it
+        c = np.zeros((prun.log.shape[0], _CONTROLLER_COLUMNS))
+    run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, _U], plant_summary=s,
+                   controller_summary=cs, u_n=c[:, _U_N], u_c=c[:, _U_C])
+    # the exit status reflects every side's: the plant's first, then the controller node's
+    rc = int(s["exit"]) if s["exit"] != 0 else int(cs["exit"])
+    return SideRun(rc, run, {"plant": s, "controller": cs})
