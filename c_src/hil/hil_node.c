@@ -157,6 +157,28 @@ int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, siz
     return rrr_param_set(m, (size_t)row, v) == RRR_OK ? 0 : -1; /* v is finite: RRR_OK */
 }
 
+/* The value after the option argv[*i] (*i moves to it); -1 with a message when there is none. */
+static int option_value(int argc, char **argv, int *i, const char *prog, const char **v)
+{
+    if (*i + 1 >= argc) {
+        fprintf(stderr, "%s: %s needs a value\n", prog, argv[*i]);
+        return -1;
+    }
+    *v = argv[++*i];
+    return 0;
+}
+
+/* A path option's value: not empty. 1 (taken) or -1 with a message. */
+static int path_value(const char *prog, const char *option, const char *v, const char **out)
+{
+    if (v[0] == '\0') {
+        fprintf(stderr, "%s: %s: empty path\n", prog, option);
+        return -1;
+    }
+    *out = v;
+    return 1;
+}
+
 int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog)
 {
     const char *a = argv[*i];
@@ -171,18 +193,12 @@ int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const 
         !is_log) {
         return 0;
     }
-    if (*i + 1 >= argc) {
-        fprintf(stderr, "%s: %s needs a value\n", prog, a);
+    const char *v;
+    if (option_value(argc, argv, i, prog, &v) != 0) {
         return -1;
     }
-    const char *v = argv[++*i];
     if (is_log) {
-        if (v[0] == '\0') {
-            fprintf(stderr, "%s: --frame-log: empty path\n", prog);
-            return -1;
-        }
-        o->frame_log = v;
-        return 1;
+        return path_value(prog, a, v, &o->frame_log);
     }
     if (is_handshake || is_idle) {
         char *end;
@@ -337,18 +353,12 @@ int rrr_hil_rt_arg(rrr_hil_rt_opts *o, int argc, char **argv, int *i, const char
     if (!is_fifo && !is_cpu && !is_spin && !is_log) {
         return 0;
     }
-    if (*i + 1 >= argc) {
-        fprintf(stderr, "%s: %s needs a value\n", prog, a);
+    const char *v;
+    if (option_value(argc, argv, i, prog, &v) != 0) {
         return -1;
     }
-    const char *v = argv[++*i];
     if (is_log) {
-        if (v[0] == '\0') {
-            fprintf(stderr, "%s: --latency-log: empty path\n", prog);
-            return -1;
-        }
-        o->latency_log = v;
-        return 1;
+        return path_value(prog, a, v, &o->latency_log);
     }
     const long lo = is_fifo ? 0 : is_cpu ? -1 : 0;
     const long hi = is_fifo ? 99 : is_cpu ? CPU_SETSIZE - 1 : RRR_HIL_RT_MAX_SPIN_US;
