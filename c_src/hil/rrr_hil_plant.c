@@ -248,6 +248,20 @@ static int interrupted(plant *p)
     return end_run(p, RRR_HIL_EXIT_INTERRUPTED, "%s", rrr_hil_stop_signal_name());
 }
 
+/* The value references of n variables by name; -1 (the FMU's last_error says which) if one is
+ * missing. */
+static int resolve_vrs(rrr_hil_fmu *fmu, const char *const *names, int n, fmi2ValueReference *vr)
+{
+    for (int i = 0; i < n; ++i) {
+        const long v = rrr_hil_fmu_vr(fmu, names[i]);
+        if (v < 0) {
+            return -1;
+        }
+        vr[i] = (fmi2ValueReference)v;
+    }
+    return 0;
+}
+
 static int setup_fmu(plant *p, const opts *o)
 {
     if (rrr_hil_fmu_open(&p->fmu, o->fmu_dir, "plant") != 0) {
@@ -257,29 +271,10 @@ static int setup_fmu(plant *p, const opts *o)
     static const char *const xn[6] = {"q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]"};
     static const char *const un[3] = {"u[1]", "u[2]", "u[3]"};
     static const char *const yn[6] = {"qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"};
-    for (int i = 0; i < 6; ++i) {
-        const long vr = rrr_hil_fmu_vr(&p->fmu, yn[i]);
-        if (vr < 0) {
-            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
-            return -1;
-        }
-        p->vr_y[i] = (fmi2ValueReference)vr;
-    }
-    for (int i = 0; i < 6; ++i) {
-        const long vr = rrr_hil_fmu_vr(&p->fmu, xn[i]);
-        if (vr < 0) {
-            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
-            return -1;
-        }
-        p->vr_x[i] = (fmi2ValueReference)vr;
-    }
-    for (int i = 0; i < 3; ++i) {
-        const long vr = rrr_hil_fmu_vr(&p->fmu, un[i]);
-        if (vr < 0) {
-            fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
-            return -1;
-        }
-        p->vr_u[i] = (fmi2ValueReference)vr;
+    if (resolve_vrs(&p->fmu, yn, 6, p->vr_y) != 0 || resolve_vrs(&p->fmu, xn, 6, p->vr_x) != 0 ||
+        resolve_vrs(&p->fmu, un, 3, p->vr_u) != 0) {
+        fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+        return -1;
     }
     char name[16];
     for (int i = 0; i < 3; ++i) {
