@@ -183,9 +183,9 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
     """Start the C plant node as socketcand server on ``listen`` (port 0: any free port, read
     back in ``.port``), on the plant FMU (default: the packaged one, unzipped to a temp dir);
     ``frame_log``: its log of every frame (rrr_robot.hil.framelog)."""
-    from fmpy import extract
+    from ..core.archives import extract_to_temp
 
-    unzip = Path(extract(str(fmu or fmu_path("plant"))))
+    unzip = extract_to_temp(fmu or fmu_path("plant"), "FMU", prefix="rrr-fmu-")
     args: list[str] = [str(node_executable("plant")), "--fmu", str(unzip), "--listen", listen,
                        "--q0", _vec(q0), "--qd0", _vec(qd0)]
     args += set_args(values)

@@ -9,12 +9,12 @@ platforms the build could compile for.
 from __future__ import annotations
 
 import os
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..core._package import PACKAGE_DIR
-from ..errors import BadInputError, RrrError
+from ..core.archives import CheckedZip
+from ..errors import ArchiveError, BadInputError, RrrError
 
 FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu",
              "reference": "rrr_reference.fmu"}
@@ -64,10 +64,10 @@ def describe(which: str, fmi_version: int) -> FmuVariant:
     """What the archive of one FMU holds (read from its file list and model description)."""
     path = fmu_path(which, fmi_version)
     try:
-        with zipfile.ZipFile(path) as z:
-            names = z.namelist()
-            md = z.read("modelDescription.xml").decode("utf-8")
-    except (OSError, KeyError, zipfile.BadZipFile) as exc:
+        with CheckedZip(path, "FMU") as z:
+            names = z.names()
+            md = z.read("modelDescription.xml", 16_000_000).decode("utf-8")
+    except (ArchiveError, UnicodeError) as exc:
         raise RrrError(f"{path} is not a readable FMU: {exc}") from exc
     platforms = sorted({n.split("/")[1] for n in names
                         if n.startswith("binaries/") and n.count("/") >= 2 and n.split("/")[2]})
