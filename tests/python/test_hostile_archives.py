@@ -454,3 +454,21 @@ def test_a_good_run_leaves_no_temporary_folder(ssp: Path, tmp_path: Path,
                      "-q"]) == 0, capsys.readouterr().err
         assert (tmp_path / tool / "summary.json").is_file()
         assert list(scratch.iterdir()) == []
+
+
+def test_an_fmu_with_a_hostile_entry_is_refused_by_every_loader(tmp_path: Path) -> None:
+    """The co-simulation's slave, the CAN bench's plant node and rrr fmus read FMUs through
+    the same reader."""
+    from rrr_robot.errors import CosimError
+    from rrr_robot.hil.nodes import start_plant
+    from rrr_robot.sim.fmu_slave import FmuSlave
+    from rrr_robot.sim.fmus import fmu_path
+
+    bad = tmp_path / "bad.fmu"
+    _add_to_fmu("../outside.txt", b"x")(fmu_path("plant"), bad)
+    with pytest.raises(CosimError, match=r"cannot read the FMU .*bad.fmu: .*entry "
+                       r"'../outside.txt': a path part '..'"):
+        FmuSlave(bad, "plant")
+    with pytest.raises(ArchiveError, match="'../outside.txt'"):
+        start_plant(fmu=bad)
+    assert not (tmp_path.parent / "outside.txt").exists()
