@@ -469,6 +469,6 @@ def test_an_fmu_with_a_hostile_entry_is_refused_by_every_loader(tmp_path: Path) 
     with pytest.raises(CosimError, match=r"cannot read the FMU .*bad.fmu: .*entry "
                        r"'../outside.txt': a path part '..'"):
         FmuSlave(bad, "plant")
-    with pytest.raises(ArchiveError, match="'../outside.txt'"):
+    with pytest.raises(ArchiveError, match=re.escape("'../outside.txt'")):
         start_plant(fmu=bad)
     assert not (tmp_path.parent / "outside.txt").exists()
