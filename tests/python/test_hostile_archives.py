@@ -390,7 +390,7 @@ def _long_archive(src: Path, dst: Path, seconds: float) -> Path:
 
 def test_sigterm_ends_a_libcosim_run_at_once_and_leaves_nothing(ssp: Path,
                                                                 tmp_path: Path) -> None:
-    long = _long_archive(ssp, tmp_path / "long.ssp", 20.0)
+    long = _long_archive(ssp, tmp_path / "long.ssp", 40.0)  # runs for seconds in libcosim
     scratch = tmp_path / "tmp"
     scratch.mkdir()
     out = tmp_path / "out"
@@ -402,7 +402,8 @@ def test_sigterm_ends_a_libcosim_run_at_once_and_leaves_nothing(ssp: Path,
     while not list(scratch.glob("rrr-run-ssp-*/tmp/libcosim_*")):  # libcosim has loaded it
         assert proc.poll() is None and time.monotonic() < deadline, proc.stderr
         time.sleep(0.05)
-    time.sleep(0.5)
+    time.sleep(0.2)
+    assert proc.poll() is None  # still running
     start = time.monotonic()
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=30)

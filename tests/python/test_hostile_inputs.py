@@ -190,23 +190,35 @@ def test_two_writing_runs_at_once_into_one_new_folder(tmp_path: Path) -> None:
 # ---- N12, N17: a node of the CAN bench that dies -----------------------------------------------
 
 
+#: A node that dies by SIGKILL once its --log has grown to 20 kB (about a hundred periods of
+#: the thousands of a run, however fast the machine): a watcher started before the node is
+#: exec'd in its place (it gives up after 30 s).
+_DYING = """#!/bin/sh
+log=""; prev=""
+for a in "$@"; do [ "$prev" = "--log" ] && log="$a"; prev="$a"; done
+me=$$
+( i=0
+  while [ "$(stat -c %s "$log" 2>/dev/null || echo 0)" -lt 20000 ] && [ $i -lt 3000 ]; do
+    sleep 0.01; i=$((i + 1)); done
+  [ $i -lt 3000 ] && [ -d /proc/$me ] && kill -9 $me ) >/dev/null 2>&1 </dev/null &
+exec {node} "$@"
+"""
+
+
 @pytest.fixture
 def dying_nodes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
-    """RRR_HIL_BIN_DIR with the real nodes, one of which can be made to die by SIGKILL after
-    a moment (a wrapper that execs the node and kills it)."""
+    """RRR_HIL_BIN_DIR with the real nodes, one of which is made to die (_DYING)."""
     from rrr_robot.hil.nodes import node_executable
 
     real = {w: node_executable(w) for w in ("plant", "controller")}
     folder = tmp_path / "bin"
     folder.mkdir()
 
-    def make(dies: str, after: float) -> None:
+    def make(dies: str) -> None:
         for which, path in real.items():
             node = folder / f"rrr_hil_{which}"
-            node.unlink(missing_ok=True)
             if which == dies:
-                node.write_text(f"#!/bin/sh\n( sleep {after}; kill -9 $$ ) >/dev/null 2>&1 "
-                                f"</dev/null &\nexec {path} \"$@\"\n")
+                node.write_text(_DYING.format(node=path))
                 node.chmod(0o755)
             else:
                 node.symlink_to(path)
@@ -219,7 +231,7 @@ def dying_nodes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
 def test_a_node_that_dies_is_named_with_its_signal_and_log(
         tmp_path: Path, dying_nodes: Any, capsys: pytest.CaptureFixture[str], side: str,
         dies: str) -> None:
-    dying_nodes(dies, 0.3 if side == "bench" else 1.0)
+    dying_nodes(dies)
     out = tmp_path / "out"
     assert main(["hil", side, "--out", str(out), "-q", "--no-figures"]) == 2
     err = [x for x in _err(capsys) if not x.startswith(("ERROR ", "WARNING "))]

@@ -133,9 +133,11 @@ def _wait(node: Any, timeout: float, poll: LogProgress | None) -> dict[str, Any]
 class _StateWaiter:
     """Collects JointState1..3 of one alive counter from a bus (lockstep controller side)."""
 
-    def __init__(self, bus: Any, timeout: float) -> None:
+    def __init__(self, bus: Any, timeout: float,
+                 alive: Callable[[], bool] | None = None) -> None:
         self.bus = bus
         self.timeout = timeout
+        self.alive = alive  # whether the plant node still runs (None: not known here)
         self.status: dict[str, float] = {}
         self.rejected: dict[str, int] = {}
 
@@ -144,9 +146,16 @@ class _StateWaiter:
         have: set[int] = set()
         deadline = time.monotonic() + self.timeout
         while len(have) < 3:
-            msg = self.bus.recv(timeout=max(0.0, deadline - time.monotonic()))
+            left = deadline - time.monotonic()
+            msg = self.bus.recv(timeout=max(0.0, min(left, 0.2)))
             if msg is None:
-                raise HilError(f"no joint state with counter {counter} within {self.timeout} s")
+                if self.alive is not None and not self.alive():
+                    raise HilError(f"the plant node ended before the joint state with counter "
+                                   f"{counter}")
+                if left <= 0.2:
+                    raise HilError(f"no joint state with counter {counter} within "
+                                   f"{self.timeout} s")
+                continue
             try:
                 name, sig = decode(msg)
             except FrameError as exc:
@@ -164,13 +173,16 @@ class _StateWaiter:
 def run_fmu_controller(bus: Any, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                        qdd_ref: FloatArray, controller_values: Mapping[str, float | bool] = {},
                        timeout: float = 5.0, controller_fmu: Path | None = None,
-                       progress: Progress | None = None) -> BenchRun:
-    """Lockstep: the controller FMU (FMPy) drives the plant node on ``bus`` along the reference."""
+                       progress: Progress | None = None,
+                       alive: Callable[[], bool] | None = None) -> BenchRun:
+    """Lockstep: the controller FMU (FMPy) drives the plant node on ``bus`` along the reference;
+    ``alive()``: whether the plant node still runs (a node started here: it stops at once when
+    the node has died, not after ``timeout``)."""
     n = t.shape[0]
     ref = np.hstack([q_ref, qd_ref, qdd_ref])
     q_rec, qd_rec = np.empty((n, 3)), np.empty((n, 3))
     out_rec = np.empty((n, 9))  # u, u_n, u_c
-    waiter = _StateWaiter(bus, timeout)
+    waiter = _StateWaiter(bus, timeout, alive)
     start = time.perf_counter()
     with FmuSlave(controller_fmu or fmu_path("controller"), "controller") as ctrl:
         ctrl.initialize(float(t[0]), controller_values)

@@ -133,7 +133,8 @@ def run_controller_side(ref: Reference, controller_values: Mapping[str, float | 
         try:
             with open_checked_bus(conn, host, port) as bus:
                 run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd,
-                                         dict(controller_values), progress=progress)
+                                         dict(controller_values), progress=progress,
+                                         alive=plant.running if plant is not None else None)
         except BusLost as exc:  # name the plant node when it is the one that died
             if plant is not None and plant.died():
                 raise plant.failure(f"the CAN bench stopped at period {exc.period} of "
