@@ -28,6 +28,9 @@ Derivation (all symbolic, nothing numeric):
    monomials of degree <= 2 in s2, c2, s3, c3, s23, c23 (found by a deterministic search and proven
    equal through the normal form), so the generated code needs no trig call and no double angle.
    Common subexpressions are shared with sympy.cse and the C is written with a small printer.
+6. The partial derivatives d tau / d q and d tau / d qd (rrr_gen_tau_jacobian, behind
+   rrr_derivatives.h) are the fused torques of step 5 differentiated by the chain rule in
+   s2, c2, s3, c3, s23, c23, each proven equal to the derivative of the normal form.
 
 Usage: derive_dynamics.py [--output-dir DIR] [--check] [--typos]
 """
@@ -544,6 +547,7 @@ def build_functions(der: Derivation) -> list[GenFunction]:
     ]
     pot = [("", linear_in_p(der.v, sparse))]
     pot_text = sp.sstr(sp.collect(pot[0][1], g)).replace("**", "^")
+    jac = tau_jacobian(tau_rows, [e for _, e in tau])
     return [
         GenFunction(
             "rrr_gen_regressor",
@@ -578,6 +582,15 @@ def build_functions(der: Derivation) -> list[GenFunction]:
         ),
         GenFunction("rrr_gen_gravity", "Gravity torques h(q) = dV/dq.", "double h[3]", grav),
         GenFunction(
+            "rrr_gen_tau_jacobian",
+            "Partial derivatives of tau = R(q, qd, qdd) p at fixed qdd: dq[i][j] = d tau_i / d q_j "
+            "(column 0 is zero: q1 does not enter), dqd[i][j] = d tau_i / d qd_j; "
+            "d tau / d qdd is D(q).",
+            "const double qd[3], const double qdd[3], double dq[3][3], double dqd[3][3]",
+            jac,
+            epilogue=("dq[0][0] = 0.0;", "dq[1][0] = 0.0;", "dq[2][0] = 0.0;"),
+        ),
+        GenFunction(
             "rrr_gen_potential",
             f"Potential energy V(q) = {pot_text}, h = dV/dq.",
             "",
@@ -585,6 +598,39 @@ def build_functions(der: Derivation) -> list[GenFunction]:
             returns_value=True,
         ),
     ]
+
+
+# d/dq2 and d/dq3 of the six trig inputs (q1 enters none of them)
+_TRIG6_DQ: dict[int, dict[sp.Symbol, sp.Expr]] = {
+    1: {s2: c2, c2: -s2, s23: c23, c23: -s23},
+    2: {s3: c3, c3: -s3, s23: c23, c23: -s23},
+}
+
+
+def d_dq6(f: sp.Expr, k: int) -> sp.Expr:
+    """d f / d q_k (k = 1, 2) of an expression in s2, c2, s3, c3, s23, c23, by the chain rule:
+    the compact form stays compact (no double angles appear, no search is needed)."""
+    return sp.Add(*[sp.diff(f, s) * ds for s, ds in _TRIG6_DQ[k].items()])
+
+
+def tau_jacobian(tau_rows: list[sp.Expr], tau_compact: list[sp.Expr]) -> list[tuple[str, sp.Expr]]:
+    """d tau / d q (columns q2, q3) and d tau / d qd of the fused torques, differentiated in
+    their compact form and proven equal to the derivatives of the normal form (d_dq, the
+    calculus on the torus): exact, the same derivation as the dynamics."""
+    out: list[tuple[str, sp.Expr]] = []
+    for k in range(3):
+        for j in (1, 2):
+            expr = d_dq6(tau_compact[k], j)
+            if nf4(expr - d_dq(tau_rows[k], j)) != 0:
+                raise AssertionError(f"d tau_{k + 1} / d q_{j + 1}: compact form differs")
+            out.append((f"dq[{k}][{j}]", expr))
+    for k in range(3):
+        for j in range(3):
+            expr = sp.diff(tau_compact[k], qd[j])
+            if nf4(expr - sp.diff(tau_rows[k], qd[j])) != 0:
+                raise AssertionError(f"d tau_{k + 1} / d qd_{j + 1}: compact form differs")
+            out.append((f"dqd[{k}][{j}]", expr))
+    return out
 
 
 def tau_expr(row: sp.Expr, sparse: SparseTrig) -> sp.Expr:

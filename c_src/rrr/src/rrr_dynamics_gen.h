@@ -38,6 +38,14 @@ void rrr_gen_coriolis(const rrr_model *m, const rrr_trig *trig, const double qd[
 /** Gravity torques h(q) = dV/dq. (9 operations after CSE.) */
 void rrr_gen_gravity(const rrr_model *m, const rrr_trig *trig, double h[3]);
 
+/** Partial derivatives of tau = R(q, qd, qdd) p at fixed qdd: dq[i][j] = d tau_i / d q_j (column 0 is zero: q1 does not enter), dqd[i][j] = d tau_i / d qd_j; d tau / d qdd is D(q). (268 operations after CSE.) */
+void rrr_gen_tau_jacobian(const rrr_model *m,
+                          const rrr_trig *trig,
+                          const double qd[3],
+                          const double qdd[3],
+                          double dq[3][3],
+                          double dqd[3][3]);
+
 /** Potential energy V(q) = g*(c2*p16 + c23*p4 + p15*s2 + p3*s23), h = dV/dq. (8 operations after CSE.) */
 double rrr_gen_potential(const rrr_model *m, const rrr_trig *trig);
 
