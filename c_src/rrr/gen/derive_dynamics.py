@@ -741,7 +741,26 @@ def prototype(fn: GenFunction) -> str:
     return f"{ret} {fn.name}(" + (",\n" + indent).join(params) + ")"
 
 
-def render(emitted: list[Emitted]) -> tuple[str, str]:
+def structure_macros(R: sp.Matrix) -> list[str]:
+    """The structure of R as C macros: which base parameters and whether g enter each torque
+    (a structural zero of R is an identically zero entry of the normal form)."""
+    cols = []
+    for k in range(3):
+        mask = sum(1 << col for col in range(NP) if R[k, col] != 0)
+        cols.append(f"0x{mask:04x}u")
+    g_rows = sum(1 << k for k in range(3) if any(g in R[k, col].free_symbols
+                                                  for col in range(NP)))
+    return [
+        "/** Bit l of entry i: column l of row i of R is not identically zero (p_{l+1} enters",
+        " *  tau_i). */",
+        f"#define RRR_GEN_REGRESSOR_COLS {{{', '.join(cols)}}}",
+        "/** Bit i: g enters tau_i. */",
+        f"#define RRR_GEN_GRAVITY_ROWS 0x{g_rows:x}u",
+        "",
+    ]
+
+
+def render(emitted: list[Emitted], macros: list[str] | None = None) -> tuple[str, str]:
     banner = "\n".join(
         [
             f"/* {BANNER}.",
@@ -767,6 +786,7 @@ def render(emitted: list[Emitted]) -> tuple[str, str]:
         hdr.append(f"/** {em.fn.doc} ({em.ops} operations after CSE.) */")
         hdr.append(prototype(em.fn) + ";")
         hdr.append("")
+    hdr += macros or []
     hdr.append("#endif /* RRR_DYNAMICS_GEN_H */")
     src = [banner, f'#include "{HEADER_NAME}"', ""]
     for em in emitted:
@@ -832,7 +852,7 @@ def generate(out_dir: Path, log: bool = True) -> list[Emitted]:
     say("derivation:")
     der = derive(log=log)
     emitted = [emit_function(fn) for fn in build_functions(der)]
-    header, source = render(emitted)
+    header, source = render(emitted, structure_macros(der.R))
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / HEADER_NAME).write_bytes(header.encode("utf-8"))
     (out_dir / SOURCE_NAME).write_bytes(source.encode("utf-8"))

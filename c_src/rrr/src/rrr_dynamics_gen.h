@@ -49,4 +49,10 @@ void rrr_gen_tau_jacobian(const rrr_model *m,
 /** Potential energy V(q) = g*(c2*p16 + c23*p4 + p15*s2 + p3*s23), h = dV/dq. (8 operations after CSE.) */
 double rrr_gen_potential(const rrr_model *m, const rrr_trig *trig);
 
+/** Bit l of entry i: column l of row i of R is not identically zero (p_{l+1} enters
+ *  tau_i). */
+#define RRR_GEN_REGRESSOR_COLS {0x07ffu, 0xdfbfu, 0x31bcu}
+/** Bit i: g enters tau_i. */
+#define RRR_GEN_GRAVITY_ROWS 0x6u
+
 #endif /* RRR_DYNAMICS_GEN_H */
