@@ -14,7 +14,6 @@ import shutil
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -415,7 +414,7 @@ def test_initial_unknown_dependencies_are_exact(which: str) -> None:
         if var.type == "Boolean" and var.causality == "parameter":
             f.fmu.reset()
             f.set(list(base_start), np.array(list(base_start.values())))
-            f.fmu.setBoolean([var.valueReference], [not (var.start in ("true", True))])
+            f.fmu.setBoolean([var.valueReference], [var.start not in ("true", True)])
             f.fmu.setupExperiment(startTime=0.0)
             f.fmu.enterInitializationMode()
             y1 = f.get(unknowns)
