@@ -1,7 +1,8 @@
 /* Exact partial derivatives (rrr_derivatives.h) against central finite differences of the
  * functions they differentiate, on random states: d tau / d(q, qd), the friction slope, the
- * plant's d qdd / d(q, qd, u) (saturated inputs included) and the computed-torque law's
- * d(u, u_n, u_c) / d(q_ref, qd_ref, qdd_ref, q, qd). Prints the worst relative error per block. */
+ * plant's d qdd / d(q, qd, u) (saturated inputs included), the computed-torque law's
+ * d(u, u_n, u_c) / d(q_ref, qd_ref, qdd_ref, q, qd), and d qdd, d tip, d u by every model
+ * parameter and gain. Prints the worst relative error per block. */
 #include <string.h>
 
 #include "rrr/rrr.h"
@@ -195,6 +196,93 @@ static void test_ctc(const rrr_model *m, const rrr_ctc_gains *k, const ctc_point
     }
 }
 
+/* d/d(model parameter c) by central differences: the model with parameter c moved */
+static rrr_model moved(const rrr_model *m, int c, double h)
+{
+    rrr_model x = *m;
+    double v[RRR_N_PARAMS];
+    memcpy(v, &x, sizeof v);
+    v[c] += h;
+    memcpy(&x, v, sizeof v);
+    return x;
+}
+
+static double param_value(const rrr_model *m, int c)
+{
+    double v[RRR_N_PARAMS];
+    memcpy(v, m, sizeof v);
+    return v[c];
+}
+
+static double worst_param[3];
+
+static void record_param(int slot, double err, const char *what)
+{
+    worst_param[slot] = fmax(worst_param[slot], err);
+    if (!(err <= TOL)) {
+        fprintf(stderr, "%s: relative error %.3g > %g\n", what, err, TOL);
+        rrr_test_failures++;
+    }
+}
+
+static void test_params(const rrr_model *m, const rrr_ctc_gains *k, const rrr_plant_state *x,
+                        const double u[3], const ctc_point *pt)
+{
+    double dqdd[3][RRR_N_PARAMS], dx[3][RRR_N_PARAMS], fq[3][RRR_N_PARAMS], fx[3][RRR_N_PARAMS];
+    double fu[3][RRR_N_PARAMS], fn[3][RRR_N_PARAMS];
+    rrr_ctc_param_derivatives cd;
+    CHECK_STATUS(rrr_plant_param_jacobian(m, x, u, dqdd), RRR_OK);
+    CHECK_STATUS(rrr_fk_param_jacobian(m, x->q, dx), RRR_OK);
+    CHECK_STATUS(rrr_ctc_param_jacobian(m, k, pt->in[RRR_CTC_Q_REF], pt->in[RRR_CTC_QD_REF],
+                                        pt->in[RRR_CTC_QDD_REF], pt->in[RRR_CTC_Q],
+                                        pt->in[RRR_CTC_QD], &cd),
+                 RRR_OK);
+    for (int c = 0; c < RRR_N_PARAMS; ++c) {
+        const double h = step_of(param_value(m, c));
+        const rrr_model mp = moved(m, c, h), mm = moved(m, c, -h);
+        const double dp = param_value(&mp, c) - param_value(&mm, c);
+        double ap[3], am[3], xp[3], xm[3];
+        CHECK_STATUS(rrr_plant_accel(&mp, x, u, ap), RRR_OK);
+        CHECK_STATUS(rrr_plant_accel(&mm, x, u, am), RRR_OK);
+        CHECK_STATUS(rrr_fk(&mp, x->q, xp, NULL), RRR_OK);
+        CHECK_STATUS(rrr_fk(&mm, x->q, xm, NULL), RRR_OK);
+        rrr_ctc_output op, om;
+        ctc_eval(&mp, k, pt, &op);
+        ctc_eval(&mm, k, pt, &om);
+        for (int i = 0; i < 3; ++i) {
+            fq[i][c] = (ap[i] - am[i]) / dp;
+            fx[i][c] = (xp[i] - xm[i]) / dp;
+            fu[i][c] = (op.u[i] - om.u[i]) / dp;
+            fn[i][c] = (op.u_n[i] - om.u_n[i]) / dp;
+        }
+    }
+    record_param(0, block_error(&dqdd[0][0], &fq[0][0], 3 * RRR_N_PARAMS), "dqdd/dparam");
+    record_param(1, block_error(&dx[0][0], &fx[0][0], 3 * RRR_N_PARAMS), "dtip/dparam");
+    record_param(2, fmax(block_error(&cd.du[0][0], &fu[0][0], 3 * RRR_N_PARAMS),
+                         block_error(&cd.du_n[0][0], &fn[0][0], 3 * RRR_N_PARAMS)),
+                 "du/dparam");
+    /* the gains: u_c is linear in kp and kd */
+    for (int i = 0; i < 3; ++i) {
+        rrr_ctc_gains kp = *k, km = *k;
+        const double h = step_of(k->kp[i]);
+        kp.kp[i] += h;
+        km.kp[i] -= h;
+        rrr_ctc_output op, om;
+        ctc_eval(m, &kp, pt, &op);
+        ctc_eval(m, &km, pt, &om);
+        const double fd = (op.u[i] - om.u[i]) / (kp.kp[i] - km.kp[i]);
+        record_param(2, fabs(cd.du_dkp[i] - fd) / fmax(fabs(fd), 1.0), "du/dkp");
+        kp = *k;
+        km = *k;
+        kp.kd[i] += step_of(k->kd[i]);
+        km.kd[i] -= step_of(k->kd[i]);
+        ctc_eval(m, &kp, pt, &op);
+        ctc_eval(m, &km, pt, &om);
+        const double fdd = (op.u_c[i] - om.u_c[i]) / (kp.kd[i] - km.kd[i]);
+        record_param(2, fabs(cd.du_c_dkd[i] - fdd) / fmax(fabs(fdd), 1.0), "du_c/dkd");
+    }
+}
+
 static void test_refusals(const rrr_model *m, const rrr_ctc_gains *k)
 {
     const double z[3] = {0.0, 0.0, 0.0}, bad[3] = {0.0, NAN, 0.0};
@@ -223,6 +311,13 @@ static void test_refusals(const rrr_model *m, const rrr_ctc_gains *k)
     CHECK_STATUS(rrr_ctc_jacobian(m, k, z, z, bad, z, z, &c), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_ctc_jacobian(m, k, z, z, z, z, z, NULL), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_ctc_jacobian(m, NULL, z, z, z, z, z, &c), RRR_BAD_INPUT);
+    double dp[3][RRR_N_PARAMS];
+    rrr_ctc_param_derivatives cp;
+    CHECK_STATUS(rrr_plant_param_jacobian(m, &x, z, dp), RRR_BAD_INPUT); /* x.qd[2] = Inf */
+    CHECK_STATUS(rrr_plant_param_jacobian(m, &x, z, NULL), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_fk_param_jacobian(m, bad, dp), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_ctc_param_jacobian(m, k, z, bad, z, z, z, &cp), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_ctc_param_jacobian(m, k, z, z, z, z, z, NULL), RRR_BAD_INPUT);
 }
 
 int main(void)
@@ -268,11 +363,19 @@ int main(void)
         }
         if (!near_kink) {
             test_ctc(&m, n % 5 == 4 ? &pd : &k, &p);
+            if (n % 10 == 0 || n % 20 == 3) { /* 47 parameters: every tenth state, and
+                                                 * saturated inputs (n % 4 == 3) */
+                test_params(&m, n % 20 == 0 ? &k : &pd, &x, u, &p);
+            }
         }
     }
     test_refusals(&m, &k);
     for (int s = 0; s < 16; ++s) {
         printf("  %-14s worst relative error %.2e\n", worst_name[s], worst[s]);
     }
+    printf("  dqdd/dparam    worst relative error %.2e\n", worst_param[0]);
+    printf("  dtip/dparam    worst relative error %.2e\n", worst_param[1]);
+    printf("  du/dparam      worst relative error %.2e (model parameters and gains)\n",
+           worst_param[2]);
     return rrr_test_report("test_derivatives");
 }

@@ -30,7 +30,8 @@ Derivation (all symbolic, nothing numeric):
    Common subexpressions are shared with sympy.cse and the C is written with a small printer.
 6. The partial derivatives d tau / d q and d tau / d qd (rrr_gen_tau_jacobian, behind
    rrr_derivatives.h) are the fused torques of step 5 differentiated by the chain rule in
-   s2, c2, s3, c3, s23, c23, each proven equal to the derivative of the normal form.
+   s2, c2, s3, c3, s23, c23, each proven equal to the derivative of the normal form; the same
+   for d tau / d a2 and d tau / d g (rrr_gen_tau_param_jacobian).
 
 Usage: derive_dynamics.py [--output-dir DIR] [--check] [--typos]
 """
@@ -548,6 +549,7 @@ def build_functions(der: Derivation) -> list[GenFunction]:
     pot = [("", linear_in_p(der.v, sparse))]
     pot_text = sp.sstr(sp.collect(pot[0][1], g)).replace("**", "^")
     jac = tau_jacobian(tau_rows, [e for _, e in tau])
+    par = tau_param_jacobian(tau_rows, [e for _, e in tau])
     return [
         GenFunction(
             "rrr_gen_regressor",
@@ -591,6 +593,13 @@ def build_functions(der: Derivation) -> list[GenFunction]:
             epilogue=("dq[0][0] = 0.0;", "dq[1][0] = 0.0;", "dq[2][0] = 0.0;"),
         ),
         GenFunction(
+            "rrr_gen_tau_param_jacobian",
+            "Partial derivatives of tau = R(q, qd, qdd) p with respect to the model fields a2 and g "
+            "(with respect to p they are the columns of R).",
+            "const double qd[3], const double qdd[3], double da2[3], double dg[3]",
+            par,
+        ),
+        GenFunction(
             "rrr_gen_potential",
             f"Potential energy V(q) = {pot_text}, h = dV/dq.",
             "",
@@ -630,6 +639,20 @@ def tau_jacobian(tau_rows: list[sp.Expr], tau_compact: list[sp.Expr]) -> list[tu
             if nf4(expr - sp.diff(tau_rows[k], qd[j])) != 0:
                 raise AssertionError(f"d tau_{k + 1} / d qd_{j + 1}: compact form differs")
             out.append((f"dqd[{k}][{j}]", expr))
+    return out
+
+
+def tau_param_jacobian(tau_rows: list[sp.Expr], tau_compact: list[sp.Expr]
+                       ) -> list[tuple[str, sp.Expr]]:
+    """d tau / d a2 and d tau / d g of the fused torques, proven equal to the derivatives of the
+    normal form."""
+    out: list[tuple[str, sp.Expr]] = []
+    for name, sym in (("da2", a2), ("dg", g)):
+        for k in range(3):
+            expr = sp.diff(tau_compact[k], sym)
+            if nf4(expr - sp.diff(tau_rows[k], sym)) != 0:
+                raise AssertionError(f"d tau_{k + 1} / d {sym}: compact form differs")
+            out.append((f"{name}[{k}]", expr))
     return out
 
 

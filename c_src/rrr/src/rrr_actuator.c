@@ -73,6 +73,15 @@ static void friction_slope(const rrr_model *m, const double qd[3], double s[3])
     }
 }
 
+void rrr_actuator_friction_tanh(const rrr_model *m, const double qd[3], double th[3][RRR_NF])
+{
+    for (int i = 0; i < RRR_NJ; ++i) {
+        for (int k = 0; k < RRR_NF; ++k) {
+            th[i][k] = tanh_fast(m->w[i][k] * qd[i]);
+        }
+    }
+}
+
 rrr_status rrr_friction_slope(const rrr_model *m, const double qd[3], double duf_dqd[3])
 {
     if (m == NULL || qd == NULL || duf_dqd == NULL || !actuator_ok(m) || !rrr_finite_n(qd, 3)) {

@@ -165,3 +165,156 @@ rrr_status rrr_ctc_jacobian(const rrr_model *m, const rrr_ctc_gains *gains,
     *d = o;
     return RRR_OK;
 }
+
+/* ---- with respect to the model parameters ------------------------------------------------------ */
+
+/* column of a model field: its index among the doubles of rrr_model (= the parameter table's row,
+ * tests/c/test_model.c) */
+#define COL(MEMBER) ((int)(offsetof(rrr_model, MEMBER) / sizeof(double)))
+_Static_assert(sizeof(rrr_model) == RRR_N_PARAMS * sizeof(double),
+               "rrr_model is the parameter table's doubles");
+
+rrr_status rrr_plant_param_jacobian(const rrr_model *m, const rrr_plant_state *x,
+                                    const double u[3], double dqdd_dparam[3][RRR_N_PARAMS])
+{
+    if (m == NULL || x == NULL || u == NULL || dqdd_dparam == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_plant_prep p;
+    rrr_plant_prepare(m, rrr_actuator_params_ok(m), x->q, x->qd, &p);
+    double qdd[3];
+    const rrr_status st = rrr_plant_accel_prepared(m, &p, u, qdd);
+    if (st != RRR_OK) {
+        return st;
+    }
+    /* D dqdd = d(k_t (sat(u) - u_f)) - d tau, tau = R(q, qd, qdd) p at the point's qdd */
+    double Y[3][RRR_NP], da2[3], dg[3], th[3][RRR_NF];
+    rrr_gen_regressor(m, &p.fd.t, x->qd, qdd, Y);
+    rrr_gen_tau_param_jacobian(m, &p.fd.t, x->qd, qdd, da2, dg);
+    rrr_actuator_friction_tanh(m, x->qd, th);
+    double rhs[3][RRR_N_PARAMS];
+    memset(rhs, 0, sizeof rhs);
+    for (int i = 0; i < RRR_NJ; ++i) {
+        const double kt = m->kt[i];
+        const int clamped = u[i] > m->u_max || u[i] < -m->u_max;
+        const double sat = clamped ? copysign(m->u_max, u[i]) : u[i];
+        rhs[i][COL(a2)] = -da2[i];
+        rhs[i][COL(g)] = -dg[i];
+        for (int l = 0; l < RRR_NP; ++l) {
+            rhs[i][COL(p) + l] = -Y[i][l];
+        }
+        rhs[i][COL(kt) + i] = sat - p.uf[i];
+        for (int k = 0; k < RRR_NF; ++k) {
+            rhs[i][COL(f) + RRR_NF * i + k] = -kt * th[i][k];
+            rhs[i][COL(w) + RRR_NF * i + k] =
+                -kt * m->f[i][k] * x->qd[i] * (1.0 - th[i][k] * th[i][k]);
+        }
+        rhs[i][COL(b) + i] = -kt * x->qd[i];
+        rhs[i][COL(u_max)] = clamped ? copysign(kt, u[i]) : 0.0;
+    }
+    double out[3][RRR_N_PARAMS];
+    for (int c = 0; c < RRR_N_PARAMS; ++c) {
+        const double r[3] = {rhs[0][c], rhs[1][c], rhs[2][c]};
+        double v[3];
+        chol_solve(&p.fd, r, v);
+        out[0][c] = v[0];
+        out[1][c] = v[1];
+        out[2][c] = v[2];
+    }
+    if (!rrr_finite_n(&out[0][0], 3 * RRR_N_PARAMS)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(dqdd_dparam, out, sizeof out);
+    return RRR_OK;
+}
+
+rrr_status rrr_fk_param_jacobian(const rrr_model *m, const double q[3],
+                                 double dx_dparam[3][RRR_N_PARAMS])
+{
+    double x[3];
+    if (dx_dparam == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    const rrr_status st = rrr_fk(m, q, x, NULL); /* its checks and statuses */
+    if (st != RRR_OK) {
+        return st;
+    }
+    /* x = c1 r + e s1, y = s1 r - e c1, z = a2 s2 + a3 s23 + d1, r = a2 c2 + a3 c23,
+     * e = d2 + d3: affine in each length */
+    const double s1 = sin(q[0]), c1 = cos(q[0]);
+    const rrr_trig t = rrr_trig_of(q);
+    double out[3][RRR_N_PARAMS];
+    memset(out, 0, sizeof out);
+    out[2][COL(d1)] = 1.0;
+    out[0][COL(a2)] = c1 * t.c2;
+    out[1][COL(a2)] = s1 * t.c2;
+    out[2][COL(a2)] = t.s2;
+    out[0][COL(a3)] = c1 * t.c23;
+    out[1][COL(a3)] = s1 * t.c23;
+    out[2][COL(a3)] = t.s23;
+    out[0][COL(d2)] = out[0][COL(d3)] = s1;
+    out[1][COL(d2)] = out[1][COL(d3)] = -c1;
+    memcpy(dx_dparam, out, sizeof out);
+    return RRR_OK;
+}
+
+rrr_status rrr_ctc_param_jacobian(const rrr_model *m, const rrr_ctc_gains *gains,
+                                  const double q_ref[3], const double qd_ref[3],
+                                  const double qdd_ref[3], const double q[3], const double qd[3],
+                                  rrr_ctc_param_derivatives *d)
+{
+    if (d == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_ctc_output o;
+    rrr_status st = rrr_ctc(m, gains, q_ref, qd_ref, qdd_ref, q, qd, &o);
+    if (st != RRR_OK) {
+        return st; /* also every NULL and non-finite argument */
+    }
+    rrr_ctc_param_derivatives r;
+    memset(&r, 0, sizeof r);
+    if (gains->feedforward) {
+        double tau[3];
+        st = rrr_inverse_dynamics(m, q_ref, qd_ref, qdd_ref, tau);
+        if (st != RRR_OK) {
+            return st;
+        }
+        const rrr_trig t = rrr_trig_of(q_ref);
+        double Y[3][RRR_NP], da2[3], dg[3], th[3][RRR_NF];
+        rrr_gen_regressor(m, &t, qd_ref, qdd_ref, Y);
+        rrr_gen_tau_param_jacobian(m, &t, qd_ref, qdd_ref, da2, dg);
+        rrr_actuator_friction_tanh(m, qd_ref, th);
+        for (int i = 0; i < RRR_NJ; ++i) {
+            const double kt = m->kt[i];
+            r.du_n[i][COL(a2)] = da2[i] / kt;
+            r.du_n[i][COL(g)] = dg[i] / kt;
+            for (int l = 0; l < RRR_NP; ++l) {
+                r.du_n[i][COL(p) + l] = Y[i][l] / kt;
+            }
+            r.du_n[i][COL(kt) + i] = -tau[i] / (kt * kt);
+            for (int k = 0; k < RRR_NF; ++k) {
+                r.du_n[i][COL(f) + RRR_NF * i + k] = th[i][k];
+                r.du_n[i][COL(w) + RRR_NF * i + k] =
+                    m->f[i][k] * qd_ref[i] * (1.0 - th[i][k] * th[i][k]);
+            }
+            r.du_n[i][COL(b) + i] = qd_ref[i];
+        }
+    }
+    for (int i = 0; i < RRR_NJ; ++i) {
+        const int free_i = !(o.saturated & (1u << i));
+        r.du_c_dkp[i] = q_ref[i] - q[i];
+        r.du_c_dkd[i] = qd_ref[i] - qd[i];
+        r.du_dkp[i] = free_i ? r.du_c_dkp[i] : 0.0;
+        r.du_dkd[i] = free_i ? r.du_c_dkd[i] : 0.0;
+        for (int c = 0; c < RRR_N_PARAMS; ++c) {
+            r.du[i][c] = free_i ? r.du_n[i][c] : 0.0;
+        }
+        r.du[i][COL(u_max)] = free_i ? 0.0 : (o.u[i] > 0.0 ? 1.0 : -1.0);
+    }
+    if (!rrr_finite_n(&r.du[0][0], 3 * RRR_N_PARAMS) ||
+        !rrr_finite_n(&r.du_n[0][0], 3 * RRR_N_PARAMS)) {
+        return RRR_NUMERIC;
+    }
+    *d = r;
+    return RRR_OK;
+}

@@ -427,6 +427,45 @@ void rrr_gen_tau_jacobian(const rrr_model *m,
     dq[2][0] = 0.0;
 }
 
+void rrr_gen_tau_param_jacobian(const rrr_model *m,
+                                const rrr_trig *trig,
+                                const double qd[3],
+                                const double qdd[3],
+                                double da2[3],
+                                double dg[3])
+{
+    const double s2 = trig->s2;
+    const double c2 = trig->c2;
+    const double s3 = trig->s3;
+    const double c3 = trig->c3;
+    const double s23 = trig->s23;
+    const double c23 = trig->c23;
+    const double p3 = m->p[2];
+    const double p4 = m->p[3];
+    const double p15 = m->p[14];
+    const double p16 = m->p[15];
+    const double qd1 = qd[0];
+    const double qd2 = qd[1];
+    const double qd3 = qd[2];
+    const double qdd1 = qdd[0];
+    const double qdd2 = qdd[1];
+    const double qdd3 = qdd[2];
+    const double t0 = c2*(c23*p4 + p3*s23);
+    const double t1 = c23*p3 - p4*s23;
+    const double t2 = 2.0*s2;
+    const double t3 = p3*(c23*t2 + s3) + p4*(c3 - s23*t2);
+    const double t4 = c3*p3 - p4*s3;
+    const double t5 = qdd2*t4;
+    const double t6 = c3*p4 + p3*s3;
+    const double t7 = qd1*qd1;
+    da2[0] = 2.0*c2*qdd1*t1 - 2.0*qd1*qd2*t3 - 2.0*qd1*qd3*t0;
+    da2[1] = -2.0*qd2*qd3*t6 - qd3*qd3*t6 + qdd3*t4 + t3*t7 + 2.0*t5;
+    da2[2] = qd2*qd2*t6 + t0*t7 + t5;
+    dg[0] = 0.0;
+    dg[1] = c2*p15 - p16*s2 + t1;
+    dg[2] = t1;
+}
+
 double rrr_gen_potential(const rrr_model *m, const rrr_trig *trig)
 {
     const double s2 = trig->s2;

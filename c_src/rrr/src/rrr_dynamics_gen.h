@@ -46,6 +46,14 @@ void rrr_gen_tau_jacobian(const rrr_model *m,
                           double dq[3][3],
                           double dqd[3][3]);
 
+/** Partial derivatives of tau = R(q, qd, qdd) p with respect to the model fields a2 and g (with respect to p they are the columns of R). (55 operations after CSE.) */
+void rrr_gen_tau_param_jacobian(const rrr_model *m,
+                                const rrr_trig *trig,
+                                const double qd[3],
+                                const double qdd[3],
+                                double da2[3],
+                                double dg[3]);
+
 /** Potential energy V(q) = g*(c2*p16 + c23*p4 + p15*s2 + p3*s23), h = dV/dq. (8 operations after CSE.) */
 double rrr_gen_potential(const rrr_model *m, const rrr_trig *trig);
 

@@ -36,6 +36,7 @@ extern "C" {
 
 #include "rrr_control.h"
 #include "rrr_model.h"
+#include "rrr_params.h"
 #include "rrr_plant.h"
 
 /**
@@ -114,6 +115,56 @@ RRR_API rrr_status rrr_ctc_jacobian(const rrr_model *m, const rrr_ctc_gains *gai
                                     const double q_ref[3], const double qd_ref[3],
                                     const double qdd_ref[3], const double q[3],
                                     const double qd[3], rrr_ctc_derivatives *d);
+
+/* ---- with respect to the model parameters ----------------------------------------------------
+ * Column k of every matrix below is parameter k of librrr's parameter table (rrr_params.h,
+ * RRR_MODEL_PARAMS order: d1, a2, a3, d2, d3, g, p1..p16, kt, f, w, b, u_max), which is also
+ * the order of the doubles in rrr_model: column k is d / d ((const double *)m)[k]. Units: per
+ * unit of that parameter. tau is affine in a2, g and each p_l, the friction is the tanh sum of
+ * eq 9, the tip affine in d1, a2, a3, d2 and d3: every column is a closed form (the generated
+ * d tau / d a2 and d tau / d g, the regressor's columns for p), no finite differences. */
+
+/**
+ * @brief d qdd / d (every model parameter) of the plant at (q, qd, u): D dqdd = d(k_t (sat(u) -
+ *        u_f)) - d tau(q, qd, qdd) at the point's qdd. The kinematic lengths d1, a3, d2, d3 do
+ *        not enter the dynamics (zero columns); u_max only where an input is clamped.
+ * @param[out] dqdd_dparam written only on RRR_OK
+ * @return rrr_plant_jacobian's statuses
+ */
+RRR_API rrr_status rrr_plant_param_jacobian(const rrr_model *m, const rrr_plant_state *x,
+                                            const double u[3],
+                                            double dqdd_dparam[3][RRR_N_PARAMS]);
+
+/**
+ * @brief d x / d (every model parameter) of the tip position x = rrr_fk(q): the columns of
+ *        d1, a2, a3, d2, d3; every other column is 0.
+ * @return rrr_fk's statuses
+ */
+RRR_API rrr_status rrr_fk_param_jacobian(const rrr_model *m, const double q[3],
+                                         double dx_dparam[3][RRR_N_PARAMS]);
+
+/** @brief The computed-torque law's derivatives with respect to the model and the gains. */
+typedef struct rrr_ctc_param_derivatives {
+    double du[3][RRR_N_PARAMS];    ///< d u_i / d (model parameter k); row i 0 where clamped,
+                                   ///< except the u_max column (sign of u_i there)
+    double du_n[3][RRR_N_PARAMS];  ///< d u_n,i / d (model parameter k) (0 without feedforward)
+    double du_dkp[3];              ///< d u_i / d kp_i (d u_i / d kp_j = 0 for j != i)
+    double du_dkd[3];              ///< d u_i / d kd_i
+    double du_c_dkp[3];            ///< d u_c,i / d kp_i = q_ref_i - q_i
+    double du_c_dkd[3];            ///< d u_c,i / d kd_i = qd_ref_i - qd_i
+} rrr_ctc_param_derivatives;
+
+/**
+ * @brief The partial derivatives of eq 15 with respect to the model parameters (the law's own
+ *        copy: the feedforward u_n = k_t^-1 R(q_ref, qd_ref, qdd_ref) p + u_f(qd_ref), and u_max)
+ *        and the gains. The PD part does not depend on the model.
+ * @param[out] d written only on RRR_OK
+ * @return rrr_ctc's statuses
+ */
+RRR_API rrr_status rrr_ctc_param_jacobian(const rrr_model *m, const rrr_ctc_gains *gains,
+                                          const double q_ref[3], const double qd_ref[3],
+                                          const double qdd_ref[3], const double q[3],
+                                          const double qd[3], rrr_ctc_param_derivatives *d);
 
 #ifdef __cplusplus
 }
