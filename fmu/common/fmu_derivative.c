@@ -6,17 +6,18 @@
  *
  * Unknowns are the Real outputs (the continuous states and their derivatives are outputs in
  * these models, fmu_model_check); knowns are the Real inputs and the continuous states, in every
- * state where the call is allowed (Initialization Mode included: the derivative is then taken at
- * the start values, which is what the model's outputs are computed from). Parameters are not
- * knowns here: a derivative with respect to a parameter is refused with a message saying so.
+ * state where the call is allowed, and in Initialization Mode also the Real parameters (FMI:
+ * there the knowns are the inputs and the variables with initial = "exact"; the derivative is
+ * taken at the start values, which is what the model's outputs are computed from). A parameter
+ * as a known after initialization is refused with a message saying why.
  */
 #include "fmu_internal.h"
 
 #include <math.h>
 #include <string.h>
 
-/* the largest table and matrix the partials are built for (the models here: < 80 rows, at most
- * 9 x 18 entries); a bigger model is refused, not overrun */
+/* the largest table and matrix the partials are built for (the models here: < 85 rows, at most
+ * 12 x 65 entries in Initialization Mode); a bigger model is refused, not overrun */
 #define FMU_PARTIALS_MAX_VARS 256
 #define FMU_PARTIALS_MAX_ENTRIES 1024
 
@@ -34,9 +35,10 @@ int fmu_is_unknown(const fmu_model *m, const fmu_variable *v)
     return v->type == FMU_REAL && v->causality == FMU_OUTPUT;
 }
 
-int fmu_is_known(const fmu_model *m, const fmu_variable *v)
+int fmu_is_known(const fmu_model *m, const fmu_variable *v, int init)
 {
-    return v->type == FMU_REAL && (v->causality == FMU_INPUT || fmu_state_index(m, v->vr) >= 0);
+    return v->type == FMU_REAL && (v->causality == FMU_INPUT || fmu_state_index(m, v->vr) >= 0 ||
+                                   (init && v->causality == FMU_PARAMETER));
 }
 
 /* FMU_OK when every value reference names a variable of the kind `want` (1: unknown, 0: known);
@@ -45,6 +47,7 @@ static fmu_status check_refs(fmu_instance *S, const char *fn, const char *arg, c
                              size_t n, int want_unknown)
 {
     const fmu_model *m = S->model;
+    const int init = S->state == FMU_INIT_MODE;
     for (size_t i = 0; i < n; ++i) {
         const fmu_variable *v = fmu_find_var(m, vr[i]);
         if (v == NULL) {
@@ -53,7 +56,15 @@ static fmu_status check_refs(fmu_instance *S, const char *fn, const char *arg, c
                     (unsigned)vr[i], m->identifier);
             return FMU_ERROR;
         }
-        const int ok = want_unknown ? fmu_is_unknown(m, v) : fmu_is_known(m, v);
+        const int ok = want_unknown ? fmu_is_unknown(m, v) : fmu_is_known(m, v, init);
+        if (!ok && !want_unknown && v->type == FMU_REAL && v->causality == FMU_PARAMETER) {
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: %s[%zu] = %u (%s) is a parameter: parameters are knowns only in "
+                    "InitializationMode (they do not change afterwards); the knowns now are the "
+                    "Real inputs and the continuous states",
+                    fn, arg, i, (unsigned)vr[i], v->name);
+            return FMU_ERROR;
+        }
         if (!ok) {
             fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
                     "%s: %s[%zu] = %u (%s, %s %s) is not %s", fn, arg, i, (unsigned)vr[i],
@@ -61,8 +72,7 @@ static fmu_status check_refs(fmu_instance *S, const char *fn, const char *arg, c
                     want_unknown ? "an unknown: the unknowns are the Real outputs (the continuous "
                                    "states and their derivatives among them)"
                                  : "a known: the knowns are the Real inputs and the continuous "
-                                   "states (derivatives with respect to parameters are not "
-                                   "provided)");
+                                   "states, and in InitializationMode the Real parameters");
             return FMU_ERROR;
         }
     }
@@ -133,9 +143,10 @@ fmu_status fmu_get_derivative(fmu_instance *S, const char *fn, int adjoint,
                 FMU_PARTIALS_MAX_VARS);
         return FMU_ERROR;
     }
+    const int init = S->state == FMU_INIT_MODE;
     for (size_t k = 0; k < m->n_vars; ++k) {
         row[k] = fmu_is_unknown(m, &m->vars[k]) ? (int)n_rows++ : -1;
-        col[k] = fmu_is_known(m, &m->vars[k]) ? (int)n_cols++ : -1;
+        col[k] = fmu_is_known(m, &m->vars[k], init) ? (int)n_cols++ : -1;
     }
     double J[FMU_PARTIALS_MAX_ENTRIES];
     if (n_rows * n_cols > FMU_PARTIALS_MAX_ENTRIES) {
@@ -145,7 +156,7 @@ fmu_status fmu_get_derivative(fmu_instance *S, const char *fn, int adjoint,
         return FMU_ERROR;
     }
     memset(J, 0, n_rows * n_cols * sizeof J[0]);
-    fmu_partials P = {J, row, col, m->n_vars, n_cols};
+    fmu_partials P = {J, row, col, m->n_vars, n_cols, init};
     const fmu_status st = m->partials(S, &P);
     if (st > FMU_WARNING) {
         return st; /* the model logged why */

@@ -118,8 +118,8 @@ fmu_status fmu_me_get_event_indicators(fmu_instance *S, const char *fn, size_t n
  *        n_seed = nu, n_sensitivity = nk), J = d unknowns / d knowns from the model's partials
  *        hook. Refused (FMU_ERROR, nothing written): no hook; an unknown that is not an output
  *        or state derivative of type Real, a known that is not an input or continuous state of
- *        type Real (parameters included), an unknown value reference, a seed that is not
- *        finite, wrong counts. A failure of the hook is the model's (FMU_ERROR from the hook).
+ *        type Real (in Initialization Mode a Real parameter is a known too), an unknown value
+ *        reference, a seed that is not finite, wrong counts. A failure of the hook is the model's (FMU_ERROR from the hook).
  */
 fmu_status fmu_get_derivative(fmu_instance *S, const char *fn, int adjoint,
                               const fmu_vr unknowns[], size_t nu, const fmu_vr knowns[],
@@ -130,8 +130,9 @@ fmu_status fmu_get_derivative(fmu_instance *S, const char *fn, int adjoint,
  *         derivatives of these models are outputs too). */
 int fmu_is_unknown(const fmu_model *m, const fmu_variable *v);
 
-/** @brief 1 when vr is a known of the partial derivatives: a Real input or continuous state. */
-int fmu_is_known(const fmu_model *m, const fmu_variable *v);
+/** @brief 1 when vr is a known of the partial derivatives: a Real input or continuous state,
+ *         and in Initialization Mode (init nonzero) also a Real parameter. */
+int fmu_is_known(const fmu_model *m, const fmu_variable *v, int init);
 
 /* ---- FMU state snapshots (fmu_instance.c) -------------------------------------------------- */
 

@@ -137,6 +137,8 @@ typedef struct fmu_partials {
     const int *col;                   ///< column of value reference vr, or -1 (n_vars entries)
     size_t n_vars;                    ///< entries of row and col (the table's rows)
     size_t n_cols;                    ///< number of knowns
+    int parameters;                   ///< nonzero in Initialization Mode: the Real parameters
+                                      ///< are knowns too (their columns exist)
 } fmu_partials;
 
 /** @brief J[unknown][known] = value; ignored unless unknown is an unknown and known a known. */
@@ -177,9 +179,10 @@ typedef struct fmu_model {
     int (*depends_initial)(fmu_vr unknown, fmu_vr known);
     /** Optional (NULL: no directional or adjoint derivatives; the capability flags say so):
      *  the partial derivatives of every unknown with respect to every known at the current
-     *  values (in Instantiated and Initialization Mode: the start values), written with
-     *  fmu_partial_set; entries not written are 0. Exact, not finite differences: what
-     *  fmiXGetDirectionalDerivative and fmi3GetAdjointDerivative multiply with the seed. */
+     *  values (in Initialization Mode: the start values, and the knowns include the Real
+     *  parameters, P->parameters), written with fmu_partial_set; entries not written are 0.
+     *  Exact, not finite differences: what fmiXGetDirectionalDerivative and
+     *  fmi3GetAdjointDerivative multiply with the seed. */
     fmu_status (*partials)(fmu_instance *inst, fmu_partials *P);
     /** Optional (NULL: none): free what the model keeps in fmu_instance.work (memory outside
      *  the model data, e.g. a table read from resources/) and set work to NULL; called at

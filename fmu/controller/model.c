@@ -211,6 +211,44 @@ static int depends_initial(fmu_vr out_vr, fmu_vr in_vr)
     return ff || pd || RRR_MV_IN(off, u_max) ? FMU_DEP_DEPENDENT : FMU_DEP_NONE; /* u */
 }
 
+/* In Initialization Mode the parameters are knowns too: the model (rrr_ctc_param_jacobian: the
+ * feedforward and u_max), kp and kd, and lead through the predictor (d q_p / d lead = qd +
+ * lead qdd, d qd_p / d lead = qdd). */
+static fmu_status parameter_partials(fmu_instance *inst, const double q[3], const double qd[3],
+                                     const rrr_ctc_derivatives *d, fmu_partials *P)
+{
+    const controller_data *c = data_of(inst);
+    rrr_ctc_param_derivatives pd;
+    const rrr_status st = rrr_ctc_param_jacobian(&c->model, &c->gains, c->q_ref, c->qd_ref,
+                                                 c->qdd_ref, q, qd, &pd);
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: rrr_ctc_param_jacobian failed at t = %.17g: %s", MODEL_IDENTIFIER,
+                inst->time, rrr_status_str(st));
+        return FMU_ERROR;
+    }
+    const double l = c->lead;
+    for (fmu_vr i = 0; i < RRR_NJ; ++i) {
+        for (fmu_vr m = 0; m < RRR_MV_COUNT; ++m) {
+            fmu_partial_set(P, vr_u + i, vr_model + m, pd.du[i][m]);
+            fmu_partial_set(P, vr_u_n + i, vr_model + m, pd.du_n[i][m]);
+        }
+        fmu_partial_set(P, vr_u + i, vr_kp + i, pd.du_dkp[i]);
+        fmu_partial_set(P, vr_u + i, vr_kd + i, pd.du_dkd[i]);
+        fmu_partial_set(P, vr_u_c + i, vr_kp + i, pd.du_c_dkp[i]);
+        fmu_partial_set(P, vr_u_c + i, vr_kd + i, pd.du_c_dkd[i]);
+        double du = 0.0, du_c = 0.0;
+        for (int j = 0; j < RRR_NJ; ++j) {
+            const double dq = c->qd[j] + l * c->qdd[j], dqd = c->qdd[j];
+            du += d->du[RRR_CTC_Q][i][j] * dq + d->du[RRR_CTC_QD][i][j] * dqd;
+            du_c += d->du_c[RRR_CTC_Q][i][j] * dq + d->du_c[RRR_CTC_QD][i][j] * dqd;
+        }
+        fmu_partial_set(P, vr_u + i, vr_lead, du);
+        fmu_partial_set(P, vr_u_c + i, vr_lead, du_c);
+    }
+    return FMU_OK;
+}
+
 /* The exact partial derivatives of u, u_n and u_c with respect to every input: rrr_ctc_jacobian
  * at the predicted state, chained through the predictor (rrr_ctc_jacobian's note). */
 static fmu_status partials(fmu_instance *inst, fmu_partials *P)
@@ -249,7 +287,7 @@ static fmu_status partials(fmu_instance *inst, fmu_partials *P)
             }
         }
     }
-    return FMU_OK;
+    return P->parameters ? parameter_partials(inst, q, qd, &d, P) : FMU_OK;
 }
 
 const fmu_model FMU_MODEL = {

@@ -245,6 +245,42 @@ static int depends_initial(fmu_vr unknown, fmu_vr known)
     return FMU_DEP_NONE;
 }
 
+/* In Initialization Mode the parameters are knowns too: the state is (q0, qd0), so the
+ * derivatives by q0 and qd0 are those by q and qd; by the model parameters
+ * rrr_plant_param_jacobian and rrr_fk_param_jacobian; the integrator settings act only inside
+ * doStep (0). */
+static fmu_status parameter_partials(fmu_instance *inst, const rrr_plant_state *x,
+                                     const rrr_plant_derivatives *d, double J[3][3],
+                                     fmu_partials *P)
+{
+    const plant_data *p = data_of(inst);
+    double dqdd[3][RRR_N_PARAMS], dtip[3][RRR_N_PARAMS];
+    rrr_status st = rrr_plant_param_jacobian(&p->model, x, p->u, dqdd);
+    if (st == RRR_OK) {
+        st = rrr_fk_param_jacobian(&p->model, x->q, dtip);
+    }
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: cannot compute the derivatives by the parameters: %s", MODEL_IDENTIFIER,
+                rrr_status_str(st));
+        return FMU_ERROR;
+    }
+    for (fmu_vr i = 0; i < RRR_NJ; ++i) {
+        fmu_partial_set(P, vr_q + i, vr_q0 + i, 1.0);
+        fmu_partial_set(P, vr_qd + i, vr_qd0 + i, 1.0);
+        for (fmu_vr j = 0; j < RRR_NJ; ++j) {
+            fmu_partial_set(P, vr_qdd + i, vr_q0 + j, d->dqdd_dq[i][j]);
+            fmu_partial_set(P, vr_qdd + i, vr_qd0 + j, d->dqdd_dqd[i][j]);
+            fmu_partial_set(P, vr_tip + i, vr_q0 + j, J[i][j]);
+        }
+        for (fmu_vr c = 0; c < RRR_MV_COUNT; ++c) {
+            fmu_partial_set(P, vr_qdd + i, vr_model + c, dqdd[i][c]);
+            fmu_partial_set(P, vr_tip + i, vr_model + c, dtip[i][c]);
+        }
+    }
+    return FMU_OK;
+}
+
 /* The exact partial derivatives of the unknowns with respect to u, q and qd: rrr_plant_jacobian
  * (qdd) and rrr_jacobian (tip), at the state the outputs are computed from. */
 static fmu_status partials(fmu_instance *inst, fmu_partials *P)
@@ -279,7 +315,7 @@ static fmu_status partials(fmu_instance *inst, fmu_partials *P)
             fmu_partial_set(P, vr_tip + i, vr_q + j, J[i][j]);
         }
     }
-    return FMU_OK;
+    return P->parameters ? parameter_partials(inst, &x, &d, J, P) : FMU_OK;
 }
 
 const fmu_model FMU_MODEL = {

@@ -422,6 +422,64 @@ def test_initial_unknown_dependencies_are_exact(which: str) -> None:
                 assert (var.name in dec[unk]) == (y1[i] != y0[i]), (unk, var.name)
 
 
+# ---- Initialization Mode: the parameters are knowns too ------------------------------------------
+
+@pytest.mark.parametrize("which", ["plant", "controller"])
+@pytest.mark.parametrize("version", [2, 3])
+def test_initialization_mode_derivatives_by_parameters(which: str, version: int) -> None:
+    """In Initialization Mode the knowns are the inputs and the parameters (initial = exact):
+    the directional derivative of every initial unknown equals central differences of
+    re-initialized instances (each input and Real parameter moved alone), at random points."""
+    f = open_fmu(which, version, "ME" if version == 2 else "CS", initialize=False)
+    unknowns = PLANT_UNKNOWNS if which == "plant" else CTRL_UNKNOWNS
+    knowns = [v.name for v in f.md.modelVariables
+              if v.causality in ("input", "parameter") and v.type in ("Real", "Float64")]
+    start = {v.name: float(v.start) for v in f.md.modelVariables
+             if v.name in knowns and v.start is not None}
+    rng = np.random.default_rng(RNG_SEED + 60 + version)
+    worst = 0.0
+    for n in range(5):
+        point = dict(start)
+        if which == "plant":
+            point.update(zip(names("q0"), rng.uniform(-np.pi, np.pi, 3), strict=True))
+            point.update(zip(names("qd0"), rng.uniform(-0.05, 0.05, 3), strict=True))
+            u = rng.uniform(-0.9, 0.9, 3) * start["u_max"]
+            if n % 2:
+                u[n % 3] = 1.5 * start["u_max"]  # one input beyond the limit: u_max acts
+            point.update(zip(PLANT_INPUTS, u, strict=True))
+        else:
+            point.update(zip(CTRL_INPUTS, controller_point(rng), strict=True))
+            point["lead"] = 0.002
+        x = np.array([point[k] for k in knowns])
+
+        def init_at(v: np.ndarray) -> None:
+            f.fmu.reset()
+            f.set(knowns, v)
+            if f.version == 2:
+                f.fmu.setupExperiment(startTime=0.0)
+                f.fmu.enterInitializationMode()
+            else:
+                f.fmu.enterInitializationMode(startTime=0.0)
+
+        jac = central_columns(f, unknowns, knowns, x, init_at)
+        seed = rng.normal(size=len(knowns))
+        worst = max(worst, relative_error(f.dd(unknowns, knowns, seed), jac, seed))
+        if version == 3:
+            w = rng.normal(size=len(unknowns))
+            full = np.array([f.dd(unknowns, knowns, e) for e in np.eye(len(knowns))]).T
+            np.testing.assert_allclose(f.adjoint(unknowns, knowns, w), full.T @ w, rtol=1e-12,
+                                       atol=1e-12 * float(np.abs(full).max()))
+    print(f"{which} FMI {version}, Initialization Mode, {len(knowns)} knowns: worst relative "
+          f"error {worst:.2e}")
+    assert worst <= TOL
+    # after initialization a parameter is not a known any more
+    f.fmu.exitInitializationMode()
+    with pytest.raises(FMICallException):
+        f.fmu.getDirectionalDerivative([f.vr[unknowns[0]]], [f.vr["a2"]], [1.0])
+    f.fmu.terminate()
+    f.fmu.freeInstance()
+
+
 # ---- refusals ----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("version", [2, 3])
