@@ -529,12 +529,20 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
                "<li>Every function checks the FMI %d.0 state machine: a call in a state where it "
                "is not allowed returns Error with a log message and changes nothing. Every Real "
                "that is set must be finite: NaN and Inf are refused and the old value kept.</li>\n"
+               "%s"
                "<li>Log categories: <code>logStatusWarning</code>, <code>logStatusDiscard</code>, "
                "<code>logStatusError</code>, <code>logStatusFatal</code> (on by default) and "
                "<code>logCalls</code> (every FMI call with its arguments).</li>\n"
                "<li>Binaries for %s (platforms where the build had a compiler for them).</li>\n"
                "</ul>\n",
             m->n_states, m->n_states > 0 ? " (listed in the table below)" : "", fmi_version,
+            m->partials == NULL
+                ? ""
+                : "<li><b>Partial derivatives</b>: exact directional derivatives (and, FMI 3.0, "
+                  "adjoint derivatives) of the outputs and state derivatives by the inputs and "
+                  "continuous states, and in Initialization Mode by the parameters, from the "
+                  "closed-form model (no finite differences); a clamped voltage has derivative "
+                  "0. The ModelStructure lists the dependencies and their kinds exactly.</li>\n",
             platform_dirs);
     fprintf(f, "<h2>Variables</h2>\n<p>Value references are the same in the FMI 2.0 and FMI 3.0 "
                "builds; FMI 3.0 uses the same scalar variables (no arrays).</p>\n");
