@@ -594,8 +594,8 @@ def build_functions(der: Derivation) -> list[GenFunction]:
         ),
         GenFunction(
             "rrr_gen_tau_param_jacobian",
-            "Partial derivatives of tau = R(q, qd, qdd) p with respect to the model fields a2 and g "
-            "(with respect to p they are the columns of R).",
+            "Partial derivatives of tau = R(q, qd, qdd) p with respect to the model fields a2 "
+            "and g (with respect to p they are the columns of R).",
             "const double qd[3], const double qdd[3], double da2[3], double dg[3]",
             par,
         ),
