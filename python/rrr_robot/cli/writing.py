@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from ._args import output_path
+from ._args import add_verbosity_arguments, command_parser, output_path
 from ._progress import Bars, shown
 
 
@@ -66,20 +66,20 @@ writing area (default robot; a robot file's [writing] plane_y, x_range, z_range 
 glyphs: printable ASCII (space to ~) in the cursive Hershey font 'scripts', and the Greek
   alphabet (Unicode, upper and lower case) in the Hershey font 'greek'; at most 200
   characters.
-examples:
-  rrr writing --out results --text "Hello, world"
-  rrr writing --out results --text 'Hello\\nworld' --scenario ctc
 """
+WRITING_EXAMPLES = ["rrr writing --out results --text \"Hello, world\"",
+                    "rrr writing --out results --text 'Hello\\nworld' --scenario ctc"]
 
 
 def register_cli(subparsers: Any) -> None:
     """Add the ``writing`` subcommand to the ``rrr`` command line."""
-    p_w = subparsers.add_parser(
-        "writing", help="run the writing task: co-simulate the FMUs for each scenario",
+    p_w = command_parser(
+        subparsers, "writing", help="run the writing task: co-simulate the FMUs for each "
+        "scenario",
         description="Co-simulate the controller and plant FMUs on the writing task and write "
         "summary.json, one table of every signal per scenario (CSV, or Parquet with --format "
         "parquet) and the figures (paper Figs 2-9) into --out.",
-        epilog=WRITING_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=WRITING_EPILOG, example=WRITING_EXAMPLES,
     )
     p_w.add_argument("--text", help="text to write (default: the paper-like default text "
                      "'a\u03c9m\u03b3'); a newline or \\n starts a new line")
@@ -112,5 +112,5 @@ def register_cli(subparsers: Any) -> None:
                      "pen trace, reference), 15 frames per simulated second; FORMAT auto "
                      "(default: mp4 when imageio-ffmpeg is installed, pip install "
                      "'rrr_robot[mp4]', else gif), gif or mp4")
-    p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_verbosity_arguments(p_w)
     p_w.set_defaults(func=_cmd_writing)
