@@ -111,7 +111,7 @@ int main(void)
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, 0, STEP, ref[0], pout[0],
                                      cout_[0], &done),
                  RRR_BAD_INPUT);
-    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, NAN, ref[0], pout[0],
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, (double)NAN, ref[0], pout[0],
                                      cout_[0], &done),
                  RRR_BAD_INPUT);
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, NULL, pout[0],
@@ -128,7 +128,7 @@ int main(void)
                                      pout[0], cout_[0], &done),
                  RRR_BAD_INPUT);
     /* a non-finite reference at sample 500: the loop stops there, earlier rows are valid */
-    ref[500][4] = NAN;
+    ref[500][4] = (double)NAN;
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
                                      pout[0], cout_[0], &done),
                  RRR_BAD_INPUT);
