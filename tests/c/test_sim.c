@@ -51,6 +51,13 @@ static int public_loop(const rrr_model *m, const rrr_plant_integrator *s, const 
         memcpy(pub_c[k], o.u, sizeof o.u);
         memcpy(pub_c[k] + 3, o.u_n, sizeof o.u_n);
         memcpy(pub_c[k] + 6, o.u_c, sizeof o.u_c);
+        if (k == 0) { /* row 0: the acceleration under row 0's input */
+            double qdd0[3];
+            if (rrr_plant_accel(m, &x, o.u, qdd0) != RRR_OK) {
+                return 0;
+            }
+            memcpy(pub_p[0] + 6, qdd0, sizeof qdd0);
+        }
         if (k + 1 < N && (rrr_plant_step(m, s, o.u, STEP, &x, qdd, NULL) != RRR_OK ||
                           rrr_fk(m, x.q, tip, NULL) != RRR_OK)) {
             return 0;
