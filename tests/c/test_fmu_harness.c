@@ -2327,6 +2327,104 @@ static fmi2Status ref_init(const fmu_api *api, const char *uri, char *msg, size_
 
 #define REF_ROW(T, Q) #T "," #Q ",0.2,0.3,1,0,0,0,0,0,0.5,-0.25,0.4,0,0,0,0,0,0\n"
 
+/* <dir>/resources/start_values.csv holding `len` bytes of `body`; uri receives its location. */
+static int start_folder(const char *dir, const char *body, size_t len, char *uri, size_t n)
+{
+    char path[800];
+    snprintf(path, sizeof path, "%s/resources", dir);
+    (void)mkdir(path, 0700);
+    snprintf(path, sizeof path, "%s/resources/start_values.csv", dir);
+    FILE *f = fopen(path, "wb");
+    if (f == NULL) {
+        return 1;
+    }
+    const int ok = fwrite(body, 1, len, f) == len;
+    fclose(f);
+    snprintf(uri, n, "file://%s/resources", dir);
+    return !ok;
+}
+
+/* resources/start_values.csv: its values replace the compiled start values at instantiation and
+ * reset; a malformed file stops the instantiation with a message naming the line. */
+static void test_start_file(const fmu_api *api)
+{
+    char dir[] = "/tmp/rrr_start_harness_XXXXXX";
+    if (mkdtemp(dir) == NULL) {
+        CHECK(0);
+        return;
+    }
+    char uri[1100];
+    static const char good[] = "# one system's values\nname,value\nkp[2],123.5\r\n\n"
+                               "f[1,2],0.25\nfeedforward,false\n";
+    if (start_folder(dir, good, sizeof good - 1, uri, sizeof uri) != 0) {
+        CHECK(0);
+        return;
+    }
+    inst x;
+    if (inst_new_at(&x, api, "start_file", uri) == 0) {
+        CHECK(api->SetupExperiment(x.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+        CHECK(api->EnterInitializationMode(x.c) == fmi2OK);
+        CHECK(get1(&x, "kp[2]") == 123.5 && get1(&x, "f[1,2]") == 0.25);
+        const fmi2ValueReference ff = vr_of(api, "feedforward");
+        fmi2Boolean b = fmi2True;
+        CHECK(api->GetBoolean(x.c, &ff, 1, &b) == fmi2OK && b == fmi2False);
+        CHECK(api->Reset(x.c) == fmi2OK);
+        CHECK(set1(&x, "kp[2]", 7.0) == fmi2OK);
+        CHECK(api->Reset(x.c) == fmi2OK);
+        CHECK(api->SetupExperiment(x.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+        CHECK(api->EnterInitializationMode(x.c) == fmi2OK);
+        CHECK(get1(&x, "kp[2]") == 123.5); /* the file's again after Reset */
+        inst_free(&x);
+    }
+    static char big[70000];
+    memset(big, '#', sizeof big);
+    static const struct {
+        const char *body;
+        size_t len; /* 0: strlen(body) */
+        const char *needle;
+    } bad[] = {
+        {"kp[2],1\n", 0, "line 1: the header name,value expected"},
+        {"name,value\nkp[2]\n", 0, "line 2: expected name,value"},
+        {"name,value\nkq[2],1\n", 0, "has no parameter or input \"kq[2]\""},
+        {"name,value\nu[1],1\n", 0, "has no parameter or input \"u[1]\""},
+        {"name,value\nkp[2],1.5x\n", 0, "kp[2]: a number expected, got \"1.5x\""},
+        {"name,value\nkp[2],nan\n", 0, "kp[2] must be finite"},
+        {"name,value\nkp[2],-1e999\n", 0, "kp[2] must be finite"},
+        {"name,value\nfeedforward,yes\n", 0, "true or false expected"},
+        {"name,value\nkp[2],1\0\n", 19, "not text"},
+        {big, sizeof big, "is larger than 65536 bytes"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        const size_t len = bad[k].len != 0 ? bad[k].len : strlen(bad[k].body);
+        if (start_folder(dir, bad[k].body, len, uri, sizeof uri) != 0) {
+            CHECK(0);
+            continue;
+        }
+        inst y;
+        memset(&y, 0, sizeof y);
+        y.api = api;
+        y.cb.logger = logger;
+        y.cb.allocateMemory = count_calloc;
+        y.cb.freeMemory = count_free;
+        y.cb.componentEnvironment = &y.log;
+        y.c = api->Instantiate("start_bad", fmi2CoSimulation, api->guid, uri, &y.cb, fmi2False,
+                               fmi2False);
+        if (y.c != NULL || strstr(y.log.last_error, bad[k].needle) == NULL ||
+            strstr(y.log.last_error, "start_values.csv") == NULL) {
+            fprintf(stderr, "start file %zu: instance %p, message \"%s\", expected \"%s\"\n", k,
+                    (void *)y.c, y.log.last_error, bad[k].needle);
+            rrr_test_failures++;
+            inst_free(&y);
+        }
+    }
+    char path[800];
+    snprintf(path, sizeof path, "%s/resources/start_values.csv", dir);
+    remove(path);
+    snprintf(path, sizeof path, "%s/resources", dir);
+    rmdir(path);
+    rmdir(dir);
+}
+
 /* Tables in resources/: missing, malformed ones refused at exitInitializationMode with a message
  * naming the problem; a percent-escaped resource URI; FMU state set into a fresh instance (the
  * table is read on first use) and refused by an instance with another table. */
@@ -2462,6 +2560,7 @@ int main(int argc, char **argv)
     test_closed_loop(&plant, &ctrl);
     test_illegal_sequences(&plant, &cs_machine);
     test_illegal_sequences(&ctrl, &cs_machine);
+    test_start_file(&ctrl);
     test_bad_values(&plant, &ctrl);
     test_validation(&plant, &ctrl);
     test_discard(&plant);

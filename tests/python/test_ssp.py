@@ -105,6 +105,48 @@ def test_tool_tracks_the_letters_like_rrr_writing(runs: dict[str, Any], scenario
         theirs["t"][-1])
 
 
+@pytest.mark.parametrize("scenario", ["ctc", "pd"])
+def test_an_importer_that_ignores_the_bindings_runs_the_same_system(
+        runs: dict[str, Any], scenario: str) -> None:
+    """FMPy's plain simulate_ssp, with no parameter set (it applies no SSD binding and no XML
+    start value itself; only the archive's experiment times are given): the FMUs in the archive
+    start with the scenario's values (resources/start_values.csv, read by their binaries), so
+    it tracks as rrr writing does (before: the arm started away from the text, 386 mm)."""
+    import numpy as np
+    from fmpy import read_model_description
+    from fmpy.ssp.simulation import simulate_ssp
+    from rrr_robot.ssp import run as ssp_run
+
+    ssp = runs["ssp"][scenario]
+    arch = read_ssp(ssp)
+    res = simulate_ssp(str(ssp), start_time=arch.start_time, stop_time=arch.stop_time,
+                       step_size=arch.step)
+    t_end = res["time"] + arch.step  # FMPy records a step's outputs under its start time
+    keep = t_end <= arch.stop_time + 1e-9
+    ref = ssp_run._reference_at(arch, t_end[keep])
+    tip = np.column_stack([res[f"plant.tip.{a}"][keep] for a in "xyz"])
+    x_ref = np.column_stack([ref[f"x_ref.{a}"] for a in "xyz"])
+    err = float(np.linalg.norm(tip - x_ref, axis=1).max())
+    ours = runs["writing"]["scenarios"][scenario]["tip_error_max"]
+    assert 0.0 < err <= 2.0 * ours, (err, ours)
+    # the same run as with the bindings applied (rrr run-ssp --tool fmpy), to the last bit
+    with_bindings = read_csv_table(runs["runs"][(scenario, "fmpy")][1] / f"{scenario}.csv")
+    for a, col in zip("xyz", ("tip.x", "tip.y", "tip.z"), strict=True):
+        assert np.array_equal(res[f"plant.tip.{a}"][keep], with_bindings[col])
+    # the XML's start values are the bindings too (for tools that read them)
+    with zipfile.ZipFile(ssp) as z:
+        for comp, params in arch.parameters.items():
+            member = f"resources/rrr_{comp}.fmu"
+            (Path(runs["root"]) / f"{scenario}-{comp}.fmu").write_bytes(z.read(member))
+            md = read_model_description(str(Path(runs["root"]) / f"{scenario}-{comp}.fmu"))
+            starts = {v.name: v.start for v in md.modelVariables}
+            for name, value in params.items():
+                want = ("true" if value else "false") if isinstance(value, bool) else value
+                got = starts[name]
+                assert (got == want if isinstance(value, bool) else float(got) == value), \
+                    (comp, name, got, value)
+
+
 def test_libcosim_and_fmpy_agree(runs: dict[str, Any]) -> None:
     for scn in BUILTIN:
         a = runs["runs"][(scn, "libcosim")][0]["scenarios"][scn]["tip_error_max"]
