@@ -30,7 +30,8 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
     from ..ssp.run import SspRun, run_ssp
 
     job = SspRun(ssp=Path(args.ssp), tool=args.tool, out=Path(args.out),
-                 real_time=args.real_time)
+                 real_time=args.real_time, figures=not args.no_figures,
+                 robot=Path(args.robot) if args.robot else None)
     with Bars(shown(args.quiet)) as bars:
         summary = run_ssp(job, progress=bars.callback(args.tool))
     for name, s in summary["scenarios"].items():
@@ -40,7 +41,9 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
         print(f"real-time factor {info['real_time_factor']:.4f} over "
               f"{info['simulated_time']:.3f} s (simulated / wall-clock time; libcosim's own "
               f"figure at the end: {info['libcosim_real_time_factor']:.4f})")
-    print(f"results in {job.out}/ (summary.json, {', '.join(summary['scenarios'])}.csv)")
+    figures = ", figures" if job.figures else ""
+    print(f"results in {job.out}/ (summary.json, {', '.join(summary['scenarios'])}.csv"
+          f"{figures})")
     return 0
 
 
@@ -84,5 +87,9 @@ def register_cli(subparsers: Any) -> None:
     r.add_argument("--real-time", action="store_true",
                    help="libcosim's real-time mode (the run takes the simulated time); reports "
                    "the achieved real-time factor")
+    r.add_argument("--no-figures", action="store_true",
+                   help="skip the PNG figures (those of rrr writing: Figs 2-9, the tip error)")
+    r.add_argument("--robot", help="the robot file the archive was written from, for the "
+                   "figures (default: the packaged default robot)")
     add_verbosity_arguments(r)
     r.set_defaults(func=_cmd_run_ssp)
