@@ -752,6 +752,47 @@ static rrr_status row_ctc(const rrr_model *m, const void *ctx, const double *con
     return st;
 }
 
+/* plant_jacobian(q, qd, u) -> (qdd, J): J = d qdd / d(q, qd, u), 3 x 9 */
+static rrr_status row_plant_jacobian(const rrr_model *m, const void *ctx,
+                                     const double *const *in, double *const *out)
+{
+    (void)ctx;
+    rrr_plant_state x;
+    memset(&x, 0, sizeof x);
+    memcpy(x.q, in[0], sizeof x.q);
+    memcpy(x.qd, in[1], sizeof x.qd);
+    rrr_plant_derivatives d;
+    const rrr_status st = rrr_plant_jacobian(m, &x, in[2], &d);
+    if (st == RRR_OK) {
+        memcpy(out[0], d.qdd, sizeof d.qdd);
+        for (int i = 0; i < NJ; ++i) {
+            memcpy(out[1] + 9 * i, d.dqdd_dq[i], sizeof d.dqdd_dq[i]);
+            memcpy(out[1] + 9 * i + 3, d.dqdd_dqd[i], sizeof d.dqdd_dqd[i]);
+            memcpy(out[1] + 9 * i + 6, d.dqdd_du[i], sizeof d.dqdd_du[i]);
+        }
+    }
+    return st;
+}
+
+/* ctc_jacobian(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, du, du_n): du = d u / d(q_ref,
+ * qd_ref, qdd_ref, q, qd), 3 x 15 (column 3 k + j: joint j of input k), du_n the same of u_n */
+static rrr_status row_ctc_jacobian(const rrr_model *m, const void *ctx,
+                                   const double *const *in, double *const *out)
+{
+    rrr_ctc_derivatives d;
+    const rrr_status st = rrr_ctc_jacobian(m, ctx, in[0], in[1], in[2], in[3], in[4], &d);
+    if (st == RRR_OK) {
+        memcpy(out[0], d.out.u, sizeof d.out.u);
+        for (int i = 0; i < NJ; ++i) {
+            for (int k = 0; k < RRR_CTC_INPUT_COUNT; ++k) {
+                memcpy(out[1] + 15 * i + 3 * k, d.du[k][i], sizeof d.du[k][i]);
+                memcpy(out[2] + 15 * i + 3 * k, d.du_n[k][i], sizeof d.du_n[k][i]);
+            }
+        }
+    }
+    return st;
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* map_rows: parse, broadcast, allocate, loop (without the GIL for large batches), report      */
 /* ------------------------------------------------------------------------------------------ */
@@ -991,6 +1032,14 @@ static const map_spec S_CTC = {"ctc", "rrr_ctc", row_ctc, 5,
                                "q_ref, qd_ref, qdd_ref, q, qd",
                                3, {1, 1, 1}, {{NJ, 0}, {NJ, 0}, {NJ, 0}}};
 
+static const map_spec S_PLANT_JACOBIAN = {"plant_jacobian", "rrr_plant_jacobian",
+                                          row_plant_jacobian, 3, {"q", "qd", "u"}, "q, qd, u",
+                                          2, {1, 2}, {{NJ, 0}, {NJ, 9}}};
+static const map_spec S_CTC_JACOBIAN = {"ctc_jacobian", "rrr_ctc_jacobian", row_ctc_jacobian, 5,
+                                        {"q_ref", "qd_ref", "qdd_ref", "q", "qd"},
+                                        "q_ref, qd_ref, qdd_ref, q, qd",
+                                        3, {1, 2, 2}, {{NJ, 0}, {NJ, 15}, {NJ, 15}}};
+
 static PyObject *map_method(PyObject *self, const map_spec *s, PyObject *const *args,
                             Py_ssize_t nargs)
 {
@@ -1021,6 +1070,7 @@ MAP_METHOD(energy, S_ENERGY)
 MAP_METHOD(friction, S_FRICTION)
 MAP_METHOD(voltage_from_torque, S_VOLTAGE_FROM_TORQUE)
 MAP_METHOD(torque_from_voltage, S_TORQUE_FROM_VOLTAGE)
+MAP_METHOD(plant_jacobian, S_PLANT_JACOBIAN)
 
 /* ik_branch(x, shoulder, elbow): shoulder 0 front / 1 back, elbow 0 up / 1 down. */
 static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
@@ -1338,6 +1388,18 @@ static PyObject *K_ctc(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
     return map_rows(MODEL(self), &S_CTC, &gains, args + 1);
 }
 
+/* ctc_jacobian(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, du, du_n), one state or rows. */
+static PyObject *K_ctc_jacobian(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    rrr_ctc_gains gains;
+    if (check_nargs("ctc_jacobian", nargs, 6) != 0 ||
+        struct_from(args[0], &gains, sizeof gains, "ctc_jacobian",
+                    "rrr_ctc_gains (CtcGains.packed)") != 0) {
+        return NULL;
+    }
+    return map_rows(MODEL(self), &S_CTC_JACOBIAN, &gains, args + 1);
+}
+
 /* The state error's context: "u = [...], h = ..., q = [...], qd = [...]". */
 static void raise_plant(const char *fn, rrr_status st, const double *u, double h,
                         const rrr_plant_state *x)
@@ -1470,6 +1532,10 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(plant_step, "plant_step(integrator, u, h, state, stats) -> qdd (state and stats "
                          "updated in place)"),
     FASTCALL(plant_accel, "plant_accel(state, u) -> qdd"),
+    FASTCALL(plant_jacobian, "plant_jacobian(q, qd, u) -> (qdd, J), J = d qdd / d(q, qd, u) "
+                             "(3, 9)"),
+    FASTCALL(ctc_jacobian, "ctc_jacobian(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, du, du_n), "
+                           "du = d u / d(q_ref, qd_ref, qdd_ref, q, qd) (3, 15)"),
     {NULL, NULL, 0, NULL},
 };
 

@@ -394,7 +394,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
     END_FUNCTION()
 }
 
-/* ---- not provided (capability flags false in the XML) ------------------------------------------ */
+/* ---- partial derivatives (fmu_derivative.c; providesDirectionalDerivative from the model) ---- */
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[],
@@ -403,13 +403,16 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 {
     BEGIN_FUNCTION(GetDirectionalDerivative)
     TRACE("fmi2GetDirectionalDerivative(nUnknown=%zu, nKnown=%zu)", nUnknown, nKnown);
-    (void)vUnknown_ref;
-    (void)vKnown_ref;
-    (void)dvKnown;
-    (void)dvUnknown;
-    REFUSE("fmi2GetDirectionalDerivative: not provided (providesDirectionalDerivative=false)");
+    if (S->model->partials != NULL && nUnknown > 0 && vUnknown_ref != NULL &&
+        fmu_needs_update(S, vUnknown_ref, nUnknown)) {
+        CALL(fmu_update(S)); /* the outputs the derivatives belong to */
+    }
+    CHECKED(fmu_get_derivative(S, fn_, 0, vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown,
+                               nKnown, dvUnknown, nUnknown));
     END_FUNCTION()
 }
+
+/* ---- not provided (capability flags false in the XML) ------------------------------------------ */
 
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[])

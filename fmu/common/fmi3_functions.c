@@ -445,15 +445,13 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
                                         fmi3Float64 sensitivity[], size_t nSensitivity)
 {
     BEGIN_FUNCTION(GetDirectionalDerivative)
-    (void)unknowns;
-    (void)nUnknowns;
-    (void)knowns;
-    (void)nKnowns;
-    (void)seed;
-    (void)nSeed;
-    (void)sensitivity;
-    (void)nSensitivity;
-    NOT_PROVIDED(GetDirectionalDerivative, "providesDirectionalDerivatives=false");
+    TRACE("fmi3GetDirectionalDerivative(nUnknowns=%zu, nKnowns=%zu)", nUnknowns, nKnowns);
+    if (S->model->partials != NULL && nUnknowns > 0 && unknowns != NULL &&
+        fmu_needs_update(S, unknowns, nUnknowns)) {
+        CALL(fmu_update(S)); /* the outputs the derivatives belong to */
+    }
+    CHECKED(fmu_get_derivative(S, fn_, 0, unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
+                               sensitivity, nSensitivity));
     END_FUNCTION()
 }
 
@@ -463,15 +461,13 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
                                     fmi3Float64 sensitivity[], size_t nSensitivity)
 {
     BEGIN_FUNCTION(GetAdjointDerivative)
-    (void)unknowns;
-    (void)nUnknowns;
-    (void)knowns;
-    (void)nKnowns;
-    (void)seed;
-    (void)nSeed;
-    (void)sensitivity;
-    (void)nSensitivity;
-    NOT_PROVIDED(GetAdjointDerivative, "providesAdjointDerivatives=false");
+    TRACE("fmi3GetAdjointDerivative(nUnknowns=%zu, nKnowns=%zu)", nUnknowns, nKnowns);
+    if (S->model->partials != NULL && nUnknowns > 0 && unknowns != NULL &&
+        fmu_needs_update(S, unknowns, nUnknowns)) {
+        CALL(fmu_update(S)); /* the outputs the derivatives belong to */
+    }
+    CHECKED(fmu_get_derivative(S, fn_, 1, unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
+                               sensitivity, nSensitivity));
     END_FUNCTION()
 }
 

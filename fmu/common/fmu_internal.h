@@ -118,6 +118,30 @@ fmu_status fmu_me_get_nominals(fmu_instance *S, const char *fn, double nominals[
 /** @brief Event indicators: the model has none, so n must be 0. */
 fmu_status fmu_me_get_event_indicators(fmu_instance *S, const char *fn, size_t n);
 
+/* ---- partial derivatives (fmu_derivative.c) --------------------------------------------------- */
+
+/**
+ * @brief fmiXGetDirectionalDerivative (adjoint = 0: sensitivity = J seed, n_seed = nk,
+ *        n_sensitivity = nu) and fmi3GetAdjointDerivative (adjoint = 1: sensitivity = J^T seed,
+ *        n_seed = nu, n_sensitivity = nk), J = d unknowns / d knowns from the model's partials
+ *        hook. Refused (FMU_ERROR, nothing written): no hook; an unknown that is not an output
+ *        or state derivative of type Real, a known that is not an input or continuous state of
+ *        type Real (in Initialization Mode a Real parameter is a known too), an unknown value
+ *        reference, a seed that is not finite, wrong counts. A failure of the hook is the model's (FMU_ERROR from the hook).
+ */
+fmu_status fmu_get_derivative(fmu_instance *S, const char *fn, int adjoint,
+                              const fmu_vr unknowns[], size_t nu, const fmu_vr knowns[],
+                              size_t nk, const double seed[], size_t n_seed,
+                              double sensitivity[], size_t n_sensitivity);
+
+/** @brief 1 when vr is an unknown of the partial derivatives: a Real output (the state
+ *         derivatives of these models are outputs too). */
+int fmu_is_unknown(const fmu_model *m, const fmu_variable *v);
+
+/** @brief 1 when vr is a known of the partial derivatives: a Real input or continuous state,
+ *         and in Initialization Mode (init nonzero) also a Real parameter. */
+int fmu_is_known(const fmu_model *m, const fmu_variable *v, int init);
+
 /* ---- FMU state snapshots (fmu_instance.c) -------------------------------------------------- */
 
 /** @brief GetFMUstate: copy the instance into a new snapshot or overwrite *state. */

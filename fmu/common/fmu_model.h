@@ -114,6 +114,36 @@ typedef struct fmu_continuous_state {
 
 typedef struct fmu_instance fmu_instance;
 
+/**
+ * @brief How an unknown depends on a known (the ModelStructure's dependenciesKind, FMI 2.0 and
+ *        3.0 alike); FMU_DEP_NONE: not at all. The order is not a ranking.
+ */
+typedef enum fmu_dependency {
+    FMU_DEP_NONE = 0,       ///< no dependency (not listed)
+    FMU_DEP_DEPENDENT = 1,  ///< "dependent": no particular structure, f(v)
+    FMU_DEP_CONSTANT,       ///< "constant": a constant factor, c v
+    FMU_DEP_FIXED,          ///< "fixed": a factor that depends on fixed parameters only
+    FMU_DEP_TUNABLE         ///< "tunable": a factor that depends on tunable parameters only
+} fmu_dependency;
+
+/**
+ * @brief Where a model's partials hook writes: the partial derivatives of the unknowns (outputs
+ *        and state derivatives) with respect to the knowns (inputs and continuous states), a
+ *        dense matrix the glue owns (zeros before the hook runs). Write through fmu_partial_set.
+ */
+typedef struct fmu_partials {
+    double *J;                        ///< n_rows x n_cols, row-major: J[row * n_cols + col]
+    const int *row;                   ///< row of value reference vr, or -1 (n_vars entries)
+    const int *col;                   ///< column of value reference vr, or -1 (n_vars entries)
+    size_t n_vars;                    ///< entries of row and col (the table's rows)
+    size_t n_cols;                    ///< number of knowns
+    int parameters;                   ///< nonzero in Initialization Mode: the Real parameters
+                                      ///< are knowns too (their columns exist)
+} fmu_partials;
+
+/** @brief J[unknown][known] = value; ignored unless unknown is an unknown and known a known. */
+void fmu_partial_set(fmu_partials *P, fmu_vr unknown, fmu_vr known, double value);
+
 /** Size of an instantiation token (GUID) buffer including the terminating NUL. */
 #define FMU_TOKEN_SIZE 39
 
@@ -139,9 +169,21 @@ typedef struct fmu_model {
     /** Co-Simulation: advance by h > 0 seconds; FMU_DISCARD leaves the data as it was. Outputs
      *  up to date on FMU_OK. */
     fmu_status (*do_step)(fmu_instance *inst, double h);
-    /** 1 when unknown (an output or a state derivative) depends directly on known (an input or
-     *  a continuous state): ModelStructure, XML only. */
+    /** How unknown (an output or a state derivative) depends directly on known (an input or a
+     *  continuous state), an fmu_dependency (1 = FMU_DEP_DEPENDENT, 0 = none): the
+     *  ModelStructure's dependencies and dependenciesKind of Outputs and Derivatives. */
     int (*depends)(fmu_vr unknown, fmu_vr known);
+    /** Optional (NULL: the InitialUnknowns list no dependencies, i.e. on every known): the same
+     *  in Initialization Mode, where the knowns are the inputs and the parameters (initial =
+     *  exact); the kinds allowed there are FMU_DEP_DEPENDENT and FMU_DEP_CONSTANT. */
+    int (*depends_initial)(fmu_vr unknown, fmu_vr known);
+    /** Optional (NULL: no directional or adjoint derivatives; the capability flags say so):
+     *  the partial derivatives of every unknown with respect to every known at the current
+     *  values (in Initialization Mode: the start values, and the knowns include the Real
+     *  parameters, P->parameters), written with fmu_partial_set; entries not written are 0.
+     *  Exact, not finite differences: what fmiXGetDirectionalDerivative and
+     *  fmi3GetAdjointDerivative multiply with the seed. */
+    fmu_status (*partials)(fmu_instance *inst, fmu_partials *P);
     /** Optional (NULL: none): free what the model keeps in fmu_instance.work (memory outside
      *  the model data, e.g. a table read from resources/) and set work to NULL; called at
      *  reset and when the instance is freed. */

@@ -135,19 +135,52 @@ static void write_header(const fmu_model *m, FILE *f)
             m->identifier);
 }
 
-/* " a b c": the knowns of unknown u, as 1-based indices (FMI 2) or value references (FMI 3). */
-static void write_dependencies(const fmu_model *m, const fmu_variable *u, int fmi_version, FILE *f)
+static const char *dependency_kind_name(int kind)
 {
-    fprintf(f, " dependencies=\"");
-    int first = 1;
-    for (size_t k = 0; k < m->n_vars; ++k) {
-        const fmu_variable *kv = &m->vars[k];
-        if (is_known(m, kv) && m->depends(u->vr, kv->vr)) {
-            fprintf(f, "%s%zu", first ? "" : " ", fmi_version == 3 ? (size_t)kv->vr : k + 1);
+    switch (kind) {
+    case FMU_DEP_CONSTANT:
+        return "constant";
+    case FMU_DEP_FIXED:
+        return "fixed";
+    case FMU_DEP_TUNABLE:
+        return "tunable";
+    default:
+        return "dependent";
+    }
+}
+
+/* A known of the InitialUnknowns: an input or a parameter (initial = "exact"). */
+static int is_initial_known(const fmu_variable *v)
+{
+    return v->causality == FMU_INPUT || v->causality == FMU_PARAMETER;
+}
+
+/* dependencies=" a b c" and dependenciesKind=" k k k" of unknown u: the knowns (1-based indices
+ * in FMI 2, value references in FMI 3) for which dep(u, known) is not FMU_DEP_NONE; in
+ * Initialization Mode (initial = 1) the knowns are the inputs and parameters. */
+static void write_dependencies(const fmu_model *m, const fmu_variable *u, int fmi_version,
+                               int initial, FILE *f)
+{
+    int (*const dep)(fmu_vr, fmu_vr) = initial ? m->depends_initial : m->depends;
+    for (int pass = 0; pass < 2; ++pass) {
+        fprintf(f, pass == 0 ? " dependencies=\"" : " dependenciesKind=\"");
+        int first = 1;
+        for (size_t k = 0; k < m->n_vars; ++k) {
+            const fmu_variable *kv = &m->vars[k];
+            const int known = initial ? is_initial_known(kv) : is_known(m, kv);
+            const int kind = known ? dep(u->vr, kv->vr) : FMU_DEP_NONE;
+            if (kind == FMU_DEP_NONE) {
+                continue;
+            }
+            if (pass == 0) {
+                fprintf(f, "%s%zu", first ? "" : " ", fmi_version == 3 ? (size_t)kv->vr : k + 1);
+            } else {
+                fprintf(f, "%s%s", first ? "" : " ", dependency_kind_name(kind));
+            }
             first = 0;
         }
+        fprintf(f, "\"");
     }
-    fprintf(f, "\"");
 }
 
 /* unit, start, nominal (continuous states) and derivative (state derivatives) of row v; the
@@ -194,8 +227,9 @@ static void write_interfaces2(const fmu_model *m, fmu_sources src, FILE *f)
             "    modelIdentifier=\"%s\"\n"
             "    completedIntegratorStepNotNeeded=\"true\"\n"
             "    canGetAndSetFMUstate=\"true\"\n"
-            "    canSerializeFMUstate=\"true\"%s\n",
-            m->identifier, src.n > 0 ? ">" : "/>");
+            "    canSerializeFMUstate=\"true\"\n"
+            "    providesDirectionalDerivative=\"%s\"%s\n",
+            m->identifier, m->partials != NULL ? "true" : "false", src.n > 0 ? ">" : "/>");
     if (src.n > 0) {
         write_sources2(src, f);
         fprintf(f, "  </ModelExchange>\n");
@@ -205,8 +239,9 @@ static void write_interfaces2(const fmu_model *m, fmu_sources src, FILE *f)
             "    modelIdentifier=\"%s\"\n"
             "    canHandleVariableCommunicationStepSize=\"true\"\n"
             "    canGetAndSetFMUstate=\"true\"\n"
-            "    canSerializeFMUstate=\"true\"%s\n",
-            m->identifier, src.n > 0 ? ">" : "/>");
+            "    canSerializeFMUstate=\"true\"\n"
+            "    providesDirectionalDerivative=\"%s\"%s\n",
+            m->identifier, m->partials != NULL ? "true" : "false", src.n > 0 ? ">" : "/>");
     if (src.n > 0) {
         write_sources2(src, f);
         fprintf(f, "  </CoSimulation>\n");
@@ -248,7 +283,7 @@ static void write_structure2(const fmu_model *m, FILE *f)
     for (size_t i = 0; i < m->n_vars; ++i) {
         if (m->vars[i].causality == FMU_OUTPUT) {
             fprintf(f, "      <Unknown index=\"%zu\"", i + 1);
-            write_dependencies(m, &m->vars[i], 2, f);
+            write_dependencies(m, &m->vars[i], 2, 0, f);
             fprintf(f, "/>\n");
         }
     }
@@ -258,7 +293,7 @@ static void write_structure2(const fmu_model *m, FILE *f)
         for (size_t i = 0; i < m->n_states; ++i) {
             const fmu_vr d = m->states[i].derivative;
             fprintf(f, "      <Unknown index=\"%u\"", (unsigned)d + 1u);
-            write_dependencies(m, fmu_find_var(m, d), 2, f);
+            write_dependencies(m, fmu_find_var(m, d), 2, 0, f);
             fprintf(f, "/>\n");
         }
         fprintf(f, "    </Derivatives>\n");
@@ -266,7 +301,11 @@ static void write_structure2(const fmu_model *m, FILE *f)
     fprintf(f, "    <InitialUnknowns>\n");
     for (size_t i = 0; i < m->n_vars; ++i) {
         if (m->vars[i].causality == FMU_OUTPUT) {
-            fprintf(f, "      <Unknown index=\"%zu\"/>\n", i + 1);
+            fprintf(f, "      <Unknown index=\"%zu\"", i + 1);
+            if (m->depends_initial != NULL) {
+                write_dependencies(m, &m->vars[i], 2, 1, f);
+            }
+            fprintf(f, "/>\n");
         }
     }
     fprintf(f, "    </InitialUnknowns>\n  </ModelStructure>\n");
@@ -322,19 +361,23 @@ static void write_structure3(const fmu_model *m, FILE *f)
     for (size_t i = 0; i < m->n_vars; ++i) {
         if (m->vars[i].causality == FMU_OUTPUT) {
             fprintf(f, "    <Output valueReference=\"%u\"", (unsigned)m->vars[i].vr);
-            write_dependencies(m, &m->vars[i], 3, f);
+            write_dependencies(m, &m->vars[i], 3, 0, f);
             fprintf(f, "/>\n");
         }
     }
     for (size_t i = 0; i < m->n_states; ++i) {
         const fmu_vr d = m->states[i].derivative;
         fprintf(f, "    <ContinuousStateDerivative valueReference=\"%u\"", (unsigned)d);
-        write_dependencies(m, fmu_find_var(m, d), 3, f);
+        write_dependencies(m, fmu_find_var(m, d), 3, 0, f);
         fprintf(f, "/>\n");
     }
     for (size_t i = 0; i < m->n_vars; ++i) {
         if (m->vars[i].causality == FMU_OUTPUT) {
-            fprintf(f, "    <InitialUnknown valueReference=\"%u\"/>\n", (unsigned)m->vars[i].vr);
+            fprintf(f, "    <InitialUnknown valueReference=\"%u\"", (unsigned)m->vars[i].vr);
+            if (m->depends_initial != NULL) {
+                write_dependencies(m, &m->vars[i], 3, 1, f);
+            }
+            fprintf(f, "/>\n");
         }
     }
     fprintf(f, "  </ModelStructure>\n");
@@ -342,6 +385,7 @@ static void write_structure3(const fmu_model *m, FILE *f)
 
 static void write_xml3(const fmu_model *m, const void *data, const char *token, FILE *f)
 {
+    const char *const flag = m->partials != NULL ? "true" : "false";
     fprintf(f,
             "<fmiModelDescription\n"
             "  fmiVersion=\"3.0\"\n"
@@ -356,14 +400,18 @@ static void write_xml3(const fmu_model *m, const void *data, const char *token, 
             "    modelIdentifier=\"%s\"\n"
             "    needsCompletedIntegratorStep=\"false\"\n"
             "    canGetAndSetFMUState=\"true\"\n"
-            "    canSerializeFMUState=\"true\"/>\n"
+            "    canSerializeFMUState=\"true\"\n"
+            "    providesDirectionalDerivatives=\"%s\"\n"
+            "    providesAdjointDerivatives=\"%s\"/>\n"
             "  <CoSimulation\n"
             "    modelIdentifier=\"%s\"\n"
             "    canHandleVariableCommunicationStepSize=\"true\"\n"
             "    canGetAndSetFMUState=\"true\"\n"
             "    canSerializeFMUState=\"true\"\n"
+            "    providesDirectionalDerivatives=\"%s\"\n"
+            "    providesAdjointDerivatives=\"%s\"\n"
             "    hasEventMode=\"false\"/>\n",
-            m->identifier, m->identifier);
+            m->identifier, flag, flag, m->identifier, flag, flag);
     write_units(m, f);
     write_log_categories(f);
     write_default_experiment(m, f);
@@ -481,12 +529,20 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
                "<li>Every function checks the FMI %d.0 state machine: a call in a state where it "
                "is not allowed returns Error with a log message and changes nothing. Every Real "
                "that is set must be finite: NaN and Inf are refused and the old value kept.</li>\n"
+               "%s"
                "<li>Log categories: <code>logStatusWarning</code>, <code>logStatusDiscard</code>, "
                "<code>logStatusError</code>, <code>logStatusFatal</code> (on by default) and "
                "<code>logCalls</code> (every FMI call with its arguments).</li>\n"
                "<li>Binaries for %s (platforms where the build had a compiler for them).</li>\n"
                "</ul>\n",
             m->n_states, m->n_states > 0 ? " (listed in the table below)" : "", fmi_version,
+            m->partials == NULL
+                ? ""
+                : "<li><b>Partial derivatives</b>: exact directional derivatives (and, FMI 3.0, "
+                  "adjoint derivatives) of the outputs and state derivatives by the inputs and "
+                  "continuous states, and in Initialization Mode by the parameters, from the "
+                  "closed-form model (no finite differences); a clamped voltage has derivative "
+                  "0. The ModelStructure lists the dependencies and their kinds exactly.</li>\n",
             platform_dirs);
     fprintf(f, "<h2>Variables</h2>\n<p>Value references are the same in the FMI 2.0 and FMI 3.0 "
                "builds; FMI 3.0 uses the same scalar variables (no arrays).</p>\n");

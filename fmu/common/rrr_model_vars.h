@@ -44,4 +44,21 @@
               DESC RRR_MV_RANGE_##BOUND, UNIT, T, model.MEMBER),
 #define RRR_MODEL_VARS RRR_MODEL_PARAMS(RRR_MV_ROW)
 
+/** Byte offset in rrr_model of the model parameter with value reference vr, when the model's
+ *  rows start at value reference base; (size_t)-1 when vr is not one of them. */
+static inline size_t rrr_mv_offset(fmu_vr vr, fmu_vr base)
+{
+    return vr - base < (fmu_vr)RRR_MV_COUNT ? (size_t)(vr - base) * sizeof(double) : (size_t)-1;
+}
+
+/** 1 when byte offset OFF (rrr_mv_offset) lies in member MEMBER of rrr_model (unsigned
+ *  wrap-around: OFF - first < size  <=>  first <= OFF < first + size). */
+#define RRR_MV_IN(OFF, MEMBER)                                                                \
+    ((size_t)(OFF) - offsetof(rrr_model, MEMBER) < sizeof(((rrr_model *)0)->MEMBER))
+
+/** The joint (0, 1, 2) of byte offset OFF in a per-joint member (kt, b: 3 doubles; f, w:
+ *  3 x RRR_NF doubles) of rrr_model. */
+#define RRR_MV_JOINT(OFF, MEMBER)                                                             \
+    (int)(((OFF) - offsetof(rrr_model, MEMBER)) / (sizeof(((rrr_model *)0)->MEMBER) / RRR_NJ))
+
 #endif /* RRR_MODEL_VARS_H */

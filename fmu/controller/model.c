@@ -143,26 +143,151 @@ static fmu_status do_step(fmu_instance *inst, double h)
     return inst->dirty ? calculate(inst) : FMU_OK;
 }
 
-/* u_n(i) depends on the whole reference (D(q_ref) couples the joints); u_c(i) on joint i's
- * q_ref, qd_ref, q, qd and qdd (through the predictor, when lead > 0); u = sat(u_n + u_c) on
- * both sets. Unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n. */
+/* u_n = k_t^-1 R(q_ref, qd_ref, qdd_ref) p + u_f(qd_ref): every joint of qd_ref and qdd_ref
+ * and q_ref[2], q_ref[3] (the dynamics do not depend on q1); u_c(i) = kp_i (q_ref_i - q_p,i) +
+ * kd_i (qd_ref_i - qd_p,i) with the predicted q_p = q + lead qd + lead^2/2 qdd, qd_p = qd +
+ * lead qdd: linear in joint i's q_ref, qd_ref, q, qd and qdd with factors of the fixed
+ * parameters kp, kd and lead ("fixed"; the qdd factor is 0 when lead = 0); u = sat(u_n + u_c) on
+ * both sets. Unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n.
+ * tests/python/test_fmu_derivatives.py checks every entry against the numbers. */
 _Static_assert(vr_q_ref % RRR_NJ == 0 && vr_q % RRR_NJ == 0 && vr_qdd % RRR_NJ == 0 &&
                    vr_u % RRR_NJ == 0 && vr_u_n % RRR_NJ == 0 && vr_u_c % RRR_NJ == 0,
                "joint i of every vector at a value reference = i - 1 (mod 3)");
 
+/* 1 when u_n depends on input in_vr */
+static int feedforward_input(fmu_vr in_vr)
+{
+    return (in_vr - vr_q_ref < RRR_NJ && in_vr != vr_q_ref) || in_vr - vr_qd_ref < 2 * RRR_NJ;
+}
+
+/* 1 when u_c of the joint of out_vr depends on input in_vr */
+static int pd_input(fmu_vr out_vr, fmu_vr in_vr)
+{
+    const int same_joint = in_vr % RRR_NJ == out_vr % RRR_NJ;
+    return same_joint && (in_vr - vr_q_ref < 2 * RRR_NJ || in_vr - vr_q < 2 * RRR_NJ ||
+                          in_vr - vr_qdd < RRR_NJ);
+}
+
 static int depends(fmu_vr out_vr, fmu_vr in_vr)
 {
-    const int ref = in_vr - vr_q_ref < 3 * RRR_NJ;                  /* q_ref, qd_ref, qdd_ref */
-    const int same_joint = in_vr % RRR_NJ == out_vr % RRR_NJ;
-    const int pd = same_joint && (in_vr - vr_q_ref < 2 * RRR_NJ || in_vr - vr_q < 2 * RRR_NJ ||
-                                  in_vr - vr_qdd < RRR_NJ);
+    const int ff = feedforward_input(in_vr);
+    const int pd = pd_input(out_vr, in_vr);
     if (out_vr - vr_u_n < RRR_NJ) {
-        return ref;
+        return ff ? FMU_DEP_DEPENDENT : FMU_DEP_NONE;
     }
     if (out_vr - vr_u_c < RRR_NJ) {
-        return pd;
+        return pd ? FMU_DEP_FIXED : FMU_DEP_NONE;
     }
-    return ref || pd; /* u */
+    return ff || pd ? FMU_DEP_DEPENDENT : FMU_DEP_NONE; /* u */
+}
+
+/* In Initialization Mode the parameters are knowns too: u_n(i) uses feedforward, a2, the base
+ * parameters and gravity that enter tau_i (rrr_regressor_structure: g and p12..p16 do not act
+ * on joint 1, for one), kt_i and joint i's friction; u_c(i) kp_i, kd_i and lead; u both and
+ * u_max. */
+static int depends_initial(fmu_vr out_vr, fmu_vr in_vr)
+{
+    const int joint = (int)(out_vr % RRR_NJ);
+    const size_t off = rrr_mv_offset(in_vr, vr_model);
+    unsigned p_cols[3] = {0u, 0u, 0u}, g_rows = 0u;
+    (void)rrr_regressor_structure(p_cols, &g_rows);
+    const int p_used = RRR_MV_IN(off, p) &&
+                       ((p_cols[joint] >> ((off - offsetof(rrr_model, p)) / sizeof(double))) & 1u);
+    const int g_used = RRR_MV_IN(off, g) && ((g_rows >> joint) & 1u);
+    const int ff = feedforward_input(in_vr) || in_vr == vr_feedforward ||
+                   RRR_MV_IN(off, a2) || g_used || p_used ||
+                   (RRR_MV_IN(off, kt) && RRR_MV_JOINT(off, kt) == joint) ||
+                   (RRR_MV_IN(off, f) && RRR_MV_JOINT(off, f) == joint) ||
+                   (RRR_MV_IN(off, w) && RRR_MV_JOINT(off, w) == joint) ||
+                   (RRR_MV_IN(off, b) && RRR_MV_JOINT(off, b) == joint);
+    const int pd = pd_input(out_vr, in_vr) || in_vr == vr_kp + (fmu_vr)joint ||
+                   in_vr == vr_kd + (fmu_vr)joint || in_vr == vr_lead;
+    if (out_vr - vr_u_n < RRR_NJ) {
+        return ff ? FMU_DEP_DEPENDENT : FMU_DEP_NONE;
+    }
+    if (out_vr - vr_u_c < RRR_NJ) {
+        return pd ? FMU_DEP_DEPENDENT : FMU_DEP_NONE;
+    }
+    return ff || pd || RRR_MV_IN(off, u_max) ? FMU_DEP_DEPENDENT : FMU_DEP_NONE; /* u */
+}
+
+/* In Initialization Mode the parameters are knowns too: the model (rrr_ctc_param_jacobian: the
+ * feedforward and u_max), kp and kd, and lead through the predictor (d q_p / d lead = qd +
+ * lead qdd, d qd_p / d lead = qdd). */
+static fmu_status parameter_partials(fmu_instance *inst, const double q[3], const double qd[3],
+                                     const rrr_ctc_derivatives *d, fmu_partials *P)
+{
+    const controller_data *c = data_of(inst);
+    rrr_ctc_param_derivatives pd;
+    const rrr_status st = rrr_ctc_param_jacobian(&c->model, &c->gains, c->q_ref, c->qd_ref,
+                                                 c->qdd_ref, q, qd, &pd);
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: rrr_ctc_param_jacobian failed at t = %.17g: %s", MODEL_IDENTIFIER,
+                inst->time, rrr_status_str(st));
+        return FMU_ERROR;
+    }
+    const double l = c->lead;
+    for (fmu_vr i = 0; i < RRR_NJ; ++i) {
+        for (fmu_vr m = 0; m < RRR_MV_COUNT; ++m) {
+            fmu_partial_set(P, vr_u + i, vr_model + m, pd.du[i][m]);
+            fmu_partial_set(P, vr_u_n + i, vr_model + m, pd.du_n[i][m]);
+        }
+        fmu_partial_set(P, vr_u + i, vr_kp + i, pd.du_dkp[i]);
+        fmu_partial_set(P, vr_u + i, vr_kd + i, pd.du_dkd[i]);
+        fmu_partial_set(P, vr_u_c + i, vr_kp + i, pd.du_c_dkp[i]);
+        fmu_partial_set(P, vr_u_c + i, vr_kd + i, pd.du_c_dkd[i]);
+        double du = 0.0, du_c = 0.0;
+        for (int j = 0; j < RRR_NJ; ++j) {
+            const double dq = c->qd[j] + l * c->qdd[j], dqd = c->qdd[j];
+            du += d->du[RRR_CTC_Q][i][j] * dq + d->du[RRR_CTC_QD][i][j] * dqd;
+            du_c += d->du_c[RRR_CTC_Q][i][j] * dq + d->du_c[RRR_CTC_QD][i][j] * dqd;
+        }
+        fmu_partial_set(P, vr_u + i, vr_lead, du);
+        fmu_partial_set(P, vr_u_c + i, vr_lead, du_c);
+    }
+    return FMU_OK;
+}
+
+/* The exact partial derivatives of u, u_n and u_c with respect to every input: rrr_ctc_jacobian
+ * at the predicted state, chained through the predictor (rrr_ctc_jacobian's note). */
+static fmu_status partials(fmu_instance *inst, fmu_partials *P)
+{
+    const controller_data *c = data_of(inst);
+    double q[RRR_NJ];
+    double qd[RRR_NJ];
+    rrr_ctc_derivatives d;
+    rrr_status st = rrr_predict_state(c->q, c->qd, c->qdd, c->lead, q, qd);
+    if (st == RRR_OK) {
+        st = rrr_ctc_jacobian(&c->model, &c->gains, c->q_ref, c->qd_ref, c->qdd_ref, q, qd, &d);
+    }
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: rrr_ctc_jacobian failed at t = %.17g: %s", MODEL_IDENTIFIER, inst->time,
+                rrr_status_str(st));
+        return FMU_ERROR;
+    }
+    const double l = c->lead;
+    const fmu_vr first[RRR_CTC_INPUT_COUNT] = {vr_q_ref, vr_qd_ref, vr_qdd_ref, vr_q, vr_qd};
+    const fmu_vr out_first[3] = {vr_u, vr_u_n, vr_u_c};
+    for (int o = 0; o < 3; ++o) {
+        double(*const dv)[3][3] = o == 0 ? d.du : o == 1 ? d.du_n : d.du_c;
+        for (fmu_vr i = 0; i < RRR_NJ; ++i) {
+            for (fmu_vr j = 0; j < RRR_NJ; ++j) {
+                const fmu_vr out = out_first[o] + i;
+                for (int k = 0; k < RRR_CTC_INPUT_COUNT; ++k) {
+                    double v = dv[k][i][j];
+                    if (k == RRR_CTC_QD) { /* qd_p = qd + l qdd, q_p = q + l qd + ... */
+                        v += l * dv[RRR_CTC_Q][i][j];
+                    }
+                    fmu_partial_set(P, out, first[k] + j, v);
+                }
+                fmu_partial_set(P, out, vr_qdd + j,
+                                0.5 * l * l * dv[RRR_CTC_Q][i][j] + l * dv[RRR_CTC_QD][i][j]);
+            }
+        }
+    }
+    return P->parameters ? parameter_partials(inst, q, qd, &d, P) : FMU_OK;
 }
 
 const fmu_model FMU_MODEL = {
@@ -180,4 +305,6 @@ const fmu_model FMU_MODEL = {
     .calculate = calculate,
     .do_step = do_step,
     .depends = depends,
+    .depends_initial = depends_initial,
+    .partials = partials,
 };

@@ -192,24 +192,130 @@ static fmu_status do_step(fmu_instance *inst, double h)
 }
 
 /* Direct dependencies of the unknowns on the knowns (inputs u and continuous states q, qd):
- * q[i] and qd[i] are states (no feedthrough from u); qdd = D(q)^-1 (tau(u, qd) - c - h) couples
- * every input and velocity into every acceleration, and D, c and h depend on q2 and q3 only;
- * the tip depends on q. Unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n. */
+ * q[i] and qd[i] are states (no feedthrough from u), each its own identity (constant); qdd =
+ * D(q)^-1 (k_t (sat(u) - u_f(qd)) - c - h) couples every input and velocity into every
+ * acceleration, and D, c and h depend on q2 and q3 only; the tip depends on q, tip.z on q2 and
+ * q3 only (z = d1 + a2 s2 + a3 s23). Unsigned wrap-around: vr - first < n  <=>  first <= vr <
+ * first + n. tests/python/test_fmu_derivatives.py checks every entry against the numbers. */
 static int depends(fmu_vr unknown, fmu_vr known)
 {
     const int is_u = known - vr_u < RRR_NJ;
     const int is_q = known - vr_q < RRR_NJ;
     const int is_qd = known - vr_qd < RRR_NJ;
     if (unknown - vr_q < RRR_NJ || unknown - vr_qd < RRR_NJ) {
-        return known == unknown;
+        return known == unknown ? FMU_DEP_CONSTANT : FMU_DEP_NONE;
     }
     if (unknown - vr_qdd < RRR_NJ) {
-        return is_u || is_qd || (is_q && known != vr_q);
+        return is_u || is_qd || (is_q && known != vr_q) ? FMU_DEP_DEPENDENT : FMU_DEP_NONE;
     }
     if (unknown - vr_tip < 3) {
-        return is_q;
+        const int q1 = known == vr_q;
+        return is_q && !(unknown == vr_tip + 2 && q1) ? FMU_DEP_DEPENDENT : FMU_DEP_NONE;
     }
-    return 0;
+    return FMU_DEP_NONE;
+}
+
+/* In Initialization Mode (knowns: u and the parameters): the state starts at q0, qd0; qdd uses
+ * the dynamics' parameters (a2, g, p, k_t, friction, u_max; not d1, a3, d2, d3, which only the
+ * kinematics uses) and the tip the kinematic ones (tip.x and tip.y: a2, a3, d2, d3 and q0;
+ * tip.z: d1, a2, a3, q0[2], q0[3]). The integrator settings act only inside doStep. */
+static int depends_initial(fmu_vr unknown, fmu_vr known)
+{
+    const size_t off = rrr_mv_offset(known, vr_model);
+    if (unknown - vr_q < RRR_NJ) {
+        return known == vr_q0 + (unknown - vr_q) ? FMU_DEP_CONSTANT : FMU_DEP_NONE;
+    }
+    if (unknown - vr_qd < RRR_NJ) {
+        return known == vr_qd0 + (unknown - vr_qd) ? FMU_DEP_CONSTANT : FMU_DEP_NONE;
+    }
+    if (unknown - vr_qdd < RRR_NJ) {
+        const int dyn = RRR_MV_IN(off, a2) || RRR_MV_IN(off, g) || RRR_MV_IN(off, p) ||
+                        RRR_MV_IN(off, kt) || RRR_MV_IN(off, f) || RRR_MV_IN(off, w) ||
+                        RRR_MV_IN(off, b) || RRR_MV_IN(off, u_max);
+        const int state = (known - vr_q0 < RRR_NJ && known != vr_q0) || known - vr_qd0 < RRR_NJ;
+        return dyn || state || known - vr_u < RRR_NJ ? FMU_DEP_DEPENDENT : FMU_DEP_NONE;
+    }
+    if (unknown - vr_tip < 3) {
+        const int z = unknown == vr_tip + 2;
+        const int kin = RRR_MV_IN(off, a2) || RRR_MV_IN(off, a3) ||
+                        (z ? RRR_MV_IN(off, d1) : RRR_MV_IN(off, d2) || RRR_MV_IN(off, d3));
+        const int q = known - vr_q0 < RRR_NJ && !(z && known == vr_q0);
+        return kin || q ? FMU_DEP_DEPENDENT : FMU_DEP_NONE;
+    }
+    return FMU_DEP_NONE;
+}
+
+/* In Initialization Mode the parameters are knowns too: the state is (q0, qd0), so the
+ * derivatives by q0 and qd0 are those by q and qd; by the model parameters
+ * rrr_plant_param_jacobian and rrr_fk_param_jacobian; the integrator settings act only inside
+ * doStep (0). */
+static fmu_status parameter_partials(fmu_instance *inst, const rrr_plant_state *x,
+                                     const rrr_plant_derivatives *d, double J[3][3],
+                                     fmu_partials *P)
+{
+    const plant_data *p = data_of(inst);
+    double dqdd[3][RRR_N_PARAMS], dtip[3][RRR_N_PARAMS];
+    rrr_status st = rrr_plant_param_jacobian(&p->model, x, p->u, dqdd);
+    if (st == RRR_OK) {
+        st = rrr_fk_param_jacobian(&p->model, x->q, dtip);
+    }
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: cannot compute the derivatives by the parameters: %s", MODEL_IDENTIFIER,
+                rrr_status_str(st));
+        return FMU_ERROR;
+    }
+    for (fmu_vr i = 0; i < RRR_NJ; ++i) {
+        fmu_partial_set(P, vr_q + i, vr_q0 + i, 1.0);
+        fmu_partial_set(P, vr_qd + i, vr_qd0 + i, 1.0);
+        for (fmu_vr j = 0; j < RRR_NJ; ++j) {
+            fmu_partial_set(P, vr_qdd + i, vr_q0 + j, d->dqdd_dq[i][j]);
+            fmu_partial_set(P, vr_qdd + i, vr_qd0 + j, d->dqdd_dqd[i][j]);
+            fmu_partial_set(P, vr_tip + i, vr_q0 + j, J[i][j]);
+        }
+        for (fmu_vr c = 0; c < RRR_MV_COUNT; ++c) {
+            fmu_partial_set(P, vr_qdd + i, vr_model + c, dqdd[i][c]);
+            fmu_partial_set(P, vr_tip + i, vr_model + c, dtip[i][c]);
+        }
+    }
+    return FMU_OK;
+}
+
+/* The exact partial derivatives of the unknowns with respect to u, q and qd: rrr_plant_jacobian
+ * (qdd) and rrr_jacobian (tip), at the state the outputs are computed from. */
+static fmu_status partials(fmu_instance *inst, fmu_partials *P)
+{
+    const plant_data *p = data_of(inst);
+    rrr_plant_state x = p->x;
+    if (inst->state == FMU_INSTANTIATED || inst->state == FMU_INIT_MODE) {
+        memcpy(x.q, p->q0, sizeof x.q);
+        memcpy(x.qd, p->qd0, sizeof x.qd);
+    }
+    rrr_plant_derivatives d;
+    double J[3][3];
+    rrr_status st = rrr_plant_jacobian(&p->model, &x, p->u, &d);
+    if (st == RRR_OK) {
+        st = rrr_jacobian(&p->model, x.q, J);
+    }
+    if (st != RRR_OK) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: cannot compute the partial derivatives at q = [%.17g, %.17g, %.17g], qd = "
+                "[%.17g, %.17g, %.17g]: %s (check the parameters)",
+                MODEL_IDENTIFIER, x.q[0], x.q[1], x.q[2], x.qd[0], x.qd[1], x.qd[2],
+                rrr_status_str(st));
+        return FMU_ERROR;
+    }
+    for (fmu_vr i = 0; i < RRR_NJ; ++i) {
+        fmu_partial_set(P, vr_q + i, vr_q + i, 1.0);
+        fmu_partial_set(P, vr_qd + i, vr_qd + i, 1.0);
+        for (fmu_vr j = 0; j < RRR_NJ; ++j) {
+            fmu_partial_set(P, vr_qdd + i, vr_u + j, d.dqdd_du[i][j]);
+            fmu_partial_set(P, vr_qdd + i, vr_q + j, d.dqdd_dq[i][j]);
+            fmu_partial_set(P, vr_qdd + i, vr_qd + j, d.dqdd_dqd[i][j]);
+            fmu_partial_set(P, vr_tip + i, vr_q + j, J[i][j]);
+        }
+    }
+    return P->parameters ? parameter_partials(inst, &x, &d, J, P) : FMU_OK;
 }
 
 const fmu_model FMU_MODEL = {
@@ -230,4 +336,6 @@ const fmu_model FMU_MODEL = {
     .calculate = calculate,
     .do_step = do_step,
     .depends = depends,
+    .depends_initial = depends_initial,
+    .partials = partials,
 };

@@ -31,6 +31,7 @@ from .errors import (
 if TYPE_CHECKING:
     from .core.control import CtcGains
     from .core.integrator import PlantIntegrator
+    from .core.linearize import LinearSystem, linearize
     from .core.model import Model, Singularity, bps_from_inertia
     from .core.plant import Plant, PlantSnapshot, PlantStats
     from .core.robot import RobotFile, read_robot_file
@@ -46,6 +47,8 @@ _LAZY = {
     "Singularity": ".core.model",
     "bps_from_inertia": ".core.model",
     "PlantIntegrator": ".core.integrator",
+    "LinearSystem": ".core.linearize",
+    "linearize": ".core.linearize",
     "Plant": ".core.plant",
     "PlantSnapshot": ".core.plant",
     "PlantStats": ".core.plant",
@@ -77,6 +80,7 @@ __all__ = [
     "BadInputError",
     "CosimError",
     "CtcGains",
+    "LinearSystem",
     "Model",
     "ModelError",
     "NumericError",
@@ -95,6 +99,7 @@ __all__ = [
     "__version__",
     "bps_from_inertia",
     "fmu_path",
+    "linearize",
     "read_robot_file",
     "robot_urdf",
     "simulate",

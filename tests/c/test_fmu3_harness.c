@@ -1444,9 +1444,6 @@ static void test_not_provided(const fmu3 *api)
         int me;
         int st;
     } cases[] = {
-        {"fmi3GetDirectionalDerivative", 0, ST_STEP},
-        {"fmi3GetDirectionalDerivative", 1, ST_CONT},
-        {"fmi3GetAdjointDerivative", 1, ST_EVENT},
         {"fmi3GetNumberOfVariableDependencies", 0, ST_INST},
         {"fmi3GetVariableDependencies", 1, ST_INIT},
         {"fmi3EnterConfigurationMode", 0, ST_INST},
@@ -1478,6 +1475,211 @@ static void test_not_provided(const fmu3 *api)
         inst_free(&x);
     }
     printf("%s: %d calls of functions that are not provided refused\n", api->id, tried);
+}
+
+/* ---- partial derivatives ----------------------------------------------------------------------- */
+
+/* One refused derivative call: fmi3Error, one error message containing needle, the state
+ * unchanged, the sensitivity untouched. */
+static void expect_refused_derivative(inst *x, int st, int adjoint, const fmi3ValueReference *u,
+                                      size_t nu, const fmi3ValueReference *k, size_t nk,
+                                      const double *seed, size_t n_seed, size_t n_sens,
+                                      const char *needle)
+{
+    double sens[16];
+    for (size_t i = 0; i < 16; ++i) {
+        sens[i] = 42.0;
+    }
+    log_clear(x);
+    const fmi3Status s = adjoint ? x->api->GetAdjointDerivative(x->c, u, nu, k, nk, seed, n_seed,
+                                                                 sens, n_sens)
+                                 : x->api->GetDirectionalDerivative(x->c, u, nu, k, nk, seed,
+                                                                    n_seed, sens, n_sens);
+    int untouched = 1;
+    for (size_t i = 0; i < 16; ++i) {
+        untouched &= sens[i] == 42.0;
+    }
+    if (!(s == fmi3Error && x->log.count[fmi3Error] == 1 && strstr(x->log.last_error, needle) &&
+          untouched)) {
+        fprintf(stderr, "%s (%s): refused %s: status %d, %d error message(s), last \"%s\" "
+                        "(want \"%s\"), sensitivity %s\n",
+                x->api->id, interface_names[x->me], adjoint ? "adjoint" : "directional", (int)s,
+                x->log.count[fmi3Error], x->log.last_error, needle,
+                untouched ? "untouched" : "written");
+        rrr_test_failures++;
+    }
+    check_state(x, st, "after a refused derivative");
+}
+
+/* d(unknowns)/d(knowns) of one FMU, column by column with unit seeds (forward) and row by row
+ * (adjoint): the two agree bit for bit, and equal librrr's rrr_plant_jacobian /
+ * rrr_ctc_jacobian at the same point bit for bit (the FMU multiplies by 1 and adds zeros). */
+static void test_derivative_values(inst *x, const fmi3ValueReference *u, size_t nu,
+                                   const fmi3ValueReference *k, size_t nk, double *J)
+{
+    const fmu3 *a = x->api;
+    double seed[32], sens[32];
+    for (size_t j = 0; j < nk; ++j) {
+        for (size_t m = 0; m < nk; ++m) {
+            seed[m] = m == j ? 1.0 : 0.0;
+        }
+        CHECK(a->GetDirectionalDerivative(x->c, u, nu, k, nk, seed, nk, sens, nu) == fmi3OK);
+        for (size_t i = 0; i < nu; ++i) {
+            J[i * nk + j] = sens[i];
+        }
+    }
+    for (size_t i = 0; i < nu; ++i) {
+        for (size_t m = 0; m < nu; ++m) {
+            seed[m] = m == i ? 1.0 : 0.0;
+        }
+        CHECK(a->GetAdjointDerivative(x->c, u, nu, k, nk, seed, nu, sens, nk) == fmi3OK);
+        for (size_t j = 0; j < nk; ++j) {
+            if (sens[j] != J[i * nk + j]) {
+                fprintf(stderr, "%s: adjoint [%zu][%zu] = %.17g, forward %.17g\n", a->id, i, j,
+                        sens[j], J[i * nk + j]);
+                rrr_test_failures++;
+            }
+        }
+    }
+}
+
+static void test_derivatives(const fmu3 *plant, const fmu3 *ctrl)
+{
+    rrr_model m;
+    rrr_model_default(&m);
+    int checked = 0;
+    for (int me = 0; me < 2; ++me) {
+        /* the plant: qdd by u, q, qd at q0, qd0 (Initialization Mode) and after a step */
+        for (int pass = 0; pass < 2; ++pass) {
+            const int st = pass == 0 ? ST_INIT : me ? ST_CONT : ST_STEP;
+            inst x;
+            if (inst_new(&x, plant, "derivatives", me)) {
+                return;
+            }
+            const double q0[3] = {0.3, -0.7, 1.1}, qd0[3] = {0.2, -0.05, 0.4};
+            const double u[3] = {1.5, -2.0, 30.0}; /* u[3] beyond the limit */
+            fmi3ValueReference vq0[3], vqd0[3], vu[3], uk[3], kn[9];
+            vrs3(plant, "q0", vq0);
+            vrs3(plant, "qd0", vqd0);
+            vrs3(plant, "u", vu);
+            vrs3(plant, "qdd", uk);
+            vrs3(plant, "u", kn);
+            vrs3(plant, "q", kn + 3);
+            vrs3(plant, "qd", kn + 6);
+            CHECK(plant->SetFloat64(x.c, vq0, 3, q0, 3) == fmi3OK);
+            CHECK(plant->SetFloat64(x.c, vqd0, 3, qd0, 3) == fmi3OK);
+            drive(&x, st);
+            CHECK(plant->SetFloat64(x.c, vu, 3, u, 3) == fmi3OK);
+            rrr_plant_state s;
+            if (pass == 0) {
+                rrr_plant_state_init(q0, qd0, &s);
+            } else {
+                fmi3ValueReference vq[3], vqd[3];
+                vrs3(plant, "q", vq);
+                vrs3(plant, "qd", vqd);
+                CHECK(plant->GetFloat64(x.c, vq, 3, s.q, 3) == fmi3OK);
+                CHECK(plant->GetFloat64(x.c, vqd, 3, s.qd, 3) == fmi3OK);
+            }
+            rrr_plant_derivatives d;
+            CHECK(rrr_plant_jacobian(&m, &s, u, &d) == RRR_OK);
+            double J[3 * 9];
+            test_derivative_values(&x, uk, 3, kn, 9, J);
+            for (int i = 0; i < 3; ++i) {
+                for (int j = 0; j < 3; ++j) {
+                    CHECK(J[i * 9 + j] == d.dqdd_du[i][j]);
+                    CHECK(J[i * 9 + 3 + j] == d.dqdd_dq[i][j]);
+                    CHECK(J[i * 9 + 6 + j] == d.dqdd_dqd[i][j]);
+                }
+                CHECK(J[i * 9 + 2] == 0.0); /* u[3] is clamped */
+            }
+            /* the parameters: knowns in Initialization Mode (the start value q0 like q, the
+             * model parameters as rrr_plant_param_jacobian), refused afterwards */
+            const fmi3ValueReference a2 = vr_of(plant, "a2"), bad = 100000u;
+            const double one = 1.0, nan = NAN, inf = INFINITY;
+            if (pass == 0) {
+                double dp[3][RRR_N_PARAMS];
+                CHECK(rrr_plant_param_jacobian(&m, &s, u, dp) == RRR_OK);
+                const fmi3ValueReference pk[3] = {a2, vr_of(plant, "p[7]"), vr_of(plant, "u_max")};
+                const int pc[3] = {rrr_param_index("a2"), rrr_param_index("p[7]"),
+                                   rrr_param_index("u_max")};
+                double Jp[3 * 3];
+                test_derivative_values(&x, uk, 3, pk, 3, Jp);
+                for (int i = 0; i < 3; ++i) {
+                    for (int j = 0; j < 3; ++j) {
+                        CHECK(Jp[i * 3 + j] == dp[i][pc[j]]);
+                    }
+                }
+                CHECK(Jp[0 * 3 + 2] != 0.0); /* u[3] is clamped: u_max acts */
+                double Jq[3 * 3];
+                test_derivative_values(&x, uk, 3, vq0, 3, Jq);
+                for (int i = 0; i < 3; ++i) {
+                    for (int j = 0; j < 3; ++j) {
+                        CHECK(Jq[i * 3 + j] == d.dqdd_dq[i][j]);
+                    }
+                }
+            } else {
+                expect_refused_derivative(&x, st, 0, uk, 1, &a2, 1, &one, 1, 1,
+                                          "InitializationMode");
+                expect_refused_derivative(&x, st, 1, uk, 1, &a2, 1, &one, 1, 1,
+                                          "InitializationMode");
+            }
+            expect_refused_derivative(&x, st, 0, vu, 1, kn, 1, &one, 1, 1, "not an unknown");
+            expect_refused_derivative(&x, st, 0, uk, 1, &bad, 1, &one, 1, 1,
+                                      "not a value reference");
+            expect_refused_derivative(&x, st, 0, &bad, 1, kn, 1, &one, 1, 1,
+                                      "not a value reference");
+            expect_refused_derivative(&x, st, 0, uk, 1, kn, 1, &nan, 1, 1, "seed[0]");
+            expect_refused_derivative(&x, st, 1, uk, 1, kn, 1, &inf, 1, 1, "seed[0]");
+            expect_refused_derivative(&x, st, 0, uk, 1, kn, 1, &one, 2, 1, "nSeed");
+            expect_refused_derivative(&x, st, 1, uk, 2, kn, 1, &one, 1, 1, "nSeed");
+            expect_refused_derivative(&x, st, 0, uk, 1, NULL, 1, &one, 1, 1, "NULL");
+            expect_refused_derivative(&x, st, 0, uk, 1, kn, 1, NULL, 1, 1, "NULL");
+            checked += pass == 0 ? 9 : 11;
+            inst_free(&x);
+        }
+        /* the controller: every output by every input, against rrr_ctc_jacobian (lead = 0) */
+        inst x;
+        if (inst_new(&x, ctrl, "derivatives", me)) {
+            return;
+        }
+        drive(&x, me ? ST_CONT : ST_STEP);
+        const char *in_names[5] = {"q_ref", "qd_ref", "qdd_ref", "q", "qd"};
+        const char *out_names[3] = {"u", "u_n", "u_c"};
+        const double in_values[5][3] = {{0.1, 0.5, -0.3}, {0.4, -0.2, 0.1}, {1.0, 2.0, -1.0},
+                                        {0.11, 0.49, -0.31}, {0.39, -0.21, 0.12}};
+        fmi3ValueReference kn[15], un[9];
+        for (int k = 0; k < 5; ++k) {
+            vrs3(ctrl, in_names[k], kn + 3 * k);
+            CHECK(ctrl->SetFloat64(x.c, kn + 3 * k, 3, in_values[k], 3) == fmi3OK);
+        }
+        for (int o = 0; o < 3; ++o) {
+            vrs3(ctrl, out_names[o], un + 3 * o);
+        }
+        rrr_ctc_gains g;
+        rrr_ctc_gains_default(&g);
+        rrr_ctc_derivatives d;
+        CHECK(rrr_ctc_jacobian(&m, &g, in_values[0], in_values[1], in_values[2], in_values[3],
+                               in_values[4], &d) == RRR_OK);
+        double J[9 * 15];
+        test_derivative_values(&x, un, 9, kn, 15, J);
+        for (int o = 0; o < 3; ++o) {
+            double(*const dv)[3][3] = o == 0 ? d.du : o == 1 ? d.du_n : d.du_c;
+            for (int i = 0; i < 3; ++i) {
+                for (int k = 0; k < 5; ++k) {
+                    for (int j = 0; j < 3; ++j) {
+                        CHECK(J[(3 * o + i) * 15 + 3 * k + j] == dv[k][i][j]);
+                    }
+                }
+            }
+        }
+        const double one = 1.0;
+        expect_refused_derivative(&x, me ? ST_CONT : ST_STEP, 0, un, 1, &un[1], 1, &one, 1, 1,
+                                  "not a known");
+        checked += 1;
+        inst_free(&x);
+    }
+    printf("partial derivatives: forward = adjoint = librrr bit for bit (plant in "
+           "Initialization Mode and after a step, controller), %d refused calls\n", checked);
 }
 
 /* ---- refused values -------------------------------------------------------------------------- */
@@ -2476,6 +2678,7 @@ int main(int argc, char **argv)
     }
     test_not_provided(&plant);
     test_not_provided(&ctrl);
+    test_derivatives(&plant, &ctrl);
     test_bad_values(&plant, &ctrl);
     test_validation(&plant, &ctrl);
     test_discard(&plant);

@@ -1177,6 +1177,137 @@ static void test_illegal_sequences(const fmu_api *api, const machine *m)
 
 /* ---- refused values ---------------------------------------------------------------------------- */
 
+/* ---- partial derivatives ------------------------------------------------------------------------ */
+
+/* A refused fmi2GetDirectionalDerivative: fmi2Error, one error message containing needle,
+ * dvUnknown untouched, the instance still answering (the state machine unchanged). */
+static void expect_refused_dd(inst *x, const fmi2ValueReference *u, size_t nu,
+                              const fmi2ValueReference *k, size_t nk, const double *seed,
+                              const char *needle)
+{
+    double out[8] = {42.0, 42.0, 42.0, 42.0, 42.0, 42.0, 42.0, 42.0};
+    log_clear(x);
+    const fmi2Status s = x->api->GetDirectionalDerivative(x->c, u, nu, k, nk, seed, out);
+    int untouched = 1;
+    for (int i = 0; i < 8; ++i) {
+        untouched &= out[i] == 42.0;
+    }
+    if (!(s == fmi2Error && x->log.count[fmi2Error] == 1 && strstr(x->log.last_error, needle) &&
+          untouched)) {
+        fprintf(stderr, "%s: refused fmi2GetDirectionalDerivative: status %d, %d error "
+                        "message(s), last \"%s\" (want \"%s\"), dvUnknown %s\n",
+                x->api->id, (int)s, x->log.count[fmi2Error], x->log.last_error, needle,
+                untouched ? "untouched" : "written");
+        rrr_test_failures++;
+    }
+}
+
+/* The plant (Co-Simulation and Model Exchange) and the controller: the directional derivatives
+ * equal librrr's rrr_plant_jacobian / rrr_ctc_jacobian bit for bit (unit seeds), a NaN or Inf
+ * seed, an unknown value reference, a parameter as known and an input as unknown are refused;
+ * the reference FMU refuses the call as not provided. */
+static void test_directional_derivatives(const fmu_api *plant, const fmu_api *ctrl,
+                                         const fmu_api *ref)
+{
+    rrr_model m;
+    rrr_model_default(&m);
+    int refused = 0;
+    for (int me = 0; me < 2; ++me) {
+        inst x;
+        if ((me ? inst_new_me : inst_new)(&x, plant, "derivatives")) {
+            return;
+        }
+        const double u[3] = {-20.0, 0.8, 2.5}; /* u[1] beyond the limit */
+        fmi2ValueReference vu[3], vqdd[3], vq[3], vqd[3];
+        vrs3(plant, "u", vu);
+        vrs3(plant, "qdd", vqdd);
+        vrs3(plant, "q", vq);
+        vrs3(plant, "qd", vqd);
+        CHECK(set1(&x, "q0[2]", 0.6) == fmi2OK);
+        CHECK(set1(&x, "qd0[3]", -0.3) == fmi2OK);
+        if (me) {
+            drive_me(&x, MS_CONT);
+        } else {
+            drive(&x, ST_DONE);
+        }
+        CHECK(plant->SetReal(x.c, vu, 3, u) == fmi2OK);
+        rrr_plant_state s;
+        CHECK(plant->GetReal(x.c, vq, 3, s.q) == fmi2OK);
+        CHECK(plant->GetReal(x.c, vqd, 3, s.qd) == fmi2OK);
+        rrr_plant_derivatives d;
+        CHECK(rrr_plant_jacobian(&m, &s, u, &d) == RRR_OK);
+        for (int j = 0; j < 3; ++j) {
+            const double one = 1.0;
+            double col[3];
+            CHECK(plant->GetDirectionalDerivative(x.c, vqdd, 3, &vu[j], 1, &one, col) == fmi2OK);
+            for (int i = 0; i < 3; ++i) {
+                CHECK(col[i] == d.dqdd_du[i][j]);
+            }
+            CHECK(plant->GetDirectionalDerivative(x.c, vqdd, 3, &vq[j], 1, &one, col) == fmi2OK);
+            for (int i = 0; i < 3; ++i) {
+                CHECK(col[i] == d.dqdd_dq[i][j]);
+            }
+            CHECK(plant->GetDirectionalDerivative(x.c, vqdd, 3, &vqd[j], 1, &one, col) == fmi2OK);
+            for (int i = 0; i < 3; ++i) {
+                CHECK(col[i] == d.dqdd_dqd[i][j]);
+            }
+        }
+        const fmi2ValueReference a2 = vr_of(plant, "a2"), bad = 100000u;
+        const double one = 1.0, nan = NAN, inf = -INFINITY;
+        expect_refused_dd(&x, vqdd, 1, &a2, 1, &one, "InitializationMode");
+        expect_refused_dd(&x, vu, 1, vq, 1, &one, "not an unknown");
+        expect_refused_dd(&x, vqdd, 1, &bad, 1, &one, "not a value reference");
+        expect_refused_dd(&x, vqdd, 1, vu, 1, &nan, "seed[0]");
+        expect_refused_dd(&x, vqdd, 1, vu, 1, &inf, "seed[0]");
+        expect_refused_dd(&x, vqdd, 1, NULL, 1, &one, "NULL");
+        refused += 6;
+        double col[3];
+        CHECK(plant->GetDirectionalDerivative(x.c, vqdd, 3, vu, 1, &one, col) == fmi2OK);
+        inst_free(&x);
+    }
+    inst c;
+    if (inst_new(&c, ctrl, "derivatives")) {
+        return;
+    }
+    drive(&c, ST_DONE);
+    fmi2ValueReference vqref[3], vun[3], vq[3];
+    vrs3(ctrl, "q_ref", vqref);
+    vrs3(ctrl, "u_n", vun);
+    vrs3(ctrl, "q", vq);
+    const double q_ref[3] = {0.2, 0.7, -0.4}, zero[3] = {0.0, 0.0, 0.0};
+    CHECK(ctrl->SetReal(c.c, vqref, 3, q_ref) == fmi2OK);
+    CHECK(ctrl->SetReal(c.c, vq, 3, q_ref) == fmi2OK);
+    rrr_ctc_gains g;
+    rrr_ctc_gains_default(&g);
+    rrr_ctc_derivatives d;
+    CHECK(rrr_ctc_jacobian(&m, &g, q_ref, zero, zero, q_ref, zero, &d) == RRR_OK);
+    for (int j = 0; j < 3; ++j) {
+        const double one = 1.0;
+        double col[3];
+        CHECK(ctrl->GetDirectionalDerivative(c.c, vun, 3, &vqref[j], 1, &one, col) == fmi2OK);
+        for (int i = 0; i < 3; ++i) {
+            CHECK(col[i] == d.du_n[RRR_CTC_Q_REF][i][j]);
+        }
+    }
+    const double one = 1.0;
+    expect_refused_dd(&c, vun, 1, &vun[1], 1, &one, "not a known");
+    refused += 1;
+    inst_free(&c);
+    if (ref != NULL) {
+        inst r;
+        if (inst_new(&r, ref, "derivatives")) {
+            return;
+        }
+        drive(&r, ST_DONE);
+        const fmi2ValueReference v0 = 0u;
+        expect_refused_dd(&r, &v0, 1, &v0, 1, &one, "not provided");
+        refused += 1;
+        inst_free(&r);
+    }
+    printf("fmi2GetDirectionalDerivative: equal to librrr bit for bit (plant CS and ME, "
+           "controller), %d refused calls\n", refused);
+}
+
 static void expect_refused(inst *x, const char *name, double v, const char *needle)
 {
     const double before = get1(x, name);
@@ -2581,12 +2712,16 @@ int main(int argc, char **argv)
     test_me_bad_values(&plant, &ctrl);
     test_me_fmu_state(&plant, &ctrl);
 
+    if (argc != 4) {
+        test_directional_derivatives(&plant, &ctrl, NULL);
+    }
     if (argc == 4) {
         fmu_api ref;
         if (fmu_load(&ref, argv[3])) {
             return 2;
         }
         CHECK(strcmp(ref.id, "rrr_reference") == 0);
+        test_directional_derivatives(&plant, &ctrl, &ref);
         test_instantiate(&ref);
         test_illegal_sequences(&ref, &cs_machine);
         test_illegal_sequences(&ref, &me_machine);

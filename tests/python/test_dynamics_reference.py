@@ -240,3 +240,24 @@ def test_inverse_dynamics_equals_rtb_rne() -> None:
         for k in range(len(qs)):
             ref = np.asarray(dh_robot.rne(qs[k], qds[k], qdds[k]), dtype=float)
             assert_close(tau[k], ref, f"tau vs RTB rne, robot {seed} state {k}")
+
+
+def test_plant_jacobian_equals_aba_derivatives(
+    robot: Robot, robot_seed: int, pin_model: tuple[pin.Model, pin.Data]
+) -> None:
+    """The rigid-body part of librrr's exact d qdd / d(q, qd, u) (rrr_plant_jacobian, generated
+    from the SymPy derivation) against Pinocchio's computeABADerivatives: with k_t = 1, no
+    friction and no voltage limit in reach the plant's input is the motor torque."""
+    model, data = pin_model
+    rigid = robot.model.with_params(kt=[1.0, 1.0, 1.0], f=np.zeros((3, 3)), b=[0.0, 0.0, 0.0],
+                                    u_max=1e9)
+    qs, qds, qdds = random_states(robot_seed)
+    taus = rigid.inverse_dynamics(qs, qds, qdds)
+    for k in range(len(qs)):
+        pin.computeABADerivatives(model, data, qs[k], qds[k], taus[k])
+        minv = np.triu(data.Minv) + np.triu(data.Minv, 1).T
+        qdd, jac = rigid.plant_jacobian(qs[k], qds[k], taus[k])
+        assert_close(qdd, data.ddq, f"qdd vs aba {k}")
+        assert_close(jac[:, :3], data.ddq_dq, f"d qdd / d q vs ddq_dq {k}")
+        assert_close(jac[:, 3:6], data.ddq_dv, f"d qdd / d qd vs ddq_dv {k}")
+        assert_close(jac[:, 6:], minv, f"d qdd / d u vs Minv {k}")

@@ -49,6 +49,7 @@ SIGNATURES: dict[str, tuple[str, ...]] = {
     "voltage_from_torque": ("v", "v"),
     "torque_from_voltage": ("v", "v"),
     "nominal_voltage": ("q", "v", "v"),
+    "plant_jacobian": ("q", "v", "v"),
 }
 SINGLE_ONLY = {"ik": ("x",), "ik_branches": ("x",)}
 

@@ -28,6 +28,10 @@ Derivation (all symbolic, nothing numeric):
    monomials of degree <= 2 in s2, c2, s3, c3, s23, c23 (found by a deterministic search and proven
    equal through the normal form), so the generated code needs no trig call and no double angle.
    Common subexpressions are shared with sympy.cse and the C is written with a small printer.
+6. The partial derivatives d tau / d q and d tau / d qd (rrr_gen_tau_jacobian, behind
+   rrr_derivatives.h) are the fused torques of step 5 differentiated by the chain rule in
+   s2, c2, s3, c3, s23, c23, each proven equal to the derivative of the normal form; the same
+   for d tau / d a2 and d tau / d g (rrr_gen_tau_param_jacobian).
 
 Usage: derive_dynamics.py [--output-dir DIR] [--check] [--typos]
 """
@@ -544,6 +548,8 @@ def build_functions(der: Derivation) -> list[GenFunction]:
     ]
     pot = [("", linear_in_p(der.v, sparse))]
     pot_text = sp.sstr(sp.collect(pot[0][1], g)).replace("**", "^")
+    jac = tau_jacobian(tau_rows, [e for _, e in tau])
+    par = tau_param_jacobian(tau_rows, [e for _, e in tau])
     return [
         GenFunction(
             "rrr_gen_regressor",
@@ -578,6 +584,22 @@ def build_functions(der: Derivation) -> list[GenFunction]:
         ),
         GenFunction("rrr_gen_gravity", "Gravity torques h(q) = dV/dq.", "double h[3]", grav),
         GenFunction(
+            "rrr_gen_tau_jacobian",
+            "Partial derivatives of tau = R(q, qd, qdd) p at fixed qdd: dq[i][j] = d tau_i / d q_j "
+            "(column 0 is zero: q1 does not enter), dqd[i][j] = d tau_i / d qd_j; "
+            "d tau / d qdd is D(q).",
+            "const double qd[3], const double qdd[3], double dq[3][3], double dqd[3][3]",
+            jac,
+            epilogue=("dq[0][0] = 0.0;", "dq[1][0] = 0.0;", "dq[2][0] = 0.0;"),
+        ),
+        GenFunction(
+            "rrr_gen_tau_param_jacobian",
+            "Partial derivatives of tau = R(q, qd, qdd) p with respect to the model fields a2 "
+            "and g (with respect to p they are the columns of R).",
+            "const double qd[3], const double qdd[3], double da2[3], double dg[3]",
+            par,
+        ),
+        GenFunction(
             "rrr_gen_potential",
             f"Potential energy V(q) = {pot_text}, h = dV/dq.",
             "",
@@ -585,6 +607,53 @@ def build_functions(der: Derivation) -> list[GenFunction]:
             returns_value=True,
         ),
     ]
+
+
+# d/dq2 and d/dq3 of the six trig inputs (q1 enters none of them)
+_TRIG6_DQ: dict[int, dict[sp.Symbol, sp.Expr]] = {
+    1: {s2: c2, c2: -s2, s23: c23, c23: -s23},
+    2: {s3: c3, c3: -s3, s23: c23, c23: -s23},
+}
+
+
+def d_dq6(f: sp.Expr, k: int) -> sp.Expr:
+    """d f / d q_k (k = 1, 2) of an expression in s2, c2, s3, c3, s23, c23, by the chain rule:
+    the compact form stays compact (no double angles appear, no search is needed)."""
+    return sp.Add(*[sp.diff(f, s) * ds for s, ds in _TRIG6_DQ[k].items()])
+
+
+def tau_jacobian(tau_rows: list[sp.Expr], tau_compact: list[sp.Expr]) -> list[tuple[str, sp.Expr]]:
+    """d tau / d q (columns q2, q3) and d tau / d qd of the fused torques, differentiated in
+    their compact form and proven equal to the derivatives of the normal form (d_dq, the
+    calculus on the torus): exact, the same derivation as the dynamics."""
+    out: list[tuple[str, sp.Expr]] = []
+    for k in range(3):
+        for j in (1, 2):
+            expr = d_dq6(tau_compact[k], j)
+            if nf4(expr - d_dq(tau_rows[k], j)) != 0:
+                raise AssertionError(f"d tau_{k + 1} / d q_{j + 1}: compact form differs")
+            out.append((f"dq[{k}][{j}]", expr))
+    for k in range(3):
+        for j in range(3):
+            expr = sp.diff(tau_compact[k], qd[j])
+            if nf4(expr - sp.diff(tau_rows[k], qd[j])) != 0:
+                raise AssertionError(f"d tau_{k + 1} / d qd_{j + 1}: compact form differs")
+            out.append((f"dqd[{k}][{j}]", expr))
+    return out
+
+
+def tau_param_jacobian(tau_rows: list[sp.Expr], tau_compact: list[sp.Expr]
+                       ) -> list[tuple[str, sp.Expr]]:
+    """d tau / d a2 and d tau / d g of the fused torques, proven equal to the derivatives of the
+    normal form."""
+    out: list[tuple[str, sp.Expr]] = []
+    for name, sym in (("da2", a2), ("dg", g)):
+        for k in range(3):
+            expr = sp.diff(tau_compact[k], sym)
+            if nf4(expr - sp.diff(tau_rows[k], sym)) != 0:
+                raise AssertionError(f"d tau_{k + 1} / d {sym}: compact form differs")
+            out.append((f"{name}[{k}]", expr))
+    return out
 
 
 def tau_expr(row: sp.Expr, sparse: SparseTrig) -> sp.Expr:
@@ -695,7 +764,26 @@ def prototype(fn: GenFunction) -> str:
     return f"{ret} {fn.name}(" + (",\n" + indent).join(params) + ")"
 
 
-def render(emitted: list[Emitted]) -> tuple[str, str]:
+def structure_macros(R: sp.Matrix) -> list[str]:
+    """The structure of R as C macros: which base parameters and whether g enter each torque
+    (a structural zero of R is an identically zero entry of the normal form)."""
+    cols = []
+    for k in range(3):
+        mask = sum(1 << col for col in range(NP) if R[k, col] != 0)
+        cols.append(f"0x{mask:04x}u")
+    g_rows = sum(1 << k for k in range(3) if any(g in R[k, col].free_symbols
+                                                  for col in range(NP)))
+    return [
+        "/** Bit l of entry i: column l of row i of R is not identically zero (p_{l+1} enters",
+        " *  tau_i). */",
+        f"#define RRR_GEN_REGRESSOR_COLS {{{', '.join(cols)}}}",
+        "/** Bit i: g enters tau_i. */",
+        f"#define RRR_GEN_GRAVITY_ROWS 0x{g_rows:x}u",
+        "",
+    ]
+
+
+def render(emitted: list[Emitted], macros: list[str] | None = None) -> tuple[str, str]:
     banner = "\n".join(
         [
             f"/* {BANNER}.",
@@ -721,6 +809,7 @@ def render(emitted: list[Emitted]) -> tuple[str, str]:
         hdr.append(f"/** {em.fn.doc} ({em.ops} operations after CSE.) */")
         hdr.append(prototype(em.fn) + ";")
         hdr.append("")
+    hdr += macros or []
     hdr.append("#endif /* RRR_DYNAMICS_GEN_H */")
     src = [banner, f'#include "{HEADER_NAME}"', ""]
     for em in emitted:
@@ -786,7 +875,7 @@ def generate(out_dir: Path, log: bool = True) -> list[Emitted]:
     say("derivation:")
     der = derive(log=log)
     emitted = [emit_function(fn) for fn in build_functions(der)]
-    header, source = render(emitted)
+    header, source = render(emitted, structure_macros(der.R))
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / HEADER_NAME).write_bytes(header.encode("utf-8"))
     (out_dir / SOURCE_NAME).write_bytes(source.encode("utf-8"))

@@ -59,6 +59,43 @@ static void friction(const rrr_model *m, const double qd[3], double uf[3])
     }
 }
 
+/* d u_f,i / d qd_i of eq 9: b_i + sum_k f_ik w_ik (1 - tanh^2(w_ik qd_i)), with the tanh of the
+ * friction itself */
+static void friction_slope(const rrr_model *m, const double qd[3], double s[3])
+{
+    for (int i = 0; i < RRR_NJ; ++i) {
+        double v = m->b[i];
+        for (int k = 0; k < RRR_NF; ++k) {
+            const double t = tanh_fast(m->w[i][k] * qd[i]);
+            v += m->f[i][k] * m->w[i][k] * (1.0 - t * t);
+        }
+        s[i] = v;
+    }
+}
+
+void rrr_actuator_friction_tanh(const rrr_model *m, const double qd[3], double th[3][RRR_NF])
+{
+    for (int i = 0; i < RRR_NJ; ++i) {
+        for (int k = 0; k < RRR_NF; ++k) {
+            th[i][k] = tanh_fast(m->w[i][k] * qd[i]);
+        }
+    }
+}
+
+rrr_status rrr_friction_slope(const rrr_model *m, const double qd[3], double duf_dqd[3])
+{
+    if (m == NULL || qd == NULL || duf_dqd == NULL || !actuator_ok(m) || !rrr_finite_n(qd, 3)) {
+        return RRR_BAD_INPUT;
+    }
+    double v[3];
+    friction_slope(m, qd, v);
+    if (!rrr_finite_n(v, 3)) {
+        return RRR_NUMERIC;
+    }
+    memcpy(duf_dqd, v, sizeof v);
+    return RRR_OK;
+}
+
 rrr_status rrr_friction(const rrr_model *m, const double qd[3], double uf[3])
 {
     if (m == NULL || qd == NULL || uf == NULL || !actuator_ok(m) || !rrr_finite_n(qd, 3)) {

@@ -285,3 +285,16 @@ rrr_status rrr_energy(const rrr_model *m, const double q[3], const double qd[3],
     *potential = pe;
     return RRR_OK;
 }
+
+rrr_status rrr_regressor_structure(unsigned p_cols[3], unsigned *g_rows)
+{
+    if (p_cols == NULL || g_rows == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    static const unsigned cols[3] = RRR_GEN_REGRESSOR_COLS;
+    p_cols[0] = cols[0];
+    p_cols[1] = cols[1];
+    p_cols[2] = cols[2];
+    *g_rows = RRR_GEN_GRAVITY_ROWS;
+    return RRR_OK;
+}

@@ -315,6 +315,157 @@ void rrr_gen_gravity(const rrr_model *m, const rrr_trig *trig, double h[3])
     h[2] = g*t0;
 }
 
+void rrr_gen_tau_jacobian(const rrr_model *m,
+                          const rrr_trig *trig,
+                          const double qd[3],
+                          const double qdd[3],
+                          double dq[3][3],
+                          double dqd[3][3])
+{
+    const double s2 = trig->s2;
+    const double c2 = trig->c2;
+    const double s3 = trig->s3;
+    const double c3 = trig->c3;
+    const double s23 = trig->s23;
+    const double c23 = trig->c23;
+    const double a2 = m->a2;
+    const double g = m->g;
+    const double p1 = m->p[0];
+    const double p2 = m->p[1];
+    const double p3 = m->p[2];
+    const double p4 = m->p[3];
+    const double p5 = m->p[4];
+    const double p6 = m->p[5];
+    const double p8 = m->p[7];
+    const double p9 = m->p[8];
+    const double p10 = m->p[9];
+    const double p11 = m->p[10];
+    const double p15 = m->p[14];
+    const double p16 = m->p[15];
+    const double qd1 = qd[0];
+    const double qd2 = qd[1];
+    const double qd3 = qd[2];
+    const double qdd1 = qdd[0];
+    const double qdd2 = qdd[1];
+    const double qdd3 = qdd[2];
+    const double t0 = qd2*qd2;
+    const double t1 = c2*p1;
+    const double t2 = p2*s2;
+    const double t3 = a2*p4;
+    const double t4 = a2*p3;
+    const double t5 = 2.0*c23*t4 - 2.0*s23*t3;
+    const double t6 = t1 + 2.0*t2 + t5;
+    const double t7 = 2.0*qd2;
+    const double t8 = qd1*t7;
+    const double t9 = 2.0*s2;
+    const double t10 = 2.0*qd3;
+    const double t11 = qd1*t10;
+    const double t12 = c23*p4;
+    const double t13 = p3*s23;
+    const double t14 = a2*(t12 + t13);
+    const double t15 = 2.0*t1;
+    const double t16 = qd3*qd3;
+    const double t17 = qd3*t7;
+    const double t18 = p5*s23;
+    const double t19 = a2*c2;
+    const double t20 = p4*t19;
+    const double t21 = t18 + t20;
+    const double t22 = t18 + t4*t9;
+    const double t23 = c23*p5;
+    const double t24 = 2.0*t23;
+    const double t25 = p6*s23;
+    const double t26 = p3*t19;
+    const double t27 = s23*(p8*qdd2 + p8*qdd3 + p9*t0 + p9*t16 + p9*t17 + qdd1*(t24 - t25 + 2.0*t26) - t11*t21 - t22*t8);
+    const double t28 = 2.0*t25;
+    const double t29 = t23 + t26 - t28;
+    const double t30 = -t23 + t28 + t3*t9;
+    const double t31 = p8*t0 + p8*t16 + p8*t17 - p9*qdd2 - p9*qdd3 + qdd1*(c23*p6 + 2.0*t20) + t11*t29 - t30*t8;
+    const double t32 = a2*c3;
+    const double t33 = qd1*qd1;
+    const double t34 = s2*t33;
+    const double t35 = g*p3 + p8*qdd1;
+    const double t36 = s23*(t22*t33 + t35);
+    const double t37 = g*p4;
+    const double t38 = p9*qdd1;
+    const double t39 = t30*t33 + t37 - t38;
+    const double t40 = p4*qdd2;
+    const double t41 = p3*qdd2;
+    const double t42 = a2*s3;
+    const double t43 = s23*(t21*t33 + t35);
+    const double t44 = t29*t33 - t37 + t38;
+    const double t45 = t12*t19;
+    const double t46 = t13*t19;
+    const double t47 = p6*(2.0*s23*s23 - 1.0);
+    const double t48 = s23*t24 - t47;
+    const double t49 = 2.0*t45 + 2.0*t46 + t48;
+    const double t50 = p2*(2.0*s2*s2 - 1.0);
+    const double t51 = t4*(c23*t9 + s3);
+    const double t52 = t3*(c3 - s23*t9);
+    const double t53 = s2*t15 + t48 + t50 + 2.0*t51 + 2.0*t52;
+    const double t54 = c23*p9 - p8*s23;
+    const double t55 = t10*t54;
+    const double t56 = s23*t23 - 0.5*t47;
+    const double t57 = 2.0*qd1;
+    const double t58 = a2*(c3*p4 + p3*s3);
+    dq[0][1] = c2*(c2*p2*qdd1 - p10*t0 + p11*qdd2 - t6*t8) - c23*t31 - s2*(-p1*qd1*qd2*t9 + p10*qdd2 + p11*t0 + qdd1*(t15 + t2 + t5) - t11*t14) - t27;
+    dq[0][2] = 2.0*a2*p4*qd1*qd2*s3 - c23*t31 - p3*t32*t8 - t27;
+    dq[1][1] = c2*(-g*p16 + p11*qdd1 + t33*t6) - c23*t39 - s2*(g*p15 + p1*t34 + p10*qdd1) - t36;
+    dq[1][2] = -c23*t39 - t32*(p3*t16 + p3*t17 - p3*t33 + p4*qdd3 + 2.0*t40) - t36 - t42*(p3*qdd3 - p4*t16 - p4*t17 + p4*t33 + 2.0*t41);
+    dq[2][1] = c23*t44 - t14*t34 - t43;
+    dq[2][2] = c23*t44 + t32*(p3*t0 - t40) - t42*(p4*t0 + t41) - t43;
+    dqd[0][0] = -qd2*t53 - qd3*t49;
+    dqd[0][1] = -qd1*t53 + t55 + t7*(c2*p11 - p10*s2 + t54);
+    dqd[0][2] = -qd1*t49 + t54*t7 + t55;
+    dqd[1][0] = t57*(s2*t1 + 0.5*t50 + t51 + t52 + t56);
+    dqd[1][1] = -t10*t58;
+    dqd[1][2] = -2.0*t58*(qd2 + qd3);
+    dqd[2][0] = t57*(t45 + t46 + t56);
+    dqd[2][1] = t58*t7;
+    dqd[2][2] = 0.0;
+    dq[0][0] = 0.0;
+    dq[1][0] = 0.0;
+    dq[2][0] = 0.0;
+}
+
+void rrr_gen_tau_param_jacobian(const rrr_model *m,
+                                const rrr_trig *trig,
+                                const double qd[3],
+                                const double qdd[3],
+                                double da2[3],
+                                double dg[3])
+{
+    const double s2 = trig->s2;
+    const double c2 = trig->c2;
+    const double s3 = trig->s3;
+    const double c3 = trig->c3;
+    const double s23 = trig->s23;
+    const double c23 = trig->c23;
+    const double p3 = m->p[2];
+    const double p4 = m->p[3];
+    const double p15 = m->p[14];
+    const double p16 = m->p[15];
+    const double qd1 = qd[0];
+    const double qd2 = qd[1];
+    const double qd3 = qd[2];
+    const double qdd1 = qdd[0];
+    const double qdd2 = qdd[1];
+    const double qdd3 = qdd[2];
+    const double t0 = c2*(c23*p4 + p3*s23);
+    const double t1 = c23*p3 - p4*s23;
+    const double t2 = 2.0*s2;
+    const double t3 = p3*(c23*t2 + s3) + p4*(c3 - s23*t2);
+    const double t4 = c3*p3 - p4*s3;
+    const double t5 = qdd2*t4;
+    const double t6 = c3*p4 + p3*s3;
+    const double t7 = qd1*qd1;
+    da2[0] = 2.0*c2*qdd1*t1 - 2.0*qd1*qd2*t3 - 2.0*qd1*qd3*t0;
+    da2[1] = -2.0*qd2*qd3*t6 - qd3*qd3*t6 + qdd3*t4 + t3*t7 + 2.0*t5;
+    da2[2] = qd2*qd2*t6 + t0*t7 + t5;
+    dg[0] = 0.0;
+    dg[1] = c2*p15 - p16*s2 + t1;
+    dg[2] = t1;
+}
+
 double rrr_gen_potential(const rrr_model *m, const rrr_trig *trig)
 {
     const double s2 = trig->s2;

@@ -38,7 +38,29 @@ void rrr_gen_coriolis(const rrr_model *m, const rrr_trig *trig, const double qd[
 /** Gravity torques h(q) = dV/dq. (9 operations after CSE.) */
 void rrr_gen_gravity(const rrr_model *m, const rrr_trig *trig, double h[3]);
 
+/** Partial derivatives of tau = R(q, qd, qdd) p at fixed qdd: dq[i][j] = d tau_i / d q_j (column 0 is zero: q1 does not enter), dqd[i][j] = d tau_i / d qd_j; d tau / d qdd is D(q). (268 operations after CSE.) */
+void rrr_gen_tau_jacobian(const rrr_model *m,
+                          const rrr_trig *trig,
+                          const double qd[3],
+                          const double qdd[3],
+                          double dq[3][3],
+                          double dqd[3][3]);
+
+/** Partial derivatives of tau = R(q, qd, qdd) p with respect to the model fields a2 and g (with respect to p they are the columns of R). (55 operations after CSE.) */
+void rrr_gen_tau_param_jacobian(const rrr_model *m,
+                                const rrr_trig *trig,
+                                const double qd[3],
+                                const double qdd[3],
+                                double da2[3],
+                                double dg[3]);
+
 /** Potential energy V(q) = g*(c2*p16 + c23*p4 + p15*s2 + p3*s23), h = dV/dq. (8 operations after CSE.) */
 double rrr_gen_potential(const rrr_model *m, const rrr_trig *trig);
+
+/** Bit l of entry i: column l of row i of R is not identically zero (p_{l+1} enters
+ *  tau_i). */
+#define RRR_GEN_REGRESSOR_COLS {0x07ffu, 0xdfbfu, 0x31bcu}
+/** Bit i: g enters tau_i. */
+#define RRR_GEN_GRAVITY_ROWS 0x6u
 
 #endif /* RRR_DYNAMICS_GEN_H */

@@ -127,6 +127,10 @@ int rrr_actuator_params_ok(const rrr_model *m);
  *  params_ok (rrr_actuator_params_ok(m)) and qd is finite, else 0 (uf unset). */
 int rrr_actuator_friction(const rrr_model *m, int params_ok, const double qd[3], double uf[3]);
 
+/** The tanh terms of eq 9, th[i][k] = tanh(w_ik qd_i), with the friction's own tanh (the
+ *  derivatives with respect to f, w and b are built from them); m valid, qd finite. */
+void rrr_actuator_friction_tanh(const rrr_model *m, const double qd[3], double th[3][RRR_NF]);
+
 /** tau from the input u and the friction uf of rrr_actuator_friction (which returned 1), with
  *  rrr_torque_from_voltage's statuses for u and the result. */
 rrr_status rrr_actuator_torque(const rrr_model *m, const double uf[3], const double u[3],

@@ -218,6 +218,46 @@ class Kernels:
             _lib.raise_for("rrr_plant_accel", status, _plant_context(u_arr, 0.0, x))
         return qdd
 
+    # ---- partial derivatives -------------------------------------------------------------
+    def plant_jacobian(self, q: ArrayLike, qd: ArrayLike, u: ArrayLike, /
+                       ) -> tuple[FloatArray, FloatArray]:
+        rows, batch = broadcast_rows((q, "q"), (qd, "qd"), (u, "u"))
+        n = rows[0].shape[0]
+        qdd, jac = np.empty((n, 3)), np.empty((n, 3, 9))
+        x, d = _lib.RawPlantState(), _lib.RawPlantDerivatives()
+        fn = _lib.FUNCS["rrr_plant_jacobian"]
+        for i in range(n):
+            x.q[:], x.qd[:] = rows[0][i], rows[1][i]
+            if status := fn(self._ref, ct.byref(x), ptr(rows[2][i]), ct.byref(d)):
+                self._fail("rrr_plant_jacobian", status, rows, "q, qd, u", i)
+            qdd[i] = d.qdd[:]
+            jac[i] = np.hstack([np.ctypeslib.as_array(d.dqdd_dq), np.ctypeslib.as_array(
+                d.dqdd_dqd), np.ctypeslib.as_array(d.dqdd_du)])
+        return (qdd, jac) if batch else (qdd[0], jac[0])
+
+    def ctc_jacobian(self, gains: bytes, q_ref: ArrayLike, qd_ref: ArrayLike, qdd_ref: ArrayLike,
+                     q: ArrayLike, qd: ArrayLike, /
+                     ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        if len(gains) != ct.sizeof(_lib.RawCtcGains):
+            raise TypeError(f"ctc_jacobian needs the {ct.sizeof(_lib.RawCtcGains)} bytes of an "
+                            "rrr_ctc_gains (CtcGains.packed)")
+        raw_gains = _lib.RawCtcGains.from_buffer_copy(gains)
+        names = ("q_ref", "qd_ref", "qdd_ref", "q", "qd")
+        rows, batch = broadcast_rows(*zip((q_ref, qd_ref, qdd_ref, q, qd), names, strict=True))
+        n = rows[0].shape[0]
+        u, du, du_n = np.empty((n, 3)), np.empty((n, 3, 15)), np.empty((n, 3, 15))
+        d = _lib.RawCtcDerivatives()
+        fn = _lib.FUNCS["rrr_ctc_jacobian"]
+        for i in range(n):
+            if status := fn(self._ref, ct.byref(raw_gains), *(ptr(a[i]) for a in rows),
+                            ct.byref(d)):
+                self._fail("rrr_ctc_jacobian", status, rows, ", ".join(names), i)
+            u[i] = d.out.u[:]
+            # [k][i][j] -> [i][3 k + j]
+            du[i] = np.ctypeslib.as_array(d.du).transpose(1, 0, 2).reshape(3, 15)
+            du_n[i] = np.ctypeslib.as_array(d.du_n).transpose(1, 0, 2).reshape(3, 15)
+        return (u, du, du_n) if batch else (u[0], du[0], du_n[0])
+
     # ---- helpers ---------------------------------------------------------------------------
     def _rowwise(self, fn: str, ins: list[FloatArray], out_shapes: list[tuple[int, ...]],
                  names: str) -> list[FloatArray]:

@@ -62,3 +62,14 @@ class Kernels:
         self, integrator: bytes, u: ArrayLike, h: object, state: Any, stats: Any, /
     ) -> _F: ...
     def plant_accel(self, state: Any, u: ArrayLike, /) -> _F: ...
+    def plant_jacobian(self, q: ArrayLike, qd: ArrayLike, u: ArrayLike, /) -> tuple[_F, _F]: ...
+    def ctc_jacobian(
+        self,
+        gains: bytes,
+        q_ref: ArrayLike,
+        qd_ref: ArrayLike,
+        qdd_ref: ArrayLike,
+        q: ArrayLike,
+        qd: ArrayLike,
+        /,
+    ) -> tuple[_F, _F, _F]: ...

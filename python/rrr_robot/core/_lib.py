@@ -83,6 +83,21 @@ class RawCtcOutput(ct.Structure):
     _fields_ = [("u", D3), ("u_n", D3), ("u_c", D3), ("saturated", ct.c_uint)]
 
 
+class RawCtcDerivatives(ct.Structure):
+    """Mirror of ``rrr_ctc_derivatives`` (c_src/rrr/include/rrr/rrr_derivatives.h): du[k][i][j]
+    = d u_i / d (input k)_j, inputs q_ref, qd_ref, qdd_ref, q, qd."""
+
+    _fields_ = [("out", RawCtcOutput), ("du", (D3 * 3) * 5), ("du_n", (D3 * 3) * 5),
+                ("du_c", (D3 * 3) * 5)]
+
+
+class RawPlantDerivatives(ct.Structure):
+    """Mirror of ``rrr_plant_derivatives``: qdd and d qdd / d(q, qd, u)."""
+
+    _fields_ = [("qdd", D3), ("dqdd_dq", D3 * 3), ("dqdd_dqd", D3 * 3), ("dqdd_du", D3 * 3),
+                ("saturated", ct.c_uint)]
+
+
 class RawPlantIntegrator(ct.Structure):
     """Mirror of ``rrr_plant_integrator`` (c_src/rrr/include/rrr/rrr_plant.h)."""
 
@@ -154,6 +169,8 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_plant_integrator_check": [_P(RawPlantIntegrator), _P(ct.c_char_p)],
     "rrr_plant_state_init": [_D, _D, _P(RawPlantState)],
     "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
+    "rrr_plant_jacobian": [_M, _P(RawPlantState), _D, _P(RawPlantDerivatives)],
+    "rrr_ctc_jacobian": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcDerivatives)],
     "rrr_plant_step": [_M, _P(RawPlantIntegrator), _D, ct.c_double, _P(RawPlantState), _D,
                        _P(RawPlantStats)],
     "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),

@@ -331,6 +331,25 @@ class Model:
             raise BadInputError(f"gains must be a CtcGains, got {type(gains).__name__}")
         return self._k.ctc(gains.packed, q_ref, qd_ref, qdd_ref, q, qd)
 
+    # ---- exact partial derivatives (rrr_derivatives.h) ----------------------------------------
+    def plant_jacobian(self, q: ArrayLike, qd: ArrayLike, u: ArrayLike
+                       ) -> tuple[FloatArray, FloatArray]:
+        """The plant's qdd = f(q, qd, u) (eqs 7-9, u saturated at u_max) and its exact
+        Jacobian d qdd / d(q, qd, u), (3, 9): columns q1..q3, qd1..qd3, u1..u3 (rad/s^2 per
+        rad, per rad/s, per V); a clamped input's column is 0. (n, 3) and (n, 3, 9) for rows."""
+        return self._k.plant_jacobian(q, qd, u)
+
+    def ctc_jacobian(
+        self, gains: CtcGains, q_ref: ArrayLike, qd_ref: ArrayLike, qdd_ref: ArrayLike,
+        q: ArrayLike, qd: ArrayLike,
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The computed-torque law's u (eq 15) and its exact Jacobians du and du_n, (3, 15) each:
+        columns 3 k + j are joint j of q_ref, qd_ref, qdd_ref, q, qd (k = 0..4), V per unit; a
+        clamped u_i has row i = 0 in du."""
+        if not isinstance(gains, CtcGains):
+            raise BadInputError(f"gains must be a CtcGains, got {type(gains).__name__}")
+        return self._k.ctc_jacobian(gains.packed, q_ref, qd_ref, qdd_ref, q, qd)
+
     def __repr__(self) -> str:
         return f"Model(dh={self.dh}, g={self.g}, kt={self.kt.tolist()})"
 

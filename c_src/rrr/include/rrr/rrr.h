@@ -13,6 +13,7 @@
 #include "rrr_control.h"
 #include "rrr_plant.h"
 #include "rrr_sim.h"
+#include "rrr_derivatives.h"
 
 /** Version of librrr. */
 #define RRR_VERSION_STRING "0.1.0"

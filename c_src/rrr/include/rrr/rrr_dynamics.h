@@ -47,6 +47,15 @@ RRR_API rrr_status rrr_forward_dynamics(const rrr_model *m, const double q[3], c
                                 const double tau[3], double qdd[3]);
 
 /**
+ * @brief The structure of the regressor, from the symbolic derivation: bit l of p_cols[i] is
+ *        set when column l of row i of R is not identically zero (p_{l+1} enters tau_i), bit i
+ *        of *g_rows when the gravity g enters tau_i. (a2 enters every row; q1 none.) What an
+ *        FMU's ModelStructure needs to list its dependencies exactly.
+ * @return RRR_OK, RRR_BAD_INPUT (NULL)
+ */
+RRR_API rrr_status rrr_regressor_structure(unsigned p_cols[3], unsigned *g_rows);
+
+/**
  * @brief Kinetic energy 1/2 qd' D qd and potential energy (zero at the configuration where
  *        the generated potential vanishes), J. Used to check the integrator.
  */
