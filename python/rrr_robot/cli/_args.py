@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["HelpFormatter", "add_verbosity_arguments", "command_parser", "host_port",
-           "nonnegative_int", "output_path", "positive_int"]
+           "nonnegative_int", "output_path", "positive_int", "quiet"]
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -58,6 +58,12 @@ def add_verbosity_arguments(parser: argparse.ArgumentParser, bars: bool = True) 
                        + (", no progress bars" if bars else ""))
     group.add_argument("-v", "--verbose", action="store_true", default=argparse.SUPPRESS,
                        help="also log DEBUG lines (more detail)")
+
+
+def quiet(args: argparse.Namespace) -> bool:
+    """``-q`` given (before or after the command; False for a namespace of a parser without the
+    verbosity options)."""
+    return bool(getattr(args, "quiet", False))
 
 
 def output_path(text: str) -> Path:

@@ -14,7 +14,7 @@ from types import FrameType
 
 from .. import __version__
 from ..errors import RrrError
-from ._args import HelpFormatter, add_verbosity_arguments, command_parser
+from ._args import HelpFormatter, add_verbosity_arguments, command_parser, quiet
 from .hil import register_cli as register_hil
 from .identify import register_cli as register_identify
 from .ssp import register_cli as register_ssp
@@ -97,6 +97,7 @@ def _logging(verbose: bool, quiet: bool) -> Iterator[None]:
     handler = LogHandler()
     handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
     level = logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO
+    handler.setLevel(level)  # also for the libraries whose loggers set their own level (Dask)
     previous = root.level
     root.addHandler(handler)
     root.setLevel(level)
@@ -122,7 +123,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
-        with _logging(args.verbose, args.quiet):
+        with _logging(bool(getattr(args, "verbose", False)), quiet(args)):
             return int(args.func(args))
     except KeyboardInterrupt:
         print("rrr: interrupted", file=sys.stderr)

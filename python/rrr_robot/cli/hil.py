@@ -18,6 +18,7 @@ from ._args import (
     host_port,
     nonnegative_int,
     output_path,
+    quiet,
 )
 
 if TYPE_CHECKING:
@@ -160,7 +161,7 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
         return 0
     conn = (sides.Connection() if args.side == "bench"
             else sides.Connection(args.interface, args.connect, args.channel))
-    with Bars(shown(args.quiet), unit="period") as bars:
+    with Bars(shown(quiet(args)), unit="period") as bars:
         progress = bars.callback("CAN bench")
         if args.side == "plant":
             side = sides.run_plant_side(ref, ctrl_values, work, conn, frame_log=NODE_FRAMES,

@@ -19,6 +19,7 @@ from ._args import (
     nonnegative_int,
     output_path,
     positive_int,
+    quiet,
 )
 from ._progress import Bars, shown
 
@@ -43,7 +44,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                         friction_method=args.friction_method, weighting=args.weighting,
                         v_min=args.v_min)
     friction = read_log(args.friction_log, friction=True) if args.friction_log else None
-    with Bars(shown(args.quiet), unit="joint") as bars:
+    with Bars(shown(quiet(args)), unit="joint") as bars:
         result = identify(read_log(args.log), prior, friction, settings, progress=bars)
     report: dict[str, Any] = result.report()
     est = result.base.wls if settings.weighting == "wls" else result.base.ls
@@ -53,7 +54,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     if args.validate:
         from ..identify.validation import validate_writing
 
-        with Bars(shown(args.quiet)) as bars:
+        with Bars(shown(quiet(args))) as bars:
             report["writing"] = validate_writing(
                 prior, result.model, prior_robot,
                 progress=lambda name, k, n: bars(name, k + 1, n))
@@ -112,7 +113,7 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     ex.check_experiments(args.periods, step)  # the bounds, before anything runs
     sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)
     # the three files appear together when every experiment succeeded (core.outputs)
-    with ResultSet(out, kind="identify-experiment") as rs, Bars(shown(args.quiet)) as bars:
+    with ResultSet(out, kind="identify-experiment") as rs, Bars(shown(quiet(args))) as bars:
         traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
         traj.to_json(rs.path("excitation.json"))
         note = f"simulated, sensors: {sensors}"

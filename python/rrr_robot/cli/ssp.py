@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from ._args import add_verbosity_arguments, command_parser, nonnegative_int, output_path
+from ._args import add_verbosity_arguments, command_parser, nonnegative_int, output_path, quiet
 from ._progress import Bars, shown
 from .writing import _scenario_line
 
@@ -32,7 +32,7 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
     job = SspRun(ssp=Path(args.ssp), tool=args.tool, out=Path(args.out),
                  real_time=args.real_time, figures=not args.no_figures,
                  robot=Path(args.robot) if args.robot else None)
-    with Bars(shown(args.quiet)) as bars:
+    with Bars(shown(quiet(args))) as bars:
         summary = run_ssp(job, progress=bars.callback(args.tool))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")

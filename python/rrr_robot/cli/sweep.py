@@ -8,7 +8,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from ._args import add_verbosity_arguments, command_parser, output_path, positive_int
+from ._args import add_verbosity_arguments, command_parser, output_path, positive_int, quiet
 from ._progress import Bars, shown
 
 _ADDRESS = re.compile(r"^(?:(?:tcp|tls|ws|wss)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):\d{1,5}$")
@@ -34,7 +34,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     job = SweepJob(spec=Path(args.spec), out=Path(args.out), workers=args.workers,
                    scheduler=args.scheduler, engine=args.engine, resume=args.resume,
                    batch=args.batch, figures=not args.no_figures)
-    with Bars(shown(args.quiet), unit="run") as bars:
+    with Bars(shown(quiet(args)), unit="run") as bars:
         summary = run_sweep(job, progress=lambda done, total: bars("sweep", done, total))
     counts = ", ".join(f"{k} {v}" for k, v in summary["status"].items() if v)
     tip = summary["tip_error_max"]

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from ._args import add_verbosity_arguments, command_parser, output_path
+from ._args import add_verbosity_arguments, command_parser, output_path, quiet
 from ._progress import Bars, shown
 
 
@@ -43,7 +43,7 @@ def _cmd_writing(args: argparse.Namespace) -> int:
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
         engine=args.engine, animate=args.animate,
     )
-    with Bars(shown(args.quiet)) as bars:
+    with Bars(shown(quiet(args))) as bars:
         summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
