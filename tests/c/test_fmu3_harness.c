@@ -1595,7 +1595,7 @@ static void test_derivatives(const fmu3 *plant, const fmu3 *ctrl)
             /* the parameters: knowns in Initialization Mode (the start value q0 like q, the
              * model parameters as rrr_plant_param_jacobian), refused afterwards */
             const fmi3ValueReference a2 = vr_of(plant, "a2"), bad = 100000u;
-            const double one = 1.0, nan = NAN, inf = INFINITY;
+            const double one = 1.0, nan = (double)NAN, inf = (double)INFINITY;
             if (pass == 0) {
                 double dp[3][RRR_N_PARAMS];
                 CHECK(rrr_plant_param_jacobian(&m, &s, u, dp) == RRR_OK);

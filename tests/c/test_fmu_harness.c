@@ -1253,7 +1253,7 @@ static void test_directional_derivatives(const fmu_api *plant, const fmu_api *ct
             }
         }
         const fmi2ValueReference a2 = vr_of(plant, "a2"), bad = 100000u;
-        const double one = 1.0, nan = NAN, inf = -INFINITY;
+        const double one = 1.0, nan = (double)NAN, inf = -(double)INFINITY;
         expect_refused_dd(&x, vqdd, 1, &a2, 1, &one, "InitializationMode");
         expect_refused_dd(&x, vu, 1, vq, 1, &one, "not an unknown");
         expect_refused_dd(&x, vqdd, 1, &bad, 1, &one, "not a value reference");
