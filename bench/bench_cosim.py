@@ -26,6 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 import rrr_robot as rr
+from _quick import add_quick, apply_quick
 from rrr_robot.sim.cosim import (
     CTRL_IN,
     CTRL_OUT,
@@ -119,7 +120,10 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=5, help="alternating blocks (>= 3)")
     parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
                         help="cpu (default): the calling thread's CPU time; wall: the wall clock")
-    args = parser.parse_args()
+    parser.add_argument("--calls", type=int, default=5000,
+                        help="calls per row of 'where the time goes' (default 5000)")
+    add_quick(parser)
+    args = apply_quick(parser, parser.parse_args(), {"repeats": 3, "calls": 200})
     global clock
     clock = CLOCKS[args.clock]
     model = rr.Model.default()
@@ -154,7 +158,7 @@ def main() -> int:
           f"{speedup.min():.1f}x / {np.median(speedup):.1f}x / {speedup.max():.1f}x\n")
     print("| where the time goes (each call alone) | us/call |")
     print("|---|---|")
-    for name, us in per_call(5000, step).items():
+    for name, us in per_call(args.calls, step).items():
         print(f"| {name} | {us:.2f} |")
     w2, w3 = fmi_versions(ref, step, max(3, args.repeats))
     ratio = np.array(w3) / np.array(w2)

@@ -27,6 +27,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from _quick import add_quick, apply_quick
 from rrr_robot.hil.bench import RealTime, run_c_bench
 from rrr_robot.hil.results import extend_reference
 from rrr_robot.writing.job import WritingJob, prepare
@@ -54,7 +55,8 @@ def main() -> int:
     ap.add_argument("--duration", type=float, default=20.0, help="seconds per run (default 20)")
     ap.add_argument("--spin-us", type=int, default=100, help="tuned runs' spin (default 100)")
     ap.add_argument("--json", type=Path, help="also write every run's figures to this file")
-    args = ap.parse_args()
+    add_quick(ap)
+    args = apply_quick(ap, ap.parse_args(), {"blocks": 1, "duration": 0.5})
     ref = extend_reference(prepare(WritingJob(out=Path("."), scenarios=["ctc"]))[3],
                            args.duration)
     configs = {

@@ -25,6 +25,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
+from _quick import add_quick, apply_quick
 from rrr_robot.core.model import Model
 from rrr_robot.identify import _threads
 from rrr_robot.identify import experiments as ex
@@ -59,7 +60,8 @@ def main() -> int:
     ap.add_argument("--hog", type=int, default=0, metavar="N",
                     help="busy-looping processes running during the timing")
     ap.add_argument("--friction", action="store_true", help="also time the friction fits")
-    args = ap.parse_args()
+    add_quick(ap)
+    args = apply_quick(ap, ap.parse_args(), {"repeats": 1})
     model = Model.default()
     traj, _ = design_excitation(model, np.array(ex.SweepDesign().pose), maxiter=30)
     lg = ex.excitation_experiment(model, traj, periods=1, sensors=ex.NOISY)

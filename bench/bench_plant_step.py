@@ -42,6 +42,7 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+from _quick import add_quick, apply_quick
 
 ROOT = Path(__file__).resolve().parent.parent
 DRIVER = ROOT / "bench" / "bench_plant_step.c"
@@ -168,7 +169,8 @@ def main() -> int:
     parser.add_argument("--baseline-ref", help="git revision whose plant FMU is 'today'")
     parser.add_argument("--baseline-fmu", type=Path, help="a plant .fmu file as 'today'")
     parser.add_argument("--no-writing", action="store_true", help="open loop only")
-    args = parser.parse_args()
+    add_quick(parser)
+    args = apply_quick(parser, parser.parse_args(), {"blocks": 1})
     if args.fmu_dir is not None:
         plant_fmu, ctrl_fmu = args.fmu_dir / "rrr_plant.fmu", args.fmu_dir / "rrr_controller.fmu"
     else:

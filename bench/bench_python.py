@@ -44,6 +44,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _quick import add_quick, apply_quick
 
 ROOT = Path(__file__).resolve().parent.parent
 ALPHA = (np.pi / 2, 0.0, 0.0)
@@ -250,10 +251,15 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
         m_addr = ct.addressof(model.raw)
         if floor(m_addr, *addr, nb) != -1:
             sys.exit("bench_python: batch_floor_inverse_dynamics failed")
+
+        def c_floor(k: int, arrays: tuple[Any, ...] = (bq, bqd, bqdd, out)) -> Any:
+            # the arrays ride along: the C loop writes into `out`, which must outlive build()
+            return floor(m_addr, *addr, nb)
+
         pairs.append(Pair(
             f"tau = R p, batch of {nb:,} states (per state): the C floor",
             "Model.inverse_dynamics", lambda k: model.inverse_dynamics(bq, bqd, bqdd),
-            "librrr in a C loop (bench/batch_floor.c)", lambda k: floor(m_addr, *addr, nb), 1,
+            "librrr in a C loop (bench/batch_floor.c)", c_floor, 1,
             per=nb, agreement=f"bit-identical: {out.tobytes() == batch_ours.tobytes()}"))
     pairs += [
         Pair("tau = R p, one state: the binding before", "Model.inverse_dynamics",
@@ -294,7 +300,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="time blocks by the CPU time of the thread (default) or the wall "
                              "clock")
     parser.add_argument("--json", type=Path, help="also write the raw timings to this file")
-    args = parser.parse_args(argv)
+    add_quick(parser)
+    args = apply_quick(parser, parser.parse_args(argv),
+                       {"repeats": 2, "states": 40, "calls": 80, "batch": 2000})
 
     load_start = " ".join(f"{v:.2f}" for v in os.getloadavg())
     with tempfile.TemporaryDirectory(prefix="rrr-bench-") as tmp:

@@ -15,6 +15,7 @@ import time
 import zipfile
 from pathlib import Path
 
+from _quick import add_quick, apply_quick
 from rrr_robot.ssp.export import SspJob, export_ssp
 from rrr_robot.ssp.run import SspRun, run_ssp
 from rrr_robot.writing.job import WritingJob, run_writing
@@ -41,18 +42,23 @@ def main() -> int:
                     "temporary one)")
     ap.add_argument("--no-real-time", action="store_true", help="skip the real-time run")
     ap.add_argument("--real-time-only", action="store_true", help="only the real-time run")
-    args = ap.parse_args()
+    ap.add_argument("--scenario", action="append", choices=list(BUILTIN), metavar="S",
+                    help="the scenarios of the table (repeatable; default: all built-in)")
+    add_quick(ap)
+    args = apply_quick(ap, ap.parse_args(), {"scenario": ["ctc"], "no_real_time": True})
     with tempfile.TemporaryDirectory(prefix="bench-ssp-") as tmp:
         root = args.out or Path(tmp)
         root.mkdir(parents=True, exist_ok=True)
         if args.real_time_only:
             export_ssp(SspJob(out=root / "ctc.ssp", scenario="ctc"))
+        scenarios = args.scenario or list(BUILTIN)
         ours = {"scenarios": {}} if args.real_time_only else run_writing(
-            WritingJob(out=root / "writing", engine="native", figures=False))
+            WritingJob(out=root / "writing", engine="native", figures=False,
+                       scenarios=scenarios))
         print("| scenario | rrr writing: max / RMS (mm) | compensation | libcosim: max / RMS (mm)"
               " | FMPy: max / RMS (mm) |")
         print("|---|---|---|---|---|")
-        for scn in () if args.real_time_only else BUILTIN:
+        for scn in () if args.real_time_only else scenarios:
             w = ours["scenarios"][scn]
             both = root / f"{scn}.ssp"
             export_ssp(SspJob(out=both, scenario=scn))

@@ -19,6 +19,8 @@ import subprocess
 import sys
 import time
 
+from _quick import add_quick, apply_quick
+
 HEAVY = ("numpy", "scipy", "matplotlib", "fmpy", "cantools", "can", "pandas", "pyarrow")
 
 
@@ -43,7 +45,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeats", type=int, default=15)
     ap.add_argument("--rrr", default=shutil.which("rrr") or "rrr", help="the rrr script")
-    args = ap.parse_args()
+    add_quick(ap)
+    args = apply_quick(ap, ap.parse_args(), {"repeats": 2})
     cmds = {
         'python -c "import numpy"': [sys.executable, "-c", "import numpy"],
         "rrr --help": [args.rrr, "--help"],

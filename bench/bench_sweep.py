@@ -37,6 +37,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from _quick import add_quick, apply_quick
 from rrr_robot.sweep.execution import batch_size, batches, dask_client, execute, worker_threads
 from rrr_robot.sweep.job import make_plan
 from rrr_robot.sweep.results import schema, write_part
@@ -172,7 +173,7 @@ def big(args: argparse.Namespace, work: Path) -> None:
     print(f"\n`rrr sweep` of {args.big} runs, default local cluster ({os.cpu_count()} workers)\n")
     print("| engine | command wall time (s) | runs (s) | cluster start (s) | runs/s | statuses |")
     print("|---|---:|---:|---:|---:|---|")
-    for engine in ("native", "fmpy"):
+    for engine in args.big_engine or ("native", "fmpy"):
         out = work / f"big-{engine}"
         start = time.perf_counter()
         subprocess.run([sys.executable, "-m", "rrr_robot", "sweep", str(spec_path), "--out",
@@ -194,7 +195,11 @@ def main() -> None:
                     help="engine of the blocks (default native)")
     ap.add_argument("--big", type=int, default=1000, help="runs of the big sweep (1000)")
     ap.add_argument("--skip-big", action="store_true", help="leave out the big sweeps")
-    args = ap.parse_args()
+    ap.add_argument("--big-engine", action="append", choices=("native", "fmpy"),
+                    help="the engines of the big sweeps (repeatable; default both)")
+    add_quick(ap)
+    args = apply_quick(ap, ap.parse_args(),
+                       {"runs": 4, "repeats": 1, "big": 8, "big_engine": ["native"]})
     import dask
     import distributed
 

@@ -35,6 +35,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from _quick import add_quick, apply_quick
+
 PHASES = r"""
 import json, pickle, sys, tempfile, time
 from pathlib import Path
@@ -123,7 +125,8 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--baseline", help="folder holding another rrr_robot (before)")
     ap.add_argument("--whole", action="store_true", help="also time whole rrr writing runs")
-    args = ap.parse_args()
+    add_quick(ap)
+    args = apply_quick(ap, ap.parse_args(), {"repeats": 1})
     copies: dict[str, str | None] = {"this": None}
     if args.baseline:
         copies = {"baseline": args.baseline, "this": None}

@@ -48,6 +48,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from _quick import add_quick, apply_quick
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -83,10 +84,10 @@ def cmeel_prefix() -> Path:
     return prefix
 
 
-def build(build_dir: Path, cmake: str) -> None:
+def build(build_dir: Path, cmake: str, werror: bool = False) -> None:
     configure = [
         cmake, "-S", str(BENCH), "-B", str(build_dir), "-DCMAKE_BUILD_TYPE=Release",
-        f"-DCMAKE_PREFIX_PATH={cmeel_prefix()}",
+        f"-DCMAKE_PREFIX_PATH={cmeel_prefix()}", f"-DRRR_WERROR={'ON' if werror else 'OFF'}",
     ]
     log("configure: " + " ".join(configure))
     subprocess.run(configure, check=True, stdout=subprocess.DEVNULL)
@@ -704,6 +705,11 @@ def report(
     return "\n".join(lines), key
 
 
+#: --quick: every part on a few inputs (the build and the generator run in full)
+QUICK = {"states": 64, "calls": 640, "repeats": 3, "py_states": 16, "py_repeats": 3,
+         "c_loop_calls": 64}
+
+
 # ---------------------------------------------------------------------------------------------
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -711,6 +717,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="CMake build directory of the C++ driver (default: %(default)s)")
     parser.add_argument("--cmake", default=shutil.which("cmake") or "cmake")
     parser.add_argument("--skip-build", action="store_true", help="reuse an existing build")
+    parser.add_argument("--build-only", action="store_true",
+                        help="configure and build, then stop (the test command builds in the "
+                        "background and runs --quick --skip-build later)")
     parser.add_argument("--states", type=int, default=1024, help="C++ states (power of 2)")
     parser.add_argument("--calls", type=int, default=20_480,
                         help="C++ calls per block, rounded up to whole passes over the states "
@@ -730,7 +739,10 @@ def main(argv: list[str] | None = None) -> int:
                              "waiting for a core on a loaded machine is left out) or the wall "
                              "clock")
     parser.add_argument("--json", type=Path, help="also write the raw results to this file")
-    args = parser.parse_args(argv)
+    parser.add_argument("--werror", action="store_true",
+                        help="build with warnings as errors (RRR_WERROR; the test command)")
+    add_quick(parser)
+    args = apply_quick(parser, parser.parse_args(argv), QUICK)
     for name in ("states", "calls", "repeats", "py_states", "py_repeats", "c_loop_calls"):
         if getattr(args, name) <= 0:
             parser.error(f"--{name.replace('_', '-')} must be positive")
@@ -738,7 +750,9 @@ def main(argv: list[str] | None = None) -> int:
     load_start = load_average()
     build_dir = args.build_dir.resolve()
     if not args.skip_build:
-        build(build_dir, args.cmake)
+        build(build_dir, args.cmake, args.werror)
+    if args.build_only:
+        return 0
     exe = build_dir / "bench_core"
     loops = build_dir / "libbench_loops.so"
     if not exe.is_file() or not loops.is_file():

@@ -39,6 +39,17 @@ install(FILES "${CMAKE_CURRENT_BINARY_DIR}/rrrConfig.cmake"
 # cmake --install --prefix anywhere (or moved) stays right
 file(RELATIVE_PATH RRR_PC_TO_PREFIX "/prefix/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/prefix")
 string(REGEX REPLACE "/$" "" RRR_PC_TO_PREFIX "${RRR_PC_TO_PREFIX}")
+# Libs: -Wl,-rpath,${libdir} unless RRR_PC_RPATH is OFF, so a program linked with `pkg-config
+# --libs rrr` finds librrr.so.0 where it was installed, with no LD_LIBRARY_PATH (a distribution
+# that installs into the loader's own path turns it off); and -lm, as the CMake package's
+# rrr::rrr links m for its consumers: librrr.so records its own libm (DT_NEEDED) and the headers
+# inline nothing, but librrr.a needs it, and so do the consumers that call <math.h> beside
+# librrr, as nearly every user of an angle-based API does (examples/c_consumer/main.c: fmax).
+option(RRR_PC_RPATH "rrr.pc links consumers with an rpath to the installed librrr" ON)
+set(RRR_PC_RPATH_FLAG "")
+if(RRR_PC_RPATH)
+  set(RRR_PC_RPATH_FLAG " -Wl,-rpath,\${libdir}")
+endif()
 set(RRR_PC_LIBS_EXTRA "")
 if(RRR_SANITIZE)
   set(RRR_PC_LIBS_EXTRA " -fsanitize=address,undefined")

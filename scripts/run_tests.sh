@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Sets up everything and runs every test: C tests (core, FMUs, CAN bench) under AddressSanitizer
-# and UndefinedBehaviorSanitizer via CTest (with the FMUs' Windows binaries run under wine), ruff,
+# and UndefinedBehaviorSanitizer via CTest (with the FMUs' Windows binaries run under wine), the
+# same CTest on the README's default build (Release), ruff,
 # the Python package's import layers (lint-imports) and types (mypy), pytest (including the
 # generated-code checks), and a short libFuzzer run on the CAN frame decoders. mingw-w64, wine and
 # clang are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
-export RRR_PIP_TARGET=".[test]"
+export RRR_PIP_TARGET=".[test,bench]"
 # The Windows binaries of the FMUs are cross-compiled with mingw-w64 and tested under wine: both
 # must be present before the FMUs are built (by pip install below and by CMake).
 windows_tools_ok() {
@@ -34,11 +35,26 @@ fi
 # shellcheck disable=SC1091
 . scripts/setup_env.sh
 JOBS="$(nproc 2>/dev/null || echo 2)"
+# The benchmark's C++ driver (one Pinocchio translation unit: about 2 min of CPU) builds in the
+# background at the lowest priority while the tests below run, in a process group of its own
+# (stopped with this script); bench/run_bench.py --quick uses it at the end.
+mkdir -p build-bench
+echo "== building bench/run_bench.py's C++ driver in the background (nice 19, build-bench/) =="
+setsid nice -n 19 python bench/run_bench.py --build-only --werror --build-dir build-bench \
+  > build-bench/build.log 2>&1 &
+BENCH_BUILD=$!
+trap 'kill -- "-$BENCH_BUILD" 2>/dev/null || true' EXIT
 echo "== C tests under ASan + UBSan =="
-cmake -S . -B build-asan -DRRR_SANITIZE=ON -DCMAKE_BUILD_TYPE=Debug -DPython3_EXECUTABLE="$(command -v python)"
+# warnings are errors in every build of the test command (RRR_WERROR; off in a user's build)
+cmake -S . -B build-asan -DRRR_SANITIZE=ON -DRRR_WERROR=ON -DCMAKE_BUILD_TYPE=Debug \
+  -DPython3_EXECUTABLE="$(command -v python)"
 cmake --build build-asan -j "$JOBS"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir build-asan --output-on-failure -j "$JOBS"
+echo "== the README's CMake build (default type: Release, tests on) and its CTest =="
+cmake -S . -B build-release -DRRR_WERROR=ON -DPython3_EXECUTABLE="$(command -v python)"
+cmake --build build-release -j "$JOBS"
+ctest --test-dir build-release --output-on-failure -j "$JOBS"
 echo "== ruff, lint-imports, mypy =="
 ruff check python tests bench tools c_src/rrr/gen
 # the layers of the Python package (pyproject.toml [tool.importlinter]), checked on the rrr_robot
@@ -47,6 +63,17 @@ lint-imports
 mypy python/rrr_robot
 echo "== pytest =="
 python -m pytest -q tests/python
+echo "== every bench script's quick mode (bench/: they print their tables; no number is checked) =="
+if ! wait "$BENCH_BUILD"; then
+  cat build-bench/build.log >&2
+  echo "the benchmark's C++ driver did not build (build-bench/build.log above)" >&2
+  exit 1
+fi
+python bench/run_bench.py --quick --skip-build --build-dir build-bench
+for script in bench/bench_*.py; do
+  echo "-- python $script --quick"
+  python "$script" --quick
+done
 echo "== libFuzzer on the CAN frame decoders (short run; c_src/hil/README.md has the long one) =="
 fuzzer_ok() {
   command -v clang >/dev/null 2>&1 && [ -e "$(clang -print-file-name=libclang_rt.fuzzer-x86_64.a)" ]
@@ -65,10 +92,11 @@ if ! fuzzer_ok; then
     exit 1
   fi
 fi
-cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_BUILD_TESTS=OFF \
+cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_BUILD_TESTS=OFF -DRRR_WERROR=ON \
   -DCMAKE_BUILD_TYPE=Debug -DPython3_EXECUTABLE="$(command -v python)" >/dev/null
 cmake --build build-fuzz --target fuzz_hil_decode -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
-echo "== all test stages passed (CTest, ruff, lint-imports, mypy, pytest, libFuzzer) =="
+echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, pytest, the benchmarks'" \
+     "quick modes, libFuzzer) =="

@@ -7,4 +7,6 @@ ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
 # shellcheck disable=SC1091
 . scripts/setup_env.sh
+echo "== rrr writing --out ${1:-results}: the writing task co-simulated for the scenarios pd," \
+     "ctc and mismatch, then the figures (usually 10 to 30 s) =="
 rrr writing --out "${1:-results}"

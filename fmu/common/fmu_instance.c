@@ -132,6 +132,142 @@ static char *resource_folder(const fmu_host *host)
     return out;
 }
 
+/* ---- start values from resources/ ------------------------------------------------------------ */
+
+/* One line of resources/FMU_START_FILE, "name,value" (split at the last comma: names such as
+ * "f[1,2]" hold commas, numbers never do), applied as SetReal/SetBoolean would in state
+ * Instantiated (the same checks: a parameter or an input, finite). 0, or -1 logged. */
+static int start_line(fmu_instance *S, const char *fn, size_t line_no, char *line)
+{
+    char *comma = strrchr(line, ',');
+    if (comma == NULL) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: resources/%s line %zu: expected name,value",
+                fn, FMU_START_FILE, line_no);
+        return -1;
+    }
+    *comma = '\0';
+    const char *name = line;
+    const char *text = comma + 1;
+    const fmu_variable *v = NULL;
+    for (size_t i = 0; i < S->model->n_vars && v == NULL; ++i) {
+        if (strcmp(S->model->vars[i].name, name) == 0) {
+            v = &S->model->vars[i];
+        }
+    }
+    if (v == NULL || (v->causality != FMU_PARAMETER && v->causality != FMU_INPUT)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: resources/%s line %zu: %s has no parameter or input \"%.64s\"", fn,
+                FMU_START_FILE, line_no, S->model->identifier, name);
+        return -1;
+    }
+    if (v->type == FMU_REAL) {
+        char *end = NULL;
+        const double d = strtod(text, &end);
+        if (end == text || *end != '\0') {
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: resources/%s line %zu: %s: a number expected, got \"%.64s\"", fn,
+                    FMU_START_FILE, line_no, v->name, text);
+            return -1;
+        }
+        if (!isfinite(d)) {
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: resources/%s line %zu: %s must be finite, got \"%.64s\"", fn,
+                    FMU_START_FILE, line_no, v->name, text);
+            return -1;
+        }
+        return fmu_set_values(S, fn, FMU_REAL, &v->vr, 1, &d, FMU_BOOL_INT) <= FMU_WARNING ? 0
+                                                                                           : -1;
+    }
+    const int b = strcmp(text, "true") == 0 || strcmp(text, "1") == 0;
+    if (!b && strcmp(text, "false") != 0 && strcmp(text, "0") != 0) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: resources/%s line %zu: %s: true or false expected, got \"%.64s\"", fn,
+                FMU_START_FILE, line_no, v->name, text);
+        return -1;
+    }
+    return fmu_set_values(S, fn, FMU_BOOLEAN, &v->vr, 1, &b, FMU_BOOL_INT) <= FMU_WARNING ? 0 : -1;
+}
+
+/* The start values of resources/FMU_START_FILE, when the FMU has one: a CSV with the header
+ * "name,value" and one line per variable (blank lines and lines starting with '#' skipped), at
+ * most FMU_START_FILE_MAX bytes, lines of at most FMU_START_LINE_MAX characters. A tool that
+ * writes an FMU for one system (rrr ssp) puts the system's values there, so that an importer
+ * that sets no parameter runs the same system. Nothing when there is no resources/ folder or no
+ * such file; an unreadable or malformed file is an error (logged: which line, what). */
+static fmu_status apply_start_file(fmu_instance *S, const char *fn)
+{
+    if (S->resources == NULL) {
+        return FMU_OK;
+    }
+    const size_t plen = strlen(S->resources) + sizeof FMU_START_FILE;
+    char *path = S->host.alloc(plen, 1);
+    char *text = S->host.alloc(FMU_START_FILE_MAX + 2, 1);
+    if (path == NULL || text == NULL) {
+        S->host.release(path);
+        S->host.release(text);
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: out of memory", fn);
+        return FMU_ERROR;
+    }
+    snprintf(path, plen, "%s%s", S->resources, FMU_START_FILE);
+    FILE *f = fopen(path, "rb");
+    size_t n = 0;
+    if (f != NULL) {
+        n = fread(text, 1, FMU_START_FILE_MAX + 1, f);
+        const int failed = ferror(f);
+        fclose(f);
+        if (failed) {
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: cannot read resources/%s", fn,
+                    FMU_START_FILE);
+            n = FMU_START_FILE_MAX + 2; /* refused below */
+        }
+    }
+    S->host.release(path);
+    fmu_status st = FMU_OK;
+    if (f != NULL && n > FMU_START_FILE_MAX) {
+        if (n == FMU_START_FILE_MAX + 1) {
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: resources/%s is larger than %d bytes", fn,
+                    FMU_START_FILE, FMU_START_FILE_MAX);
+        }
+        st = FMU_ERROR;
+    }
+    size_t line_no = 0;
+    int header = 0;
+    for (size_t at = 0; f != NULL && st == FMU_OK && at < n;) {
+        size_t end = at;
+        while (end < n && text[end] != '\n') {
+            ++end;
+        }
+        ++line_no;
+        char *line = text + at;
+        size_t len = end - at;
+        at = end + 1;
+        if (len > 0 && line[len - 1] == '\r') {
+            --len;
+        }
+        line[len] = '\0';
+        if (len > FMU_START_LINE_MAX || strlen(line) != len) {
+            fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: resources/%s line %zu: longer than %d characters or not text", fn,
+                    FMU_START_FILE, line_no, FMU_START_LINE_MAX);
+            st = FMU_ERROR;
+        } else if (len == 0 || line[0] == '#') {
+            continue;
+        } else if (!header) {
+            if (strcmp(line, "name,value") != 0) {
+                fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                        "%s: resources/%s line %zu: the header name,value expected", fn,
+                        FMU_START_FILE, line_no);
+                st = FMU_ERROR;
+            }
+            header = 1;
+        } else if (start_line(S, fn, line_no, line) != 0) {
+            st = FMU_ERROR;
+        }
+    }
+    S->host.release(text);
+    return st;
+}
+
 fmu_instance *fmu_create(const char *fn, const fmu_host *host, int fmi_version,
                          fmu_interface interface, const char *name, const char *token,
                          int logging_on)
@@ -199,6 +335,12 @@ fmu_instance *fmu_create(const char *fn, const fmu_host *host, int fmi_version,
         fmu_destroy(S);
         return NULL;
     }
+    /* the token is the table's and the compiled start values'; a resources/ file of start
+     * values changes the values, not the binary the XML belongs to */
+    if (apply_start_file(S, fn) > FMU_WARNING) {
+        fmu_destroy(S);
+        return NULL;
+    }
     return S;
 }
 
@@ -230,7 +372,12 @@ fmu_status fmu_reset_instance(fmu_instance *S)
     S->stop_time = 0.0;
     S->stop_time_defined = 0;
     S->dirty = 1;
-    return S->model->set_defaults(S->data);
+    fmu_status st = S->model->set_defaults(S->data);
+    if (st <= FMU_WARNING && S->token[0] != '\0') { /* Reset: the start values again */
+        const fmu_status sf = apply_start_file(S, "Reset");
+        st = sf > st ? sf : st;
+    }
+    return st;
 }
 
 fmu_status fmu_set_logging(fmu_instance *S, const char *fn, int on, size_t n,

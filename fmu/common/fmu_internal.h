@@ -21,6 +21,14 @@ extern const fmu_unit fmu_units[];
 /** Number of entries of fmu_units. */
 extern const size_t fmu_n_units;
 
+/** The optional file of start values in the FMU's resources/ (CSV "name,value"), applied at
+ *  instantiation and reset over the compiled ones: written by tools that ship an FMU for one
+ *  system (rrr ssp), so that an importer that sets no parameter runs that system. */
+#define FMU_START_FILE "start_values.csv"
+/** Its largest size in bytes and its longest line in characters. */
+#define FMU_START_FILE_MAX 65536
+#define FMU_START_LINE_MAX 256
+
 /** @brief The row of value reference vr, or NULL. */
 const fmu_variable *fmu_find_var(const fmu_model *m, fmu_vr vr);
 

@@ -53,7 +53,7 @@ static void test_voltage_torque(const rrr_model *m)
     double us[3];
     CHECK_STATUS(rrr_saturate(m, big, us, &sat), RRR_OK);
     CHECK(sat == 3u && us[0] == m->u_max && us[1] == -m->u_max && us[2] == 0.0);
-    const double nan_u[3] = {0.0, NAN, 0.0};
+    const double nan_u[3] = {0.0, (double)NAN, 0.0};
     double keep[3] = {7.0, 7.0, 7.0};
     CHECK_STATUS(rrr_saturate(m, nan_u, keep, NULL), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_torque_from_voltage(m, qd, nan_u, keep), RRR_BAD_INPUT);
@@ -97,12 +97,12 @@ static void test_ctc(const rrr_model *m)
     rrr_ctc_output keep;
     memset(&keep, 0, sizeof keep);
     keep.u[0] = 7.0;
-    const double nan_q[3] = {NAN, 0.0, 0.0};
+    const double nan_q[3] = {(double)NAN, 0.0, 0.0};
     CHECK_STATUS(rrr_ctc(m, &k, qr, qdr, qddr, nan_q, qd, &keep), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_ctc(m, &k, qr, nan_q, qddr, q, qd, &keep), RRR_BAD_INPUT);
     k.kp[1] = -1.0;
     CHECK_STATUS(rrr_ctc(m, &k, qr, qdr, qddr, q, qd, &keep), RRR_BAD_INPUT);
-    k.kp[1] = NAN;
+    k.kp[1] = (double)NAN;
     CHECK_STATUS(rrr_ctc(m, &k, qr, qdr, qddr, q, qd, &keep), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_ctc(m, NULL, qr, qdr, qddr, q, qd, &keep), RRR_BAD_INPUT);
     CHECK(keep.u[0] == 7.0);

@@ -285,7 +285,7 @@ static void test_params(const rrr_model *m, const rrr_ctc_gains *k, const rrr_pl
 
 static void test_refusals(const rrr_model *m, const rrr_ctc_gains *k)
 {
-    const double z[3] = {0.0, 0.0, 0.0}, bad[3] = {0.0, NAN, 0.0};
+    const double z[3] = {0.0, 0.0, 0.0}, bad[3] = {0.0, (double)NAN, 0.0};
     double a[3][3], b[3][3], s[3];
     CHECK_STATUS(rrr_inverse_dynamics_jacobian(NULL, z, z, z, a, b), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_inverse_dynamics_jacobian(m, bad, z, z, a, b), RRR_BAD_INPUT);
@@ -301,7 +301,7 @@ static void test_refusals(const rrr_model *m, const rrr_ctc_gains *k)
     CHECK_STATUS(rrr_plant_jacobian(m, &x, bad, &d), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_plant_jacobian(m, NULL, z, &d), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_plant_jacobian(m, &x, z, NULL), RRR_BAD_INPUT);
-    x.qd[2] = INFINITY;
+    x.qd[2] = (double)INFINITY;
     CHECK_STATUS(rrr_plant_jacobian(m, &x, z, &d), RRR_BAD_INPUT);
     CHECK(memcmp(&d, &keep, sizeof d) == 0); /* nothing written */
     rrr_model broken = *m;

@@ -270,7 +270,7 @@ static int untouched(const double *v, size_t n)
 /* ------------------------------------------------------------------------------------------ */
 static double energy(const rrr_model *m, const double q[3], const double qd[3])
 {
-    double ke = NAN, pe = NAN;
+    double ke = (double)NAN, pe = (double)NAN;
     CHECK(rrr_energy(m, q, qd, &ke, &pe) == RRR_OK, "energy");
     return ke + pe;
 }
@@ -443,7 +443,7 @@ static void test_errors(const rrr_model *good)
     CHECK(rrr_energy(good, q, qd, &ke, NULL) == RRR_BAD_INPUT, "NULL potential");
 
     /* NaN / Inf in each input component */
-    const double bad[2] = {NAN, INFINITY};
+    const double bad[2] = {(double)NAN, (double)INFINITY};
     for (int b = 0; b < 2; ++b) {
         for (int i = 0; i < 3; ++i) {
             double qb[3] = {q[0], q[1], q[2]}, qdb[3] = {qd[0], qd[1], qd[2]},

@@ -520,7 +520,7 @@ static fmi3Status set_bool(inst *x, const char *name, fmi3Boolean v)
 static double get1(inst *x, const char *name)
 {
     const fmi3ValueReference vr = vr_of(x->api, name);
-    double v = NAN;
+    double v = (double)NAN;
     CHECK(x->api->GetFloat64(x->c, &vr, 1, &v, 1) == fmi3OK);
     return v;
 }
@@ -1278,8 +1278,8 @@ static double loop_run(loop *L, int n, double (*rec)[9])
     for (int k = 0; k < n; ++k) {
         double row[9], r[9];
         if (loop_step(L, row)) {
-            CHECK(!"loop_step failed");
-            return INFINITY;
+            CHECK(0 && "loop_step failed");
+            return (double)INFINITY;
         }
         reference(L->t - H, r);
         for (int i = 0; i < 3; ++i) {
@@ -1595,7 +1595,7 @@ static void test_derivatives(const fmu3 *plant, const fmu3 *ctrl)
             /* the parameters: knowns in Initialization Mode (the start value q0 like q, the
              * model parameters as rrr_plant_param_jacobian), refused afterwards */
             const fmi3ValueReference a2 = vr_of(plant, "a2"), bad = 100000u;
-            const double one = 1.0, nan = NAN, inf = INFINITY;
+            const double one = 1.0, nan = (double)NAN, inf = (double)INFINITY;
             if (pass == 0) {
                 double dp[3][RRR_N_PARAMS];
                 CHECK(rrr_plant_param_jacobian(&m, &s, u, dp) == RRR_OK);
@@ -1784,26 +1784,26 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     /* initialization mode: parameters and inputs */
     CHECK(enter_init(&p) == fmi3OK);
     CHECK(enter_init(&c) == fmi3OK);
-    expect_refused(&p, "u[1]", NAN, "u[1]");
-    expect_refused(&p, "u[3]", -INFINITY, "u[3]");
-    expect_refused(&p, "d1", INFINITY, "d1");
-    expect_refused(&p, "p[7]", -INFINITY, "p[7]");
-    expect_refused(&p, "h_int", NAN, "h_int");
-    expect_refused(&p, "rtol", INFINITY, "rtol");
-    expect_refused(&p, "atol", NAN, "atol");
-    expect_refused(&p, "q0[2]", INFINITY, "q0[2]");
+    expect_refused(&p, "u[1]", (double)NAN, "u[1]");
+    expect_refused(&p, "u[3]", -(double)INFINITY, "u[3]");
+    expect_refused(&p, "d1", (double)INFINITY, "d1");
+    expect_refused(&p, "p[7]", -(double)INFINITY, "p[7]");
+    expect_refused(&p, "h_int", (double)NAN, "h_int");
+    expect_refused(&p, "rtol", (double)INFINITY, "rtol");
+    expect_refused(&p, "atol", (double)NAN, "atol");
+    expect_refused(&p, "q0[2]", (double)INFINITY, "q0[2]");
     expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
     expect_refused(&p, "time", 1.0, "time");       /* the independent variable */
-    expect_refused(&c, "q_ref[3]", NAN, "q_ref[3]");
-    expect_refused(&c, "kp[2]", INFINITY, "kp[2]");
-    expect_refused(&c, "f[2,3]", NAN, "f[2,3]");
+    expect_refused(&c, "q_ref[3]", (double)NAN, "q_ref[3]");
+    expect_refused(&c, "kp[2]", (double)INFINITY, "kp[2]");
+    expect_refused(&c, "f[2,3]", (double)NAN, "f[2,3]");
     expect_refused(&c, "u_n[1]", 0.5, "u_n[1]");   /* an output */
 
     /* a multi-value set with one bad value changes nothing */
     {
         fmi3ValueReference vr[3];
         vrs3(plant, "u", vr);
-        const double v[3] = {1.0, NAN, 2.0};
+        const double v[3] = {1.0, (double)NAN, 2.0};
         double got[3] = {-1.0, -1.0, -1.0};
         CHECK(plant->SetFloat64(p.c, vr, 3, v, 3) == fmi3Error);
         CHECK(plant->GetFloat64(p.c, vr, 3, got, 3) == fmi3OK);
@@ -1860,10 +1860,10 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     /* step mode: parameters are fixed, inputs are checked */
     CHECK(plant->ExitInitializationMode(p.c) == fmi3OK);
     CHECK(ctrl->ExitInitializationMode(c.c) == fmi3OK);
-    expect_refused(&p, "u[2]", INFINITY, "u[2]");
+    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
     expect_refused(&p, "a3", 0.3, "StepMode"); /* fixed parameter after initialization */
     expect_refused(&p, "q0[1]", 0.3, "q0[1]");
-    expect_refused(&c, "qd[1]", NAN, "qd[1]");
+    expect_refused(&c, "qd[1]", (double)NAN, "qd[1]");
     expect_refused(&c, "kd[3]", 1.0, "kd[3]");
     {
         const fmi3ValueReference ff = vr_of(ctrl, "feedforward");
@@ -1887,12 +1887,12 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
         log_clear(&p);
         expect_error(&p, do_step(&p, H, 0.0, NULL), "doStep h = 0", "communicationStepSize", NULL);
         expect_error(&p, do_step(&p, H, -H, NULL), "doStep h < 0", "communicationStepSize", NULL);
-        expect_error(&p, do_step(&p, H, NAN, NULL), "doStep h NaN", "communicationStepSize", NULL);
-        expect_error(&p, do_step(&p, H, INFINITY, NULL), "doStep h Inf", "communicationStepSize",
+        expect_error(&p, do_step(&p, H, (double)NAN, NULL), "doStep h NaN", "communicationStepSize", NULL);
+        expect_error(&p, do_step(&p, H, (double)INFINITY, NULL), "doStep h Inf", "communicationStepSize",
                      NULL);
         expect_error(&p, do_step(&p, 0.5, H, NULL), "doStep t wrong", "currentCommunicationPoint",
                      NULL);
-        expect_error(&p, do_step(&p, NAN, H, NULL), "doStep t NaN", "currentCommunicationPoint",
+        expect_error(&p, do_step(&p, (double)NAN, H, NULL), "doStep t NaN", "currentCommunicationPoint",
                      NULL);
         expect_error(&p, plant->DoStep(p.c, H, H, true, NULL, &b[1], &b[2], &last),
                      "doStep with eventHandlingNeeded NULL", "NULL", NULL);
@@ -1916,11 +1916,11 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
         if (inst_new(&x, plant, "stop_time", 0)) {
             return;
         }
-        expect_error(&x, plant->EnterInitializationMode(x.c, false, 0.0, NAN, false, 0.0),
+        expect_error(&x, plant->EnterInitializationMode(x.c, false, 0.0, (double)NAN, false, 0.0),
                      "startTime NaN", "startTime", NULL);
         expect_error(&x, plant->EnterInitializationMode(x.c, false, 0.0, 1.0, true, 0.5),
                      "stopTime < startTime", "stopTime", NULL);
-        expect_error(&x, plant->EnterInitializationMode(x.c, false, 0.0, 0.0, true, INFINITY),
+        expect_error(&x, plant->EnterInitializationMode(x.c, false, 0.0, 0.0, true, (double)INFINITY),
                      "stopTime Inf", "stopTime", NULL);
         check_state(&x, ST_INST, "after refused enterInitializationMode arguments");
         CHECK(plant->EnterInitializationMode(x.c, true, 1e-6, 0.0, true, 2 * H) == fmi3OK);
@@ -2044,7 +2044,7 @@ static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
     fmi3Byte *bc = malloc(nc);
     fmi3Byte *bad = malloc(np + 8);
     if (bp == NULL || bc == NULL || bad == NULL) {
-        CHECK(!"out of memory");
+        CHECK(0 && "out of memory");
         free(bp);
         free(bc);
         free(bad);
@@ -2107,7 +2107,7 @@ static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
             free(b2);
             p2->FreeFMUstate(c2, &s2);
         } else {
-            CHECK(!"FMI 2 state");
+            CHECK(0 && "FMI 2 state");
         }
         if (c2 != NULL) {
             p2->FreeInstance(c2);
@@ -2164,12 +2164,12 @@ static void plant_xdot(const fmu3 *api, const rrr_model *m, const double x[], co
         const char *name = api->vars[api->x_var[i]].name;
         const int j = name[strlen(name) - 2] - '1';
         if (j < 0 || j > 2) {
-            CHECK(!"plant states are q[1..3] and qd[1..3]");
+            CHECK(0 && "plant states are q[1..3] and qd[1..3]");
             return;
         }
         (strncmp(name, "qd[", 3) == 0 ? s.qd : s.q)[j] = x[i];
     }
-    double qdd[3] = {NAN, NAN, NAN};
+    double qdd[3] = {(double)NAN, (double)NAN, (double)NAN};
     CHECK(rrr_plant_accel(m, &s, u, qdd) == RRR_OK);
     for (size_t i = 0; i < api->nx; ++i) {
         const char *name = api->vars[api->dx_var[i]].name;
@@ -2187,7 +2187,7 @@ static void test_model_exchange(const fmu3 *plant, const fmu3 *ctrl)
     rrr_rng rng = {0x9E3779B97F4A7C15ull};
     const size_t nx = plant->nx;
     if (nx != 6) {
-        CHECK(!"the plant has 6 continuous states");
+        CHECK(0 && "the plant has 6 continuous states");
         return;
     }
     inst p;
@@ -2274,7 +2274,7 @@ static void test_model_exchange(const fmu3 *plant, const fmu3 *ctrl)
 
     /* refused: non-finite states and times, wrong counts, NULL arrays; nothing changes */
     {
-        const double specials[3] = {NAN, INFINITY, -INFINITY};
+        const double specials[3] = {(double)NAN, (double)INFINITY, -(double)INFINITY};
         double before[MAX_STATES], after[MAX_STATES], bad_x[MAX_STATES + 1];
         const double t_before = get1(&p, "time");
         CHECK(plant->GetContinuousStates(p.c, before, nx) == fmi3OK);
@@ -2314,7 +2314,7 @@ static void test_model_exchange(const fmu3 *plant, const fmu3 *ctrl)
         CHECK(plant->GetContinuousStates(p.c, after, nx) == fmi3OK);
         CHECK(memcmp(before, after, nx * sizeof before[0]) == 0);
         CHECK(get1(&p, "time") == t_before);
-        expect_refused(&p, "u[1]", NAN, "u[1]");
+        expect_refused(&p, "u[1]", (double)NAN, "u[1]");
         expect_refused(&p, "q0[1]", 1.0, "ContinuousTimeMode"); /* fixed after initialization */
         expect_refused(&p, "qdd[1]", 1.0, "qdd[1]");             /* an output */
         check_state(&p, ST_CONT, "after the refusals");
@@ -2522,7 +2522,7 @@ static void test_me_fmu_state(const fmu3 *plant)
         CHECK(plant->SetFMUState(me.c, s_back) == fmi3OK); /* back to ContinuousTimeMode */
         check_state(&me, ST_CONT, "after setFMUState of deserialized bytes");
     } else {
-        CHECK(!"out of memory");
+        CHECK(0 && "out of memory");
     }
     CHECK(plant->FreeFMUState(me.c, &s_back) == fmi3OK);
     CHECK(plant->FreeFMUState(me.c, &s_me) == fmi3OK);

@@ -149,11 +149,15 @@ static int xml_attr(const char *from, const char *attr, char *out, size_t n)
     return 0;
 }
 
-/* The <ScalarVariable ...> element of a variable, or NULL. */
+/* The <ScalarVariable ...> element of a variable, or NULL (also for a name too long to be
+ * one). */
 static const char *xml_var(const fmu_api *api, const char *name)
 {
-    char key[96];
-    snprintf(key, sizeof key, "<ScalarVariable name=\"%s\"", name);
+    char key[1024];
+    int len = snprintf(key, sizeof key, "<ScalarVariable name=\"%s\"", name);
+    if (len < 0 || (size_t)len >= sizeof key) {
+        return NULL;
+    }
     return strstr(api->xml, key);
 }
 
@@ -447,7 +451,7 @@ static fmi2Status set_bool(inst *x, const char *name, fmi2Boolean v)
 static double get1(inst *x, const char *name)
 {
     const fmi2ValueReference vr = vr_of(x->api, name);
-    double v = NAN;
+    double v = (double)NAN;
     CHECK(x->api->GetReal(x->c, &vr, 1, &v) == fmi2OK);
     return v;
 }
@@ -697,8 +701,8 @@ static double loop_run(loop *L, int n, double (*rec)[9])
     for (int k = 0; k < n; ++k) {
         double row[9], r[9];
         if (loop_step(L, row)) {
-            CHECK(!"loop_step failed");
-            return INFINITY;
+            CHECK(0 && "loop_step failed");
+            return (double)INFINITY;
         }
         reference(L->t - H, r);
         for (int i = 0; i < 3; ++i) {
@@ -1249,7 +1253,7 @@ static void test_directional_derivatives(const fmu_api *plant, const fmu_api *ct
             }
         }
         const fmi2ValueReference a2 = vr_of(plant, "a2"), bad = 100000u;
-        const double one = 1.0, nan = NAN, inf = -INFINITY;
+        const double one = 1.0, nan = (double)NAN, inf = -(double)INFINITY;
         expect_refused_dd(&x, vqdd, 1, &a2, 1, &one, "InitializationMode");
         expect_refused_dd(&x, vu, 1, vq, 1, &one, "not an unknown");
         expect_refused_dd(&x, vqdd, 1, &bad, 1, &one, "not a value reference");
@@ -1327,23 +1331,23 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     /* initialization mode: parameters and inputs */
     CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
     CHECK(ctrl->EnterInitializationMode(c.c) == fmi2OK);
-    expect_refused(&p, "u[1]", NAN, "u[1]");
-    expect_refused(&p, "d1", INFINITY, "d1");
-    expect_refused(&p, "p[7]", -INFINITY, "p[7]");
-    expect_refused(&p, "h_int", NAN, "h_int");
-    expect_refused(&p, "rtol", INFINITY, "rtol");
-    expect_refused(&p, "atol", NAN, "atol");
+    expect_refused(&p, "u[1]", (double)NAN, "u[1]");
+    expect_refused(&p, "d1", (double)INFINITY, "d1");
+    expect_refused(&p, "p[7]", -(double)INFINITY, "p[7]");
+    expect_refused(&p, "h_int", (double)NAN, "h_int");
+    expect_refused(&p, "rtol", (double)INFINITY, "rtol");
+    expect_refused(&p, "atol", (double)NAN, "atol");
     expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
-    expect_refused(&c, "q_ref[3]", NAN, "q_ref[3]");
-    expect_refused(&c, "kp[2]", INFINITY, "kp[2]");
-    expect_refused(&c, "f[2,3]", NAN, "f[2,3]");
+    expect_refused(&c, "q_ref[3]", (double)NAN, "q_ref[3]");
+    expect_refused(&c, "kp[2]", (double)INFINITY, "kp[2]");
+    expect_refused(&c, "f[2,3]", (double)NAN, "f[2,3]");
     expect_refused(&c, "u_n[1]", 0.5, "u_n[1]");   /* an output */
 
     /* a multi-value set with one bad value changes nothing */
     {
         fmi2ValueReference vr[3];
         vrs3(plant, "u", vr);
-        const double v[3] = {1.0, NAN, 2.0};
+        const double v[3] = {1.0, (double)NAN, 2.0};
         double got[3] = {-1.0, -1.0, -1.0};
         CHECK(plant->SetReal(p.c, vr, 3, v) == fmi2Error);
         CHECK(plant->GetReal(p.c, vr, 3, got) == fmi2OK);
@@ -1373,9 +1377,9 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     /* step complete: parameters are fixed, inputs are checked */
     CHECK(plant->ExitInitializationMode(p.c) == fmi2OK);
     CHECK(ctrl->ExitInitializationMode(c.c) == fmi2OK);
-    expect_refused(&p, "u[2]", INFINITY, "u[2]");
+    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
     expect_refused(&p, "a3", 0.3, "InitializationMode"); /* fixed parameter after init */
-    expect_refused(&c, "qd[1]", NAN, "qd[1]");
+    expect_refused(&c, "qd[1]", (double)NAN, "qd[1]");
     expect_refused(&c, "kd[3]", 1.0, "kd[3]");
     {
         const fmi2ValueReference ff = vr_of(ctrl, "feedforward");
@@ -1391,11 +1395,11 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     log_clear(&p);
     CHECK(plant->DoStep(p.c, H, 0.0, fmi2True) == fmi2Error);
     CHECK(plant->DoStep(p.c, H, -H, fmi2True) == fmi2Error);
-    CHECK(plant->DoStep(p.c, H, NAN, fmi2True) == fmi2Error);
+    CHECK(plant->DoStep(p.c, H, (double)NAN, fmi2True) == fmi2Error);
     CHECK(strstr(p.log.last_error, "communicationStepSize") != NULL);
     CHECK(plant->DoStep(p.c, 0.5, H, fmi2True) == fmi2Error);
     CHECK(strstr(p.log.last_error, "currentCommunicationPoint") != NULL);
-    CHECK(plant->DoStep(p.c, NAN, H, fmi2True) == fmi2Error);
+    CHECK(plant->DoStep(p.c, (double)NAN, H, fmi2True) == fmi2Error);
     /* a point at the low end of the tolerance with a shorter step would move time backwards */
     CHECK(plant->DoStep(p.c, H * (1.0 - 5e-10), H * 1e-10, fmi2True) == fmi2Error);
     CHECK(strstr(p.log.last_error, "not a finite time after the FMU time") != NULL);
@@ -1457,7 +1461,7 @@ static void test_time_overflow(const fmu_api *plant)
         return;
     }
     const double t0 = 1.5e308;
-    CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, INFINITY, fmi2False, 0.0) == fmi2Error);
+    CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, (double)INFINITY, fmi2False, 0.0) == fmi2Error);
     CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, t0, fmi2False, 0.0) == fmi2OK);
     CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
     CHECK(plant->ExitInitializationMode(p.c) == fmi2OK);
@@ -1530,7 +1534,7 @@ static void test_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
     fmi2Byte *bc = malloc(nc);
     fmi2Byte *bad = malloc(np + 8);
     if (bp == NULL || bc == NULL || bad == NULL) {
-        CHECK(!"out of memory");
+        CHECK(0 && "out of memory");
         return;
     }
     CHECK(plant->SerializeFMUstate(p.c, sp, bp, np) == fmi2OK);
@@ -1919,7 +1923,7 @@ static void test_me_derivatives(const fmu_api *api)
 {
     enum { N = 2000 };
     if (api->nx != 6u) {
-        CHECK(!"the plant declares 6 continuous states");
+        CHECK(0 && "the plant declares 6 continuous states");
         return;
     }
     int n_diff = 0, n_dq = 0, n_sat = 0, total = 0;
@@ -1955,7 +1959,7 @@ static void test_me_derivatives(const fmu_api *api)
             if (api->SetReal(x.c, vu, 3, u) != fmi2OK ||
                 api->SetContinuousStates(x.c, xv, 6) != fmi2OK ||
                 api->GetDerivatives(x.c, dx, 6) != fmi2OK) {
-                CHECK(!"SetReal/SetContinuousStates/GetDerivatives failed");
+                CHECK(0 && "SetReal/SetContinuousStates/GetDerivatives failed");
                 break;
             }
             rrr_plant_state ps;
@@ -2018,7 +2022,7 @@ static void test_me_rk4_vs_cs(const fmu_api *api)
     for (int k = 0; k < STEPS; ++k) {
         for (int j = 0; j < SUB; ++j) {
             if (me_rk4(&me, (double)(k * SUB + j) * dt, dt, x, 6)) {
-                CHECK(!"RK4 step through Model Exchange failed");
+                CHECK(0 && "RK4 step through Model Exchange failed");
                 k = STEPS;
                 break;
             }
@@ -2026,7 +2030,7 @@ static void test_me_rk4_vs_cs(const fmu_api *api)
         double y[6];
         if (api->DoStep(cs.c, k * H, H, fmi2True) != fmi2OK ||
             api->GetReal(cs.c, vq, 3, y) != fmi2OK || api->GetReal(cs.c, vqd, 3, y + 3) != fmi2OK) {
-            CHECK(!"Co-Simulation step failed");
+            CHECK(0 && "Co-Simulation step failed");
             break;
         }
         for (int i = 0; i < 6; ++i) {
@@ -2107,7 +2111,7 @@ static void test_me_controller(const fmu_api *api)
                 api->GetReal(me.c, out, 9, a) != fmi2OK ||
                 api->SetReal(cs.c, in, 15, v) != fmi2OK ||
                 api->GetReal(cs.c, out, 9, b) != fmi2OK) {
-                CHECK(!"controller set/get failed");
+                CHECK(0 && "controller set/get failed");
                 break;
             }
             rrr_ctc_output o;
@@ -2153,7 +2157,7 @@ static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     const struct {
         size_t i;
         double v;
-    } bad_x[] = {{0, NAN}, {4, INFINITY}, {5, -INFINITY}};
+    } bad_x[] = {{0, (double)NAN}, {4, (double)INFINITY}, {5, -(double)INFINITY}};
     for (size_t k = 0; k < sizeof bad_x / sizeof bad_x[0]; ++k) {
         for (size_t i = 0; i < 6; ++i) {
             xb[i] = x0[i] + 0.5;
@@ -2165,9 +2169,9 @@ static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
         CHECK(plant->GetDerivatives(p.c, buf, 6) == fmi2OK && bits_equal(buf, dx0, 6));
     }
     /* non-finite time (the serialized FMU state holds the time: unchanged) */
-    REFUSED(&p, plant->SetTime(p.c, NAN), "fmi2SetTime", NULL);
-    REFUSED(&p, plant->SetTime(p.c, INFINITY), "fmi2SetTime", NULL);
-    REFUSED(&p, plant->SetTime(p.c, -INFINITY), "fmi2SetTime", NULL);
+    REFUSED(&p, plant->SetTime(p.c, (double)NAN), "fmi2SetTime", NULL);
+    REFUSED(&p, plant->SetTime(p.c, (double)INFINITY), "fmi2SetTime", NULL);
+    REFUSED(&p, plant->SetTime(p.c, -(double)INFINITY), "fmi2SetTime", NULL);
 
     /* wrong nx and ni: refused before any element is read or written (the arrays hold 6) */
     for (size_t i = 0; i < 6; ++i) {
@@ -2201,7 +2205,7 @@ static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     expect_refused(&p, "q[1]", 1.0, "q[1]");
     expect_refused(&p, "qdd[2]", 0.0, "qdd[2]");
     expect_refused(&p, "tip.x", 0.0, "tip.x");
-    expect_refused(&p, "u[2]", INFINITY, "u[2]");
+    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
     expect_refused(&p, "kt[1]", 0.5, "ContinuousTimeMode"); /* a fixed parameter */
     CHECK(set1(&p, "u[2]", -2.5) == fmi2OK);
     CHECK(plant->GetDerivatives(p.c, buf, 6) == fmi2OK);
@@ -2228,9 +2232,9 @@ static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     REFUSED(&c, ctrl->GetContinuousStates(c.c, one, 1), "fmi2GetContinuousStates", NULL);
     REFUSED(&c, ctrl->GetDerivatives(c.c, one, 1), "fmi2GetDerivatives", NULL);
     REFUSED(&c, ctrl->GetEventIndicators(c.c, one, 1), "fmi2GetEventIndicators", NULL);
-    REFUSED(&c, ctrl->SetTime(c.c, NAN), "fmi2SetTime", NULL);
+    REFUSED(&c, ctrl->SetTime(c.c, (double)NAN), "fmi2SetTime", NULL);
     expect_refused(&c, "u_c[3]", 1.0, "u_c[3]");
-    expect_refused(&c, "q_ref[1]", NAN, "q_ref[1]");
+    expect_refused(&c, "q_ref[1]", (double)NAN, "q_ref[1]");
     CHECK(ctrl->EnterEventMode(c.c) == fmi2OK);
     expect_refused(&c, "kp[1]", 5.0, "EventMode");
     expect_refused(&c, "g", 9.0, "EventMode");
@@ -2252,12 +2256,12 @@ static void me_run(inst *p, double t, int n, double dt, double (*rec)[6])
 {
     double x[6];
     if (p->api->GetContinuousStates(p->c, x, 6) != fmi2OK) {
-        CHECK(!"GetContinuousStates failed");
+        CHECK(0 && "GetContinuousStates failed");
         return;
     }
     for (int k = 0; k < n; ++k) {
         if (me_rk4(p, t + k * dt, dt, x, 6)) {
-            CHECK(!"RK4 step through Model Exchange failed");
+            CHECK(0 && "RK4 step through Model Exchange failed");
             return;
         }
         memcpy(rec[k], x, sizeof x);
@@ -2287,7 +2291,7 @@ static void test_me_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
     CHECK(plant->SerializedFMUstateSize(p.c, s, &n) == fmi2OK && n > 0);
     fmi2Byte *bytes = malloc(n);
     if (bytes == NULL) {
-        CHECK(!"out of memory");
+        CHECK(0 && "out of memory");
         return;
     }
     CHECK(plant->SerializeFMUstate(p.c, s, bytes, n) == fmi2OK);
@@ -2329,7 +2333,7 @@ static void test_me_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
     CHECK(plant->SerializedFMUstateSize(cs.c, s_cs, &n_cs) == fmi2OK);
     fmi2Byte *bytes_cs = malloc(n_cs > 0 ? n_cs : 1);
     if (bytes_cs == NULL) {
-        CHECK(!"out of memory");
+        CHECK(0 && "out of memory");
         return;
     }
     CHECK(plant->SerializeFMUstate(cs.c, s_cs, bytes_cs, n_cs) == fmi2OK);
@@ -2453,6 +2457,104 @@ static fmi2Status ref_init(const fmu_api *api, const char *uri, char *msg, size_
 }
 
 #define REF_ROW(T, Q) #T "," #Q ",0.2,0.3,1,0,0,0,0,0,0.5,-0.25,0.4,0,0,0,0,0,0\n"
+
+/* <dir>/resources/start_values.csv holding `len` bytes of `body`; uri receives its location. */
+static int start_folder(const char *dir, const char *body, size_t len, char *uri, size_t n)
+{
+    char path[800];
+    snprintf(path, sizeof path, "%s/resources", dir);
+    (void)mkdir(path, 0700);
+    snprintf(path, sizeof path, "%s/resources/start_values.csv", dir);
+    FILE *f = fopen(path, "wb");
+    if (f == NULL) {
+        return 1;
+    }
+    const int ok = fwrite(body, 1, len, f) == len;
+    fclose(f);
+    snprintf(uri, n, "file://%s/resources", dir);
+    return !ok;
+}
+
+/* resources/start_values.csv: its values replace the compiled start values at instantiation and
+ * reset; a malformed file stops the instantiation with a message naming the line. */
+static void test_start_file(const fmu_api *api)
+{
+    char dir[] = "/tmp/rrr_start_harness_XXXXXX";
+    if (mkdtemp(dir) == NULL) {
+        CHECK(0);
+        return;
+    }
+    char uri[1100];
+    static const char good[] = "# one system's values\nname,value\nkp[2],123.5\r\n\n"
+                               "f[1,2],0.25\nfeedforward,false\n";
+    if (start_folder(dir, good, sizeof good - 1, uri, sizeof uri) != 0) {
+        CHECK(0);
+        return;
+    }
+    inst x;
+    if (inst_new_at(&x, api, "start_file", uri) == 0) {
+        CHECK(api->SetupExperiment(x.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+        CHECK(api->EnterInitializationMode(x.c) == fmi2OK);
+        CHECK(get1(&x, "kp[2]") == 123.5 && get1(&x, "f[1,2]") == 0.25);
+        const fmi2ValueReference ff = vr_of(api, "feedforward");
+        fmi2Boolean b = fmi2True;
+        CHECK(api->GetBoolean(x.c, &ff, 1, &b) == fmi2OK && b == fmi2False);
+        CHECK(api->Reset(x.c) == fmi2OK);
+        CHECK(set1(&x, "kp[2]", 7.0) == fmi2OK);
+        CHECK(api->Reset(x.c) == fmi2OK);
+        CHECK(api->SetupExperiment(x.c, fmi2False, 0.0, 0.0, fmi2False, 0.0) == fmi2OK);
+        CHECK(api->EnterInitializationMode(x.c) == fmi2OK);
+        CHECK(get1(&x, "kp[2]") == 123.5); /* the file's again after Reset */
+        inst_free(&x);
+    }
+    static char big[70000];
+    memset(big, '#', sizeof big);
+    static const struct {
+        const char *body;
+        size_t len; /* 0: strlen(body) */
+        const char *needle;
+    } bad[] = {
+        {"kp[2],1\n", 0, "line 1: the header name,value expected"},
+        {"name,value\nkp[2]\n", 0, "line 2: expected name,value"},
+        {"name,value\nkq[2],1\n", 0, "has no parameter or input \"kq[2]\""},
+        {"name,value\nu[1],1\n", 0, "has no parameter or input \"u[1]\""},
+        {"name,value\nkp[2],1.5x\n", 0, "kp[2]: a number expected, got \"1.5x\""},
+        {"name,value\nkp[2],nan\n", 0, "kp[2] must be finite"},
+        {"name,value\nkp[2],-1e999\n", 0, "kp[2] must be finite"},
+        {"name,value\nfeedforward,yes\n", 0, "true or false expected"},
+        {"name,value\nkp[2],1\0\n", 19, "not text"},
+        {big, sizeof big, "is larger than 65536 bytes"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        const size_t len = bad[k].len != 0 ? bad[k].len : strlen(bad[k].body);
+        if (start_folder(dir, bad[k].body, len, uri, sizeof uri) != 0) {
+            CHECK(0);
+            continue;
+        }
+        inst y;
+        memset(&y, 0, sizeof y);
+        y.api = api;
+        y.cb.logger = logger;
+        y.cb.allocateMemory = count_calloc;
+        y.cb.freeMemory = count_free;
+        y.cb.componentEnvironment = &y.log;
+        y.c = api->Instantiate("start_bad", fmi2CoSimulation, api->guid, uri, &y.cb, fmi2False,
+                               fmi2False);
+        if (y.c != NULL || strstr(y.log.last_error, bad[k].needle) == NULL ||
+            strstr(y.log.last_error, "start_values.csv") == NULL) {
+            fprintf(stderr, "start file %zu: instance %p, message \"%s\", expected \"%s\"\n", k,
+                    (void *)y.c, y.log.last_error, bad[k].needle);
+            rrr_test_failures++;
+            inst_free(&y);
+        }
+    }
+    char path[800];
+    snprintf(path, sizeof path, "%s/resources/start_values.csv", dir);
+    remove(path);
+    snprintf(path, sizeof path, "%s/resources", dir);
+    rmdir(path);
+    rmdir(dir);
+}
 
 /* Tables in resources/: missing, malformed ones refused at exitInitializationMode with a message
  * naming the problem; a percent-escaped resource URI; FMU state set into a fresh instance (the
@@ -2589,6 +2691,7 @@ int main(int argc, char **argv)
     test_closed_loop(&plant, &ctrl);
     test_illegal_sequences(&plant, &cs_machine);
     test_illegal_sequences(&ctrl, &cs_machine);
+    test_start_file(&ctrl);
     test_bad_values(&plant, &ctrl);
     test_validation(&plant, &ctrl);
     test_discard(&plant);

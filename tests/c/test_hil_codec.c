@@ -44,7 +44,7 @@ static void test_voltage_roundtrip(void)
     memset(&f, 0xAB, sizeof f);
     CHECK(rrr_hil_encode_voltage_cmd(&bad, &f) == -1);
     CHECK(f.id == 0xABABABABu); /* untouched */
-    bad.u_V[0] = NAN;
+    bad.u_V[0] = (double)NAN;
     CHECK(rrr_hil_encode_voltage_cmd(&bad, &f) == -1);
     bad.u_V[0] = 0.0;
     bad.counter = 16;

@@ -196,7 +196,7 @@ static void test_singular_and_bad(const rrr_model *m)
     const double far[3] = {2.0, 0.0, 0.5};
     const double inner[3] = {0.1, -0.02, 0.52};
     const double cyl[3] = {0.01, 0.01, 0.9};
-    const double nan_x[3] = {NAN, 0.0, 0.5}, inf_x[3] = {0.3, INFINITY, 0.5};
+    const double nan_x[3] = {(double)NAN, 0.0, 0.5}, inf_x[3] = {0.3, (double)INFINITY, 0.5};
     double margin = 0.0;
     unsigned flags = 0u;
     CHECK_STATUS(rrr_workspace_margin(m, far, &margin, &flags), RRR_OK);
@@ -233,7 +233,7 @@ static void test_singular_and_bad(const rrr_model *m)
     CHECK_STATUS(rrr_fk(m, nan_x, qk, NULL), RRR_BAD_INPUT);
     CHECK(qk[0] == 7.0);
     CHECK_STATUS(rrr_ik_branch(m, up, (rrr_shoulder)5, RRR_ELBOW_UP, qk), RRR_BAD_INPUT);
-    const double prev_nan[3] = {0.0, NAN, 0.0};
+    const double prev_nan[3] = {0.0, (double)NAN, 0.0};
     rrr_fk(m, up, x, NULL);
     CHECK_STATUS(rrr_ik_nearest(m, x, prev_nan, qk, NULL), RRR_BAD_INPUT);
     /* beyond RRR_Q_UNWRAP_MAX a double cannot hold the unwrapped angle: refused, not wrong */

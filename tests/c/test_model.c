@@ -61,10 +61,10 @@ static void test_bps_bad(void)
     bad.link[1].mass = -1.0;
     CHECK_STATUS(rrr_bps_from_inertia(&m, &bad, p), RRR_BAD_INPUT);
     bad = in;
-    bad.link[2].inertia_com[0][1] = NAN;
+    bad.link[2].inertia_com[0][1] = (double)NAN;
     CHECK_STATUS(rrr_bps_from_inertia(&m, &bad, p), RRR_BAD_INPUT);
     bad = in;
-    bad.rotor_inertia[0] = INFINITY;
+    bad.rotor_inertia[0] = (double)INFINITY;
     CHECK_STATUS(rrr_bps_from_inertia(&m, &bad, p), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_bps_from_inertia(NULL, &in, p), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_bps_from_inertia(&m, NULL, p), RRR_BAD_INPUT);
@@ -94,19 +94,19 @@ static void test_validate(void)
     m.kt[2] = -3.0;
     expect_invalid(&m, RRR_BAD_MODEL, "kt[3]");
     m = ok;
-    m.p[4] = NAN;
+    m.p[4] = (double)NAN;
     expect_invalid(&m, RRR_BAD_MODEL, "p[5]");
     m = ok;
     m.a3 = 0.0;
     expect_invalid(&m, RRR_BAD_MODEL, "a3");
     m = ok;
-    m.d1 = INFINITY;
+    m.d1 = (double)INFINITY;
     expect_invalid(&m, RRR_BAD_MODEL, "d1");
     m = ok;
     m.u_max = 0.0;
     expect_invalid(&m, RRR_BAD_MODEL, "u_max");
     m = ok;
-    m.f[2][1] = NAN;
+    m.f[2][1] = (double)NAN;
     expect_invalid(&m, RRR_BAD_MODEL, "f[3,2]");
     m = ok;
     m.w[0][0] = -1.0;
@@ -169,19 +169,19 @@ static void test_param_table(void)
     const int f23 = rrr_param_index("f[2,3]");
     CHECK(f23 >= 0 && rrr_param_get(&m, (size_t)f23) == m.f[1][2]);
     CHECK(rrr_param_set(&m, (size_t)f23, 0.125) == RRR_OK && m.f[1][2] == 0.125);
-    CHECK(rrr_param_set(&m, (size_t)f23, NAN) == RRR_BAD_INPUT && m.f[1][2] == 0.125);
+    CHECK(rrr_param_set(&m, (size_t)f23, (double)NAN) == RRR_BAD_INPUT && m.f[1][2] == 0.125);
     CHECK(rrr_param_set(&m, n, 1.0) == RRR_BAD_INPUT && rrr_param_set(NULL, 0, 1.0) == RRR_BAD_INPUT);
     CHECK(isnan(rrr_param_get(&m, n)) && isnan(rrr_param_get(NULL, 0)));
 
     const int a2 = rrr_param_index("a2"), g = rrr_param_index("g"), d1 = rrr_param_index("d1");
     CHECK(!rrr_param_in_range((size_t)a2, 0.0) && rrr_param_in_range((size_t)a2, 1e-9));
     CHECK(rrr_param_in_range((size_t)g, 0.0) && !rrr_param_in_range((size_t)g, -1e-9));
-    CHECK(rrr_param_in_range((size_t)d1, -5.0) && !rrr_param_in_range((size_t)d1, INFINITY));
+    CHECK(rrr_param_in_range((size_t)d1, -5.0) && !rrr_param_in_range((size_t)d1, (double)INFINITY));
     /* validation names the row, for every row */
     for (size_t i = 0; i < n; ++i) {
         rrr_model bad = m;
         const char *field = NULL;
-        memcpy((char *)&bad + t[i].offset, &(double){NAN}, sizeof(double));
+        memcpy((char *)&bad + t[i].offset, &(double){(double)NAN}, sizeof(double));
         CHECK(rrr_model_validate(&bad, &field) == RRR_BAD_MODEL);
         CHECK(field != NULL && strcmp(field, t[i].name) == 0);
     }

@@ -277,7 +277,7 @@ static void test_equilibrium_and_friction(void)
 static double ulps(double x, long double r)
 {
     const double rd = fabs((double)r);
-    const double ulp = rd == 0.0 ? 4.9406564584124654e-324 : nextafter(rd, INFINITY) - rd;
+    const double ulp = rd == 0.0 ? 4.9406564584124654e-324 : nextafter(rd, (double)INFINITY) - rd;
     return (double)(fabsl((long double)x - r) / (long double)ulp);
 }
 
@@ -416,7 +416,7 @@ static void test_bad_input(void)
     rrr_model_default(&m);
     const rrr_plant_state X0 = state(0.2, 0.3, 0.9, 1.0, -0.5, 0.8);
     rrr_plant_state x = X0;
-    const double u_nan[3] = {0.0, NAN, 0.0}, u[3] = {1.0, 2.0, 3.0};
+    const double u_nan[3] = {0.0, (double)NAN, 0.0}, u[3] = {1.0, 2.0, 3.0};
     double qdd[3] = {7.0, 7.0, 7.0};
     rrr_plant_stats st = {-1, -1, -1};
     const rrr_plant_integrator a = adaptive_default();
@@ -426,7 +426,7 @@ static void test_bad_input(void)
         CHECK_STATUS(rrr_plant_step(&m, s, u_nan, 1e-3, &x, qdd, &st), RRR_BAD_INPUT);
         CHECK_STATUS(rrr_plant_step(&m, s, u, 0.0, &x, qdd, &st), RRR_BAD_INPUT);
         CHECK_STATUS(rrr_plant_step(&m, s, u, -1e-3, &x, qdd, &st), RRR_BAD_INPUT);
-        CHECK_STATUS(rrr_plant_step(&m, s, u, INFINITY, &x, qdd, &st), RRR_BAD_INPUT);
+        CHECK_STATUS(rrr_plant_step(&m, s, u, (double)INFINITY, &x, qdd, &st), RRR_BAD_INPUT);
         CHECK_STATUS(rrr_plant_step(NULL, s, u, 1e-3, &x, qdd, &st), RRR_BAD_INPUT);
         CHECK_STATUS(rrr_plant_step(&m, s, NULL, 1e-3, &x, qdd, &st), RRR_BAD_INPUT);
         CHECK_STATUS(rrr_plant_step(&m, s, u, 1e-3, NULL, qdd, &st), RRR_BAD_INPUT);
@@ -434,16 +434,16 @@ static void test_bad_input(void)
         memset(bad.p, 0, sizeof bad.p);
         CHECK_STATUS(rrr_plant_step(&bad, s, u, 1e-3, &x, qdd, &st), RRR_NOT_POSITIVE_DEFINITE);
         rrr_plant_state nan_state = X0;
-        nan_state.qd[2] = INFINITY;
+        nan_state.qd[2] = (double)INFINITY;
         CHECK_STATUS(rrr_plant_step(&m, s, u, 1e-3, &nan_state, qdd, &st), RRR_BAD_INPUT);
         /* the step-size history must be finite and >= 0 */
         rrr_plant_state bad_h = X0;
         bad_h.h_guess = -1e-3;
         CHECK_STATUS(rrr_plant_step(&m, s, u, 1e-3, &bad_h, qdd, &st), RRR_BAD_INPUT);
-        bad_h.h_guess = NAN;
+        bad_h.h_guess = (double)NAN;
         CHECK_STATUS(rrr_plant_step(&m, s, u, 1e-3, &bad_h, qdd, &st), RRR_BAD_INPUT);
         bad_h = X0;
-        bad_h.err_prev = INFINITY;
+        bad_h.err_prev = (double)INFINITY;
         CHECK_STATUS(rrr_plant_step(&m, s, u, 1e-3, &bad_h, qdd, &st), RRR_BAD_INPUT);
     }
     CHECK_STATUS(rrr_plant_step(&m, NULL, u, 1e-3, &x, qdd, &st), RRR_BAD_INPUT);
@@ -458,11 +458,11 @@ static void test_bad_input(void)
     };
     bad_settings[0].s.rtol = 0.0;
     bad_settings[1].s.rtol = 0.1;
-    bad_settings[2].s.rtol = NAN;
+    bad_settings[2].s.rtol = (double)NAN;
     bad_settings[3].s.atol = 1e-15;
-    bad_settings[4].s.atol = INFINITY;
+    bad_settings[4].s.atol = (double)INFINITY;
     bad_settings[5].s.h_int = 0.0;
-    bad_settings[6].s.h_int = INFINITY;
+    bad_settings[6].s.h_int = (double)INFINITY;
     bad_settings[7].s.max_steps = 0;
     for (size_t i = 0; i < sizeof bad_settings / sizeof bad_settings[0]; ++i) {
         CHECK_STATUS(rrr_plant_integrator_check(&bad_settings[i].s, &field), RRR_BAD_INPUT);

@@ -51,6 +51,13 @@ static int public_loop(const rrr_model *m, const rrr_plant_integrator *s, const 
         memcpy(pub_c[k], o.u, sizeof o.u);
         memcpy(pub_c[k] + 3, o.u_n, sizeof o.u_n);
         memcpy(pub_c[k] + 6, o.u_c, sizeof o.u_c);
+        if (k == 0) { /* row 0: the acceleration under row 0's input */
+            double qdd0[3];
+            if (rrr_plant_accel(m, &x, o.u, qdd0) != RRR_OK) {
+                return 0;
+            }
+            memcpy(pub_p[0] + 6, qdd0, sizeof qdd0);
+        }
         if (k + 1 < N && (rrr_plant_step(m, s, o.u, STEP, &x, qdd, NULL) != RRR_OK ||
                           rrr_fk(m, x.q, tip, NULL) != RRR_OK)) {
             return 0;
@@ -111,7 +118,7 @@ int main(void)
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, 0, STEP, ref[0], pout[0],
                                      cout_[0], &done),
                  RRR_BAD_INPUT);
-    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, NAN, ref[0], pout[0],
+    CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, (double)NAN, ref[0], pout[0],
                                      cout_[0], &done),
                  RRR_BAD_INPUT);
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, NULL, pout[0],
@@ -128,7 +135,7 @@ int main(void)
                                      pout[0], cout_[0], &done),
                  RRR_BAD_INPUT);
     /* a non-finite reference at sample 500: the loop stops there, earlier rows are valid */
-    ref[500][4] = NAN;
+    ref[500][4] = (double)NAN;
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
                                      pout[0], cout_[0], &done),
                  RRR_BAD_INPUT);

@@ -1,7 +1,8 @@
 """The writing task's figures (rrr_robot.writing.plots): every figure is still written, under
-the names it always had, at its size; long series are drawn as their envelope (extremes
-kept); log-axis labels are plain text (no mathtext); Figs 2-6 drawn by the forked worker of a
-run are those drawn in-process, and its failures surface as without it."""
+its name (the paper's number where it reproduces one: Figs 2-9), at its size; long series are
+drawn as their envelope (extremes kept); log-axis labels are plain text (no mathtext); Figs 2-6
+drawn by the forked worker of a run are those drawn in-process, and its failures surface as
+without it."""
 
 from __future__ import annotations
 
@@ -34,8 +35,9 @@ FIGURES = {
     "fig4_joint_velocities.png": (9, 4),
     "fig5_ik_difference.png": (9, 4),
     "fig6_torque_difference.png": (9, 4),
-    **{f"fig_letters_{s}.png": (10, 4) for s in SCENARIOS},
-    **{f"fig9_u2_{s}.png": (9, 4) for s in SCENARIOS},
+    "fig7_letters_pd.png": (10, 4), "fig8_letters_ctc.png": (10, 4),
+    "fig_letters_mismatch.png": (10, 4),
+    "fig_u2_pd.png": (9, 4), "fig9_u2_ctc.png": (9, 4), "fig_u2_mismatch.png": (9, 4),
     "fig_tip_error.png": (9, 4),
 }
 

@@ -70,3 +70,21 @@ def test_native_refuses_what_belongs_to_the_fmus(prepared) -> None:
     bad[7, 1] = np.nan
     with pytest.raises(rr.BadInputError, match="NaN"):
         rr.simulate(ref.t, ref.q, bad, ref.qdd, ref.x, CosimOptions(step=base.step))
+
+
+@pytest.mark.parametrize("engine", ["fmpy", "native"])
+def test_row_0_shows_the_acceleration_of_its_own_input(prepared, engine: str) -> None:
+    """Row 0 of the signal table (t = 0): its qdd is the plant's acceleration under row 0's u
+    (before: the free fall under the FMU's start input u = 0 beside the applied u); the rows
+    after it are the end of the step to them, under the step's input u[k-1]."""
+    ref = prepared.reference
+    opts = options_for(prepared, "ctc")  # u[0] holds gravity: far from the free fall
+    run = run_cosim if engine == "fmpy" else rr.simulate
+    res = run(ref.t, ref.q, ref.qd, ref.qdd, ref.x, opts)
+    assert np.abs(res.u[0]).max() > 0.1
+    plant = rr.Plant(prepared.model, q0=res.q[0], qd0=res.qd[0])
+    assert np.array_equal(res.qdd[0], plant.accel(res.u[0]))  # bit for bit
+    assert np.abs(res.qdd[0] - plant.accel(np.zeros(3))).max() > 1.0  # not the free fall
+    # row 1: the end of the first step, under u[0]
+    plant.step(res.u[0], float(ref.t[1] - ref.t[0]))
+    assert np.array_equal(res.qdd[1], plant.qdd)

@@ -358,7 +358,7 @@ def test_an_interrupted_writing_run_leaves_the_previous_results(
     fake_cosim(monkeypatch, tip_errors={"pd": 0.02})
     run_writing(writing_job(out, figures=True))
     before = snapshot(out)
-    assert "fig_letters_ctc.png" in before and "pd.csv" in before
+    assert "fig8_letters_ctc.png" in before and "pd.csv" in before
 
     fake_cosim(monkeypatch, tip_errors={"pd": 0.03}, fail_at=2 if where == "cosim" else None)
     if where == "csv":

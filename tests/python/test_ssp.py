@@ -45,7 +45,9 @@ def runs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         out["ssp"][scn] = ssp
         for tool in TOOLS:
             folder = root / f"{scn}-{tool}"
-            run = rrr("-v", "run-ssp", str(ssp), "--tool", tool, "--out", str(folder), "-q")
+            figures = [] if (scn, tool) == ("ctc", "fmpy") else ["--no-figures"]
+            run = rrr("-v", "run-ssp", str(ssp), "--tool", tool, "--out", str(folder), "-q",
+                      *figures)
             assert run.returncode == 0, run.stdout[-3000:] + run.stderr[-3000:]
             summary = json.loads((folder / "summary.json").read_text())
             out["runs"][(scn, tool)] = (summary, folder, run.stdout + run.stderr)
@@ -96,13 +98,64 @@ def test_tool_tracks_the_letters_like_rrr_writing(runs: dict[str, Any], scenario
     # the same format: the metrics of rrr writing, the columns of its table
     assert set(got) == set(ours)
     assert set(summary) >= {"scenarios", "reference", "engine", "files", "paper_eq16"}
-    assert summary["files"] == [f"{scenario}.csv", "summary.json"]
+    figures = [f for f in summary["files"] if f.endswith(".png")]
+    assert [f for f in summary["files"] if f not in figures] == [f"{scenario}.csv",
+                                                                 "summary.json"]
+    if (scenario, tool) == ("ctc", "fmpy"):  # the figures of rrr writing for this scenario
+        assert figures == sorted(["fig2_reference.png", "fig3_joint_positions.png",
+                                  "fig4_joint_velocities.png", "fig5_ik_difference.png",
+                                  "fig6_torque_difference.png", "fig8_letters_ctc.png",
+                                  "fig9_u2_ctc.png", "fig_tip_error.png"])
+    else:
+        assert figures == []
     table = read_csv_table(folder / f"{scenario}.csv")
     theirs = read_csv_table(runs["root"] / "writing" / f"{scenario}.csv")
     assert list(table) == list(theirs)
     assert table["t"].size == theirs["t"].size - 1  # the tools record from the first step's end
     assert table["t"][0] == pytest.approx(1e-3) and table["t"][-1] == pytest.approx(
         theirs["t"][-1])
+
+
+@pytest.mark.parametrize("scenario", ["ctc", "pd"])
+def test_an_importer_that_ignores_the_bindings_runs_the_same_system(
+        runs: dict[str, Any], scenario: str) -> None:
+    """FMPy's plain simulate_ssp, with no parameter set (it applies no SSD binding and no XML
+    start value itself; only the archive's experiment times are given): the FMUs in the archive
+    start with the scenario's values (resources/start_values.csv, read by their binaries), so
+    it tracks as rrr writing does (before: the arm started away from the text, 386 mm)."""
+    import numpy as np
+    from fmpy import read_model_description
+    from fmpy.ssp.simulation import simulate_ssp
+    from rrr_robot.ssp import run as ssp_run
+
+    ssp = runs["ssp"][scenario]
+    arch = read_ssp(ssp)
+    res = simulate_ssp(str(ssp), start_time=arch.start_time, stop_time=arch.stop_time,
+                       step_size=arch.step)
+    t_end = res["time"] + arch.step  # FMPy records a step's outputs under its start time
+    keep = t_end <= arch.stop_time + 1e-9
+    ref = ssp_run._reference_at(arch, t_end[keep])
+    tip = np.column_stack([res[f"plant.tip.{a}"][keep] for a in "xyz"])
+    x_ref = np.column_stack([ref[f"x_ref.{a}"] for a in "xyz"])
+    err = float(np.linalg.norm(tip - x_ref, axis=1).max())
+    ours = runs["writing"]["scenarios"][scenario]["tip_error_max"]
+    assert 0.0 < err <= 2.0 * ours, (err, ours)
+    # the same run as with the bindings applied (rrr run-ssp --tool fmpy), to the last bit
+    with_bindings = read_csv_table(runs["runs"][(scenario, "fmpy")][1] / f"{scenario}.csv")
+    for a, col in zip("xyz", ("tip.x", "tip.y", "tip.z"), strict=True):
+        assert np.array_equal(res[f"plant.tip.{a}"][keep], with_bindings[col])
+    # the XML's start values are the bindings too (for tools that read them)
+    with zipfile.ZipFile(ssp) as z:
+        for comp, params in arch.parameters.items():
+            member = f"resources/rrr_{comp}.fmu"
+            (Path(runs["root"]) / f"{scenario}-{comp}.fmu").write_bytes(z.read(member))
+            md = read_model_description(str(Path(runs["root"]) / f"{scenario}-{comp}.fmu"))
+            starts = {v.name: v.start for v in md.modelVariables}
+            for name, value in params.items():
+                want = ("true" if value else "false") if isinstance(value, bool) else value
+                got = starts[name]
+                assert (got == want if isinstance(value, bool) else float(got) == value), \
+                    (comp, name, got, value)
 
 
 def test_libcosim_and_fmpy_agree(runs: dict[str, Any]) -> None:

@@ -136,7 +136,7 @@ def test_runs_with_default_options(tmp_path: Path, text: str, written: str,
     assert set(summary["scenarios"]) == {"pd", "ctc", "mismatch"}
     assert all(s["status"] == "ok" for s in summary["scenarios"].values())
     assert summary["scenarios"]["ctc"]["tip_error_max"] < 1e-3
-    assert "fig_letters_ctc.png" in summary["files"]
+    assert "fig8_letters_ctc.png" in summary["files"]
 
 
 # ---- legends ----------------------------------------------------------------------------------
@@ -177,7 +177,7 @@ def test_legends_cover_no_axis_label_and_no_letter(text: str, tmp_path: Path,
     plots.fig_reference(tmp_path, ref)
     plots.fig_joints(tmp_path, ref)
     plots.write_result_figures(tmp_path, ref, _fake_results(ref))
-    assert {"fig_letters_pd.png", "fig_letters_ctc.png", "fig_tip_error.png"} <= set(figures)
+    assert {"fig7_letters_pd.png", "fig8_letters_ctc.png", "fig_tip_error.png"} <= set(figures)
     checked = 0
     for name, fig in figures.items():
         renderer = fig.canvas.get_renderer()
@@ -187,8 +187,90 @@ def test_legends_cover_no_axis_label_and_no_letter(text: str, tmp_path: Path,
             assert fig.bbox.contains(box.x0, box.y0) and fig.bbox.contains(box.x1, box.y1), name
             for label in _labels(fig):
                 assert not box.overlaps(label), f"{name}: the legend covers an axis label"
-            if name.startswith("fig_letters_"):
+            if "_letters_" in name:
                 for ax in fig.axes:  # the letters are drawn inside the axes
                     assert not box.overlaps(ax.get_window_extent(renderer)), name
             checked += 1
     assert checked >= 6
+
+
+def _kept_figures(monkeypatch: pytest.MonkeyPatch) -> dict[str, Any]:
+    """Every figure the plotting modules save, by file name (each saved as usual too)."""
+    from rrr_robot.hil import figures as hil_figures
+
+    figures: dict[str, Any] = {}
+    save = plots._save
+
+    def keep(fig: Any, path: Path, *args: Any, **kwargs: Any) -> None:
+        save(fig, path, *args, **kwargs)
+        figures[path.name] = fig
+
+    monkeypatch.setattr(plots, "_save", keep)
+    monkeypatch.setattr(hil_figures, "save_figure", keep)
+    return figures
+
+
+def test_titles_stay_inside_and_legends_off_the_traces(tmp_path: Path,
+                                                       monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every figure of a run (the writing task's Figs 2-4 and 7-9, a Fig 5/6-style difference,
+    the tip error, the CAN bench's): titles and axis labels inside the figure (none clipped),
+    legends inside the figure and off every trace (no drawn point of a line inside a legend's
+    box, in display coordinates), log axes starting where the data is; the default scenarios'
+    letters are Figs 7 and 8 by name and title, the CAN bench's titles name the scenario."""
+    from rrr_robot.hil.figures import write_bench_figures
+
+    ref = tr.make_reference(MODEL, tr.WritingSpec(text="a\u03c9m\u03b3"))
+    figures = _kept_figures(monkeypatch)
+    results = _fake_results(ref)
+    plots.fig_reference(tmp_path, ref)
+    plots.fig_joints(tmp_path, ref)
+    plots._diff_plot(tmp_path / "fig5_ik_difference.png", ref.t,
+                     1e-13 * np.sin(np.outer(ref.t, [1.0, 2.0, 3.0])), "rad", "Fig. 5: test")
+    plots.write_result_figures(tmp_path, ref, results)
+    bench_out = tmp_path / "bench"
+    bench_out.mkdir()
+    write_bench_figures(bench_out, ref, results["ctc"], results["pd"], scenario="ctc")
+    assert {"fig7_letters_pd.png", "fig8_letters_ctc.png", "fig9_u2_ctc.png", "fig_u2_pd.png",
+            "fig_letters_bench.png", "fig_voltages.png"} <= set(figures)
+    titles = {name: " ".join(ax.get_title() for ax in fig.axes) for name, fig in figures.items()}
+    assert titles["fig7_letters_pd.png"].startswith("Fig. 7: ") and "PD control only" in \
+        titles["fig7_letters_pd.png"]
+    assert titles["fig8_letters_ctc.png"].startswith("Fig. 8: ") and "feedforward" in \
+        titles["fig8_letters_ctc.png"]
+    assert titles["fig9_u2_ctc.png"].startswith("Fig. 9: ")
+    for n in (2, 3, 4, 5):
+        assert any(t.startswith(f"Fig. {n}: ") for t in titles.values()), n
+    for name in ("fig_letters_bench.png", "fig_bench_vs_cosim.png", "fig_joint_errors.png",
+                 "fig_voltages.png"):
+        assert "scenario ctc" in titles[name], (name, titles[name])
+    for name, fig in figures.items():
+        renderer = fig.canvas.get_renderer()
+        inside = fig.bbox
+        for ax in fig.axes:
+            for text in (ax.title, ax.xaxis.label, ax.yaxis.label):
+                if text.get_text():
+                    box = text.get_window_extent(renderer)
+                    assert inside.x0 <= box.x0 and box.x1 <= inside.x1 and \
+                        inside.y0 <= box.y0 and box.y1 <= inside.y1, \
+                        f"{name}: {text.get_text()!r} is clipped"
+            if ax.get_yscale() == "log":
+                ys = np.concatenate([line.get_ydata() for line in ax.get_lines()])
+                ys = ys[np.isfinite(ys) & (ys > 0)]
+                low, high = ax.get_ylim()
+                assert ys.min() / 1.5 <= low <= ys.min() and ys.max() <= high, name
+        legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend())]
+        assert legends or name == "fig2_reference.png", name  # one trace per axes
+        for legend in legends:
+            box = legend.get_window_extent(renderer)
+            assert inside.x0 <= box.x0 and box.x1 <= inside.x1 and inside.y0 <= box.y0 \
+                and box.y1 <= inside.y1, f"{name}: the legend leaves the figure"
+            for ax in fig.axes:
+                for line in ax.get_lines():
+                    xy = np.column_stack([line.get_xdata(), line.get_ydata()]).astype(float)
+                    xy = xy[np.all(np.isfinite(xy), axis=1)]
+                    if xy.size == 0:
+                        continue
+                    pts = ax.transData.transform(xy)
+                    hit = ((pts[:, 0] >= box.x0) & (pts[:, 0] <= box.x1)
+                           & (pts[:, 1] >= box.y0) & (pts[:, 1] <= box.y1))
+                    assert not hit.any(), f"{name}: the legend covers {line.get_label()!r}"

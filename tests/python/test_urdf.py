@@ -6,6 +6,9 @@
   frame equals our forward kinematics (position and orientation); continuous joints give the same
   dynamics through Pinocchio's cos/sin joints.
 - yourdfpy loads the file; its tool pose equals our FK, its masses are the robot file's.
+- MuJoCo (the file's <mujoco> compiler element keeps the fixed `tool` link a body) and Drake
+  (base_link welded to the world): their tool pose equals our FK, their inverse dynamics with
+  the rotor inertias (MuJoCo: armature; Drake: + J_m qdd) equal ours.
 - A robot file with [base_parameters] only is refused with a clear error (API and CLI).
 """
 
@@ -170,3 +173,81 @@ def test_bad_limits_and_names_are_refused() -> None:
                     {"name": "a b"}, {"name": ""}):
         with pytest.raises(rr.BadInputError):
             robot_urdf(robot, **options)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("name", ["default", "random2"])
+def test_mujoco_keeps_the_tool_frame_and_the_dynamics(name: str, tmp_path: Path) -> None:
+    """MuJoCo's URDF import (which merges fixed links into their parent unless the file's
+    <mujoco><compiler fusestatic="false"/> says otherwise) keeps the `tool` body: its pose
+    equals our FK; with the rotor inertias as armature and the model's gravity, its inverse
+    dynamics (mj_inverse) equal Model.inverse_dynamics."""
+    import mujoco
+
+    robot = ROBOTS[name]()
+    path = write_urdf(tmp_path / "robot.urdf", robot)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    assert m.nq == 3 and m.nv == 3
+    tool = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "tool")
+    assert tool >= 0, "MuJoCo fused the tool frame away"
+    m.dof_armature[:] = robot.rotor_inertia
+    m.opt.gravity[:] = (0.0, 0.0, -robot.model.g)
+    d = mujoco.MjData(m)
+    q, qd, qdd = states(7, 20)
+    x, rot = robot.model.fk(q)
+    tau = robot.model.inverse_dynamics(q, qd, qdd)
+    for k in range(q.shape[0]):
+        d.qpos[:], d.qvel[:], d.qacc[:] = q[k], qd[k], qdd[k]
+        mujoco.mj_inverse(m, d)
+        np.testing.assert_allclose(d.xpos[tool], x[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(d.xmat[tool].reshape(3, 3), rot[k], rtol=0, atol=1e-12)
+        assert_close(d.qfrc_inverse, tau[k], f"mj_inverse, state {k}")
+
+
+@pytest.mark.parametrize("name", ["default", "random4"])
+def test_drake_keeps_the_tool_frame_and_the_dynamics(name: str, tmp_path: Path) -> None:
+    """Drake's MultibodyPlant from the URDF, base_link welded to the world (a URDF root is a
+    free body in Drake): the `tool` frame's pose equals our FK, and CalcInverseDynamics with the
+    force elements (gravity) plus J_m qdd equals Model.inverse_dynamics."""
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import MultibodyPlant
+    from pydrake.multibody.tree import MultibodyForces
+
+    robot = ROBOTS[name]()
+    path = write_urdf(tmp_path / "robot.urdf", robot)
+    plant = MultibodyPlant(0.0)
+    Parser(plant).AddModels(str(path))
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("base_link"))
+    plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -robot.model.g])
+    plant.Finalize()
+    assert plant.num_positions() == plant.num_velocities() == 3
+    ctx = plant.CreateDefaultContext()
+    tool = plant.GetFrameByName("tool")
+    q, qd, qdd = states(11, 20)
+    x, rot = robot.model.fk(q)
+    tau = robot.model.inverse_dynamics(q, qd, qdd)
+    rotor = np.asarray(robot.rotor_inertia)
+    for k in range(q.shape[0]):
+        plant.SetPositions(ctx, q[k])
+        plant.SetVelocities(ctx, qd[k])
+        pose = plant.CalcRelativeTransform(ctx, plant.world_frame(), tool)
+        np.testing.assert_allclose(pose.translation(), x[k], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(pose.rotation().matrix(), rot[k], rtol=0, atol=1e-12)
+        forces = MultibodyForces(plant)
+        plant.CalcForceElementsContribution(ctx, forces)
+        assert_close(plant.CalcInverseDynamics(ctx, qdd[k], forces) + rotor * qdd[k], tau[k],
+                     f"Drake, state {k}")
+
+
+def test_the_loading_code_of_docs_urdf_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+                                            ) -> None:
+    """docs/urdf.md's blocks as written: its `rrr urdf` command, then each Python block."""
+    import re
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "urdf.md").read_text()
+    monkeypatch.chdir(tmp_path)
+    (command,) = re.findall(r"```bash\n(.*?)```", text, re.S)
+    subprocess.run(command, shell=True, check=True, capture_output=True)
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert len(blocks) == 3
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"docs/urdf.md block {i + 1}", "exec"), {})

@@ -15,8 +15,9 @@ from rrr_robot.writing.job import PAPER_RMS_U_N, WritingJob, run_writing
 
 FIGURES = [
     "fig2_reference.png", "fig3_joint_positions.png", "fig4_joint_velocities.png",
-    "fig5_ik_difference.png", "fig6_torque_difference.png", "fig_letters_pd.png",
-    "fig_letters_ctc.png", "fig_letters_mismatch.png", "fig9_u2_ctc.png", "fig_tip_error.png",
+    "fig5_ik_difference.png", "fig6_torque_difference.png", "fig7_letters_pd.png",
+    "fig8_letters_ctc.png", "fig_letters_mismatch.png", "fig9_u2_ctc.png", "fig_u2_pd.png",
+    "fig_u2_mismatch.png", "fig_tip_error.png",
 ]
 
 

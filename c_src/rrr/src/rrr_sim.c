@@ -61,6 +61,16 @@ rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_integrato
         memcpy(c, out.u, 3 * sizeof(double));
         memcpy(c + 3, out.u_n, 3 * sizeof(double));
         memcpy(c + 6, out.u_c, 3 * sizeof(double));
+        if (k == 0) {
+            /* row 0's qdd under row 0's input, as the master reads it from the plant FMU after
+             * setting that input (the plant's first outputs had it under u = 0) */
+            double qdd0[3];
+            st = rrr_plant_accel_prepared(plant, &prep, out.u, qdd0);
+            if (st != RRR_OK) {
+                break;
+            }
+            memcpy(plant_out + 6, qdd0, sizeof qdd0);
+        }
         if (k + 1 < n) {
             /* the plant FMU's doStep: the state and its outputs change only on success */
             rrr_plant_state next = x;

@@ -1,15 +1,41 @@
-"""Progress on the terminal, the one way every command shows it: tqdm bars on stderr, only when
-stderr is a terminal, never with ``-q``. Library functions report progress through callbacks
-(``progress(k, n)``, ``progress(name, k, n)``); a command turns them into bars with
-:class:`Bars`, so the library layers never touch the terminal."""
+"""Progress and log lines on the terminal, the one way every command shows them: tqdm bars on
+stderr, only when stderr is a terminal, never with ``-q``; log lines through :class:`LogHandler`,
+which writes them above an open bar (tqdm.write) instead of onto its line. Library functions
+report progress through callbacks (``progress(k, n)``, ``progress(name, k, n)``) and log through
+``logging``; a command turns the callbacks into bars with :class:`Bars`, so the library layers
+never touch the terminal."""
 
 from __future__ import annotations
 
+import logging
 import sys
 from types import TracebackType
 from typing import Any
 
-__all__ = ["Bars", "shown"]
+__all__ = ["Bars", "LogHandler", "shown"]
+
+#: The bars open now (tqdm instances) in this process.
+_open: list[Any] = []
+
+
+class LogHandler(logging.Handler):
+    """Log records as lines on stderr (the stderr of the moment, so a redirected or captured
+    stderr is followed). While a progress bar is open, a line goes through ``tqdm.write``: the
+    bar is cleared, the line written, the bar drawn again below it, so a log line never shares
+    a line with a bar."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            line = self.format(record)
+            if _open:
+                from tqdm import tqdm
+
+                tqdm.write(line, file=sys.stderr)
+            else:
+                sys.stderr.write(line + "\n")
+                sys.stderr.flush()
+        except Exception:  # logging's own rule: a failing handler never raises
+            self.handleError(record)
 
 
 def shown(quiet: bool) -> bool:
@@ -37,6 +63,7 @@ class Bars:
 
             self._bar = tqdm(total=total, desc=name, unit=self.unit, file=sys.stderr,
                              leave=True, dynamic_ncols=True)
+            _open.append(self._bar)
             self._name = name
         self._bar.total = total
         self._bar.n = min(max(done, 0), total)
@@ -49,8 +76,10 @@ class Bars:
     def close(self) -> None:
         """End the current bar (idempotent)."""
         if self._bar is not None:
-            self._bar.close()
-            self._bar = None
+            bar, self._bar = self._bar, None
+            if bar in _open:
+                _open.remove(bar)
+            bar.close()
             self._name = None
 
     def __enter__(self) -> Bars:

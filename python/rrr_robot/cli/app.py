@@ -4,15 +4,17 @@ other command groups in their modules (writing, identify, hil, urdf, ssp, sweep)
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import signal
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from types import FrameType
 
 from .. import __version__
 from ..errors import RrrError
+from ._args import HelpFormatter, add_verbosity_arguments, command_parser, quiet
 from .hil import register_cli as register_hil
 from .identify import register_cli as register_identify
 from .ssp import register_cli as register_ssp
@@ -39,15 +41,25 @@ def build_parser() -> argparse.ArgumentParser:
         prog="rrr",
         description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench, "
         "sweeps.",
-        epilog="examples:\n  rrr fmus\n  rrr writing --out results",
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="examples:\n  rrr fmus\n  rrr writing --out results\n\n'rrr COMMAND --help' "
+        "describes each command with an example.",
+        formatter_class=HelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"rrr_robot {__version__}")
-    parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    parser.add_argument("-q", "--quiet", action="store_true",
+                        help="print only the results and errors: no INFO lines, no progress "
+                        "bars (also after the command: rrr writing -q)")
+    parser.add_argument("-v", "--verbose", action="store_true",
+                        help="also log DEBUG lines (also after the command)")
     sub = parser.add_subparsers(dest="command", required=True)
-    p_fmus = sub.add_parser(
-        "fmus", help="list the FMUs: plant and controller, FMI 2.0 and 3.0, with their "
-        "interfaces, platforms and paths")
+    p_fmus = command_parser(
+        sub, "fmus", help="list the FMUs: plant, controller and reference, FMI 2.0 and 3.0",
+        description="List the FMUs the package ships: rrr_plant (voltages in, joint motion "
+        "out), rrr_controller (the computed-torque law of eq 15) and rrr_reference (the "
+        "writing reference played from a table), each for FMI 2.0 and FMI 3.0, with their "
+        "interfaces (Model Exchange, Co-Simulation), platforms, extras and paths.",
+        example="rrr fmus")
+    add_verbosity_arguments(p_fmus, bars=False)
     p_fmus.set_defaults(func=_cmd_fmus)
     register_writing(sub)
     register_identify(sub)
@@ -73,6 +85,29 @@ def _one_line(exc: BaseException) -> str:
     return text or type(exc).__name__
 
 
+@contextlib.contextmanager
+def _logging(verbose: bool, quiet: bool) -> Iterator[None]:
+    """The log lines of a command on stderr: WARNING and above with ``-q``, INFO by default,
+    DEBUG with ``-v`` (which wins over ``-q`` for the log; ``-q`` still hides the bars); written
+    so that they never break a progress bar (:class:`_progress.LogHandler`). Undone at the end,
+    so that ``main`` can run again in the same process."""
+    from ._progress import LogHandler
+
+    root = logging.getLogger()
+    handler = LogHandler()
+    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    level = logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO
+    handler.setLevel(level)  # also for the libraries whose loggers set their own level (Dask)
+    previous = root.level
+    root.addHandler(handler)
+    root.setLevel(level)
+    try:
+        yield
+    finally:
+        root.removeHandler(handler)
+        root.setLevel(previous)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``rrr``; returns the exit status: 0 success, 2 bad input or a failure of the run
     (one line ``rrr: error: ...``; argparse's own errors also exit 2), 130 Ctrl-C (``rrr:
@@ -88,9 +123,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
-        logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
-                            format="%(levelname)s %(name)s: %(message)s")
-        return int(args.func(args))
+        with _logging(bool(getattr(args, "verbose", False)), quiet(args)):
+            return int(args.func(args))
     except KeyboardInterrupt:
         print("rrr: interrupted", file=sys.stderr)
         return 130

@@ -12,7 +12,14 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ._args import host_port, nonnegative_int, output_path
+from ._args import (
+    add_verbosity_arguments,
+    command_parser,
+    host_port,
+    nonnegative_int,
+    output_path,
+    quiet,
+)
 
 if TYPE_CHECKING:
     from ..core.model import Model
@@ -27,6 +34,8 @@ MAX_DURATION = 3600.0
 #: The node's own frame log (hil_framelog.h) in the output folder, and the standard log.
 NODE_FRAMES = "frames.rrrcan"
 DEFAULT_CAN_LOG = "frames.blf"
+#: --spin-us without the option: sleep until 100 us before each release, then spin.
+DEFAULT_SPIN_US = 100
 
 
 def duration_seconds(text: str) -> float:
@@ -78,12 +87,11 @@ def _check_options(args: argparse.Namespace) -> None:
     """What argparse cannot check, before anything is read, run or written."""
     from ..errors import BadInputError
 
-    if args.realtime and args.side != "bench":
-        raise BadInputError(f"--realtime: only 'rrr hil bench' runs both C nodes in real time "
-                            f"(the {args.side} side runs in lockstep)")
-    for name in ("bitrate", "fd", "lockstep", "dbc"):
-        if getattr(args, name) not in (None, False):
-            raise BadInputError(f"--{name}: an option of 'rrr hil busload'")
+    if not getattr(args, "realtime", False):
+        for option, given in (("--no-fifo", getattr(args, "no_fifo", False)),
+                              ("--spin-us", getattr(args, "spin_us", None) is not None)):
+            if given:
+                raise BadInputError(f"{option}: an option of 'rrr hil bench --realtime'")
 
 
 def _can_log_target(args: argparse.Namespace, out: Path) -> Path | None:
@@ -112,15 +120,15 @@ def _can_log_target(args: argparse.Namespace, out: Path) -> Path | None:
 
 
 def _cmd_hil(args: argparse.Namespace) -> int:
+    """``rrr hil bench|controller|plant|export-reference``."""
     from ..core.outputs import ResultSet, check_folder
 
-    if args.side == "busload":
-        return _cmd_busload(args)
     _check_options(args)
     out = check_folder(args.out)  # before anything is read or run
     can_log = None if args.side == "export-reference" else _can_log_target(args, out)
     ref, ctrl_values, model = _writing_setup(args.text, args.scenario)
-    if args.duration is not None or args.realtime:
+    realtime = getattr(args, "realtime", False)
+    if args.duration is not None or realtime:
         from ..hil.results import extend_reference
 
         ref = extend_reference(ref, args.duration or float(ref.t[-1] - ref.t[0]))
@@ -151,8 +159,9 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
         export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv")
         print(f"reference: {out / 'reference.csv'} ({ref.t.size} periods)")
         return 0
-    conn = sides.Connection(args.interface, args.connect, args.channel)
-    with Bars(shown(args.quiet), unit="period") as bars:
+    conn = (sides.Connection() if args.side == "bench"
+            else sides.Connection(args.interface, args.connect, args.channel))
+    with Bars(shown(quiet(args)), unit="period") as bars:
         progress = bars.callback("CAN bench")
         if args.side == "plant":
             side = sides.run_plant_side(ref, ctrl_values, work, conn, frame_log=NODE_FRAMES,
@@ -164,7 +173,8 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
             if args.realtime:
                 realtime = RealTime(duration=float(ref.t[-1] - ref.t[0]) + 5.0,
                                     fifo=0 if args.no_fifo else 80, mlock=True, cpus=_cpus(),
-                                    spin_us=args.spin_us)
+                                    spin_us=DEFAULT_SPIN_US if args.spin_us is None
+                                    else args.spin_us)
             side = sides.run_bench(ref, ctrl_values, work, frame_log=NODE_FRAMES,
                                    realtime=realtime, progress=progress)
         else:  # controller: the controller FMU under FMPy against a plant node
@@ -203,7 +213,8 @@ def _results(args: argparse.Namespace, ref: Reference, run: BenchRun,
     """summary.json, the figures and the standard frame log of a run, into the result set."""
     from ..hil.results import RunInfo, write_results
 
-    info = RunInfo(side=args.side, mode="realtime" if args.realtime else "lockstep",
+    info = RunInfo(side=args.side,
+                   mode="realtime" if getattr(args, "realtime", False) else "lockstep",
                    scenario=args.scenario, node_log=NODE_FRAMES, view=_VIEW[args.side])
     summary = write_results(rs, info, ref, run, model, ctrl_values, nodes, can_log=can_log,
                             figures=not args.no_figures)
@@ -223,8 +234,12 @@ def _report(s: Mapping[str, Any], out: Path) -> None:
           f"{s['reference']['periods']} periods; tip error max {1e3 * b['tip_error_max']:.3f} mm, "
           f"rms {1e3 * b['tip_error_rms']:.3f} mm; max |q - q_ref| "
           f"{max(b['joint_error_max']):.3e} rad")
-    print(f"  vs unquantised co-simulation: max |dq| {max(d['q_max_abs']):.3e} rad, max |du| "
-          f"{max(d['u_max_abs']):.3e} V, tip error max {1e3 * d['tip_error_max_delta_m']:+.4f} mm")
+    unq = s["unquantised_cosim"]
+    print(f"  difference to the unquantised co-simulation: max |dq| {max(d['q_max_abs']):.3e} "
+          f"rad, max |du| {max(d['u_max_abs']):.3e} V; tip error max "
+          f"{1e3 * b['tip_error_max']:.4f} mm on the bench against "
+          f"{1e3 * unq['tip_error_max']:.4f} mm unquantised (bench - unquantised "
+          f"{1e3 * d['tip_error_max_delta_m']:+.4f} mm)")
     f = s["faults"]
     print(f"  plant: faults latched {f.get('faults')}, fault events {f.get('fault_events')}, "
           f"missed commands {s['missed_commands']}")
@@ -266,66 +281,141 @@ def _cmd_busload(args: argparse.Namespace) -> int:
     return 0
 
 
-def register_cli(subparsers: Any) -> None:
-    """Add the ``hil`` subcommand to the ``rrr`` command line."""
-    p = subparsers.add_parser(
-        "hil", help="CAN bench: C nodes, either FMU side over python-can, bus load",
-        description="Run the writing task on the CAN bench and write summary.json (the writing "
-        "task's metrics, the difference to the unquantised co-simulation of the scenario, "
-        "faults, missed commands, bus traffic, real-time latencies), the figures, the nodes' "
-        "logs and a frame log (.blf or .asc) into --out. 'bench': the C controller node "
-        "against the C plant node (socketcand transport; lockstep, or --realtime); "
-        "'controller': the controller FMU (FMPy) over python-can against the C plant node "
-        "(started here unless --connect); 'plant': the plant FMU (FMPy) behind the C "
-        "supervisor (ctypes) over python-can against the C controller node (started here "
-        "with --listen unless --connect; lockstep only); 'export-reference': write the "
-        "reference table the C controller reads; 'busload': the load of the DBC's schedule on "
-        "a classical CAN or CAN FD bus (its last line: the worst-case load in percent).",
-    )
-    p.add_argument("side", choices=["controller", "plant", "bench", "export-reference",
-                                    "busload"])
-    p.add_argument("--text", help="text to write (default: the writing task's default)")
-    p.add_argument("--scenario", default="ctc",
+# ---- the parsers: one per action, each with only its own options ----------------------------
+# Option groups that several actions share are added by one function each (python-can's
+# add_bus_arguments), so an action never lists an option it would ignore: another action's
+# option is argparse's "unrecognized arguments" error (exit 2).
+
+
+def add_reference_arguments(p: argparse.ArgumentParser) -> None:
+    """What the run follows: the text, the scenario, the duration, and where it writes."""
+    g = p.add_argument_group("writing task")
+    g.add_argument("--text", help="text to write (default: the writing task's default)")
+    g.add_argument("--scenario", default="ctc",
                    help="controller scenario (gains, feedforward, model): pd, ctc, mismatch or "
                    "a scenario .toml (default ctc)")
+    g.add_argument("--duration", type=duration_seconds, metavar="S",
+                   help=f"run S seconds (0 < S <= {MAX_DURATION:g}): the reference cut, or held "
+                   "at its last pose after its end (default: the reference's 5.9 s)")
     p.add_argument("--out", default=Path("results/hil"), type=output_path,
                    help="output folder (default: results/hil); its previous logs stay as they "
                    "were unless the run ends")
-    p.add_argument("--interface", default="socketcand", choices=["socketcand", "socketcan"],
+
+
+def add_bus_arguments(p: argparse.ArgumentParser) -> None:
+    """How the Python side reaches the other node (python-can)."""
+    g = p.add_argument_group("bus (python-can)")
+    g.add_argument("--interface", default="socketcand", choices=["socketcand", "socketcan"],
                    help="python-can interface (default socketcand)")
-    p.add_argument("--connect", metavar="HOST:PORT", type=host_port,
-                   help="socketcand server of a running node: the plant node for 'controller', "
-                   "a controller node started with --listen for 'plant' (default: start one; "
-                   "then the other node keeps its logs and no summary.json is written)")
-    p.add_argument("--channel", default="bench0",
+    g.add_argument("--connect", metavar="HOST:PORT", type=host_port,
+                   help="socketcand server of a node started elsewhere (default: start the "
+                   "other node here; with --connect it keeps its own logs and no summary.json "
+                   "is written)")
+    g.add_argument("--channel", default="bench0",
                    help="socketcand bus name, or the SocketCAN interface (default bench0)")
-    p.add_argument("--drop-commands-from", type=nonnegative_int, metavar="K",
-                   help="'plant' only, fault injection: VoltageCmd frames of periods >= K do "
-                   "not reach the plant (0 V at the 3rd period, timeout latched)")
-    p.add_argument("--duration", type=duration_seconds, metavar="S",
-                   help=f"run S seconds (0 < S <= {MAX_DURATION:g}): the reference cut, or held "
-                   "at its last pose after its end (default: the reference's 5.9 s)")
-    p.add_argument("--realtime", action="store_true",
-                   help="'bench' only: both C nodes in real time at 1 kHz (SCHED_FIFO 80, "
-                   "mlockall, one CPU each, sleep-then-spin: each when permitted, with a "
-                   "warning and the fallback otherwise); latency figures in summary.json")
-    p.add_argument("--no-fifo", action="store_true",
-                   help="--realtime without SCHED_FIFO (the default scheduler)")
-    p.add_argument("--spin-us", type=spin_us, default=100, metavar="N",
-                   help="--realtime: sleep until N us before each release, then spin (0: sleep "
-                   "only; default 100)")
-    p.add_argument("--can-log", type=output_path, metavar="FILE",
+
+
+def add_result_arguments(p: argparse.ArgumentParser) -> None:
+    """The files of a run beside summary.json: the frame log and the figures."""
+    g = p.add_argument_group("results")
+    g.add_argument("--can-log", type=output_path, metavar="FILE",
                    help=f"the frame log, .blf or .asc (default: {DEFAULT_CAN_LOG} in --out)")
-    p.add_argument("--no-can-log", action="store_true",
+    g.add_argument("--no-can-log", action="store_true",
                    help="no .blf/.asc frame log (the node's own frames.rrrcan is still written)")
-    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--bitrate", type=bitrate, metavar="B",
-                   help="'busload': the (nominal) bit rate, bit/s (default 1000000)")
-    p.add_argument("--fd", type=bitrate, metavar="DATA_BITRATE",
-                   help="'busload': CAN FD with bit-rate switch to DATA_BITRATE bit/s")
-    p.add_argument("--lockstep", action="store_true",
-                   help="'busload': include the lockstep-only frames (Sync)")
-    p.add_argument("--dbc", type=Path, metavar="FILE",
-                   help="'busload': another DBC (default: the bench's rrr_bench.dbc)")
-    p.set_defaults(func=_cmd_hil)
+    g.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+
+
+def add_realtime_arguments(p: argparse.ArgumentParser) -> None:
+    """Real time (``bench`` only)."""
+    g = p.add_argument_group("real time")
+    g.add_argument("--realtime", action="store_true",
+                   help="both C nodes in real time at 1 kHz (SCHED_FIFO 80, mlockall, one CPU "
+                   "each, sleep-then-spin: each when permitted, with a warning and the "
+                   "fallback otherwise); latency figures in summary.json (default: lockstep)")
+    g.add_argument("--no-fifo", action="store_true",
+                   help="with --realtime: the default scheduler instead of SCHED_FIFO")
+    g.add_argument("--spin-us", type=spin_us, metavar="N",
+                   help=f"with --realtime: sleep until N us before each release, then spin (0: "
+                   f"sleep only; default {DEFAULT_SPIN_US})")
+
+
+_RESULTS = ("summary.json (the writing task's metrics, the difference to the unquantised "
+            "co-simulation of the scenario, faults, missed commands, bus traffic), the figures, "
+            "the nodes' logs and a frame log (.blf or .asc) into --out.")
+
+
+def _action(actions: Any, name: str, help: str, description: str,
+            example: str) -> argparse.ArgumentParser:
+    return command_parser(actions, name, help=help, description=description, example=example)
+
+
+def register_cli(subparsers: Any) -> None:
+    """Add ``hil`` and its actions to the ``rrr`` command line."""
+    p = command_parser(
+        subparsers, "hil", help="CAN bench: C nodes, either FMU side over python-can, bus load",
+        description="The writing task on a (virtual) CAN bench: the C controller and plant "
+        "nodes, or either FMU under FMPy over python-can against the other C node, over the "
+        "socketcand protocol (or SocketCAN); and the load of the bench's schedule on a bus. "
+        "'rrr hil ACTION --help' gives each action's options.",
+        example="rrr hil bench --out results/hil")
+    actions = p.add_subparsers(dest="side", metavar="ACTION", required=True)
+
+    b = _action(actions, "bench", "the C controller node against the C plant node",
+                "Run the C controller node against the C plant node (socketcand transport; "
+                "lockstep, or --realtime) and write " + _RESULTS,
+                "rrr hil bench --realtime --duration 20 --out results/hil-rt")
+    add_reference_arguments(b)
+    add_realtime_arguments(b)
+    add_result_arguments(b)
+    add_verbosity_arguments(b)
+    b.set_defaults(func=_cmd_hil)
+
+    c = _action(actions, "controller", "the controller FMU (FMPy, python-can) vs the C plant",
+                "Run the controller FMU under FMPy over python-can against the C plant node "
+                "(started here unless --connect; lockstep) and write " + _RESULTS,
+                "rrr hil controller --out results/hil")
+    add_reference_arguments(c)
+    add_bus_arguments(c)
+    add_result_arguments(c)
+    add_verbosity_arguments(c)
+    c.set_defaults(func=_cmd_hil)
+
+    pl = _action(actions, "plant", "the plant FMU (FMPy, python-can) vs the C controller",
+                 "Run the plant FMU under FMPy behind the C command supervisor (ctypes) over "
+                 "python-can against the C controller node (started here with --listen unless "
+                 "--connect; lockstep only) and write " + _RESULTS + " Exit status 3 when the "
+                 "plant latched a fault.",
+                 "rrr hil plant --drop-commands-from 2000 --out results/hil-fault")
+    add_reference_arguments(pl)
+    add_bus_arguments(pl)
+    pl.add_argument_group("fault injection").add_argument(
+        "--drop-commands-from", type=nonnegative_int, metavar="K",
+        help="VoltageCmd frames of periods >= K do not reach the plant (0 V at the 3rd "
+        "period, timeout latched)")
+    add_result_arguments(pl)
+    add_verbosity_arguments(pl)
+    pl.set_defaults(func=_cmd_hil)
+
+    e = _action(actions, "export-reference", "write the reference table the C controller reads",
+                "Write reference.csv, the writing reference (t, q, qd, qdd per period) that "
+                "rrr_hil_controller --reference reads, into --out.",
+                "rrr hil export-reference --scenario pd --out results/hil")
+    add_reference_arguments(e)
+    add_verbosity_arguments(e, bars=False)
+    e.set_defaults(func=_cmd_hil)
+
+    bl = _action(actions, "busload", "the load of the DBC's schedule on a CAN or CAN FD bus",
+                 "Compute the load of the DBC's schedule (frame lengths with worst-case and "
+                 "without bit stuffing, periods from GenMsgCycleTime) on a classical CAN or CAN "
+                 "FD bus; the last line is the worst-case load in percent.",
+                 "rrr hil busload --bitrate 500000 --fd 2000000")
+    bl.add_argument("--bitrate", type=bitrate, metavar="B",
+                    help="the (nominal) bit rate, bit/s (default 1000000)")
+    bl.add_argument("--fd", type=bitrate, metavar="DATA_BITRATE",
+                    help="CAN FD with bit-rate switch to DATA_BITRATE bit/s")
+    bl.add_argument("--lockstep", action="store_true",
+                    help="include the lockstep-only frames (Sync)")
+    bl.add_argument("--dbc", type=Path, metavar="FILE",
+                    help="another DBC (default: the bench's rrr_bench.dbc)")
+    add_verbosity_arguments(bl, bars=False)
+    bl.set_defaults(func=_cmd_busload)

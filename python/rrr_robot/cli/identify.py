@@ -7,12 +7,20 @@ import argparse
 import contextlib
 import logging
 import os
+import shlex
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 from ..errors import BadInputError
-from ._args import nonnegative_int, output_path, positive_int
+from ._args import (
+    add_verbosity_arguments,
+    command_parser,
+    nonnegative_int,
+    output_path,
+    positive_int,
+    quiet,
+)
 from ._progress import Bars, shown
 
 log = logging.getLogger(__name__)
@@ -36,7 +44,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
                         friction_method=args.friction_method, weighting=args.weighting,
                         v_min=args.v_min)
     friction = read_log(args.friction_log, friction=True) if args.friction_log else None
-    with Bars(shown(args.quiet), unit="joint") as bars:
+    with Bars(shown(quiet(args)), unit="joint") as bars:
         result = identify(read_log(args.log), prior, friction, settings, progress=bars)
     report: dict[str, Any] = result.report()
     est = result.base.wls if settings.weighting == "wls" else result.base.ls
@@ -46,7 +54,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     if args.validate:
         from ..identify.validation import validate_writing
 
-        with Bars(shown(args.quiet)) as bars:
+        with Bars(shown(quiet(args))) as bars:
             report["writing"] = validate_writing(
                 prior, result.model, prior_robot,
                 progress=lambda name, k, n: bars(name, k + 1, n))
@@ -105,7 +113,7 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     ex.check_experiments(args.periods, step)  # the bounds, before anything runs
     sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)
     # the three files appear together when every experiment succeeded (core.outputs)
-    with ResultSet(out, kind="identify-experiment") as rs, Bars(shown(args.quiet)) as bars:
+    with ResultSet(out, kind="identify-experiment") as rs, Bars(shown(quiet(args))) as bars:
         traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
         traj.to_json(rs.path("excitation.json"))
         note = f"simulated, sensors: {sensors}"
@@ -117,16 +125,30 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
             rs.path("excitation.csv"), f"{note}; cond(W) = {cond:.2f}")
     print(f"cond(W) of the excitation: {cond:.2f}; logs in {out}/ (friction.csv, "
           "excitation.csv, excitation.json)")
+    print("identify from them with: " + identify_command(out, args.robot))
     return 0
+
+
+def identify_command(out: Path, robot: str | None) -> str:
+    """The ``rrr identify`` command that reads the logs of ``rrr identify-experiment --out
+    OUT`` (with its robot as the prior, whose kinematics and motors identification keeps)."""
+    words = ["rrr", "identify", "--log", str(out / "excitation.csv"), "--friction-log",
+             str(out / "friction.csv")]
+    if robot:
+        words += ["--robot", robot]
+    words += ["--out", str(out / "identified.toml")]
+    return shlex.join(words)
 
 
 def register_cli(sub: Any) -> None:
     """Add the identification subcommands to the ``rrr`` parser's subparsers."""
-    p = sub.add_parser(
-        "identify", help="identify friction and the 16 base parameters from logs",
+    p = command_parser(
+        sub, "identify", help="identify friction and the 16 base parameters from logs",
         description="Estimate eq 9 friction from a constant-velocity sweep log and the base "
         "parameters p from an excitation log (CSV, columns documented in "
-        "rrr_robot.identify.logs) and write a robot TOML with [base_parameters] and [friction].")
+        "rrr_robot.identify.logs) and write a robot TOML with [base_parameters] and [friction].",
+        example="rrr identify --log logs/excitation.csv --friction-log logs/friction.csv "
+        "--out identified.toml --validate")
     p.add_argument("--log", required=True, help="excitation log CSV (t, q[i], u[i])")
     p.add_argument("--friction-log", help="friction sweep CSV (adds column joint); without "
                    "it the prior's friction is used")
@@ -145,12 +167,16 @@ def register_cli(sub: Any) -> None:
     p.add_argument("--report", type=output_path, help="write the figures of merit as JSON")
     p.add_argument("--validate", action="store_true",
                    help="run the writing task with the prior and the identified model")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_verbosity_arguments(p)
     p.set_defaults(func=_cmd_identify)
-    e = sub.add_parser(
-        "identify-experiment", help="simulate friction and excitation logs on the plant FMU",
+    e = command_parser(
+        sub, "identify-experiment", help="simulate friction and excitation logs on the plant "
+        "FMU",
         description="Design an excitation, run the friction sweep and the excitation on the "
-        "plant FMU with encoder quantisation and noise, and write the logs.")
+        "plant FMU with encoder quantisation and noise, and write the logs (friction.csv, "
+        "excitation.csv, excitation.json); its last line is the rrr identify command that "
+        "reads them.",
+        example="rrr identify-experiment --out logs")
     e.add_argument("--out", required=True, type=output_path,
                    help="output folder (its previous logs stay as they were unless every "
                    "experiment succeeds)")
@@ -161,5 +187,5 @@ def register_cli(sub: Any) -> None:
     e.add_argument("--periods", type=positive_int, default=1,
                    help="excitation periods of 10 s (an experiment has at most 1,000,000 "
                    "samples: 1000 s at 1 ms)")
-    e.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_verbosity_arguments(e)
     e.set_defaults(func=_cmd_experiment)

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from ._args import nonnegative_int, output_path
+from ._args import add_verbosity_arguments, command_parser, nonnegative_int, output_path, quiet
 from ._progress import Bars, shown
 from .writing import _scenario_line
 
@@ -30,8 +30,9 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
     from ..ssp.run import SspRun, run_ssp
 
     job = SspRun(ssp=Path(args.ssp), tool=args.tool, out=Path(args.out),
-                 real_time=args.real_time)
-    with Bars(shown(args.quiet)) as bars:
+                 real_time=args.real_time, figures=not args.no_figures,
+                 robot=Path(args.robot) if args.robot else None)
+    with Bars(shown(quiet(args))) as bars:
         summary = run_ssp(job, progress=bars.callback(args.tool))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
@@ -40,14 +41,17 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
         print(f"real-time factor {info['real_time_factor']:.4f} over "
               f"{info['simulated_time']:.3f} s (simulated / wall-clock time; libcosim's own "
               f"figure at the end: {info['libcosim_real_time_factor']:.4f})")
-    print(f"results in {job.out}/ (summary.json, {', '.join(summary['scenarios'])}.csv)")
+    figures = ", figures" if job.figures else ""
+    print(f"results in {job.out}/ (summary.json, {', '.join(summary['scenarios'])}.csv"
+          f"{figures})")
     return 0
 
 
 def register_cli(subparsers: Any) -> None:
     """Add the ``ssp`` and ``run-ssp`` subcommands to the ``rrr`` command line."""
-    p = subparsers.add_parser(
-        "ssp", help="write the writing task's closed loop as an SSP 1.0 archive",
+    p = command_parser(
+        subparsers, "ssp", help="write the writing task's closed loop as an SSP 1.0 archive",
+        example="rrr ssp --scenario ctc --out ctc.ssp",
         description="Write the writing task (reference, controller and plant FMUs, their "
         "connections and parameter values, a default experiment) for one scenario as an SSP 1.0 "
         "archive that libcosim and FMPy run (rrr run-ssp).",
@@ -64,10 +68,12 @@ def register_cli(subparsers: Any) -> None:
                    help="steps the reference FMU plays ahead and the controller predicts the "
                    "measured state (default 1: compensates the one-step delay of masters that "
                    "pass outputs on at the next step, as libcosim and FMPy do; 0: none)")
+    add_verbosity_arguments(p, bars=False)
     p.set_defaults(func=_cmd_ssp)
 
-    r = subparsers.add_parser(
-        "run-ssp", help="run an SSP archive of rrr ssp in libcosim or FMPy",
+    r = command_parser(
+        subparsers, "run-ssp", help="run an SSP archive of rrr ssp in libcosim or FMPy",
+        example="rrr run-ssp ctc.ssp --tool fmpy --out results/ssp",
         description="Run an archive written by rrr ssp in libcosim (CosimExecution."
         "from_ssp_file) or in FMPy's SSP support (simulate_ssp) and write summary.json and "
         "<scenario>.csv with the metrics and columns of rrr writing into --out.",
@@ -81,5 +87,9 @@ def register_cli(subparsers: Any) -> None:
     r.add_argument("--real-time", action="store_true",
                    help="libcosim's real-time mode (the run takes the simulated time); reports "
                    "the achieved real-time factor")
-    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--no-figures", action="store_true",
+                   help="skip the PNG figures (those of rrr writing: Figs 2-9, the tip error)")
+    r.add_argument("--robot", help="the robot file the archive was written from, for the "
+                   "figures (default: the packaged default robot)")
+    add_verbosity_arguments(r)
     r.set_defaults(func=_cmd_run_ssp)

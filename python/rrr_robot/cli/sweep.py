@@ -8,7 +8,7 @@ import re
 from pathlib import Path
 from typing import Any
 
-from ._args import output_path, positive_int
+from ._args import add_verbosity_arguments, command_parser, output_path, positive_int, quiet
 from ._progress import Bars, shown
 
 _ADDRESS = re.compile(r"^(?:(?:tcp|tls|ws|wss)://)?(?:\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):\d{1,5}$")
@@ -34,7 +34,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     job = SweepJob(spec=Path(args.spec), out=Path(args.out), workers=args.workers,
                    scheduler=args.scheduler, engine=args.engine, resume=args.resume,
                    batch=args.batch, figures=not args.no_figures)
-    with Bars(shown(args.quiet), unit="run") as bars:
+    with Bars(shown(quiet(args)), unit="run") as bars:
         summary = run_sweep(job, progress=lambda done, total: bars("sweep", done, total))
     counts = ", ".join(f"{k} {v}" for k, v in summary["status"].items() if v)
     tip = summary["tip_error_max"]
@@ -57,8 +57,9 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
 
 def register_cli(subparsers: Any) -> None:
     """Add the ``sweep`` subcommand to the ``rrr`` command line."""
-    p = subparsers.add_parser(
-        "sweep", help="run a Monte Carlo sweep of writing-task scenarios on Dask",
+    p = command_parser(
+        subparsers, "sweep", help="run a Monte Carlo sweep of writing-task scenarios on Dask",
+        example="rrr sweep spec.toml --out results/sweep --engine native",
         description="Run the writing task for every sample of a sweep spec (a base scenario "
         "with fields drawn from distributions, a Latin hypercube or a grid) on a Dask cluster: "
         "a local one, or a running one with --scheduler. Writes results.parquet (one row per "
@@ -81,5 +82,5 @@ def register_cli(subparsers: Any) -> None:
     p.add_argument("--batch", type=positive_int, metavar="N",
                    help="runs per Dask task (default: from the number of runs and workers)")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_verbosity_arguments(p)
     p.set_defaults(func=_cmd_sweep)

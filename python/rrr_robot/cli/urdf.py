@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import BadInputError
-from ._args import output_path
+from ._args import add_verbosity_arguments, command_parser, output_path
 
 
 def _cmd_urdf(args: argparse.Namespace) -> int:
@@ -33,8 +33,9 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
 
 def register_cli(sub: Any) -> None:
     """Add the ``urdf`` subcommand to the ``rrr`` parser's subparsers."""
-    p = sub.add_parser(
-        "urdf", help="write the robot as a URDF file (Pinocchio, ROS, any URDF tool)",
+    p = command_parser(
+        sub, "urdf", help="write the robot as a URDF file (Pinocchio, MuJoCo, Drake, ROS)",
+        example="rrr urdf --out rrr.urdf",
         description="Write the robot of a robot file as URDF: links with masses, centres of mass "
         "and inertias from the link tables, revolute joints on the DH axes (joint angles = the "
         "model's q), a 'tool' frame at the pen tip. Rotor inertias have no place in URDF (the "
@@ -46,4 +47,5 @@ def register_cli(sub: Any) -> None:
     p.add_argument("--continuous", action="store_true",
                    help="continuous joints (no position limits, as the real joints) instead of "
                    "revolute joints limited to +-2 pi")
+    add_verbosity_arguments(p, bars=False)
     p.set_defaults(func=_cmd_urdf)

@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from ._args import output_path
+from ._args import add_verbosity_arguments, command_parser, output_path, quiet
 from ._progress import Bars, shown
 
 
@@ -55,7 +55,7 @@ def _cmd_writing(args: argparse.Namespace) -> int:
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
         engine=args.engine, animate=args.animate, fps=args.fps,
     )
-    with Bars(shown(args.quiet)) as bars:
+    with Bars(shown(quiet(args))) as bars:
         summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
@@ -78,20 +78,20 @@ writing area (default robot; a robot file's [writing] plane_y, x_range, z_range 
 glyphs: printable ASCII (space to ~) in the cursive Hershey font 'scripts', and the Greek
   alphabet (Unicode, upper and lower case) in the Hershey font 'greek'; at most 200
   characters.
-examples:
-  rrr writing --out results --text "Hello, world"
-  rrr writing --out results --text 'Hello\\nworld' --scenario ctc
 """
+WRITING_EXAMPLES = ["rrr writing --out results --text \"Hello, world\"",
+                    "rrr writing --out results --text 'Hello\\nworld' --scenario ctc"]
 
 
 def register_cli(subparsers: Any) -> None:
     """Add the ``writing`` subcommand to the ``rrr`` command line."""
-    p_w = subparsers.add_parser(
-        "writing", help="run the writing task: co-simulate the FMUs for each scenario",
+    p_w = command_parser(
+        subparsers, "writing", help="run the writing task: co-simulate the FMUs for each "
+        "scenario",
         description="Co-simulate the controller and plant FMUs on the writing task and write "
         "summary.json, one table of every signal per scenario (CSV, or Parquet with --format "
         "parquet) and the figures (paper Figs 2-9) into --out.",
-        epilog=WRITING_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=WRITING_EPILOG, example=WRITING_EXAMPLES,
     )
     p_w.add_argument("--text", help="text to write (default: the paper-like default text "
                      "'a\u03c9m\u03b3'); a newline or \\n starts a new line")
@@ -127,5 +127,5 @@ def register_cli(subparsers: Any) -> None:
     p_w.add_argument("--fps", type=_fps, default=15.0, metavar="F",
                      help="frames per simulated second of --animate (default 15); an animation "
                      "has at most 3000 frames: lower it for long texts")
-    p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_verbosity_arguments(p_w)
     p_w.set_defaults(func=_cmd_writing)

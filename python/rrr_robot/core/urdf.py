@@ -155,6 +155,10 @@ def robot_urdf(robot: RobotFile, name: str = "rrr", continuous: bool = False,
         f"joints turn without limit; {'continuous joints' if continuous else 'revolute limits '}"
         f"{'' if continuous else '+-' + _num(position_limit) + ' rad'}; effort limits "
         f"k_t u_max; velocity limits {_num(velocity_limit)} rad/s (not a model limit). "))
+    # MuJoCo's URDF import merges bodies joined by fixed joints into their parent unless told
+    # not to: keep `tool` (and base_link) as bodies of their own; other URDF readers ignore it
+    mujoco = ET.SubElement(root, "mujoco")
+    ET.SubElement(mujoco, "compiler", fusestatic="false", discardvisual="false")
     ET.SubElement(root, "link", name="base_link")
     parent = "base_link"
     placement: tuple[FloatArray, FloatArray] | None = None

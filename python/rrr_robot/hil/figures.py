@@ -11,7 +11,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..sim.cosim import CosimResult
-from ..writing.plots import JOINTS, fig_letters, new_figure, plot_series, save_figure
+from ..writing.plots import JOINTS, OUTSIDE, fig_letters, new_figure, plot_series, save_figure
 from ..writing.trajectory import Reference
 
 __all__ = ["FIGURES", "LATENCY_FIGURE", "write_bench_figures"]
@@ -22,7 +22,7 @@ FIGURES = ("fig_letters_bench.png", "fig_bench_vs_cosim.png", "fig_joint_errors.
 LATENCY_FIGURE = "fig_latency.png"
 
 
-def fig_difference(out: Path, bench: CosimResult, other: CosimResult) -> None:
+def fig_difference(out: Path, bench: CosimResult, other: CosimResult, scenario: str) -> None:
     """Bench minus the unquantised co-simulation: joint positions and voltages."""
     m = min(bench.t.shape[0], other.t.shape[0])
     fig = new_figure((10, 6))
@@ -33,12 +33,12 @@ def fig_difference(out: Path, bench: CosimResult, other: CosimResult) -> None:
                     label=f"u{i + 1}")
     dq = np.abs(bench.q[:m] - other.q[:m]).max()
     du = np.abs(bench.u[:m] - other.u[:m]).max()
-    ax1.set(ylabel="rad", title=f"CAN bench minus unquantised co-simulation: max |dq| "
-            f"{dq:.2e} rad, max |du| {du:.2e} V")
+    ax1.set(ylabel="rad", title=f"CAN bench minus unquantised co-simulation, scenario "
+            f"{scenario}: max |dq| {dq:.2e} rad, max |du| {du:.2e} V")
     ax2.set(xlabel="t [s]", ylabel="V")
     for ax in (ax1, ax2):
         ax.grid(True)
-        ax.legend(loc="upper right")
+        ax.legend(**OUTSIDE)
     save_figure(fig, out / "fig_bench_vs_cosim.png")
 
 
@@ -56,21 +56,22 @@ def _against_cosim(out: Path, name: str, t: tuple[FloatArray, FloatArray],
                         label=f"{labels[i]} {who}")
     ax.set(xlabel="t [s]", ylabel=ylabel, title=title)
     ax.grid(True)
-    ax.legend(ncol=3, fontsize="small")
+    ax.legend(fontsize="small", **OUTSIDE)
     save_figure(fig, out / name)
 
 
-def fig_joint_errors(out: Path, bench: CosimResult, other: CosimResult) -> None:
+def fig_joint_errors(out: Path, bench: CosimResult, other: CosimResult, scenario: str) -> None:
     """q - q_ref of the bench (solid) and of the unquantised co-simulation (dashed)."""
     _against_cosim(out, "fig_joint_errors.png", (bench.t, other.t),
                    (bench.q - bench.q_ref, other.q - other.q_ref), JOINTS, "q - q_ref [rad]",
-                   "Joint errors")
+                   f"Joint errors on the CAN bench and co-simulated, scenario {scenario}")
 
 
-def fig_voltages(out: Path, bench: CosimResult, other: CosimResult) -> None:
+def fig_voltages(out: Path, bench: CosimResult, other: CosimResult, scenario: str) -> None:
     """Commanded voltages of the bench (solid) and of the co-simulation (dashed)."""
     _against_cosim(out, "fig_voltages.png", (bench.t, other.t), (bench.u, other.u),
-                   ("u1", "u2", "u3"), "V", "Motor voltages commanded over CAN")
+                   ("u1", "u2", "u3"), "V",
+                   f"Motor voltages commanded over CAN and co-simulated, scenario {scenario}")
 
 
 def fig_latency(out: Path, latencies_ns: Mapping[str, FloatArray],
@@ -92,17 +93,20 @@ def fig_latency(out: Path, latencies_ns: Mapping[str, FloatArray],
     ax.set(xlabel="wake-up latency [us]", ylabel="periods",
            title="Real-time loops: wake-up latency at 1 kHz")
     ax.grid(True)
-    ax.legend(fontsize="small")
+    ax.legend(fontsize="small", loc="upper right")
     save_figure(fig, out / LATENCY_FIGURE)
 
 
 def write_bench_figures(out: Path, ref: Reference, bench: CosimResult, other: CosimResult,
                         latencies_ns: Mapping[str, FloatArray] | None = None,
-                        stats: Mapping[str, Mapping[str, float | None]] | None = None) -> None:
-    """Every figure of a bench run into ``out``."""
-    fig_letters(out, ref, {"bench": bench})
-    fig_difference(out, bench, other)
-    fig_joint_errors(out, bench, other)
-    fig_voltages(out, bench, other)
+                        stats: Mapping[str, Mapping[str, float | None]] | None = None,
+                        scenario: str = "ctc") -> None:
+    """Every figure of a bench run of ``scenario`` into ``out`` (the titles name it)."""
+    fig_letters(out, ref, {"bench": bench},
+                title=f"Letters written over the CAN bench, scenario {scenario}",
+                file="fig_letters_bench.png")
+    fig_difference(out, bench, other, scenario)
+    fig_joint_errors(out, bench, other, scenario)
+    fig_voltages(out, bench, other, scenario)
     if latencies_ns is not None:
         fig_latency(out, latencies_ns, stats or {})

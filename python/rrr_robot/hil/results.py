@@ -228,7 +228,8 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     if figures:
         from .figures import write_bench_figures
 
-        write_bench_figures(work, ref_run, bench, unq, latencies or None, stats)
+        write_bench_figures(work, ref_run, bench, unq, latencies or None, stats,
+                            scenario=info.scenario)
     summary["files"] = sorted([*rs.names(), "summary.json"])
     strict: dict[str, Any] = to_strict_json_value(summary)
     rs.write_text("summary.json", strict_json(strict) + "\n")

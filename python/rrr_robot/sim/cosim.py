@@ -158,6 +158,11 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
             _cursor(), _cursor(), _cursor())
         c_set, c_get, c_step = ctrl.setter(c_in), ctrl.getter(c_out), ctrl.stepper()
         p_set, p_get, p_step = plant.setter(p_in), plant.getter(p_out), plant.stepper()
+        # row 0's qdd: the plant's acceleration under row 0's input (qdd depends on u directly),
+        # read after that input is set; the plant's first outputs had it under its start u = 0
+        p_qdd = plant.getter(plant.real_block(PLANT_OUT[6:9]))
+        qdd0_ptr, qdd0_addr = _cursor()
+        qdd0_addr.value = rows_at + 15 * 8
         measure, actuate = options.measure, options.actuate
 
         def c_set_measured(k: int) -> None:  # the controller's inputs through `measure`
@@ -195,6 +200,9 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
                         p_set(u_ptr)
                     else:
                         p_set_actuated(k)
+                    if k == 0:
+                        stage = "plant GetReal"
+                        p_qdd(qdd0_ptr)
                     stage = "plant DoStep"
                     p_step(now, step)
                     stage = "controller DoStep"

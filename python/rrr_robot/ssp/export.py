@@ -9,6 +9,13 @@ parameter values that ``rrr writing`` gives each FMU (the same functions compute
 ``model_fmu_values``, ``controller_fmu_values``, the plant starting at the reference's first
 sample); a default experiment over the reference at its sample period.
 
+Each FMU in the archive also carries those values as its start values, so that an importer
+that ignores the SSD's parameter bindings (FMPy's ``simulate_ssp`` without a parameter set)
+runs the same system: its ``resources/start_values.csv`` (``name,value``, read by the FMU's
+binary at instantiation and reset over its compiled defaults; fmu/common) and the ``start``
+attributes of its modelDescription.xml, rewritten to the same numbers (the GUID stays the
+packaged FMU's: the binary is the same).
+
 The masters of other tools pass a step's outputs to the other FMUs only after every FMU took the
 step (libcosim, FMPy: a Jacobi data flow), so the plant integrates each step with the voltage
 computed from the reference and the measurement of one step earlier. The archive compensates it
@@ -22,7 +29,9 @@ from __future__ import annotations
 
 import logging
 import tempfile
+import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -94,17 +103,59 @@ def _check_out(out: Path) -> None:
     check_folder(out.parent if str(out.parent) else Path("."))
 
 
-def _reference_fmu(table: Path) -> bytes:
-    """The packaged reference FMU with ``table`` as its resources/reference.csv."""
-    src = fmu_path("reference", 2)
+#: The FMU's file of start values in its resources/ (fmu/common: FMU_START_FILE).
+START_FILE = "start_values.csv"
+
+
+def _start_text(value: float | bool) -> str:
+    """A start value as the XML and the start file write it (every bit of a double)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(float(value))
+
+
+def start_values_csv(values: Mapping[str, float | bool]) -> str:
+    """The FMU's resources/start_values.csv of ``values``."""
+    return "name,value\n" + "".join(f"{k},{_start_text(v)}\n" for k, v in values.items())
+
+
+def with_start_values(xml: bytes, values: Mapping[str, float | bool], where: str) -> bytes:
+    """modelDescription.xml with the ``start`` of each variable in ``values`` rewritten."""
+    root = ET.fromstring(xml)
+    todo = dict(values)
+    for var in root.iter("ScalarVariable"):
+        name = var.get("name")
+        if name in todo:
+            typed = next((c for c in var if c.tag in ("Real", "Boolean")), None)
+            if typed is None:
+                raise BadInputError(f"{where}: variable {name} has no Real or Boolean element")
+            typed.set("start", _start_text(todo.pop(name)))
+    if todo:
+        raise BadInputError(f"{where}: no variables {', '.join(sorted(todo))}")
+    body = ET.tostring(root, encoding="unicode")
+    return ('<?xml version="1.0" encoding="UTF-8"?>\n<!-- Generated from the variable table by '
+            "fmu/common/fmu_xml.c; the start values of this system's parameters rewritten by "
+            f"rrr ssp (resources/{START_FILE} holds the same). -->\n{body}\n").encode()
+
+
+def _component_fmu(src: Path, values: Mapping[str, float | bool],
+                   resources: Mapping[str, Path] = {}) -> bytes:
+    """The packaged FMU ``src`` with ``values`` as its start values (resources/start_values.csv
+    and the XML's start attributes) and ``resources`` (name -> file) in its resources/."""
+    replaced = {"modelDescription.xml", f"resources/{START_FILE}",
+                *(f"resources/{name}" for name in resources)}
     with tempfile.TemporaryDirectory(prefix="rrr-ssp-") as tmp:
-        dst = Path(tmp) / "rrr_reference.fmu"
+        dst = Path(tmp) / src.name
         with CheckedZip(src, "FMU") as zin, \
                 zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
             for name, item in zin.entries.items():
-                if name != f"resources/{TABLE_FILE}":
+                if name not in replaced:
                     zout.writestr(item, b"".join(zin.chunks(name)))
-            zout.write(table, f"resources/{TABLE_FILE}")
+            zout.writestr("modelDescription.xml", with_start_values(
+                b"".join(zin.chunks("modelDescription.xml")), values, str(src)))
+            zout.writestr(f"resources/{START_FILE}", start_values_csv(values))
+            for name, path in resources.items():
+                zout.write(path, f"resources/{name}")
         return dst.read_bytes()
 
 
@@ -152,13 +203,14 @@ def export_ssp(job: SspJob) -> dict[str, Any]:
     ssd = write_ssd(system)
     with tempfile.TemporaryDirectory(prefix="rrr-ssp-") as tmp:
         table = write_reference_table(Path(tmp) / TABLE_FILE, ref)
-        reference_fmu = _reference_fmu(table)
+        archived = {c.name: _component_fmu(fmus[c.name], c.parameters,
+                                           {TABLE_FILE: table} if c.name == "reference" else {})
+                    for c in system.components}
     job.out.parent.mkdir(parents=True, exist_ok=True)  # check_folder: it can be created
     with atomic_path(job.out) as part, zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
         z.writestr("SystemStructure.ssd", ssd)
-        z.writestr(f"resources/{COMPONENTS['reference']}", reference_fmu)
-        for name in ("controller", "plant"):
-            z.write(fmus[name], f"resources/{COMPONENTS[name]}")
+        for name, data in archived.items():
+            z.writestr(f"resources/{COMPONENTS[name]}", data)
     log.info("%s: scenario %s, %.2f s at %g s (%d samples), look-ahead %d step(s)", job.out,
              scn.name, ref.t[-1] - ref.t[0], step, ref.t.size, job.lookahead_steps)
     return {"scenario": scn.name, "duration": float(ref.t[-1] - ref.t[0]), "step": step,

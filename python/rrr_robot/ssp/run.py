@@ -68,12 +68,45 @@ RECORDED = {"plant": list(PLANT_OUT), "controller": list(CTRL_OUT)}
 
 @dataclass(frozen=True)
 class SspRun:
-    """What to run: the archive, the tool, the output folder, libcosim's real-time mode."""
+    """What to run: the archive, the tool, the output folder, libcosim's real-time mode, the
+    figures (those of ``rrr writing``) and the robot file the archive was written from (for
+    them; None: the packaged default robot when the archive names it)."""
 
     ssp: Path
     tool: str
     out: Path
     real_time: bool = False
+    figures: bool = True
+    robot: Path | None = None
+
+
+def _figures(job: SspRun, arch: SspArchive, res: CosimResult, folder: Path) -> None:
+    """The figures of ``rrr writing`` for this run: the writing reference rebuilt from the
+    archive's text and scale with its robot file (checked against the archive's table), then
+    Figs 2-9 and the tip error."""
+    from ..core.model import DEFAULT_ROBOT_TOML
+    from ..writing.job import WritingJob, prepare
+    from ..writing.plots import write_figures
+
+    robot = job.robot
+    if robot is None:
+        if arch.info.get("robot", DEFAULT_ROBOT_TOML.name) != DEFAULT_ROBOT_TOML.name:
+            raise BadInputError(f"{arch.path} was written from the robot file "
+                                f"{arch.info.get('robot')}: give it with --robot for the "
+                                "figures (or --no-figures)")
+        robot = DEFAULT_ROBOT_TOML
+    scale = float(arch.info.get("scale", "1.0"))
+    model, robot_file, _, ref = prepare(WritingJob(out=folder, text=arch.info.get("text"),
+                                                   scenarios=["ctc"], robot=robot, scale=scale,
+                                                   figures=True))
+    table = arch.table
+    if (ref.t.size != table["t"].size or
+            not np.allclose(ref.q, np.column_stack([table[f"q_ref[{i}]"] for i in (1, 2, 3)]),
+                            rtol=0.0, atol=1e-9)):
+        raise BadInputError(f"the writing reference rebuilt from {robot} is not the table of "
+                            f"{arch.path}: give the robot file it was written from with --robot "
+                            "(or --no-figures)")
+    write_figures(folder, model, robot_file, ref, {arch.scenario: res})
 
 
 @dataclass(frozen=True)
@@ -256,6 +289,8 @@ def _run(job: SspRun, arch: SspArchive, work: Path, progress: Progress) -> dict[
                     "lookahead_steps": arch.info.get("lookahead_steps"), **sig.details},
             "paper_eq16": {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)},
         }
+        if job.figures:
+            _figures(job, arch, res, rs.staging)
         log.info("%s in %s: tip error max %.3f mm, %.1fx real time", name, job.tool,
                  1e3 * _tip_error_max(res),
                  simulated / sig.wall_time if sig.wall_time > 0 else np.inf)

@@ -48,14 +48,41 @@ def _draw(out: Path, model: Model, robot: RobotFile, ref: Reference) -> None:
     write_reference_figures(out, model, robot, ref)
 
 
+class _Records(logging.Handler):
+    """The worker's log records, kept to be sent to the parent, which logs them: the worker
+    never writes to the terminal itself (its lines would land on the parent's progress bar)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.records: list[logging.LogRecord] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        record.msg, record.args = record.getMessage(), None  # picklable, formatted here
+        record.exc_info = record.exc_text = None
+        self.records.append(record)
+
+
+def _keep_logs() -> _Records:
+    """In the worker: the root logger's handlers (inherited from the parent) replaced by one
+    that keeps the records."""
+    root = logging.getLogger()
+    for handler in list(root.handlers):
+        root.removeHandler(handler)
+    keep = _Records()
+    root.addHandler(keep)
+    return keep
+
+
 def _worker(conn: Any, out: Path, model: Model, robot: RobotFile, ref: Reference) -> None:
-    """The forked process: draw, report, exit quietly (never a traceback of its own)."""
+    """The forked process: draw, report (with its log records), exit quietly (never a
+    traceback of its own)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     _die_with_parent()
+    logs = _keep_logs()
     try:
         _draw(out, model, robot, ref)
-        conn.send(("ok", ""))
+        conn.send(("ok", logs.records))
     except BaseException as exc:  # any failure: the parent draws again and raises it
         with contextlib.suppress(BaseException):
             conn.send(("error", f"{type(exc).__name__}: {exc}"))
@@ -96,6 +123,8 @@ class ReferenceFigures:
             finally:
                 self.close()
             if status == "ok":
+                for record in detail:  # the worker's log lines, logged here
+                    logging.getLogger(record.name).handle(record)
                 return
             log.debug("reference figures drawn again in this process: %s", detail)
         _draw(*self._args)

@@ -127,28 +127,51 @@ def _bottom_legend(fig: Figure, pad_points: float = 4.0) -> float:
 save_figure = _save
 
 
+#: The default scenarios whose letters reproduce a figure of the paper: Fig. 7 (PD only) and
+#: Fig. 8 (PD + feedforward); the joint-2 components of the second are its Fig. 9.
+PAPER_LETTERS = {"pd": 7, "ctc": 8}
+PAPER_CONTROLS = {"ctc": 9}
+#: Where a legend goes: outside the axes, right of them, so that it never covers a trace (the
+#: layout makes room for it).
+OUTSIDE: dict[str, Any] = {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0), "borderaxespad": 0.0}
+
+
+def letters_file(name: str) -> str:
+    """``fig7_letters_pd.png``, ``fig8_letters_ctc.png``, ``fig_letters_<name>.png``."""
+    number = PAPER_LETTERS.get(name)
+    return f"fig{number}_letters_{name}.png" if number else f"fig_letters_{name}.png"
+
+
+def controls_file(name: str) -> str:
+    """``fig9_u2_ctc.png``, ``fig_u2_<name>.png``."""
+    return "fig9_u2_ctc.png" if name in PAPER_CONTROLS else f"fig_u2_{name}.png"
+
+
 def fig_reference(out: Path, ref: Reference) -> None:
     fig = _figure((12, 4))
     ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]})
     ax1.plot(*_pen_down_xz(ref.x, ref.pen_down), "k-", lw=1.5)
-    ax1.set(xlabel="x [m]", ylabel="z [m]", title=f"Reference tip path in y = {ref.x[0, 1]:.3f} m")
+    ax1.set(xlabel="x [m]", ylabel="z [m]",
+            title=f"Fig. 2: reference tip path in y = {ref.x[0, 1]:.3f} m")
     ax1.set_aspect("equal")
     _plot_series(ax2, ref.t, ref.speed, "b-", lw=1)
-    ax2.set(xlabel="t [s]", ylabel="v = sqrt(xd^2 + zd^2) [m/s]", title="Tip speed (eq 14)")
+    ax2.set(xlabel="t [s]", ylabel="v = sqrt(xd^2 + zd^2) [m/s]", title="Fig. 2: tip speed (eq 14)")
     ax2.grid(True)
     _save(fig, out / "fig2_reference.png")
 
 
 def fig_joints(out: Path, ref: Reference) -> None:
-    for data, unit, name, title in ((ref.q, "rad", "fig3_joint_positions.png", "positions"),
-                                    (ref.qd, "rad/s", "fig4_joint_velocities.png", "velocities")):
+    for data, unit, name, title in ((ref.q, "rad", "fig3_joint_positions.png",
+                                     "Fig. 3: reference joint positions"),
+                                    (ref.qd, "rad/s", "fig4_joint_velocities.png",
+                                     "Fig. 4: reference joint velocities")):
         fig = _figure((9, 4))
         ax = fig.subplots()
         for i in range(3):
             _plot_series(ax, ref.t, data[:, i], label=JOINTS[i])
-        ax.set(xlabel="t [s]", ylabel=unit, title=f"Reference joint {title}")
+        ax.set(xlabel="t [s]", ylabel=unit, title=title)
         ax.grid(True)
-        ax.legend()
+        ax.legend(**OUTSIDE)
         _save(fig, out / name)
 
 
@@ -161,13 +184,14 @@ def fig_differences(out: Path, model: Model, robot: RobotFile, ref: Reference,
         log.warning("Fig 5 skipped: %s", refs.ik_skipped)
     else:
         _diff_plot(out / "fig5_ik_difference.png", ref.t, ref.q - refs.ik, "rad",
-                   "Closed-form minus numeric (Robotics Toolbox ik_LM) inverse kinematics")
+                   "Fig. 5: closed-form minus numeric (Robotics Toolbox ik_LM) inverse "
+                   "kinematics")
     if refs.tau is None:
         log.warning("Fig 6 skipped: %s", refs.tau_skipped)
         return
     tau = model.inverse_dynamics(ref.q, ref.qd, ref.qdd)
     _diff_plot(out / "fig6_torque_difference.png", ref.t, tau - refs.tau, "N m",
-               "Closed-form R p minus Pinocchio rnea inverse dynamics")
+               "Fig. 6: closed-form R p minus Pinocchio rnea inverse dynamics")
 
 
 def _diff_plot(path: Path, t: FloatArray, diff: FloatArray, unit: str, title: str) -> None:
@@ -178,24 +202,37 @@ def _diff_plot(path: Path, t: FloatArray, diff: FloatArray, unit: str, title: st
     ax.set(xlabel="t [s]", ylabel=unit, title=f"{title}\nmax |difference| = "
            f"{np.abs(diff).max():.2e} {unit}")
     ax.grid(True)
-    ax.legend()
+    ax.legend(**OUTSIDE)
     _save(fig, path)
 
 
-def fig_letters(out: Path, ref: Reference, results: Mapping[str, CosimResult]) -> None:
-    """Figs 7 and 8: the letters written by each scenario against the reference."""
+_LETTERS_TITLE = {7: "Fig. 7: reference letters and the letters written with PD control only",
+                  8: "Fig. 8: reference letters and the letters written with PD + feedforward"}
+
+
+def fig_letters(out: Path, ref: Reference, results: Mapping[str, CosimResult],
+                title: str | None = None, file: str | None = None) -> None:
+    """The letters written by each scenario against the reference: Figs 7 (pd) and 8 (ctc) of
+    the paper, the other scenarios under descriptive names (:func:`letters_file`); ``title``
+    and ``file``: another first title line and file name (one result: the CAN bench's)."""
     for name, res in results.items():
         fig = _figure((10, 4))
         ax = fig.subplots()
         ax.plot(*_pen_down_xz(ref.x, ref.pen_down), "k--", lw=1.2, label="reference")
-        ax.plot(*_pen_down_xz(res.tip, ref.pen_down), "r-", lw=1.2, label=f"executed ({name})")
+        # the pen of each result row (a tool's results may start after the reference's t_0)
+        pen = (ref.pen_down if res.t.shape == ref.t.shape else
+               ref.pen_down[np.clip(np.searchsorted(ref.t, res.t - 1e-9), 0, ref.t.size - 1)])
+        ax.plot(*_pen_down_xz(res.tip, pen), "r-", lw=1.2, label=f"executed ({name})")
         err = np.linalg.norm(res.tip - res.x_ref, axis=1)
+        number = PAPER_LETTERS.get(name)
+        head = title or (f"{_LETTERS_TITLE[number]} (scenario {name})" if number
+                         else f"Letters written in scenario {name}")
         ax.set(xlabel="x [m]", ylabel="z [m]",
-               title=f"Scenario {name}: max tip error {1e3 * err.max():.2f} mm")
+               title=f"{head}\nmax tip error {1e3 * err.max():.2f} mm")
         ax.set_aspect("equal")
         # below the axes and their labels, never over the letters: in a band at the bottom as
         # high as the legend, which the layout keeps free (it does not see a figure legend)
-        _save(fig, out / f"fig_letters_{name}.png", rect=(0.0, _bottom_legend(fig), 1.0, 1.0))
+        _save(fig, out / (file or letters_file(name)), rect=(0.0, _bottom_legend(fig), 1.0, 1.0))
 
 
 def fig_controls(out: Path, results: Mapping[str, CosimResult]) -> None:
@@ -205,24 +242,33 @@ def fig_controls(out: Path, results: Mapping[str, CosimResult]) -> None:
         ax = fig.subplots()
         _plot_series(ax, res.t, res.u_n[:, 1], "b-", lw=1, label="u_n,2 (model)")
         _plot_series(ax, res.t, res.u_c[:, 1], "r-", lw=1, label="u_c,2 (PD)")
-        ax.set(xlabel="t [s]", ylabel="V", title=f"Joint 2 input components, scenario {name}")
+        what = "model (u_n) and PD (u_c) components of the joint-2 input"
+        ax.set(xlabel="t [s]", ylabel="V",
+               title=f"Fig. 9: {what} (scenario {name})" if name in PAPER_CONTROLS
+               else f"The {what}, scenario {name}")
         ax.grid(True)
-        ax.legend()
-        _save(fig, out / f"fig9_u2_{name}.png")
+        ax.legend(**OUTSIDE)
+        _save(fig, out / controls_file(name))
 
 
 def fig_tip_error(out: Path, results: Mapping[str, CosimResult]) -> None:
     fig = _figure((9, 4))
     ax = fig.subplots()
+    positive = []
     for name, res in results.items():
-        _plot_series(ax, res.t, 1e3 * np.linalg.norm(res.tip - res.x_ref, axis=1), lw=0.8,
-                     label=name)
+        err = 1e3 * np.linalg.norm(res.tip - res.x_ref, axis=1)
+        _plot_series(ax, res.t, err, lw=0.8, label=name)
+        positive.append(err[np.isfinite(err) & (err > 0.0)])
     ax.set_yscale("log")
+    data = np.concatenate(positive) if positive else np.zeros(0)
+    if data.size:  # the axis where the data is (the first rows' zero error is not on it)
+        ax.set_ylim(float(data.min()) / 1.25, float(data.max()) * 1.25)
     ax.yaxis.set_major_formatter(PowerOfTenFormatter())
     ax.yaxis.set_minor_formatter(PowerOfTenFormatter(labelOnlyBase=False))
-    ax.set(xlabel="t [s]", ylabel="|tip - reference| [mm]", title="Cartesian tip error")
+    ax.set(xlabel="t [s]", ylabel="|tip - reference| [mm]",
+           title=f"Cartesian tip error ({', '.join(results)})")
     ax.grid(True, which="both")
-    ax.legend()
+    ax.legend(**OUTSIDE)
     _save(fig, out / "fig_tip_error.png")
 
 

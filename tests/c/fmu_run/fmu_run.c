@@ -273,16 +273,16 @@ static void log3_cb(fmi3InstanceEnvironment env, fmi3Status status, fmi3String c
 
 /* ---- status checks -------------------------------------------------------------------------------- */
 
-/* 0 when status is OK; otherwise names the call and returns 1. */
-static int check(const fmu *f, const char *call, int status)
+/* 0 when status is OK; otherwise names the call and returns 1. The status of either version
+ * (fmi2Status, fmi3Status: enums without negative values, fmi2OK == fmi3OK == 0). */
+static int check(const fmu *f, const char *call, unsigned int status)
 {
-    /* fmi2OK == fmi3OK == 0 */
     if (status == 0) {
         return 0;
     }
     static const char *const names[] = {"OK", "Warning", "Discard", "Error", "Fatal", "Pending"};
-    const char *name = (status >= 0 && status < 6) ? names[status] : "(invalid status)";
-    fprintf(stderr, "fmu_run: %s: fmi%d%s returned %s (%d)\n", f->inst_name, f->fmi, call, name,
+    const char *name = status < 6 ? names[status] : "(invalid status)";
+    fprintf(stderr, "fmu_run: %s: fmi%d%s returned %s (%u)\n", f->inst_name, f->fmi, call, name,
             status);
     return 1;
 }

@@ -6,12 +6,15 @@
  *
  * Per sample k = 0 .. n-1 (the master's loop):
  *  1. record the plant outputs (q, qd, qdd, tip) at t_k;
- *  2. the controller: rrr_ctc(ctrl, gains, ref_k, q, qd) -> (u, u_n, u_c), recorded;
+ *  2. the controller: rrr_ctc(ctrl, gains, ref_k, q, qd) -> (u, u_n, u_c), recorded; at k = 0
+ *     row 0's qdd is replaced by rrr_plant_accel under that u (the master reads the plant FMU's
+ *     qdd again after setting its first input: row 0 shows the acceleration of row 0's input);
  *  3. unless k = n-1: the plant over [t_k, t_k + step] with u held: rrr_plant_step, then rrr_fk
- *     (what the plant FMU's doStep calls).
+ *     (what the plant FMU's doStep calls). Row k > 0's qdd is the end of that step's, under
+ *     u[k-1].
  * Before the loop, as the FMUs' initialization does: both models validated, the integrator
  * settings checked, the plant state (q0, qd0) with no step-size history, its first qdd under the
- * FMU's start input u = 0 and its first tip position.
+ * FMU's start input u = 0 (checked, then replaced as above) and its first tip position.
  */
 #ifndef RRR_SIM_H
 #define RRR_SIM_H
