@@ -126,7 +126,7 @@ def test_an_importer_that_ignores_the_bindings_runs_the_same_system(
     import numpy as np
     from fmpy import read_model_description
     from fmpy.ssp.simulation import simulate_ssp
-    from rrr_robot.ssp import run as ssp_run
+    from rrr_robot.ssp.archive import reference_rows
 
     ssp = runs["ssp"][scenario]
     arch = read_ssp(ssp)
@@ -134,7 +134,7 @@ def test_an_importer_that_ignores_the_bindings_runs_the_same_system(
                        step_size=arch.step)
     t_end = res["time"] + arch.step  # FMPy records a step's outputs under its start time
     keep = t_end <= arch.stop_time + 1e-9
-    ref = ssp_run._reference_at(arch, t_end[keep])
+    ref = reference_rows(arch.table, t_end[keep], arch.step, str(ssp))
     tip = np.column_stack([res[f"plant.tip.{a}"][keep] for a in "xyz"])
     x_ref = np.column_stack([ref[f"x_ref.{a}"] for a in "xyz"])
     err = float(np.linalg.norm(tip - x_ref, axis=1).max())
