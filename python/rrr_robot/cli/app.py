@@ -30,7 +30,7 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
         extras = [x for x, present in (("sources", v.has_sources),
                                        ("documentation", v.has_documentation)) if present]
         print(f"{v.which:<10} FMI {v.fmi_version}.0  {' + '.join(v.interfaces):<28} "
-              f"{', '.join(v.platforms):<30} {', '.join(extras):<22} {v.path}")
+              f"{', '.join(v.platform_labels()):<44} {', '.join(extras):<22} {v.path}")
     return 0
 
 
@@ -46,8 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
     sub = parser.add_subparsers(dest="command", required=True)
     p_fmus = sub.add_parser(
-        "fmus", help="list the FMUs: plant and controller, FMI 2.0 and 3.0, with their "
-        "interfaces, platforms and paths")
+        "fmus", help="list the FMUs: plant, controller and reference, FMI 2.0 and 3.0 (and the "
+        "FMI 2.0 archives for aarch64 Linux hosts), with their interfaces, platforms and paths")
     p_fmus.set_defaults(func=_cmd_fmus)
     register_writing(sub)
     register_identify(sub)
