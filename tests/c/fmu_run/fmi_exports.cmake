@@ -1,6 +1,6 @@
+# Included by the checks of the Windows and the aarch64 binaries.
 # declared_functions(<header> <2|3> <out var>): the functions an FMI header declares for export
-# (FMI2_Export ... fmi2Xxx; / FMI3_Export ... fmi3Xxx;), sorted. Included by the checks of the
-# Windows and the aarch64 binaries. Comments in the header are removed first.
+# (FMI2_Export ... fmi2Xxx; / FMI3_Export ... fmi3Xxx;), sorted. Comments are removed first.
 function(declared_functions header prefix out)
   if(NOT EXISTS "${header}")
     message(FATAL_ERROR "no FMI header ${header}")
@@ -22,4 +22,25 @@ function(declared_functions header prefix out)
   endif()
   list(SORT names)
   set(${out} "${names}" PARENT_SCOPE)
+endfunction()
+
+# compare_exports(<binary> <2|3> <exported names> <expected names> <failures var>): appends to
+# the failures what the binary does not export and what it exports beyond the FMI functions.
+function(compare_exports binary V exported expected failures_var)
+  set(failures ${${failures_var}})
+  set(missing ${expected})
+  if(exported)
+    list(REMOVE_ITEM missing ${exported})
+  endif()
+  set(extra ${exported})
+  if(expected)
+    list(REMOVE_ITEM extra ${expected})
+  endif()
+  if(missing)
+    list(APPEND failures "${binary}: does not export ${missing}")
+  endif()
+  if(extra)
+    list(APPEND failures "${binary}: exports more than the FMI ${V} functions: ${extra}")
+  endif()
+  set(${failures_var} ${failures} PARENT_SCOPE)
 endfunction()
