@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 __all__ = [
+    "ArchiveError",
     "BadInputError",
     "CosimError",
     "ModelError",
@@ -30,6 +31,12 @@ class RrrError(Exception):
 
 class BadInputError(RrrError, ValueError):
     """An argument is NaN/Inf, has the wrong shape or is out of range."""
+
+
+class ArchiveError(BadInputError):
+    """A zip archive (an SSP, an FMU) refused before anything in it is used: an entry name that
+    could leave the extraction folder, a link, a duplicate, sizes or a compression ratio beyond
+    the bounds of :mod:`rrr_robot.core.archives`, or data that does not match its headers."""
 
 
 class ModelError(RrrError, ValueError):

@@ -33,6 +33,18 @@ def _text(text: str | None) -> str | None:
     return None if text is None else text.replace("\\n", "\n")
 
 
+def _fps(text: str) -> float:
+    """--fps: a finite number > 0 and <= 1000."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"a number of frames per second expected, got "
+                                         f"{text!r}") from None
+    if not 0 < value <= 1000:  # also NaN
+        raise argparse.ArgumentTypeError(f"a frame rate > 0 and <= 1000 expected, got {text}")
+    return value
+
+
 def _cmd_writing(args: argparse.Namespace) -> int:
     from ..writing.job import WritingJob, run_writing
     from ..writing.scenarios import BUILTIN
@@ -41,7 +53,7 @@ def _cmd_writing(args: argparse.Namespace) -> int:
         out=Path(args.out), text=_text(args.text), scenarios=args.scenario or list(BUILTIN),
         robot=Path(args.robot) if args.robot else WritingJob.robot, scale=args.scale,
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
-        engine=args.engine, animate=args.animate,
+        engine=args.engine, animate=args.animate, fps=args.fps,
     )
     with Bars(shown(args.quiet)) as bars:
         summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
@@ -112,5 +124,8 @@ def register_cli(subparsers: Any) -> None:
                      "pen trace, reference), 15 frames per simulated second; FORMAT auto "
                      "(default: mp4 when imageio-ffmpeg is installed, pip install "
                      "'rrr_robot[mp4]', else gif), gif or mp4")
+    p_w.add_argument("--fps", type=_fps, default=15.0, metavar="F",
+                     help="frames per simulated second of --animate (default 15); an animation "
+                     "has at most 3000 frames: lower it for long texts")
     p_w.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p_w.set_defaults(func=_cmd_writing)

@@ -71,19 +71,24 @@ def bps_from_inertia(
     rotor_inertia: ArrayLike,
 ) -> FloatArray:
     """Base parameters p (eq 12) from link masses (3,), COMs in DH frame i (3, 3), inertia
-    tensors about the COM (3, 3, 3) and rotor inertias (3,)."""
-    m_arr = np.asarray(masses, dtype=float)
-    c_arr = np.asarray(coms, dtype=float)
-    i_arr = np.asarray(inertias_com, dtype=float)
-    j_arr = np.asarray(rotor_inertia, dtype=float)
+    tensors about the COM (3, 3, 3) and rotor inertias (3,); ``dh``: some of the DH lengths
+    d1, a2, a3, d2, d3 (m). BadInputError names the argument that is not finite numbers of its
+    shape, or a key of ``dh`` that is no DH length."""
     shapes = {"masses": (3,), "coms": (3, 3), "inertias_com": (3, 3, 3), "rotor_inertia": (3,)}
-    for name, arr in zip(shapes, (m_arr, c_arr, i_arr, j_arr), strict=True):
-        if arr.shape != shapes[name]:
-            raise BadInputError(f"{name} must have shape {shapes[name]}, got {arr.shape}")
+    m_arr, c_arr, i_arr, j_arr = (
+        finite_array(value, name, shapes[name])
+        for name, value in zip(shapes, (masses, coms, inertias_com, rotor_inertia),
+                               strict=True))
+    if not isinstance(dh, Mapping):
+        raise BadInputError(f"dh must be a mapping of DH lengths ({', '.join(DH_KEYS)}), got "
+                            f"{type(dh).__name__}")
+    unknown = [str(k) for k in dh if k not in DH_KEYS]
+    if unknown:
+        raise BadInputError(f"dh[{unknown[0]!r}] is no DH length (keys: {', '.join(DH_KEYS)})")
     raw = _lib.RawModel()
     for k in DH_KEYS:
         if k in dh:
-            setattr(raw, k, float(dh[k]))
+            setattr(raw, k, _ctypes_kernels.finite_scalar(dh[k], f"dh[{k!r}]"))
     inertial = _lib.RawInertial()
     for i in range(3):
         link = inertial.link[i]
@@ -354,12 +359,24 @@ class Model:
         return f"Model(dh={self.dh}, g={self.g}, kt={self.kt.tolist()})"
 
 
+def finite_array(value: ArrayLike, name: str, shape: tuple[int, ...]) -> FloatArray:
+    """``value`` as float64 of ``shape`` with finite elements; BadInputError naming ``name``."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise BadInputError(f"{name} must be finite numbers of shape {shape}: "
+                            f"{' '.join(str(exc).split())}") from None
+    if arr.shape != shape:
+        raise BadInputError(f"{name} must have shape {shape}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise BadInputError(f"{name} must be finite numbers, got {value!r}")
+    return arr
+
+
 def _set_array(raw: _lib.RawModel, key: str, value: ArrayLike) -> None:
-    arr = np.asarray(value, dtype=float)
     target = getattr(raw, key)
     expected = {"p": (_lib.NP,), "kt": (3,), "b": (3,), "f": (3, 3), "w": (3, 3)}[key]
-    if arr.shape != expected:
-        raise BadInputError(f"{key} must have shape {expected}, got {arr.shape}")
+    arr = finite_array(value, key, expected)
     if arr.ndim == 1:
         for i, v in enumerate(arr):
             target[i] = float(v)

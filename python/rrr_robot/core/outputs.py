@@ -31,10 +31,17 @@ A result set removes the files that the previous run of the same kind wrote and 
 (a run with fewer scenarios leaves no old ``<scenario>.csv`` behind); files it did not write
 (other kinds' results, the user's files) are never touched.
 
+Two runs into one folder: the folder is created race-free (a run that finds it just made by
+another goes on), and commits are serialised by :func:`folder_lock` (``.rrr-lock-commit``, held
+for the few milliseconds of a commit), so the folder holds one run's files whole: the last to
+commit. A command that must own its folder for its whole run (``rrr sweep``) claims it with
+:func:`folder_lock` (``wait=False``): a second one is refused at once, naming the first's pid.
+The locks are ``flock`` locks (released by the system when their process dies, however it dies)
+on hidden files that go when the lock is released.
+
 Limits: the renames of a result set are one after another (a reader listing the folder during the
 few milliseconds of a commit may see some files new and some old; summary.json is removed first
-and renamed last, so it is absent rather than wrong during that time). Two runs committing into
-the same folder at the same moment are not serialised.
+and renamed last, so it is absent rather than wrong during that time).
 """
 
 from __future__ import annotations
@@ -47,6 +54,7 @@ import os
 import re
 import secrets
 import shutil
+import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
@@ -57,6 +65,7 @@ from ..errors import BadInputError
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "LOCK_PREFIX",
     "MANIFEST_PREFIX",
     "STAGING_PREFIX",
     "TEMP_PREFIX",
@@ -69,7 +78,9 @@ __all__ = [
     "check_folder",
     "check_name",
     "clean_stale",
+    "folder_lock",
     "is_temporary",
+    "make_folders",
     "strict_json",
     "to_strict_json_value",
 ]
@@ -78,6 +89,7 @@ TEMP_PREFIX = ".rrr-tmp-"
 TEMP_SUFFIX = ".part"
 STAGING_PREFIX = ".rrr-staging-"
 MANIFEST_PREFIX = ".rrr-results-"
+LOCK_PREFIX = ".rrr-lock-"
 _JOURNAL = ".commit"
 _OURS = re.compile(r"^\.rrr-(tmp|staging)-(\d+)-([0-9a-f]{8})(?:-|$)")
 _KIND = re.compile(r"^[a-z0-9][a-z0-9-]{0,31}$")
@@ -97,7 +109,7 @@ def _token() -> str:
 def is_temporary(path: str | os.PathLike[str]) -> bool:
     """True for the temporary files, staging folders and manifests of this module."""
     name = Path(path).name
-    return name.startswith((TEMP_PREFIX, STAGING_PREFIX, MANIFEST_PREFIX))
+    return name.startswith((TEMP_PREFIX, STAGING_PREFIX, MANIFEST_PREFIX, LOCK_PREFIX))
 
 
 def check_name(name: str) -> str:
@@ -122,6 +134,122 @@ def check_folder(folder: str | os.PathLike[str]) -> Path:
     if not os.access(p, os.W_OK | os.X_OK):
         raise BadInputError(f"the output folder {folder} cannot be written: {p} is not writable")
     return folder
+
+
+def make_folders(folder: str | os.PathLike[str]) -> list[Path]:
+    """Create ``folder`` and its missing parents, race-free: a folder that another process
+    creates at the same moment is taken as it is. Returns the folders this call created (outer
+    first); BadInputError when one cannot be created or a path part is not a folder."""
+    folder = Path(folder)
+    missing: list[Path] = []
+    p = folder
+    while not p.exists() and p != p.parent:
+        missing.append(p)
+        p = p.parent
+    created: list[Path] = []
+    try:
+        for d in reversed(missing):
+            try:
+                d.mkdir()
+                created.append(d)
+            except FileExistsError:
+                if not d.is_dir():
+                    raise
+        if not folder.is_dir():
+            raise NotADirectoryError(f"{folder} is not a folder")
+    except OSError as exc:
+        for d in reversed(created):
+            with contextlib.suppress(OSError):
+                d.rmdir()
+        what = "it exists and is not a folder" if isinstance(exc, FileExistsError | \
+                                                             NotADirectoryError) else \
+            (exc.strerror or str(exc))
+        raise BadInputError(f"cannot create the output folder {folder}: {what}") from exc
+    return created
+
+
+class _Lock:
+    """An exclusive lock on ``folder/.rrr-lock-<purpose>`` (see :func:`folder_lock`)."""
+
+    def __init__(self, folder: Path, purpose: str) -> None:
+        self.path = folder / f"{LOCK_PREFIX}{purpose}"
+        self.fd = -1
+
+    def try_lock(self) -> bool:
+        """Take the lock if it is free; the file is checked to be the one locked (another
+        process may remove it between our open and our lock)."""
+        import fcntl
+
+        while True:
+            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                os.close(fd)
+                return False
+            except BaseException:
+                os.close(fd)
+                raise
+            try:
+                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                self.fd = fd
+                os.ftruncate(fd, 0)
+                os.write(fd, f"{os.getpid()}\n".encode())
+                return True
+            os.close(fd)  # locked a file that was removed meanwhile: again
+
+    def holder(self) -> str:
+        try:
+            return self.path.read_text(encoding="ascii").strip() or "?"
+        except (OSError, UnicodeError):
+            return "?"
+
+    def release(self) -> None:
+        if self.fd >= 0:
+            with contextlib.suppress(OSError):
+                self.path.unlink()  # while it is held: the next one makes a new file
+            os.close(self.fd)
+            self.fd = -1
+
+
+@contextlib.contextmanager
+def folder_lock(folder: str | os.PathLike[str], purpose: str, *, wait: bool = False,
+                timeout: float = 60.0, what: str = "") -> Iterator[None]:
+    """Hold ``folder``'s lock ``purpose`` for the block (the folder must exist). ``wait``:
+    wait for it up to ``timeout`` s; otherwise BadInputError at once when another process holds
+    it (``what`` names what holds it in the message: "another rrr sweep"). Where the system has
+    no ``flock`` (Windows) the lock is not taken."""
+    folder = Path(folder)
+    if not _KIND.match(purpose):
+        raise ValueError(f"folder_lock: purpose must match {_KIND.pattern}, got {purpose!r}")
+    try:
+        import fcntl  # noqa: F401
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    lock = _Lock(folder, purpose)
+    deadline = time.monotonic() + timeout
+    try:
+        while not lock.try_lock():
+            if not wait:
+                raise BadInputError(f"{folder} is in use by {what or 'another run'} (process "
+                                    f"{lock.holder()}): wait for it to end or choose another "
+                                    "--out")
+            if time.monotonic() > deadline:
+                raise BadInputError(f"{folder}: {what or 'another run'} (process "
+                                    f"{lock.holder()}) has held {lock.path.name} for "
+                                    f"{timeout:g} s")
+            time.sleep(0.01)
+    except OSError as exc:
+        raise BadInputError(f"cannot lock the output folder {folder}: "
+                            f"{exc.strerror or exc}") from exc
+    try:
+        yield
+    finally:
+        lock.release()
 
 
 # ---- durability -------------------------------------------------------------------------------
@@ -381,21 +509,7 @@ class ResultSet:
 
     # ---- opening ---------------------------------------------------------------------------
     def _make_folder(self) -> None:
-        missing: list[Path] = []
-        p = self.folder
-        while not p.exists() and p != p.parent:
-            missing.append(p)
-            p = p.parent
-        try:
-            for d in reversed(missing):
-                d.mkdir()
-                self._created.append(d)
-            if not self.folder.is_dir():
-                raise NotADirectoryError(f"{self.folder} is not a folder")
-        except OSError as exc:
-            self._remove_created()
-            raise BadInputError(f"cannot create the output folder {self.folder}: "
-                                f"{exc.strerror or exc}") from exc
+        self._created = make_folders(self.folder)
 
     def open(self) -> ResultSet:
         """Create the output folder if needed, clean stale leftovers, make the staging folder."""
@@ -470,6 +584,11 @@ class ResultSet:
             return []
         for name in files:
             _fsync_file(staging / name)
+        with folder_lock(self.folder, "commit", wait=True, what="another run's commit"):
+            self._commit_locked(staging, files)
+        return self.committed
+
+    def _commit_locked(self, staging: Path, files: list[str]) -> None:
         try:
             old = json.loads(_manifest(self.folder, self.kind).read_text(encoding="utf-8"))
         except (OSError, ValueError):
@@ -480,7 +599,8 @@ class ResultSet:
                    "remove": [n for n in previous if n not in files]}
         for name in order:
             if (self.folder / name).is_dir():  # before anything is moved
-                raise BadInputError(f"cannot write {self.folder / name}: it is a folder")
+                raise BadInputError(f"cannot write {self.folder / name}: a folder of that "
+                                    "name is in the way; move it away")
         # from here on the commit is finished, by clean_stale if this process dies
         with _open_at_end(staging / _JOURNAL, "w", "utf-8", None, clean=False) as fh:
             fh.write(strict_json(journal) + "\n")
@@ -489,7 +609,6 @@ class ResultSet:
         self._staging = None
         self.committed = [self.folder / n for n in order]
         log.debug("results in %s: %s", self.folder, ", ".join(order))
-        return self.committed
 
     def discard(self) -> None:
         """Drop the staged files and the folders this result set created (if empty). A commit

@@ -31,7 +31,7 @@ from typing import Any
 from ..errors import RobotFileError, RrrError
 from . import _lib
 from .checked import Document, Field, Flag, Matrix, Number, Text, Vector, load_toml, show
-from .param_names import PARAMS, ParamInfo, group_shape
+from .param_names import PARAMS, ParamInfo, group_shape, param
 
 __all__ = [
     "DEFAULT_SAMPLE_TIME",
@@ -44,6 +44,7 @@ __all__ = [
     "ControlGains",
     "LinkInertia",
     "RobotData",
+    "param_check",
     "parse_robot",
     "read_robot_data",
     "write_toml",
@@ -244,6 +245,13 @@ def _bound(info: ParamInfo) -> Number:
     if info.bound == _lib.PARAM_NONNEG:
         return Number(lo=0.0, hi=MAX_MAGNITUDE, extra=info.in_range)
     return Number(lo=-MAX_MAGNITUDE, hi=MAX_MAGNITUDE, extra=info.in_range)
+
+
+def param_check(name: str) -> Number:
+    """The check of one scalar model parameter by its C name ("kt[2]", "f[1,3]"), as a robot
+    file checks it: finite, its lower bound, magnitude <= MAX_MAGNITUDE (BadInputError for a
+    name that is no model parameter)."""
+    return _bound(param(name))
 
 
 def param_field(group: str) -> Field:

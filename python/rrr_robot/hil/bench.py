@@ -24,7 +24,14 @@ from ..core.outputs import atomic_path
 from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, CosimResult, run_cosim
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
-from .nodes import controller_node_args, export_reference, start_controller, start_plant
+from .nodes import (
+    controller_node_args,
+    export_reference,
+    failure_folder,
+    read_node_log,
+    start_controller,
+    start_plant,
+)
 from .protocol import (
     NMT_OPERATIONAL,
     NMT_STOPPED,
@@ -126,9 +133,11 @@ def _wait(node: Any, timeout: float, poll: LogProgress | None) -> dict[str, Any]
 class _StateWaiter:
     """Collects JointState1..3 of one alive counter from a bus (lockstep controller side)."""
 
-    def __init__(self, bus: Any, timeout: float) -> None:
+    def __init__(self, bus: Any, timeout: float,
+                 alive: Callable[[], bool] | None = None) -> None:
         self.bus = bus
         self.timeout = timeout
+        self.alive = alive  # whether the plant node still runs (None: not known here)
         self.status: dict[str, float] = {}
         self.rejected: dict[str, int] = {}
 
@@ -137,9 +146,16 @@ class _StateWaiter:
         have: set[int] = set()
         deadline = time.monotonic() + self.timeout
         while len(have) < 3:
-            msg = self.bus.recv(timeout=max(0.0, deadline - time.monotonic()))
+            left = deadline - time.monotonic()
+            msg = self.bus.recv(timeout=max(0.0, min(left, 0.2)))
             if msg is None:
-                raise HilError(f"no joint state with counter {counter} within {self.timeout} s")
+                if self.alive is not None and not self.alive():
+                    raise HilError(f"the plant node ended before the joint state with counter "
+                                   f"{counter}")
+                if left <= 0.2:
+                    raise HilError(f"no joint state with counter {counter} within "
+                                   f"{self.timeout} s")
+                continue
             try:
                 name, sig = decode(msg)
             except FrameError as exc:
@@ -157,18 +173,48 @@ class _StateWaiter:
 def run_fmu_controller(bus: Any, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                        qdd_ref: FloatArray, controller_values: Mapping[str, float | bool] = {},
                        timeout: float = 5.0, controller_fmu: Path | None = None,
-                       progress: Progress | None = None) -> BenchRun:
-    """Lockstep: the controller FMU (FMPy) drives the plant node on ``bus`` along the reference."""
+                       progress: Progress | None = None,
+                       alive: Callable[[], bool] | None = None) -> BenchRun:
+    """Lockstep: the controller FMU (FMPy) drives the plant node on ``bus`` along the reference;
+    ``alive()``: whether the plant node still runs (a node started here: it stops at once when
+    the node has died, not after ``timeout``)."""
     n = t.shape[0]
     ref = np.hstack([q_ref, qd_ref, qdd_ref])
     q_rec, qd_rec = np.empty((n, 3)), np.empty((n, 3))
     out_rec = np.empty((n, 9))  # u, u_n, u_c
-    waiter = _StateWaiter(bus, timeout)
-    every = max(1, n // 100)
+    waiter = _StateWaiter(bus, timeout, alive)
     start = time.perf_counter()
     with FmuSlave(controller_fmu or fmu_path("controller"), "controller") as ctrl:
         ctrl.initialize(float(t[0]), controller_values)
         c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)
+        _drive(bus, ctrl, c_in, c_out, ref, q_rec, qd_rec, out_rec, waiter, progress)
+        # the stop request: E2E-protected, the next alive counter after the last VoltageCmd
+        bus.send(encode("StopCmd", {"AliveCounter": n & 15, "Reason": 0}))
+        bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
+    return BenchRun(t=t, q=q_rec, qd=qd_rec, u=out_rec[:, 0:3], plant_summary=dict(waiter.status),
+                    controller_summary={"rejected": waiter.rejected}, u_n=out_rec[:, 3:6],
+                    u_c=out_rec[:, 6:9], wall_time=time.perf_counter() - start)
+
+
+class BusLost(HilError):
+    """The bus failed, or the other node went silent, at ``period``."""
+
+    def __init__(self, message: str, period: int) -> None:
+        super().__init__(message)
+        self.period = period
+
+
+def _drive(bus: Any, ctrl: FmuSlave, c_in: Any, c_out: Any, ref: FloatArray,
+           q_rec: FloatArray, qd_rec: FloatArray, out_rec: FloatArray, waiter: _StateWaiter,
+           progress: Progress | None) -> None:
+    """The lockstep loop of run_fmu_controller; BusLost when the bus fails or the plant node
+    goes silent."""
+    import can
+
+    n = ref.shape[0]
+    every = max(1, n // 100)
+    k = 0
+    try:
         bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_OPERATIONAL, "Counter": 0}))
         for k in range(n):
             q_rec[k], qd_rec[k] = waiter.wait(k & 15)
@@ -185,12 +231,11 @@ def run_fmu_controller(bus: Any, t: FloatArray, q_ref: FloatArray, qd_ref: Float
                 ctrl.do_step(PERIOD)
             if progress is not None and (k % every == 0 or k == n - 1):
                 progress(k + 1, n)
-        # the stop request: E2E-protected, the next alive counter after the last VoltageCmd
-        bus.send(encode("StopCmd", {"AliveCounter": n & 15, "Reason": 0}))
-        bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
-    return BenchRun(t=t, q=q_rec, qd=qd_rec, u=out_rec[:, 0:3], plant_summary=dict(waiter.status),
-                    controller_summary={"rejected": waiter.rejected}, u_n=out_rec[:, 3:6],
-                    u_c=out_rec[:, 6:9], wall_time=time.perf_counter() - start)
+    except HilError as exc:
+        raise BusLost(f"period {k} of {n}: {exc}", k) from exc
+    except (can.CanError, OSError) as exc:
+        raise BusLost(f"period {k} of {n}: the CAN bus failed "
+                      f"({' '.join(str(exc).split()) or type(exc).__name__})", k) from exc
 
 
 def write_controller_log(run: BenchRun, path: Path) -> Path:
@@ -205,10 +250,6 @@ def write_controller_log(run: BenchRun, path: Path) -> Path:
         fh.write(CONTROLLER_LOG_HEADER + "\n")
         np.savetxt(fh, rows, delimiter=",", fmt="%.17g")
     return Path(path)
-
-
-def _read_log(path: Path) -> FloatArray:
-    return np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
 
 
 @contextlib.contextmanager
@@ -262,18 +303,18 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                                             *rt_ctrl]) as ctrl:
                 cs = _wait(ctrl, timeout, LogProgress(ctrl_log, n, progress))
                 if cs["exit"] != 0:  # the plant would wait for a controller that is gone
+                    # the node that died first is the one to name: a controller whose plant
+                    # was killed ends with an error of its own
+                    dead = plant if plant.died() else ctrl
                     plant.close()
-                    raise HilError(f"bench failed: controller exit {cs['exit']}: "
-                                   f"{ctrl.stderr.strip()}")
+                    raise dead.failure("the CAN bench failed", failure_folder(work))
                 ps = plant.wait(timeout)
             wall = time.perf_counter() - start
-            if cs["exit"] != 0 or ps["exit"] != 0:
-                raise HilError(f"bench failed: controller exit {cs['exit']}: "
-                               f"{ctrl.stderr.strip()}; plant exit {ps['exit']}: "
-                               f"{plant.stderr.strip()}")
+            if ps["exit"] != 0:
+                raise plant.failure("the CAN bench failed", failure_folder(work))
             if frames is not None and cs.get("frame_log_error"):
                 raise HilError(f"the controller's frame log failed: {cs['frame_log_error']}")
-            p, c = _read_log(plant_log), _read_log(ctrl_log)
+            p, c = read_node_log(plant_log, 19), read_node_log(ctrl_log, 18)
         m = min(p.shape[0], c.shape[0])  # real time: the two loops need not end together
         return BenchRun(t=p[:m, 1], q=p[:m, 2:5], qd=p[:m, 5:8], u=c[:m, [8, 11, 14]],
                         plant_summary=ps, controller_summary=cs, u_n=c[:m, [9, 12, 15]],

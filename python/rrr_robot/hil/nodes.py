@@ -13,6 +13,7 @@ import logging
 import os
 import re
 import shutil
+import signal
 import subprocess
 import warnings
 from collections.abc import Mapping, Sequence
@@ -24,7 +25,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
-from ..core.outputs import atomic_open
+from ..core.outputs import STAGING_PREFIX, atomic_open, atomic_write_text
 from ..core.param_names import param_index
 from ..sim.fmus import fmu_path
 from .protocol import PERIOD, HilError
@@ -35,8 +36,10 @@ __all__ = [
     "NodeProcess",
     "controller_node_args",
     "export_reference",
+    "failure_folder",
     "node_executable",
     "open_bus",
+    "read_node_log",
     "set_args",
     "start_controller",
     "start_listening_controller",
@@ -75,6 +78,43 @@ def export_reference(t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArr
     return Path(path)
 
 
+def read_node_log(path: Path, columns: int | None = None) -> FloatArray:
+    """The rows of a node's CSV log (a header row, then rows of numbers; ``columns`` of them
+    when given); HilError naming the file when it is missing, not numeric or cut short (a node
+    that died while writing it)."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeError) as exc:
+        raise HilError(f"cannot read the node log {path}: {exc}") from exc
+    lines = text.splitlines()[1:]
+    if lines and not text.endswith("\n"):
+        raise HilError(f"the node log {path} is cut short (its last line is incomplete: the "
+                       "node ended while writing it)")
+    try:
+        rows = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=np.float64) if lines else \
+            np.zeros((0, columns or 0))
+    except ValueError as exc:
+        raise HilError(f"the node log {path} is not a table of numbers: "
+                       f"{' '.join(str(exc).split())}") from exc
+    if columns is not None and rows.size and rows.shape[1] != columns:
+        raise HilError(f"the node log {path} has {rows.shape[1]} columns, expected {columns}")
+    return rows
+
+
+def failure_folder(work: Path) -> Path:
+    """Where the log of a node that failed goes: the output folder when ``work`` is a result
+    set's staging folder (which goes with the failed run), else ``work`` itself."""
+    work = Path(work)
+    return work.parent if work.name.startswith(STAGING_PREFIX) else work
+
+
+def _signal_name(number: int) -> str:
+    try:
+        return signal.Signals(number).name
+    except ValueError:
+        return f"signal {number}"
+
+
 class NodeProcess:
     """A running C node (context manager; ``close()`` is idempotent and stops it)."""
 
@@ -102,6 +142,44 @@ class NodeProcess:
     def running(self) -> bool:
         """Whether the process has not ended yet."""
         return self._proc.poll() is None
+
+    @property
+    def pid(self) -> int:
+        return int(self._proc.pid)
+
+    def died(self, grace: float = 0.5) -> bool:
+        """Whether the process ended by a signal (waiting up to ``grace`` s for its end)."""
+        try:
+            self._proc.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            return False
+        return self._proc.returncode < 0
+
+    def how_it_ended(self) -> str:
+        """'was killed by SIGKILL', 'exited with status 3', 'is still running'."""
+        rc = self._proc.poll()
+        if rc is None:
+            return "is still running"
+        return f"was killed by {_signal_name(-rc)}" if rc < 0 else f"exited with status {rc}"
+
+    def failure(self, what: str, folder: Path | None = None) -> HilError:
+        """The error of a node that failed: ``what`` happened, which node, how it ended, and
+        its output (stderr), which is written to ``folder/<node>.failed.log`` (else its last
+        line is quoted)."""
+        self.close()  # collect its output
+        how = self.how_it_ended()
+        text = self.stderr.strip()
+        last = f": {' '.join(text.splitlines()[-1].split())}" if text else ""
+        tail = "" if text else "; it printed nothing"
+        if folder is not None:
+            path = Path(folder) / f"{self.name}.failed.log"
+            try:
+                atomic_write_text(path, f"# {' '.join(self.args)}\n# pid {self.pid} {how}\n"
+                                  f"{text}\n")
+                tail = f"; its output is in {path}" + ("" if text else " (it printed nothing)")
+            except OSError as exc:
+                tail = f"; its output could not be kept ({exc.strerror or exc})"
+        return HilError(f"{what}: the node {self.name} (pid {self.pid}) {how}{last}{tail}")
 
     def wait(self, timeout: float = 120.0) -> dict[str, Any]:
         """Wait for the exit; returns the node's summary (``RRR_HIL_SUMMARY`` JSON) with
@@ -183,9 +261,9 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
     """Start the C plant node as socketcand server on ``listen`` (port 0: any free port, read
     back in ``.port``), on the plant FMU (default: the packaged one, unzipped to a temp dir);
     ``frame_log``: its log of every frame (rrr_robot.hil.framelog)."""
-    from fmpy import extract
+    from ..core.archives import extract_to_temp
 
-    unzip = Path(extract(str(fmu or fmu_path("plant"))))
+    unzip = extract_to_temp(fmu or fmu_path("plant"), "FMU", prefix="rrr-fmu-")
     args: list[str] = [str(node_executable("plant")), "--fmu", str(unzip), "--listen", listen,
                        "--q0", _vec(q0), "--qd0", _vec(qd0)]
     args += set_args(values)

@@ -38,7 +38,7 @@ from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from . import _hil_lib as hl
 from .bench import BenchRun
-from .nodes import export_reference, open_bus, start_listening_controller
+from .nodes import export_reference, open_bus, read_node_log, start_listening_controller
 from .protocol import (
     NMT_BOOT,
     NMT_OPERATIONAL,
@@ -307,7 +307,7 @@ def run_python_plant_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                 raise HilError(f"bench failed: controller exit {cs['exit']}: "
                                f"{ctrl.stderr.strip()}; python plant exit "
                                f"{prun.summary['exit']}")
-            c = np.loadtxt(ctrl_log, delimiter=",", skiprows=1, ndmin=2)
+            c = read_node_log(ctrl_log, 18)
         run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, [8, 11, 14]],
                        plant_summary=prun.summary, controller_summary=cs)
         return run, prun

@@ -28,6 +28,7 @@ from ..sim.native import simulate
 from ..writing.job import metrics, scenario_summary
 from ..writing.trajectory import Reference
 from .bench import BenchRun
+from .nodes import read_node_log
 from .protocol import PERIOD, HilError
 
 __all__ = ["PLANT_LOG_COLUMNS", "RunInfo", "bench_result", "bench_summary", "comparison",
@@ -42,10 +43,7 @@ PLANT_LOG_COLUMNS: dict[str, slice] = {
 
 def read_plant_log(path: Path) -> FloatArray:
     """The rows of a plant log (HilError when it has not the 19 columns of the nodes' log)."""
-    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    if rows.shape[1] != 19:
-        raise HilError(f"{path}: {rows.shape[1]} columns, a plant log has 19")
-    return rows
+    return read_node_log(path, 19)
 
 
 def extend_reference(ref: Reference, duration: float) -> Reference:
@@ -118,7 +116,7 @@ def comparison(bench: CosimResult, other: CosimResult) -> dict[str, Any]:
 
 def read_latency_log(path: Path) -> FloatArray:
     """The (latency_ns, work_ns) rows of a node's --latency-log."""
-    rows = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    rows = read_node_log(path)
     return rows[:, 1:3] if rows.size else np.zeros((0, 2))
 
 

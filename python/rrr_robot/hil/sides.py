@@ -22,11 +22,20 @@ from typing import Any
 import numpy as np
 
 from ..writing.trajectory import Reference
-from .bench import BenchRun, RealTime, run_c_bench, run_fmu_controller, write_controller_log
+from .bench import (
+    BenchRun,
+    BusLost,
+    RealTime,
+    run_c_bench,
+    run_fmu_controller,
+    write_controller_log,
+)
 from .nodes import (
     controller_node_args,
     export_reference,
+    failure_folder,
     open_bus,
+    read_node_log,
     start_listening_controller,
     start_plant,
 )
@@ -40,7 +49,7 @@ Progress = Callable[[int, int], None]
 
 #: The columns of u, u_n and u_c in the C controller node's log (controller.csv).
 _U, _U_N, _U_C = [8, 11, 14], [9, 12, 15], [10, 13, 16]
-_CONTROLLER_COLUMNS = 17
+_CONTROLLER_COLUMNS = 18
 
 
 @dataclass(frozen=True)
@@ -121,10 +130,19 @@ def run_controller_side(ref: Reference, controller_values: Mapping[str, float | 
             plant = start_plant(q0=ref.q[0], qd0=ref.qd[0], log_csv=work / "plant.csv",
                                 frame_log=work / frame_log)
             host, port = "127.0.0.1", int(plant.port or 0)
-        with open_checked_bus(conn, host, port) as bus:
-            run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd, dict(controller_values),
-                                     progress=progress)
+        try:
+            with open_checked_bus(conn, host, port) as bus:
+                run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd,
+                                         dict(controller_values), progress=progress,
+                                         alive=plant.running if plant is not None else None)
+        except BusLost as exc:  # name the plant node when it is the one that died
+            if plant is not None and plant.died():
+                raise plant.failure(f"the CAN bench stopped at period {exc.period} of "
+                                    f"{ref.t.size}", failure_folder(work)) from exc
+            raise
         summary = plant.wait() if plant is not None else dict(run.plant_summary)
+        if plant is not None and int(summary.get("exit", 0)) < 0:
+            raise plant.failure("the CAN bench failed", failure_folder(work))
     finally:
         if plant is not None:
             plant.close()
@@ -162,12 +180,15 @@ def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool]
                                 periods=ref.t.shape[0])
             prun = plant.run(work / "plant.csv")
         cs: dict[str, Any] = ctrl.wait() if ctrl is not None else {"exit": 0}
+        if ctrl is not None and int(cs["exit"]) < 0:  # killed: its log is cut short
+            raise ctrl.failure(f"the CAN bench stopped at period {prun.summary['periods']} of "
+                               f"{ref.t.size}", failure_folder(work))
     finally:
         if ctrl is not None:
             ctrl.close()
     s = prun.summary
     if ctrl is not None:
-        c = np.loadtxt(work / "controller.csv", delimiter=",", skiprows=1, ndmin=2)
+        c = read_node_log(work / "controller.csv", _CONTROLLER_COLUMNS)
     else:  # the controller's log stays with it
         c = np.zeros((prun.log.shape[0], _CONTROLLER_COLUMNS))
     run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, _U], plant_summary=s,

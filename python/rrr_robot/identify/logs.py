@@ -14,13 +14,21 @@ qdd[1..3]   rad/s^2  optional: measured joint accelerations (likewise)
 joint       -        friction logs only: the joint (1, 2 or 3) driven at constant velocity in
                      this row while the other two are held still; 0 marks rows to ignore
 ==========  =======  ==========================================================================
+
+Bounds: a log has at most :data:`MAX_LOG_ROWS` data rows (1000 s at 1 kHz, the longest
+experiment of ``rrr identify-experiment``), at most :data:`MAX_LOG_BYTES` bytes and lines of at
+most :data:`MAX_LINE_CHARS` characters; it is read in blocks of rows (never whole as text), only
+its known columns kept, so reading takes about the memory of those columns as float64 (at most
+about 100 MB). A log beyond a bound is refused with the numbers, before or while it is read.
 """
 
 from __future__ import annotations
 
 import csv
+import itertools
 import logging
 import warnings
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -36,6 +44,11 @@ J = (1, 2, 3)
 REQUIRED = ("t", *(f"q[{i}]" for i in J), *(f"u[{i}]" for i in J))
 OPTIONAL = (*(f"qd[{i}]" for i in J), *(f"qdd[{i}]" for i in J), "joint")
 MIN_SAMPLES = 200
+#: Most data rows of a log, bytes of a log file, and characters of one line.
+MAX_LOG_ROWS = 1_000_000
+MAX_LOG_BYTES = 400_000_000
+MAX_LINE_CHARS = 65_536
+_BLOCK_ROWS = 65_536  # rows parsed at a time
 
 
 @dataclass(frozen=True)
@@ -79,18 +92,91 @@ class Log:
 
 
 def _header(path: Path) -> tuple[list[str], int]:
+    _check_size(path)
     try:
-        with path.open(newline="") as fh:
-            for lineno, line in enumerate(fh):
+        with path.open(newline="", encoding="utf-8") as fh:
+            for lineno in itertools.count():
+                line = fh.readline(MAX_LINE_CHARS + 1)
+                if not line:
+                    break
+                if len(line) > MAX_LINE_CHARS:
+                    raise BadInputError(f"{path}: line {lineno + 1} is longer than "
+                                        f"{MAX_LINE_CHARS:,} characters")
                 if line.strip() and not line.lstrip().startswith("#"):
                     names = [c.strip() for c in next(csv.reader([line]))]
-                    duplicated = sorted({n for n in names if names.count(n) > 1})
+                    duplicated = sorted(n for n, k in Counter(names).items() if k > 1)
                     if duplicated:
                         raise BadInputError(f"{path}: duplicated column(s) {', '.join(duplicated)}")
                     return names, lineno
     except UnicodeDecodeError as exc:
         raise BadInputError(f"{path}: not a text (CSV) file: {exc}") from exc
     raise BadInputError(f"{path}: no header row (expected columns {', '.join(REQUIRED)})")
+
+
+def _check_size(path: Path) -> None:
+    size = path.stat().st_size
+    if size > MAX_LOG_BYTES:
+        raise BadInputError(f"log {path} has {size:,} bytes: at most {MAX_LOG_BYTES:,} "
+                            f"({MAX_LOG_ROWS:,} rows; decimate or split the log)")
+
+
+def _parse(lines: list[str], first: int, n_names: int, cols: list[int], path: Path) -> FloatArray:
+    """One block of data lines (``first``: the line number of the first) as float64 rows of
+    the columns ``cols``."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # a block of comments only
+            block = np.loadtxt(lines, delimiter=",", comments="#", ndmin=2, dtype=np.float64)
+    except ValueError as exc:
+        raise BadInputError(f"{path}: not a numeric CSV table (lines {first} to "
+                            f"{first + len(lines) - 1}): {exc}") from exc
+    if block.size == 0:
+        return np.empty((0, len(cols)))
+    if block.shape[1] != n_names:
+        raise BadInputError(f"{path}: {block.shape[1]} values per row but {n_names} columns "
+                            f"(lines {first} to {first + len(lines) - 1})")
+    out: FloatArray = np.ascontiguousarray(block[:, cols])
+    return out
+
+
+def _read_rows(path: Path, skip: int, names: list[str], cols: list[int]) -> FloatArray:
+    """The data rows after the header (line ``skip``), in blocks, within the bounds."""
+    _check_size(path)
+    blocks: list[FloatArray] = []
+    rows = 0
+    lineno = 0
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            lines: list[str] = []
+            first = 0
+            while True:
+                line = fh.readline(MAX_LINE_CHARS + 1)
+                if line:
+                    lineno += 1
+                if len(line) > MAX_LINE_CHARS:
+                    raise BadInputError(f"{path}: line {lineno} is longer than "
+                                        f"{MAX_LINE_CHARS:,} characters")
+                if lineno <= skip + 1 and line:
+                    continue  # the comments before the header, and the header
+                if line:
+                    if not lines:
+                        first = lineno
+                    lines.append(line)
+                if len(lines) >= _BLOCK_ROWS or (not line and lines):
+                    block = _parse(lines, first, len(names), cols, path)
+                    rows += block.shape[0]
+                    if rows > MAX_LOG_ROWS:
+                        raise BadInputError(f"log {path} has more than {MAX_LOG_ROWS:,} data "
+                                            f"rows (at line {lineno}): decimate or split it")
+                    blocks.append(block)
+                    lines = []
+                if not line:
+                    break
+    except UnicodeDecodeError as exc:
+        raise BadInputError(f"{path}: not a text (CSV) file: {exc}") from exc
+    if rows == 0:
+        raise BadInputError(f"{path}: no data rows after the header")
+    return np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
 
 
 def read_log(path: str | Path, *, friction: bool = False) -> Log:
@@ -105,17 +191,9 @@ def read_log(path: str | Path, *, friction: bool = False) -> Log:
     if missing:
         raise BadInputError(f"{path}: missing column(s) {', '.join(missing)} "
                             f"(required: {', '.join(need)})")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)  # "input contained no data": below
-            data = np.loadtxt(path, delimiter=",", skiprows=skip + 1, comments="#", ndmin=2)
-    except ValueError as exc:
-        raise BadInputError(f"{path}: not a numeric CSV table: {exc}") from exc
-    if data.size == 0:
-        raise BadInputError(f"{path}: no data rows after the header")
-    if data.shape[1] != len(names):
-        raise BadInputError(f"{path}: {data.shape[1]} values per row but {len(names)} columns")
-    col = {n: data[:, k] for k, n in enumerate(names)}
+    keep = [n for n in names if n in REQUIRED or n in OPTIONAL]
+    data = _read_rows(path, skip, names, [names.index(n) for n in keep])
+    col = {n: data[:, k] for k, n in enumerate(keep)}
 
     def stack(s: str) -> FloatArray:
         return np.column_stack([col[f"{s}[{i}]"] for i in J])

@@ -23,11 +23,12 @@ from types import TracebackType
 from typing import Any, ClassVar
 
 import numpy as np
-from fmpy import extract, read_model_description
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
 from ..core._arrays import FloatArray
-from ..errors import BadInputError, CosimError
+from ..core.archives import extract_to_temp
+from ..errors import ArchiveError, BadInputError, CosimError
 from . import _fmi_log
 
 log = logging.getLogger(__name__)
@@ -168,6 +169,11 @@ class _Fmi3:
         return lambda t, h: fmi3_do_step(component, t, h, True, *tail)
 
 
+def _needed(name: str) -> bool:
+    """The entries of an FMU a slave uses: its model description, binaries and resources."""
+    return name == "modelDescription.xml" or name.startswith(("binaries/", "resources/"))
+
+
 #: The calls of each FMI version, by the model description's fmiVersion.
 _CALLS: dict[str, type[_Fmi2] | type[_Fmi3]] = {"2.0": _Fmi2, "3.0": _Fmi3}
 
@@ -183,30 +189,27 @@ class FmuSlave:
         self._errors: list[str] = []  # the FMU's error messages during the current call
         self._closed = True
         self._initialized = False
+        # the archive checked (core.archives) and the files a slave needs extracted into a
+        # fresh folder, removed by close() or when anything below fails
         try:
-            md = read_model_description(str(self.path))
-        except Exception as exc:  # OSError, BadZipFile, FMPy's validation errors
+            self._unzipdir = str(extract_to_temp(self.path, "FMU", include=_needed,
+                                                 prefix="rrr-fmu-"))
+        except ArchiveError as exc:
             raise CosimError(f"{self._who}: cannot read the FMU {self.path}: "
                              f"{_one_line(exc)}") from exc
-        if md.coSimulation is None:
-            raise CosimError(f"{self.path} has no Co-Simulation interface")
-        calls = _CALLS.get(md.fmiVersion)
-        if calls is None:
-            raise CosimError(f"{self.path}: FMI version {md.fmiVersion} is not supported "
-                             "(2.0 and 3.0 are)")
-        self.fmi_version: int = calls.version
-        self._vars = {v.name: v for v in md.modelVariables}
         try:
-            self._unzipdir = extract(str(self.path))
-        except Exception as exc:
-            raise CosimError(f"{self._who}: cannot extract the FMU {self.path}: "
-                             f"{_one_line(exc)}") from exc
-        try:
-            self._api: _Fmi2 | _Fmi3 = calls(md, self._unzipdir, instance_name)
-        except Exception as exc:  # the binary is missing or does not load
+            md = self._model_description()
+            calls = _CALLS[md.fmiVersion]
+            self.fmi_version: int = calls.version
+            self._vars = {v.name: v for v in md.modelVariables}
+            try:
+                self._api: _Fmi2 | _Fmi3 = calls(md, self._unzipdir, instance_name)
+            except Exception as exc:  # the binary is missing or does not load
+                raise CosimError(f"{self._who}: cannot load the binary of {self.path}: "
+                                 f"{_one_line(exc)}") from exc
+        except BaseException:
             shutil.rmtree(self._unzipdir, ignore_errors=True)
-            raise CosimError(f"{self._who}: cannot load the binary of {self.path}: "
-                             f"{_one_line(exc)}") from exc
+            raise
         self._fmu = self._api.fmu
         self._closed = False
         what = f"fmi{self.fmi_version}Instantiate"
@@ -216,6 +219,20 @@ class FmuSlave:
             self.close()
             raise CosimError(f"{self._who}: {what} failed{self._detail()}", function=what,
                              status="ERROR") from exc
+
+    def _model_description(self) -> Any:
+        """The model description of the extracted FMU (FMI 2.0 or 3.0, Co-Simulation)."""
+        try:
+            md = read_model_description(self._unzipdir)
+        except Exception as exc:  # OSError, FMPy's validation errors (bare exceptions)
+            raise CosimError(f"{self._who}: cannot read the FMU {self.path}: "
+                             f"{_one_line(exc)}") from exc
+        if md.coSimulation is None:
+            raise CosimError(f"{self.path} has no Co-Simulation interface")
+        if md.fmiVersion not in _CALLS:
+            raise CosimError(f"{self.path}: FMI version {md.fmiVersion} is not supported "
+                             "(2.0 and 3.0 are)")
+        return md
 
     @property
     def _who(self) -> str:

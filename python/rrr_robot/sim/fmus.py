@@ -11,12 +11,12 @@ Co-Simulation, the sources and binaries for the platforms the build could compil
 from __future__ import annotations
 
 import os
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..core._package import PACKAGE_DIR
-from ..errors import BadInputError, RrrError
+from ..core.archives import CheckedZip
+from ..errors import ArchiveError, BadInputError, RrrError
 
 FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu",
              "reference": "rrr_reference.fmu"}
@@ -91,16 +91,15 @@ def describe(which: str, fmi_version: int, host: str = "") -> FmuVariant:
     else:
         path = fmu_path(which, fmi_version)
     try:
-        with zipfile.ZipFile(path) as z:
-            names = z.namelist()
-            md = z.read("modelDescription.xml").decode("utf-8")
+        with CheckedZip(path, "FMU") as z:
+            names = z.names()
+            md = z.read("modelDescription.xml", 16_000_000).decode("utf-8")
             linux = [n for n in names if n.startswith(("binaries/linux64/", "binaries/linux32/"))
                      and n.endswith(".so")]
             cpu = ""
             if linux:
-                with z.open(linux[0]) as f:
-                    cpu = _elf_cpu(f.read(20))
-    except (OSError, KeyError, zipfile.BadZipFile) as exc:
+                cpu = _elf_cpu(z.read(linux[0], 64_000_000)[:20])
+    except (ArchiveError, UnicodeError) as exc:
         raise RrrError(f"{path} is not a readable FMU: {exc}") from exc
     platforms = sorted({n.split("/")[1] for n in names
                         if n.startswith("binaries/") and n.count("/") >= 2 and n.split("/")[2]})

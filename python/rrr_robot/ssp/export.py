@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
+from ..core.archives import CheckedZip
 from ..core.model import DEFAULT_ROBOT_TOML
 from ..core.outputs import atomic_path, check_folder
 from ..core.param_names import model_fmu_values
@@ -98,11 +99,11 @@ def _reference_fmu(table: Path) -> bytes:
     src = fmu_path("reference", 2)
     with tempfile.TemporaryDirectory(prefix="rrr-ssp-") as tmp:
         dst = Path(tmp) / "rrr_reference.fmu"
-        with zipfile.ZipFile(src) as zin, \
+        with CheckedZip(src, "FMU") as zin, \
                 zipfile.ZipFile(dst, "w", zipfile.ZIP_DEFLATED) as zout:
-            for item in zin.infolist():
-                if item.filename != f"resources/{TABLE_FILE}":
-                    zout.writestr(item, zin.read(item.filename))
+            for name, item in zin.entries.items():
+                if name != f"resources/{TABLE_FILE}":
+                    zout.writestr(item, b"".join(zin.chunks(name)))
             zout.write(table, f"resources/{TABLE_FILE}")
         return dst.read_bytes()
 

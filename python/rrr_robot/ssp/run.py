@@ -14,6 +14,13 @@ Both tools step every FMU, then pass the outputs on (a Jacobi data flow):
   text "false"); its connectors start at 0.0 and it records each step's outputs under the
   step's start time, which is corrected here to the end time.
 
+The archive is checked first (:func:`~rrr_robot.ssp.archive.read_ssp`) and the tools run what
+the check extracted (the SSD and the FMUs it references, nothing else) in a fresh scratch
+folder that goes when the run ends, however it ends; the tools' own temporary folders are put
+inside it. libcosim runs in a child process (:mod:`._libcosim_child`): it aborts the process
+when an FMU fails in one of its threads and acts on no signal during a call, so Ctrl-C and
+SIGTERM stop the child at once and an abort is a one-line error.
+
 The rows of the table are the tool's samples at the end of each step (t_1 ... t_N);
 the reference columns are the table's samples at the row times (the reference FMU plays them
 ``lookahead`` ahead), so the tip error compares the plant's tip with the reference at the same
@@ -22,9 +29,18 @@ time, as in ``rrr writing``.
 
 from __future__ import annotations
 
+import contextlib
+import importlib.util
+import json
 import logging
+import os
+import signal
+import subprocess
+import sys
+import tempfile
 import time
-from collections.abc import Callable
+import zipfile
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,11 +48,13 @@ from typing import Any
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.archives import scratch_folder
 from ..core.outputs import ResultSet, check_folder, strict_json, to_strict_json_value
 from ..errors import BadInputError, RrrError
 from ..sim.cosim import CosimResult
 from ..writing.job import PAPER_RMS_U_C, PAPER_RMS_U_N, metrics, scenario_summary
-from .archive import SspArchive, read_ssp
+from ._libcosim_child import TAG
+from .archive import SspArchive, read_ssp, reference_rows
 from .export import CTRL_OUT, PLANT_OUT
 
 log = logging.getLogger(__name__)
@@ -44,7 +62,6 @@ log = logging.getLogger(__name__)
 __all__ = ["TOOLS", "SspRun", "run_ssp"]
 
 TOOLS = ("libcosim", "fmpy")
-_NS = 1_000_000_000  # libcosim counts time in integer nanoseconds
 #: what is recorded of each component (the columns of rrr writing that come from the FMUs)
 RECORDED = {"plant": list(PLANT_OUT), "controller": list(CTRL_OUT)}
 
@@ -72,71 +89,88 @@ class Signals:
 Progress = Callable[[int, int], None] | None
 
 
-def _libcosim(arch: SspArchive, real_time: bool, progress: Progress) -> Signals:
+def _libcosim(arch: SspArchive, work: Path, real_time: bool, progress: Progress) -> Signals:
+    """libcosim on the checked extraction ``work/ssp``, in a child process (see
+    :mod:`._libcosim_child`) whose temporary folders are in ``work/tmp``."""
+    if importlib.util.find_spec("libcosimpy") is None:
+        raise BadInputError("--tool libcosim needs libcosimpy: pip install 'rrr_robot[ssp]'")
+    (work / "tmp").mkdir()
+    job = {"ssp": str(work / "ssp"), "start": arch.start_time, "step": arch.step,
+           "steps": arch.n_steps, "real_time": real_time, "recorded": RECORDED,
+           "debug": log.isEnabledFor(logging.DEBUG), "out": str(work / "libcosim.npz")}
+    (work / "job.json").write_text(json.dumps(job), encoding="utf-8")
+    env = {**os.environ, "TMPDIR": str(work / "tmp"), "TMP": str(work / "tmp"),
+           "TEMP": str(work / "tmp")}
+    child = subprocess.Popen([sys.executable, "-m", "rrr_robot.ssp._libcosim_child",
+                              str(work / "job.json")], stdout=subprocess.PIPE, text=True,
+                             env=env)
+    error = ""
     try:
-        from libcosimpy.CosimEnums import CosimVariableType
-        from libcosimpy.CosimExecution import CosimExecution
-        from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
-        from libcosimpy.CosimObserver import CosimObserver
-    except ImportError as exc:
-        raise BadInputError("--tool libcosim needs libcosimpy: pip install 'rrr_robot[ssp]' "
-                            f"({exc})") from exc
-    # libcosim's and the FMI Library's warnings and errors; with rrr -v also their progress
-    log_output_level(CosimLogLevel.INFO if log.isEnabledFor(logging.DEBUG)
-                     else CosimLogLevel.WARNING)
-    try:
-        ex = CosimExecution.from_ssp_file(str(arch.path))
-    except AssertionError as exc:
-        raise RrrError(f"{arch.path}: libcosim could not load the archive (its log above says "
-                       "why)") from exc
-    n = arch.n_steps
-    obs = CosimObserver.create_time_series(buffer_size=n + 16)
-    ex.add_observer(obs)
-    index = {s.name.decode(): s.index for s in ex.slave_infos()}
-    vrs = {name: {v.name.decode(): v.reference for v in ex.slave_variables(i)}
-           for name, i in index.items()}
-    for comp, names in RECORDED.items():
-        for v in names:
-            obs.start_time_series(index[comp], vrs[comp][v], CosimVariableType.REAL)
-    if real_time and not ex.real_time_simulation_enabled(True):
-        raise RrrError("libcosim refused the real-time mode")
-    # as fast as it goes: in 100 calls of simulate_until, for the progress bar; real time: in
-    # one call, since libcosim's real-time clock starts anew with every call
-    start = time.perf_counter()
-    chunk = n if real_time else max(1, n // 100)
-    done = 0
-    while done < n:
-        done = min(n, done + chunk)
-        target = round((arch.start_time + done * arch.step) * _NS)
-        if not ex.simulate_until(target):
-            raise RrrError(f"{arch.path}: libcosim stopped at t = "
-                           f"{ex.status().current_time / _NS:.6f} s (its log above says why)")
-        if progress is not None:
-            progress(done, n)
-    wall = time.perf_counter() - start
-    values: dict[str, dict[str, FloatArray]] = {}
-    t_ns: list[int] = []
-    for comp, names in RECORDED.items():
-        values[comp] = {}
-        for v in names:
-            # from step 1: libcosimpy drops as many samples as it finds step numbers 0 (it
-            # takes them for unfilled entries), which would cut the last one
-            tp, steps, vals = obs.time_series_real_samples(index[comp], vrs[comp][v],
-                                                           from_step=1, sample_count=n)
-            if len(vals) != n or list(steps) != list(range(1, n + 1)):
-                raise RrrError(f"libcosim recorded {len(vals)} samples of {comp}.{v}, expected "
-                               f"{n} (steps 1 to {n})")
-            values[comp][v] = np.asarray(vals, dtype=np.float64)
-            t_ns = list(tp)
-    details: dict[str, Any] = {"real_time": real_time}
-    if real_time:  # libcosim's own figure: the factor over its last monitored steps
-        details["libcosim_real_time_factor"] = float(ex.status().real_time_factor)
-    return Signals(np.asarray(t_ns, dtype=np.float64) / _NS, values, wall, details)
+        assert child.stdout is not None
+        for line in child.stdout:
+            if not line.startswith(TAG):  # libcosim's log: passed on
+                sys.stdout.write(line)
+                continue
+            word, _, rest = line[len(TAG):].strip().partition(" ")
+            if word == "progress" and progress is not None:
+                done, total = (int(x) for x in rest.split())
+                progress(done, total)
+            elif word == "error":
+                error = rest
+        rc = child.wait()
+    finally:  # Ctrl-C, SIGTERM, an error here: the child ends with the parent, at once
+        _stop(child)
+    if rc < 0:
+        name = signal.Signals(-rc).name if -rc in signal.valid_signals() else str(-rc)
+        raise RrrError(f"{arch.path}: libcosim ended by the signal {name} (an FMU's error in "
+                       "one of its threads, see its log above)")
+    if rc != 0 or not (work / "libcosim.npz").is_file():
+        raise RrrError(f"{arch.path}: {error or f'libcosim failed (exit {rc})'}")
+    with np.load(work / "libcosim.npz") as res:
+        values = {comp: {v: res[f"{comp}.{v}"] for v in names}
+                  for comp, names in RECORDED.items()}
+        details: dict[str, Any] = {"real_time": real_time}
+        if real_time:
+            details["libcosim_real_time_factor"] = float(res["real_time_factor"])
+        return Signals(res["t"], values, float(res["wall_time"]), details)
 
 
-def _fmpy(arch: SspArchive, progress: Progress) -> Signals:
+def _stop(child: subprocess.Popen[str]) -> None:
+    """End the child now if it still runs (SIGTERM, then SIGKILL after a second)."""
+    if child.poll() is None:
+        child.terminate()
+        try:
+            child.wait(timeout=1.0)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+    if child.stdout is not None:
+        child.stdout.close()
+
+
+@contextlib.contextmanager
+def _temporary_files_in(folder: Path) -> Iterator[None]:
+    """Python's temporary files (FMPy's extraction folders) go into ``folder`` in the block."""
+    folder.mkdir()
+    previous = tempfile.tempdir
+    tempfile.tempdir = str(folder)
+    try:
+        yield
+    finally:
+        tempfile.tempdir = previous
+
+
+def _fmpy(arch: SspArchive, work: Path, progress: Progress) -> Signals:
+    """FMPy's simulate_ssp on an archive of the checked extraction ``work/ssp`` (FMPy reads a
+    zip); its extraction folders go into ``work/tmp``."""
     from fmpy.ssp.simulation import simulate_ssp
     from fmpy.ssp.ssd import Parameter, ParameterSet
+
+    clean = work / "checked.ssp"
+    with zipfile.ZipFile(clean, "w", zipfile.ZIP_STORED) as z:
+        for path in sorted((work / "ssp").rglob("*")):
+            if path.is_file():
+                z.write(path, path.relative_to(work / "ssp").as_posix())
 
     pset = ParameterSet(name="bindings")
     for comp, params in arch.parameters.items():
@@ -149,8 +183,10 @@ def _fmpy(arch: SspArchive, progress: Progress) -> Signals:
     if progress is not None:
         progress(0, arch.n_steps)
     try:
-        res = simulate_ssp(str(arch.path), start_time=arch.start_time, stop_time=arch.stop_time,
-                           step_size=arch.step, parameter_set=pset)
+        with _temporary_files_in(work / "tmp"):
+            res = simulate_ssp(str(clean), start_time=arch.start_time,
+                               stop_time=arch.stop_time, step_size=arch.step,
+                               parameter_set=pset)
     except Exception as exc:  # FMPy raises FMICallException or bare exceptions
         raise RrrError(f"{arch.path}: FMPy's simulate_ssp failed: {exc}") from exc
     wall = time.perf_counter() - start
@@ -163,18 +199,8 @@ def _fmpy(arch: SspArchive, progress: Progress) -> Signals:
     return Signals(t_end[keep], values, wall, {"real_time": False})
 
 
-def _reference_at(arch: SspArchive, t: FloatArray) -> dict[str, FloatArray]:
-    """The table's samples at the times t (which must be sample times)."""
-    tt = arch.table["t"]
-    k = np.clip(np.searchsorted(tt, t - 1e-9 * arch.step), 0, tt.size - 1)
-    if not np.all(np.abs(tt[k] - t) <= 1e-6 * arch.step):
-        raise BadInputError(f"{arch.path}: the step {arch.step} s does not fall on the "
-                            "reference table's samples")
-    return {name: col[k] for name, col in arch.table.items()}
-
-
 def _result(arch: SspArchive, sig: Signals) -> CosimResult:
-    ref = _reference_at(arch, sig.t)
+    ref = reference_rows(arch.table, sig.t, arch.step, str(arch.path))
     p, c = sig.values["plant"], sig.values["controller"]
 
     def stack(d: dict[str, FloatArray], names: list[str]) -> FloatArray:
@@ -200,11 +226,19 @@ def run_ssp(job: SspRun, progress: Progress = None) -> dict[str, Any]:
         raise BadInputError(f"unknown tool {job.tool!r}: one of {', '.join(TOOLS)}")
     if job.real_time and job.tool != "libcosim":
         raise BadInputError("--real-time needs --tool libcosim (FMPy has no real-time mode)")
-    arch = read_ssp(job.ssp)
+    # the archive's checked entries, the tools' temporary folders: in one fresh folder that
+    # goes when the run ends, however it ends
+    with scratch_folder("rrr-run-ssp-") as work:
+        (work / "ssp").mkdir()
+        arch = read_ssp(job.ssp, workdir=work / "ssp")
+        return _run(job, arch, work, progress)
+
+
+def _run(job: SspRun, arch: SspArchive, work: Path, progress: Progress) -> dict[str, Any]:
     name = arch.scenario
     with ResultSet(job.out, kind="run-ssp") as rs:
-        sig = (_libcosim(arch, job.real_time, progress) if job.tool == "libcosim"
-               else _fmpy(arch, progress))
+        sig = (_libcosim(arch, work, job.real_time, progress) if job.tool == "libcosim"
+               else _fmpy(arch, work, progress))
         res = _result(arch, sig)
         res.write(rs.path(f"{name}.csv"), "csv")
         s = scenario_summary(metrics(res))

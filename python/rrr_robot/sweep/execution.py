@@ -4,7 +4,9 @@ running Dask cluster by its scheduler's address.
 - :func:`dask_client`: without an address, a ``distributed.LocalCluster`` of ``workers``
   processes (default: one per core) with one thread each, started and stopped with the sweep;
   with one (``tcp://host:port``), a client of that cluster, whose workers must have rrr_robot
-  installed (the same version as the client: it is checked before anything runs).
+  installed (the same version as the client: it is checked before anything runs). The address
+  is probed first (:func:`probe_scheduler`): a peer that does not send a Dask handshake within
+  HANDSHAKE_TIMEOUT s (one that accepts and never speaks, an HTTP server) is a one-line error.
 - :func:`execute`: the runs go out in batches (one Dask task runs a batch, so the scheduling
   cost is paid per batch, not per run); the shared part of every run (:class:`SweepPlan`) is
   sent to each worker once. Each finished batch is handed to ``on_rows`` on the client as it
@@ -21,6 +23,9 @@ import logging
 import math
 import os
 import secrets
+import socket
+import struct
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -31,11 +36,16 @@ from .sampling import RunInput
 
 log = logging.getLogger(__name__)
 
-__all__ = ["batch_size", "batches", "dask_client", "execute", "worker_threads"]
+__all__ = ["batch_size", "batches", "dask_client", "execute", "probe_scheduler",
+           "worker_threads"]
 
 #: Seconds to connect to a scheduler, and to wait for its first worker.
 CONNECT_TIMEOUT = 20.0
 WORKER_TIMEOUT = 60.0
+#: Seconds for a scheduler's first message (the handshake a Dask scheduler sends as it accepts
+#: a connection), and its largest size in bytes.
+HANDSHAKE_TIMEOUT = 10.0
+MAX_HANDSHAKE_BYTES = 65536
 #: Most runs in one batch, per engine (a batch of the most takes about a second or two here:
 #: the native loop of the writing task ~15 ms, the FMUs through FMPy ~150 ms).
 MAX_BATCH = {"native": 100, "fmpy": 10}
@@ -96,6 +106,66 @@ def _import_runs() -> None:
     importlib.import_module("rrr_robot.sweep.runs")
 
 
+def _host_port(address: str) -> tuple[str, int]:
+    rest = address.split("://", 1)[-1]
+    host, _, port = rest.rpartition(":")
+    return host.strip("[]"), int(port)
+
+
+def _recv_exactly(sock: socket.socket, n: int, deadline: float) -> bytes:
+    data = b""
+    while len(data) < n:
+        sock.settimeout(max(0.01, deadline - time.monotonic()))
+        block = sock.recv(n - len(data))
+        if not block:
+            raise ConnectionError("the peer closed the connection")
+        data += block
+    return data
+
+
+def probe_scheduler(address: str, timeout: float | None = None) -> None:
+    """Check that a Dask scheduler answers at ``address`` before distributed is handed it:
+    within ``timeout`` s (default HANDSHAKE_TIMEOUT) the connection is accepted and the
+    scheduler's handshake arrives (distributed's TCP framing: an 8-byte length of at most
+    MAX_HANDSHAKE_BYTES, then the frames of a message naming its compression and Python).
+    BadInputError otherwise (a peer that never speaks, an HTTP server, a closed port). For
+    tls://, ws:// and wss:// only the connection is checked (their handshake is encrypted or
+    an HTTP upgrade)."""
+    timeout = HANDSHAKE_TIMEOUT if timeout is None else timeout
+    where = f"the Dask scheduler at {address}"
+    deadline = time.monotonic() + timeout
+    try:
+        host, port = _host_port(address)
+        sock = socket.create_connection((host, port), timeout=timeout)
+    except TimeoutError:
+        raise BadInputError(f"cannot connect to {where}: no answer within {timeout:g} s"
+                            ) from None
+    except (OSError, ValueError) as exc:
+        raise BadInputError(f"cannot connect to {where}: "
+                            f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
+    try:
+        with sock:
+            if "://" in address and not address.startswith("tcp://"):
+                return
+            (n,) = struct.unpack("<Q", _recv_exactly(sock, 8, deadline))
+            if not 16 <= n <= MAX_HANDSHAKE_BYTES:
+                raise BadInputError(f"{where} does not speak Dask: its first message claims "
+                                    f"{n} bytes (a Dask handshake has at most "
+                                    f"{MAX_HANDSHAKE_BYTES})")
+            body = _recv_exactly(sock, n, deadline)
+    except TimeoutError:
+        raise BadInputError(f"{where} does not speak Dask: no handshake within {timeout:g} s "
+                            "(is it a Dask scheduler, e.g. not its dashboard's HTTP port?)"
+                            ) from None
+    except OSError as exc:
+        raise BadInputError(f"{where} does not speak Dask: "
+                            f"{' '.join(str(exc).split()) or type(exc).__name__} before its "
+                            "handshake") from None
+    if b"compression" not in body or b"python" not in body:
+        raise BadInputError(f"{where} does not speak Dask: its first message is no Dask "
+                            "handshake")
+
+
 @contextlib.contextmanager
 def dask_client(workers: int | None = None, scheduler: str | None = None) -> Iterator[Any]:
     """A Dask client: of a new local cluster of ``workers`` processes (default: one per core),
@@ -114,6 +184,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
             client = stack.enter_context(Client(cluster))
             where = f"the local cluster of {n} worker processes"
         else:
+            probe_scheduler(scheduler)  # a peer that never speaks or speaks HTTP: refused
             try:
                 client = stack.enter_context(Client(scheduler, timeout=CONNECT_TIMEOUT))
             except (OSError, TimeoutError, ValueError) as exc:

@@ -11,9 +11,16 @@ Output folder ``DIR``:
   figures (rrr_robot.sweep.figures): written together (a result set) once every run is
   recorded; without summary.json a sweep is not complete.
 
+The folder is claimed before anything else is looked at in it (an exclusive lock,
+``.rrr-lock-sweep``, held until the sweep ends: rrr_robot.core.outputs.folder_lock), so a second
+sweep into it, started at the same moment or later, is refused at once.
+
 ``resume``: the runs already in results.parquet are skipped and the others run; the folder's
 sweep.json must have the same fingerprint (another spec, engine, base scenario or robot file is
-refused, naming what differs). Without ``resume`` a folder that holds a sweep is refused.
+refused, naming what differs), and every part must be this sweep's exactly (its columns and
+their types, runs within 0 to samples - 1 with this sweep's seeds and as the part's name says,
+statuses one of the five; anything else in results.parquet is refused, naming it:
+rrr_robot.sweep.results). Without ``resume`` a folder that holds a sweep is refused.
 Everything that can be checked is checked before anything is written or submitted: the spec,
 the base scenario and robot file, the base run's reference, the folder and the options.
 """
@@ -39,6 +46,8 @@ from ..core.outputs import (
     atomic_write_bytes,
     atomic_write_text,
     check_folder,
+    folder_lock,
+    make_folders,
     strict_json,
 )
 from ..core.robot import robot_file_from_dict
@@ -133,6 +142,9 @@ def _check_folder_state(out: Path, plan: SweepPlan, spec: SweepSpec, resume: boo
     """Whether ``out`` already holds this sweep (resume); errors for a folder holding another
     sweep or results without a sweep.json."""
     meta_path = out / SWEEP_META
+    if meta_path.exists() and not meta_path.is_file():
+        raise BadInputError(f"{meta_path} is not a file: not a sweep of rrr sweep; choose "
+                            "another --out")
     if not meta_path.exists():
         if (out / RESULTS).exists():
             raise BadInputError(f"{out / RESULTS} exists but {meta_path} does not: not a sweep "
@@ -261,10 +273,27 @@ def run_sweep(job: SweepJob, progress: Callable[[int, int], None] | None = None,
     check_folder(job.out)
     spec = read_spec(job.spec)
     plan = make_plan(spec, job.engine)
+    created = make_folders(job.out)
+    try:
+        # the folder is this sweep's from here on: a second sweep into it is refused at once
+        with folder_lock(job.out, "sweep", what="another rrr sweep"):
+            return _claimed(job, spec, plan, progress)
+    finally:  # a sweep that wrote nothing leaves no folder behind
+        for d in reversed(created):
+            try:
+                d.rmdir()
+            except OSError:
+                break
+
+
+def _claimed(job: SweepJob, spec: SweepSpec, plan: SweepPlan,
+             progress: Callable[[int, int], None] | None) -> dict[str, Any]:
     arrow_schema = schema(spec.vary)
     resumed = _check_folder_state(job.out, plan, spec, job.resume)
-    done = finished_runs(job.out / RESULTS, arrow_schema) if resumed else set()
-    todo = [r for r in design(spec) if r.run not in done]
+    inputs = design(spec)
+    seeds = [r.seed for r in inputs]
+    done = finished_runs(job.out / RESULTS, arrow_schema, seeds) if resumed else set()
+    todo = [r for r in inputs if r.run not in done]
     log.info("%d runs (%s), %d recorded, %d to run on the %s engine", spec.samples,
              spec.method, len(done), len(todo), job.engine)
     if progress is not None:
@@ -273,5 +302,5 @@ def run_sweep(job: SweepJob, progress: Callable[[int, int], None] | None = None,
                               "runs_per_second": None, "worker_threads": 0}
     if todo:
         timing = _run_missing(job, spec, plan, todo, len(done), not resumed, progress)
-    table = read_results(job.out / RESULTS, arrow_schema)
+    table = read_results(job.out / RESULTS, arrow_schema, seeds)
     return _finish(job, spec, table, {"this_invocation": timing})

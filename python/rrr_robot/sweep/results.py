@@ -14,13 +14,14 @@ within a batch); sort by ``run`` to get the run order.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..core.outputs import atomic_path
+from ..core.outputs import atomic_path, is_temporary
 from ..errors import BadInputError
-from .runs import METRICS
+from .runs import METRICS, STATUSES
 from .spec import Vary
 
 __all__ = ["RESULTS", "finished_runs", "read_results", "schema", "write_part"]
@@ -46,8 +47,13 @@ def _key_type(v: Vary) -> Any:
 
 
 def schema(vary: Sequence[Vary]) -> Any:
-    """The Arrow schema of a sweep's rows."""
+    """The Arrow schema of a sweep's rows (BadInputError when two varied keys are one)."""
     import pyarrow as pa
+
+    keys = [v.key for v in vary]
+    if len(set(keys)) != len(keys):
+        twice = sorted({k for k in keys if keys.count(k) > 1})
+        raise BadInputError(f"the sweep varies {twice[0]} twice")
 
     fields = [pa.field("run", pa.int64(), nullable=False), pa.field("seed", pa.int64()),
               pa.field("status", pa.string(), nullable=False), pa.field("error", pa.string())]
@@ -78,14 +84,77 @@ def write_part(folder: Path, rows: Sequence[dict[str, Any]], arrow_schema: Any) 
     return path
 
 
+_PART = re.compile(r"^part-(\d{7,})-(\d+)\.parquet$")
+
+
 def _parts(folder: Path) -> list[Path]:
-    return sorted(p for p in folder.glob("part-*.parquet") if p.is_file())
+    """The part files of the dataset ``folder``; BadInputError for anything else in it (a
+    folder named like a part, a file that is not one of ours) but the hidden temporary files
+    of a write (rrr_robot.core.outputs)."""
+    if not folder.exists():
+        return []
+    if not folder.is_dir():
+        raise BadInputError(f"{folder} is not a folder: it must be the dataset folder of this "
+                            "sweep's results; move it away or choose another --out")
+    parts = []
+    for entry in sorted(folder.iterdir()):
+        if is_temporary(entry):
+            continue
+        if _PART.match(entry.name) is None:
+            raise BadInputError(f"{entry}: not a part of this sweep's results (part-<first "
+                                "run>-<runs>.parquet); move it away")
+        if not entry.is_file():
+            raise BadInputError(f"{entry} is not a file: a part of the results must be a "
+                                "Parquet file; move it away")
+        parts.append(entry)
+    return parts
 
 
-def read_results(folder: Path, arrow_schema: Any) -> Any:
+def _check_part(part: Path, t: Any, arrow_schema: Any, seeds: Sequence[int] | None) -> None:
+    """A part must be this sweep's exactly: its columns and their types, run ids within the
+    sweep and as its name says, statuses, and each run's seed."""
+    import pyarrow.compute as pc
+
+    if t.schema.names != arrow_schema.names:
+        raise BadInputError(f"{part}: its columns are not those of this sweep's spec "
+                            f"({', '.join(t.schema.names[:6])}, ...)")
+    for f in arrow_schema:
+        got = t.schema.field(f.name).type
+        if got != f.type:
+            raise BadInputError(f"{part}: column {f.name} holds {got}, this sweep's holds "
+                                f"{f.type}")
+    for name in ("run", "status", "seed"):
+        if t.column(name).null_count:
+            raise BadInputError(f"{part}: column {name} has empty values")
+    if t.num_rows == 0:
+        raise BadInputError(f"{part}: no rows")
+    runs = t.column("run").to_pylist()
+    m = _PART.match(part.name)
+    assert m is not None
+    if int(m.group(1)) != min(runs) or int(m.group(2)) != len(runs):
+        raise BadInputError(f"{part}: holds {len(runs)} runs from run {min(runs)}, its name "
+                            "says otherwise (not a part this sweep wrote)")
+    if seeds is not None:
+        bad = [r for r in runs if not 0 <= r < len(seeds)]
+        if bad:
+            raise BadInputError(f"{part}: run {bad[0]} is not a run of this sweep (runs 0 to "
+                                f"{len(seeds) - 1})")
+        wrong = [r for r, sd in zip(runs, t.column("seed").to_pylist(), strict=True)
+                 if seeds[r] != sd]
+        if wrong:
+            raise BadInputError(f"{part}: run {wrong[0]} has the seed of another sweep "
+                                "(not this sweep's run)")
+    statuses = set(pc.unique(t.column("status")).to_pylist())
+    if not statuses <= set(STATUSES):
+        odd = sorted(statuses - set(STATUSES))
+        raise BadInputError(f"{part}: status {odd[0]!r} is none of {', '.join(STATUSES)}")
+
+
+def read_results(folder: Path, arrow_schema: Any, seeds: Sequence[int] | None = None) -> Any:
     """The dataset's rows as one pyarrow Table in run order (an empty table when there are
-    none). BadInputError when a part does not have the sweep's columns or two parts hold the
-    same run (not the results of this sweep)."""
+    none). BadInputError naming the part when one is not this sweep's exactly (its columns and
+    types, its runs within 0..len(seeds)-1 with their ``seeds``, its statuses) or two parts hold
+    the same run."""
     import pyarrow as pa
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
@@ -95,10 +164,9 @@ def read_results(folder: Path, arrow_schema: Any) -> Any:
         try:
             t = pq.read_table(part)
         except (OSError, pa.ArrowException) as exc:
-            raise BadInputError(f"{part}: not a Parquet file of this sweep: {exc}") from exc
-        if t.schema.names != arrow_schema.names:
-            raise BadInputError(f"{part}: its columns are not those of this sweep's spec "
-                                f"({', '.join(t.schema.names[:6])}, ...)")
+            raise BadInputError(f"{part}: not a Parquet file of this sweep: "
+                                f"{' '.join(str(exc).split())}") from exc
+        _check_part(part, t, arrow_schema, seeds)
         tables.append(t.cast(arrow_schema))
     if not tables:
         return arrow_schema.empty_table()
@@ -110,8 +178,7 @@ def read_results(folder: Path, arrow_schema: Any) -> Any:
     return table.sort_by("run")
 
 
-def finished_runs(folder: Path, arrow_schema: Any) -> set[int]:
-    """The runs already recorded in the dataset ``folder``."""
-    if not folder.is_dir():
-        return set()
-    return {int(r) for r in read_results(folder, arrow_schema).column("run").to_pylist()}
+def finished_runs(folder: Path, arrow_schema: Any, seeds: Sequence[int] | None = None,
+                  ) -> set[int]:
+    """The runs already recorded in the dataset ``folder`` (checked as by read_results)."""
+    return {int(r) for r in read_results(folder, arrow_schema, seeds).column("run").to_pylist()}

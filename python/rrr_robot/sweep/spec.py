@@ -35,7 +35,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, NoReturn
 
-from ..core.checked import Document, Invalid, Number, Text, load_toml, show
+from ..core.checked import Document, Invalid, Number, Text, key_text, load_toml, show
 from ..errors import SweepSpecError
 from .keys import Target, element_checks, target, targets
 
@@ -138,17 +138,33 @@ class _Checker:
     def fail(self, key: str, message: str) -> NoReturn:
         self.doc.fail("vary", key, f"[vary] {show(key)}: {message}")
 
-    def entries(self, table: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
+    def entries(self, table: Mapping[str, Any]) -> list[tuple[str, Any]]:
         """The entries of [vary], with dotted TOML keys (mismatch.p_rel = {...} without quotes,
-        or a [vary.mismatch] table) joined back into one key."""
+        a [vary.mismatch] table or an inline table mismatch = { p_rel = {...} }) joined back
+        into one key; a key given twice in two spellings (TOML itself refuses one spelling
+        twice) is refused, naming both."""
         out: list[tuple[str, Any]] = []
+        spelled: dict[str, str] = {}
+        for key, value, spelling in self._walk(table, (), ()):
+            if key in spelled:
+                self.fail(key, f"given twice, as {spelled[key]} and as {spelling} (two "
+                          "spellings of one key); give it once")
+            spelled[key] = spelling
+            out.append((key, value))
+        return out
+
+    def _walk(self, table: Mapping[str, Any], parts: tuple[str, ...],
+              path: tuple[str, ...]) -> list[tuple[str, Any, str]]:
+        """(joined key, value, how it was spelled in the file) of each entry."""
+        out: list[tuple[str, Any, str]] = []
         for name, value in table.items():
-            key = f"{prefix}{name}"
+            key = ".".join((*parts, name))
+            here = (*path, name)
             if target(key) is None and isinstance(value, Mapping) and \
                     any(k.startswith(f"{key}.") for k in targets()):
-                out += self.entries(value, f"{key}.")
+                out += self._walk(value, (*parts, name), here)
             else:
-                out.append((key, value))
+                out.append((key, value, ".".join(key_text(p) for p in here)))
         return out
 
     def vary(self, key: str, entry: Any) -> Vary:

@@ -31,8 +31,8 @@ from .trajectory import Reference
 
 log = logging.getLogger(__name__)
 
-__all__ = ["ANIMATION_FORMATS", "FPS", "LINK_COLOR", "animate_result", "animation_format",
-           "frame_indices", "link_points", "mp4_available"]
+__all__ = ["ANIMATION_FORMATS", "FPS", "LINK_COLOR", "MAX_FRAMES", "animate_result",
+           "animation_format", "frame_indices", "link_points", "max_fps", "mp4_available"]
 
 #: Frames per second of simulated time (the default 5.9 s run: 90 frames per scenario).
 FPS = 15.0
@@ -44,7 +44,8 @@ TRACE_COLOR = (214, 39, 40)
 REFERENCE_COLOR = (150, 150, 150)
 _SIZE = (6.4, 4.8)          # in
 _DPI = 80                   # 512 x 384 pixels
-_MAX_FRAMES = 3000
+#: Frames of one animation at most (of 512 x 384 pixels: about 600 MB of frames for a GIF).
+MAX_FRAMES = 3000
 
 
 def mp4_available() -> bool:
@@ -96,10 +97,18 @@ def frame_indices(t: FloatArray, fps: float = FPS) -> np.ndarray:
     t = np.asarray(t, dtype=float)
     marks = np.arange(t[0], t[-1], 1.0 / fps)
     idx = np.unique(np.concatenate([np.searchsorted(t, marks - 1e-12), [t.size - 1]]))
-    if idx.size > _MAX_FRAMES:
+    if idx.size > MAX_FRAMES:
         raise BadInputError(f"an animation of {idx.size} frames ({t[-1] - t[0]:.1f} s at {fps:g} "
-                            f"fps); at most {_MAX_FRAMES}: lower fps")
+                            f"frames per simulated second): at most {MAX_FRAMES}; lower --fps "
+                            f"to {max_fps(t):.3g} or less")
     return idx
+
+
+def max_fps(t: FloatArray) -> float:
+    """The largest frame rate (frames per simulated second) that keeps an animation of the
+    times ``t`` within MAX_FRAMES frames."""
+    span = float(t[-1] - t[0])
+    return (MAX_FRAMES - 2) / span if span > 0 else FPS
 
 
 def _rgb(color: tuple[int, int, int]) -> tuple[float, float, float]:

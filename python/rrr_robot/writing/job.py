@@ -12,6 +12,7 @@ scenario's ``status`` says why (:func:`scenario_summary`); ``files`` lists the f
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -29,10 +30,17 @@ from ..core.tables import check_table_format
 from ..errors import BadInputError
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
 from ..sim.native import simulate
-from .animation import animate_result, animation_format
+from .animation import FPS, animate_result, animation_format, frame_indices
 from .figure_worker import ReferenceFigures
 from .scenarios import BUILTIN, Scenario, check_run, load_scenario
-from .trajectory import Reference, WritingSpec, fit_letter_height, make_reference
+from .trajectory import (
+    MIN_HEIGHT_CORNER_RADII,
+    Reference,
+    WritingSpec,
+    fit_letter_height,
+    letter_height_range,
+    make_reference,
+)
 
 log = logging.getLogger(__name__)
 
@@ -61,6 +69,7 @@ class WritingJob:
     table_format: str = "csv"  # of the per-scenario signal tables: csv or parquet (core.tables)
     # an animation of the arm per scenario: None (none), "gif", "mp4" or "auto" (writing.animation)
     animate: str | None = None
+    fps: float = FPS  # of the animations: frames per simulated second
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,
@@ -150,9 +159,28 @@ def writing_spec(robot: RobotFile, text: str | None = None, scale: float = 1.0,
         spec = replace(spec, text=text)
     if scale != 1.0:
         # the factor on the height the text is written at (fitted to the writing area), and
-        # that height exactly: a scaled text that does not fit is refused
-        spec = replace(spec, letter_height=fit_letter_height(spec) * scale, fit_to_area=False)
+        # that height exactly: a scaled text outside the usable heights is refused
+        spec = replace(spec, letter_height=_scaled_height(spec, scale), fit_to_area=False)
     return spec
+
+
+def _scaled_height(spec: WritingSpec, scale: float) -> float:
+    """The letter height at ``scale`` (the factor on the fitted height: ``rrr writing
+    --scale``); BadInputError with the usable range of the scale when it is outside."""
+    if isinstance(scale, bool) or not isinstance(scale, int | float) or \
+            not math.isfinite(scale) or scale <= 0:
+        raise BadInputError(f"the letter scale (--scale) must be a finite number > 0, got "
+                            f"{scale!r}")
+    fitted = fit_letter_height(spec)
+    low, high = letter_height_range(spec)
+    height = fitted * scale
+    if not low <= height <= high:
+        raise BadInputError(
+            f"--scale {scale:g} gives letters {1e3 * height:.3g} mm high: the usable range of "
+            f"--scale is {low / fitted:.3g} to {high / fitted:.3g} for this text (letters from "
+            f"{1e3 * low:.3g} mm, {MIN_HEIGHT_CORNER_RADII:g} corner radii, to "
+            f"{1e3 * high:.3g} mm, the largest that fits the writing area)")
+    return height
 
 
 class Prepared(NamedTuple):
@@ -188,6 +216,8 @@ def run_writing(job: WritingJob,
     fmt = check_table_format(job.table_format)  # parquet without pyarrow fails here
     anim = None if job.animate is None else animation_format(job.animate)  # mp4: its package
     model, robot, scenarios, ref = prepare(job)
+    if anim is not None:
+        frame_indices(ref.t, job.fps)  # at most MAX_FRAMES frames: refused before any run
     for scn in scenarios:  # the output names, before anything runs
         check_name(f"{scn.name}.{fmt}")
         if anim is not None:
@@ -246,7 +276,7 @@ def run_writing(job: WritingJob,
                     if progress is not None:
                         progress(f"animation {name}", k - 1, n)
                 animate_result(rs.path(f"anim_{name}.{anim}"), model, ref, res, title=name,
-                               fmt=anim, progress=frames)
+                               fps=job.fps, fmt=anim, progress=frames)
             log.info("animations: %.2f s", time.perf_counter() - start)
         summary["files"] = sorted([*rs.names(), "summary.json"])
         summary = to_strict_json_value(summary)

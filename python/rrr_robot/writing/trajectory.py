@@ -69,11 +69,13 @@ __all__ = [
     "MAX_REFERENCE_DURATION",
     "MAX_REFERENCE_SAMPLES",
     "MAX_TEXT",
+    "MIN_HEIGHT_CORNER_RADII",
     "Reference",
     "TimingLaw",
     "WritingSpec",
     "fit_letter_height",
     "fitted_spec",
+    "letter_height_range",
     "make_reference",
     "numeric_ik_path",
     "writing_path",
@@ -239,6 +241,20 @@ def fit_letter_height(spec: WritingSpec) -> float:
             "enlarge the writing area"
         )
     return height
+
+
+#: The smallest letters written, in corner radii: a glyph's corners are blended over
+#: ``corner_radius`` either side, so letters of fewer radii lose their shape to the blends.
+MIN_HEIGHT_CORNER_RADII = 5.0
+
+
+def letter_height_range(spec: WritingSpec) -> tuple[float, float]:
+    """The letter heights the text can be written at: from MIN_HEIGHT_CORNER_RADII corner
+    radii (smaller letters lose their shape to the corner blends) to the largest at which it
+    fits the writing area."""
+    lo, hi = _extent(_strokes(spec))
+    factor = float(np.min(_room(spec) / np.maximum(hi - lo, 1e-300))) * (1.0 - 1e-9)
+    return MIN_HEIGHT_CORNER_RADII * spec.corner_radius, spec.letter_height * factor
 
 
 def fitted_spec(spec: WritingSpec) -> WritingSpec:
