@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Sets up everything and runs every test: C tests (core, FMUs, CAN bench) under AddressSanitizer
-# and UndefinedBehaviorSanitizer via CTest (with the FMUs' Windows binaries run under wine), the
-# same CTest on the README's default build (Release), ruff,
+# and UndefinedBehaviorSanitizer via CTest (with the FMUs' Windows binaries run under wine, their
+# aarch64 Linux binaries and the aarch64 bench nodes under qemu-user), the same CTest on the
+# README's default build (Release), ruff,
 # the Python package's import layers (lint-imports) and types (mypy), pytest (including the
-# generated-code checks), and a short libFuzzer run on the CAN frame decoders. mingw-w64, wine and
-# clang are installed with apt-get when missing and root.
+# generated-code checks), and a short libFuzzer run on the CAN frame decoders. mingw-w64, wine,
+# gcc-aarch64-linux-gnu, qemu-user and clang are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -24,6 +25,25 @@ if ! windows_tools_ok; then
   if ! windows_tools_ok; then
     echo "the FMU tests need the mingw-w64 cross compiler and wine (Debian: apt-get install" \
          "gcc-mingw-w64-x86-64 wine)" >&2
+    exit 1
+  fi
+fi
+# The aarch64 Linux binaries of the FMUs are cross-compiled with gcc-aarch64-linux-gnu and run
+# under qemu-user (with the cross toolchain's sysroot) against x86-64, as are the bench nodes
+# (docs/aarch64.md): both before the FMUs are built.
+aarch64_tools_ok() {
+  command -v aarch64-linux-gnu-gcc >/dev/null 2>&1 && command -v qemu-aarch64 >/dev/null 2>&1 &&
+    [ -e /usr/aarch64-linux-gnu/lib/ld-linux-aarch64.so.1 ]
+}
+if ! aarch64_tools_ok; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    echo "== installing gcc-aarch64-linux-gnu and qemu-user (aarch64 binaries of the FMUs) =="
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq gcc-aarch64-linux-gnu qemu-user >/dev/null
+  fi
+  if ! aarch64_tools_ok; then
+    echo "the aarch64 tests need the cross compiler and qemu-user (Debian: apt-get install" \
+         "gcc-aarch64-linux-gnu qemu-user)" >&2
     exit 1
   fi
 fi

@@ -59,16 +59,42 @@ def simulate(path: Path | str, which: str, fmi_type: str, stop: float = 1.0,
 
 
 def test_rrr_fmus_lists_every_variant() -> None:
-    found = {(v.which, v.fmi_version): v for v in variants()}
+    everything = variants()
+    found = {(v.which, v.fmi_version): v for v in everything if not v.host}
+    hosts = {v.which: v for v in everything if v.host}
     assert set(found) == {(w, v) for w in (*NAMES, "reference") for v in VERSIONS}
     for (_, version), v in found.items():
         assert v.interfaces == ("ModelExchange", "CoSimulation")
         assert LINUX[version] in v.platforms
         assert v.has_sources and v.has_documentation
+        assert v.linux_cpu == ("x86_64" if version == 2 else "")
+    # the aarch64 Linux binaries (with gcc-aarch64-linux-gnu at build time; the test command
+    # installs it): in every archive, and FMI 2.0 archives for aarch64 hosts, whose linux64 is
+    # the same aarch64 binary (docs/aarch64.md)
+    with_a64 = {k for k, v in found.items() if "aarch64-linux" in v.platforms}
+    assert with_a64 in (set(), set(found)), with_a64
+    if with_a64:
+        assert set(hosts) == {*NAMES, "reference"}
+        for which, v in hosts.items():
+            assert v.host == "aarch64-linux" and v.fmi_version == 2
+            assert v.platforms == ("linux64",) and v.linux_cpu == "aarch64"
+            assert v.platform_labels() == ["linux64 (aarch64)"]
+            with zipfile.ZipFile(v.path) as a, zipfile.ZipFile(found[(which, 2)].path) as b:
+                so = f"rrr_{which}.so"
+                assert a.read(f"binaries/linux64/{so}") == b.read(f"binaries/aarch64-linux/{so}")
+                assert a.read("modelDescription.xml") == b.read("modelDescription.xml")
+                assert {n for n in a.namelist() if not n.startswith("binaries/")} == \
+                    {n for n in b.namelist() if not n.startswith("binaries/")}
+    else:
+        assert not hosts
     cli = subprocess.run([sys.executable, "-m", "rrr_robot", "fmus"], capture_output=True,
                          text=True, check=True)
     lines = cli.stdout.strip().splitlines()
-    assert len(lines) == 6 and sum("FMI 3.0" in x for x in lines) == 3, cli.stdout
+    assert len(lines) == 6 + len(hosts) and sum("FMI 3.0" in x for x in lines) == 3, cli.stdout
+    assert sum("linux64 (x86_64)" in x for x in lines) == 3, cli.stdout
+    assert sum("linux64 (aarch64)" in x for x in lines) == len(hosts), cli.stdout
+    if with_a64:
+        assert all("aarch64-linux" in x for x in lines if "FMI 3.0" in x), cli.stdout
 
 
 @pytest.mark.parametrize("version", VERSIONS)
@@ -78,6 +104,21 @@ def test_fmpy_validates(which: str, version: int) -> None:
     md = read_model_description(str(fmu(which, version)))
     assert md.fmiVersion == f"{version}.0"
     assert md.modelExchange is not None and md.coSimulation is not None
+
+
+def test_fmpy_validates_the_aarch64_host_archives() -> None:
+    """FMPy reads them like the others (it loads binaries/linux64 on aarch64 Linux); its
+    supported_platforms (``fmpy info``) calls that folder linux64, whatever its CPU."""
+    from fmpy import supported_platforms
+
+    everything = variants()
+    hosts = [v for v in everything if v.host]
+    with_a64 = any("aarch64-linux" in v.platforms for v in everything if v.fmi_version == 3)
+    assert len(hosts) == (3 if with_a64 else 0)
+    for v in hosts:
+        assert validate_fmu(str(v.path)) == [], v.path
+        assert supported_platforms(str(v.path)) == ["c-code", "linux64"]
+    print(f"{len(hosts)} aarch64-host FMI 2.0 archives validated")
 
 
 @pytest.mark.parametrize("version", VERSIONS)

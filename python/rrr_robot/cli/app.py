@@ -32,7 +32,7 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
         extras = [x for x, present in (("sources", v.has_sources),
                                        ("documentation", v.has_documentation)) if present]
         print(f"{v.which:<10} FMI {v.fmi_version}.0  {' + '.join(v.interfaces):<28} "
-              f"{', '.join(v.platforms):<30} {', '.join(extras):<22} {v.path}")
+              f"{', '.join(v.platform_labels()):<44} {', '.join(extras):<22} {v.path}")
     return 0
 
 
@@ -53,7 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="also log DEBUG lines (also after the command)")
     sub = parser.add_subparsers(dest="command", required=True)
     p_fmus = command_parser(
-        sub, "fmus", help="list the FMUs: plant, controller and reference, FMI 2.0 and 3.0",
+        sub, "fmus", help="list the FMUs: plant, controller and reference, FMI 2.0 and 3.0 (and "
+        "the FMI 2.0 archives for aarch64 Linux hosts)",
         description="List the FMUs the package ships: rrr_plant (voltages in, joint motion "
         "out), rrr_controller (the computed-torque law of eq 15) and rrr_reference (the "
         "writing reference played from a table), each for FMI 2.0 and FMI 3.0, with their "

@@ -2,8 +2,10 @@
 
 Shipped in the package (``pip install .``) or named by ``$RRR_FMU_DIR`` (e.g. a CMake build's
 ``fmus/`` folder), with the same layout: ``rrr_<name>.fmu`` (FMI 2.0) and ``fmi3/rrr_<name>.fmu``
-(FMI 3.0). Each archive holds Model Exchange and Co-Simulation, the sources and binaries for the
-platforms the build could compile for.
+(FMI 3.0), and, when the build had the aarch64 cross compiler, ``aarch64-linux/rrr_<name>.fmu``:
+FMI 2.0 for aarch64 Linux hosts, whose ``binaries/linux64`` is the aarch64 binary (the folder
+FMPy and the FMI Library load there; docs/aarch64.md). Each archive holds Model Exchange and
+Co-Simulation, the sources and binaries for the platforms the build could compile for.
 """
 
 from __future__ import annotations
@@ -19,6 +21,10 @@ from ..errors import ArchiveError, BadInputError, RrrError
 FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu",
              "reference": "rrr_reference.fmu"}
 FMI_VERSIONS = (2, 3)
+# fmus/<folder>/: FMI 2.0 archives for the hosts of another CPU, binaries/linux64 built for it
+HOST_VARIANTS = ("aarch64-linux",)
+# ELF e_machine -> CPU, to tell what a linux32/linux64 folder (FMI 2.0: no CPU in the name) holds
+_ELF_MACHINES = {3: "x86", 62: "x86_64", 40: "arm", 183: "aarch64"}
 
 
 def fmu_dir() -> Path:
@@ -58,15 +64,41 @@ class FmuVariant:
     platforms: tuple[str, ...]    # binaries/<platform>/ folders, e.g. linux64, x86_64-windows
     has_sources: bool
     has_documentation: bool
+    host: str = ""                # "" or the HOST_VARIANTS folder the archive is in
+    linux_cpu: str = ""           # the CPU of the binary in binaries/linux64 (or linux32)
+
+    def platform_labels(self) -> list[str]:
+        """The platform folders; linux64/linux32 with their binary's CPU: 'linux64 (aarch64)'."""
+        return [f"{p} ({self.linux_cpu})" if p in ("linux64", "linux32") and self.linux_cpu
+                else p for p in self.platforms]
 
 
-def describe(which: str, fmi_version: int) -> FmuVariant:
-    """What the archive of one FMU holds (read from its file list and model description)."""
-    path = fmu_path(which, fmi_version)
+def _elf_cpu(head: bytes) -> str:
+    if len(head) < 20 or head[:4] != b"\x7fELF":
+        return ""
+    machine = int.from_bytes(head[18:20], "little" if head[5] == 1 else "big")
+    return _ELF_MACHINES.get(machine, f"ELF machine {machine}")
+
+
+def describe(which: str, fmi_version: int, host: str = "") -> FmuVariant:
+    """What the archive of one FMU holds (read from its file list and model description);
+    ``host``: one of HOST_VARIANTS, the FMI 2.0 archive for that platform's hosts."""
+    if host:
+        if host not in HOST_VARIANTS or fmi_version != 2 or which not in FMU_NAMES:
+            raise BadInputError(f"no {host!r} FMI {fmi_version}.0 variant of {which!r}: "
+                                f"hosts {HOST_VARIANTS} have FMI 2.0 archives")
+        path = fmu_dir() / host / FMU_NAMES[which]
+    else:
+        path = fmu_path(which, fmi_version)
     try:
         with CheckedZip(path, "FMU") as z:
             names = z.names()
             md = z.read("modelDescription.xml", 16_000_000).decode("utf-8")
+            linux = [n for n in names if n.startswith(("binaries/linux64/", "binaries/linux32/"))
+                     and n.endswith(".so")]
+            cpu = ""
+            if linux:
+                cpu = _elf_cpu(z.read(linux[0], 64_000_000)[:20])
     except (ArchiveError, UnicodeError) as exc:
         raise RrrError(f"{path} is not a readable FMU: {exc}") from exc
     platforms = sorted({n.split("/")[1] for n in names
@@ -76,9 +108,15 @@ def describe(which: str, fmi_version: int) -> FmuVariant:
                       platforms=tuple(platforms),
                       has_sources=any(n.startswith("sources/") and n.endswith(".c")
                                       for n in names),
-                      has_documentation="documentation/index.html" in names)
+                      has_documentation="documentation/index.html" in names,
+                      host=host, linux_cpu=cpu)
 
 
 def variants() -> list[FmuVariant]:
-    """Every FMU the package provides: plant, controller and reference, FMI 2.0 and 3.0."""
-    return [describe(which, v) for v in FMI_VERSIONS for which in FMU_NAMES]
+    """Every FMU the package provides: plant, controller and reference, FMI 2.0 and 3.0, and
+    the FMI 2.0 archives for other hosts (HOST_VARIANTS) the build made."""
+    found = [describe(which, v) for v in FMI_VERSIONS for which in FMU_NAMES]
+    for host in HOST_VARIANTS:
+        found += [describe(which, 2, host) for which in FMU_NAMES
+                  if (fmu_dir() / host / FMU_NAMES[which]).exists()]
+    return found
