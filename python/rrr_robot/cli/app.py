@@ -20,6 +20,7 @@ from .identify import register_cli as register_identify
 from .ssp import register_cli as register_ssp
 from .sweep import register_cli as register_sweep
 from .urdf import register_cli as register_urdf
+from .view import register_cli as register_view
 from .writing import register_cli as register_writing
 
 log = logging.getLogger("rrr_robot")
@@ -66,6 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
     register_identify(sub)
     register_hil(sub)
     register_urdf(sub)
+    register_view(sub)
     register_ssp(sub)
     register_sweep(sub)
     return parser

@@ -151,6 +151,7 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_model_validate": [_M, _P(ct.c_char_p)],
     "rrr_bps_from_inertia": [_M, _P(RawInertial), _D],
     "rrr_fk": [_M, _D, _D, _D],
+    "rrr_fk_frames": [_M, _D, _D],
     "rrr_jacobian": [_M, _D, _D],
     "rrr_tip_motion": [_M, _D, _D, _D, _D, _D],
     "rrr_joint_motion": [_M, _D, _D, _D, _D, _D],
