@@ -10,7 +10,7 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
-export RRR_PIP_TARGET=".[test,bench]"
+export RRR_PIP_TARGET=".[test,bench,docs]"
 # The Windows binaries of the FMUs are cross-compiled with mingw-w64 and tested under wine: both
 # must be present before the FMUs are built (by pip install below and by CMake).
 windows_tools_ok() {
@@ -94,7 +94,10 @@ ruff check python tests bench tools c_src/rrr/gen
 # that setup_env.sh has just installed from this tree
 lint-imports
 mypy python/rrr_robot
-echo "== pytest =="
+echo "== the manual: sphinx-build with warnings as errors (docs/ -> build-docs/index.html) =="
+# a broken link or anchor, an unresolved reference or a page outside the navigation fails it
+sphinx-build -q -W --keep-going -n -b html docs build-docs
+echo "== pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py) =="
 python -m pytest -q tests/python
 echo "== every bench script's quick mode (bench/: they print their tables; no number is checked) =="
 if ! wait "$BENCH_BUILD"; then
@@ -131,5 +134,5 @@ cmake --build build-fuzz --target fuzz_hil_decode -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
-echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, pytest, the benchmarks'" \
-     "quick modes, libFuzzer) =="
+echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, the manual, pytest, the" \
+     "benchmarks' quick modes, libFuzzer) =="
