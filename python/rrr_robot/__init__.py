@@ -32,7 +32,7 @@ from .errors import (
 if TYPE_CHECKING:
     from .core.control import CtcGains
     from .core.integrator import PlantIntegrator
-    from .core.linearize import LinearSystem, linearize
+    from .core.linearization import LinearSystem, linearize
     from .core.model import Model, Singularity, bps_from_inertia
     from .core.plant import Plant, PlantSnapshot, PlantStats
     from .core.robot import RobotFile, read_robot_file
@@ -50,8 +50,8 @@ _LAZY = {
     "Singularity": ".core.model",
     "bps_from_inertia": ".core.model",
     "PlantIntegrator": ".core.integrator",
-    "LinearSystem": ".core.linearize",
-    "linearize": ".core.linearize",
+    "LinearSystem": ".core.linearization",
+    "linearize": ".core.linearization",
     "Plant": ".core.plant",
     "PlantSnapshot": ".core.plant",
     "PlantStats": ".core.plant",
