@@ -38,6 +38,8 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``rrr`` with every subcommand (nothing heavy is imported: each command
+    imports its library when it runs)."""
     parser = argparse.ArgumentParser(
         prog="rrr",
         description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench, "
@@ -136,9 +138,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     (one line ``rrr: error: ...``; argparse's own errors also exit 2), 130 Ctrl-C (``rrr:
     interrupted``), 143 SIGTERM (``rrr: terminated``); a command may return others (``rrr hil
     plant``: 3 when the plant latched a fault). Nothing is printed as a traceback for these:
-    every error of the package (:class:`RrrError`), of the file system (OSError: a path that
-    cannot be read or written) and of decoding (UnicodeError: a binary file given as text)
-    ends here, and an interrupted run leaves its previous results as they were
+    every error of the package (:class:`~rrr_robot.errors.RrrError`), of the file system
+    (OSError: a path that cannot be read or written) and of decoding (UnicodeError: a binary
+    file given as text) ends here, and an interrupted run leaves its previous results as they were
     (rrr_robot.core.outputs)."""
     previous = None
     if threading.current_thread() is threading.main_thread():
