@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from .core._version import package_version
 from .errors import (
     BadInputError,
     CosimError,
@@ -36,8 +37,10 @@ if TYPE_CHECKING:
     from .core.plant import Plant, PlantSnapshot, PlantStats
     from .core.robot import RobotFile, read_robot_file
     from .core.urdf import robot_urdf, write_urdf
+    from .sim.cosim import CosimOptions, CosimResult
     from .sim.fmus import fmu_path
     from .sim.native import simulate
+    from .writing.trajectory import Reference, WritingSpec, make_reference
 
 #: The re-exported names that need numpy and librrr, imported on first use (``rr.Model``), so
 #: that ``import rrr_robot`` (and ``rrr --help``, ``rrr fmus``) loads neither.
@@ -56,8 +59,13 @@ _LAZY = {
     "read_robot_file": ".core.robot",
     "robot_urdf": ".core.urdf",
     "write_urdf": ".core.urdf",
+    "CosimOptions": ".sim.cosim",
+    "CosimResult": ".sim.cosim",
     "fmu_path": ".sim.fmus",
     "simulate": ".sim.native",
+    "Reference": ".writing.trajectory",
+    "WritingSpec": ".writing.trajectory",
+    "make_reference": ".writing.trajectory",
 }
 
 
@@ -74,11 +82,15 @@ def __dir__() -> list[str]:
     return sorted({*globals(), *_LAZY})
 
 
-__version__ = "0.1.0"
+#: The toolkit's version (``X.Y.Z``), from its one source ``rrr_version.h`` (also librrr's
+#: ``RRR_VERSION_STRING``, the FMUs' ``version`` and the CMake package's).
+__version__: str = package_version()
 
 __all__ = [
     "BadInputError",
     "CosimError",
+    "CosimOptions",
+    "CosimResult",
     "CtcGains",
     "LinearSystem",
     "Model",
@@ -88,6 +100,7 @@ __all__ = [
     "PlantIntegrator",
     "PlantSnapshot",
     "PlantStats",
+    "Reference",
     "RobotFile",
     "RobotFileError",
     "RrrError",
@@ -96,10 +109,12 @@ __all__ = [
     "Singularity",
     "SweepSpecError",
     "UnreachableError",
+    "WritingSpec",
     "__version__",
     "bps_from_inertia",
     "fmu_path",
     "linearize",
+    "make_reference",
     "read_robot_file",
     "robot_urdf",
     "simulate",
