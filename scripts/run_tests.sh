@@ -4,8 +4,9 @@
 # aarch64 Linux binaries and the aarch64 bench nodes under qemu-user), the same CTest on the
 # README's default build (Release), ruff,
 # the Python package's import layers (lint-imports) and types (mypy), pytest (including the
-# generated-code checks), and a short libFuzzer run on the CAN frame decoders. mingw-w64, wine,
-# gcc-aarch64-linux-gnu, qemu-user and clang are installed with apt-get when missing and root.
+# generated-code checks, the CAN bench over SocketCAN in a QEMU guest), and a short libFuzzer run
+# on the CAN frame decoders. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium and clang
+# are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -51,6 +52,18 @@ fi
 if ! command -v pkg-config >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq pkg-config >/dev/null
+fi
+# The SocketCAN tests (tests/python/test_socketcan_guest.py, docs/socketcan.md) boot a QEMU guest
+# with Debian's kernel (AF_CAN, vcan): can_guest.py installs qemu-system-x86, busybox-static,
+# cpio and can-utils with apt-get when missing and root, and downloads the kernel package into
+# ~/.cache/rrr-can-guest (never installed); it names what is missing otherwise.
+echo "== the SocketCAN test guest: tools, kernel, initramfs (tests/python/can_guest.py) =="
+python3 tests/python/can_guest.py prepare
+# chromium: tests/python/test_view.py opens the page of `rrr view` in headless Chromium
+if ! command -v chromium >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  echo "== installing chromium (the browser view's test, headless) =="
+  apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null
 fi
 # shellcheck disable=SC1091
 . scripts/setup_env.sh

@@ -102,6 +102,12 @@ CASES: dict[str, tuple[list[str], str]] = {
     "urdf-out-is-a-folder": (["urdf", "--out", "folder"], "is a folder"),
     "urdf-out-in-missing-folder": (["urdf", "--out", "nowhere/rrr.urdf"], "does not exist"),
     "urdf-no-out": (["urdf", "--out"], "--out"),
+    # rrr view (its FOLDER is read; the page would be FOLDER/view.html)
+    "view-missing-folder": (["view", "nowhere"], "not a folder"),
+    "view-folder-without-tables": (["view", "folder"], "no result table"),
+    "view-binary-robot": (["view", "folder", "--robot", "binary.toml"], "binary.toml"),
+    "view-unknown-scenario": (["view", "folder", "--scenario", "pd"], "no table pd.csv"),
+    "view-empty-out": (["view", "folder", "--out", ""], "--out"),
     "hil-duration-negative": (["hil", "bench", "--duration", "-1"], "--duration"),
     "hil-duration-absurd": (["hil", "bench", "--realtime", "--duration", "1e9"], "--duration"),
     "hil-duration-nan": (["hil", "bench", "--duration", "nan"], "--duration"),
