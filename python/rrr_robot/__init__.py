@@ -33,14 +33,17 @@ if TYPE_CHECKING:
     from .core.control import CtcGains
     from .core.integrator import PlantIntegrator
     from .core.linearization import LinearSystem, linearize
+    from .core.mcap_log import write_mcap
     from .core.model import Model, Singularity, bps_from_inertia
     from .core.plant import Plant, PlantSnapshot, PlantStats
     from .core.robot import RobotFile, read_robot_file
+    from .core.tables import read_table
     from .core.urdf import robot_urdf, write_urdf
     from .sim.cosim import CosimOptions, CosimResult
     from .sim.fmus import fmu_path
     from .sim.native import simulate
     from .writing.trajectory import Reference, WritingSpec, make_reference
+    from .writing.view import write_view
 
 #: The re-exported names that need numpy and librrr, imported on first use (``rr.Model``), so
 #: that ``import rrr_robot`` (and ``rrr --help``, ``rrr fmus``) loads neither.
@@ -63,6 +66,9 @@ _LAZY = {
     "CosimResult": ".sim.cosim",
     "fmu_path": ".sim.fmus",
     "simulate": ".sim.native",
+    "write_mcap": ".core.mcap_log",
+    "read_table": ".core.tables",
+    "write_view": ".writing.view",
     "Reference": ".writing.trajectory",
     "WritingSpec": ".writing.trajectory",
     "make_reference": ".writing.trajectory",
@@ -116,7 +122,10 @@ __all__ = [
     "linearize",
     "make_reference",
     "read_robot_file",
+    "read_table",
     "robot_urdf",
     "simulate",
+    "write_mcap",
     "write_urdf",
+    "write_view",
 ]

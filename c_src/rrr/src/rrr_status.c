@@ -12,6 +12,7 @@ const char *rrr_status_str(rrr_status s)
     case RRR_UNREACHABLE: return "RRR_UNREACHABLE";
     case RRR_SINGULAR: return "RRR_SINGULAR";
     case RRR_NUMERIC: return "RRR_NUMERIC";
+    case RRR_TOO_STIFF: return "RRR_TOO_STIFF";
     }
     return "RRR_UNKNOWN_STATUS";
 }

@@ -111,6 +111,12 @@ class RawPlantState(ct.Structure):
     _fields_ = [("q", D3), ("qd", D3), ("h_guess", ct.c_double), ("err_prev", ct.c_double)]
 
 
+class RawSimCarry(ct.Structure):
+    """Mirror of ``rrr_sim_carry`` (rrr_sim.h): where a closed loop run in parts stands."""
+
+    _fields_ = [("x", RawPlantState), ("qdd", D3), ("tip", D3), ("next", ct.c_size_t)]
+
+
 class RawPlantStats(ct.Structure):
     """Mirror of ``rrr_plant_stats``: the work of one ``rrr_plant_step`` call."""
 
@@ -145,6 +151,7 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_model_validate": [_M, _P(ct.c_char_p)],
     "rrr_bps_from_inertia": [_M, _P(RawInertial), _D],
     "rrr_fk": [_M, _D, _D, _D],
+    "rrr_fk_frames": [_M, _D, _D],
     "rrr_jacobian": [_M, _D, _D],
     "rrr_tip_motion": [_M, _D, _D, _D, _D, _D],
     "rrr_joint_motion": [_M, _D, _D, _D, _D, _D],
@@ -168,6 +175,7 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_plant_integrator_default": [_P(RawPlantIntegrator)],
     "rrr_plant_integrator_check": [_P(RawPlantIntegrator), _P(ct.c_char_p)],
     "rrr_plant_state_init": [_D, _D, _P(RawPlantState)],
+    "rrr_plant_stiffness": [_M, _P(ct.c_double), _P(ct.c_char_p)],
     "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
     "rrr_plant_jacobian": [_M, _P(RawPlantState), _D, _P(RawPlantDerivatives)],
     "rrr_ctc_jacobian": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcDerivatives)],
@@ -175,6 +183,9 @@ _SIGNATURES: dict[str, list[Any]] = {
                        _P(RawPlantStats)],
     "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
                             ct.c_size_t, ct.c_double, _D, _D, _D, _P(ct.c_size_t)],
+    "rrr_sim_closed_loop_part": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
+                                 ct.c_size_t, ct.c_double, _D, _D, _D, ct.c_size_t,
+                                 _P(RawSimCarry), _P(ct.c_size_t)],
     "rrr_param_set": [_M, ct.c_size_t, ct.c_double],
 }
 

@@ -63,6 +63,22 @@ typedef struct rrr_singularity {
  */
 RRR_API rrr_status rrr_fk(const rrr_model *m, const double q[3], double x[3], double R[3][3]);
 
+/** Number of frames of rrr_fk_frames: DH frames 0..3 (frame 3 is the tool, the pen tip). */
+#define RRR_NFRAMES (RRR_NJ + 1)
+
+/**
+ * @brief Every DH frame of the chain and the tool pose, in frame 0 (for a TF tree or a viewer).
+ *
+ * T[k] is the homogeneous transform of DH frame k into frame 0 (row-major 4 x 4, last row
+ * 0 0 0 1): T[0] = I (the base), T[k] = T[k-1] Rz(q_k) Tz(d_k) Tx(a_k) Rx(alpha_k) with the DH
+ * table of docs/conventions.md, and T[3] the tool, whose rotation and position are those of
+ * rrr_fk bit for bit. The URDF link k (rrr urdf) is DH frame k-1 turned by q_k about its z.
+ * @param[out] T frames 0..3
+ * @return RRR_OK or RRR_BAD_INPUT (T untouched)
+ */
+RRR_API rrr_status rrr_fk_frames(const rrr_model *m, const double q[3],
+                                 double T[RRR_NFRAMES][4][4]);
+
 /**
  * @brief Position Jacobian J = dx/dq of the tip (3 x 3, row-major, J[i][j] = d x_i / d q_j).
  * @return RRR_OK or RRR_BAD_INPUT
