@@ -16,11 +16,6 @@ def wrap(a: np.ndarray) -> np.ndarray:
     return (a + np.pi) % (2 * np.pi) - np.pi
 
 
-@pytest.fixture(scope="module")
-def model() -> rr.Model:
-    return rr.Model.default()
-
-
 def test_fk_batch_matches_single(model: rr.Model) -> None:
     qs = RNG.uniform(-np.pi, np.pi, (50, 3))
     xs, rots = model.fk(qs)

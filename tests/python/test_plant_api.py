@@ -21,11 +21,6 @@ Q0 = np.array([0.1, 0.4, 1.0])
 H = 1e-3
 
 
-@pytest.fixture(scope="module")
-def model() -> rr.Model:
-    return rr.Model.default()
-
-
 def test_snapshot_restore_reruns_bit_for_bit(model) -> None:
     plant = rr.Plant(model, q0=Q0)
     for _ in range(50):

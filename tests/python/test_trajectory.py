@@ -20,11 +20,6 @@ def wrap(a: np.ndarray) -> np.ndarray:
 
 
 @pytest.fixture(scope="module")
-def model() -> rr.Model:
-    return rr.Model.default()
-
-
-@pytest.fixture(scope="module")
 def ref(model: rr.Model) -> tr.Reference:
     return tr.make_reference(model)
 

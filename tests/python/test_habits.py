@@ -1,0 +1,36 @@
+"""The repository's habits: the licence that pyproject declares is the LICENSE file's, the
+pre-commit hooks run the checks of the test command, CONTRIBUTING names the fast subset."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_the_license_file_is_the_declared_one() -> None:
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["license"]
+    assert declared == {"text": "BSD-3-Clause"}
+    text = (ROOT / "LICENSE").read_text()
+    assert text.startswith("BSD 3-Clause License\n")
+    assert "Neither the name of the copyright holder" in text
+
+
+def test_pre_commit_runs_what_the_test_command_checks() -> None:
+    hooks = (ROOT / ".pre-commit-config.yaml").read_text()
+    script = (ROOT / "scripts" / "run_tests.sh").read_text()
+    entries = [line.split("entry:", 1)[1].strip() for line in hooks.splitlines()
+               if line.strip().startswith("entry:")]
+    assert sorted(e.split()[0] for e in entries) == ["lint-imports", "mypy", "ruff"]
+    for entry in entries:
+        assert entry in script, f"pre-commit runs {entry!r}, the test command does not"
+
+
+def test_contributing_names_the_fast_subset_and_the_markers() -> None:
+    text = (ROOT / "CONTRIBUTING.md").read_text()
+    assert 'python -m pytest -m "not slow" tests/python' in text
+    markers = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"][
+        "ini_options"]["markers"]
+    for marker in markers:
+        assert f"`{marker.split(':')[0]}`" in text
