@@ -143,7 +143,7 @@ static PyObject *empty_of_shape(int rank, const Py_ssize_t *shape)
 static PyObject *new_array(int batch, Py_ssize_t n, int nd, const Py_ssize_t *dims,
                            double **data)
 {
-    Py_ssize_t shape[3];
+    Py_ssize_t shape[4];
     int rank = 0;
     if (batch) {
         shape[rank++] = n;
@@ -629,6 +629,13 @@ static rrr_status row_fk(const rrr_model *m, const void *ctx, const double *cons
     return rrr_fk(m, in[0], out[0], M33(out[1]));
 }
 
+static rrr_status row_fk_frames(const rrr_model *m, const void *ctx, const double *const *in,
+                                double *const *out)
+{
+    (void)ctx;
+    return rrr_fk_frames(m, in[0], (double(*)[4][4])(void *)out[0]);
+}
+
 static rrr_status row_jacobian(const rrr_model *m, const void *ctx, const double *const *in,
                                double *const *out)
 {
@@ -805,8 +812,8 @@ typedef struct {
     const char *in_names[MAX_IN];
     const char *joined;           /* "q, qd, qdd" in a row's message; NULL: "q = ..., qd = ..." */
     int n_out;
-    int out_nd[MAX_OUT];          /* rank of one row's output: 0 (a number), 1 or 2 */
-    Py_ssize_t out_dims[MAX_OUT][2];
+    int out_nd[MAX_OUT];          /* rank of one row's output: 0 (a number), 1, 2 or 3 */
+    Py_ssize_t out_dims[MAX_OUT][3];
 } map_spec;
 
 static Py_ssize_t out_size(const map_spec *s, int j)
@@ -989,6 +996,8 @@ static void Kernels_dealloc(PyObject *op)
 
 static const map_spec S_FK = {"fk", "rrr_fk", row_fk, 1, {"q"}, "q",
                               2, {1, 2}, {{NJ, 0}, {NJ, NJ}}};
+static const map_spec S_FK_FRAMES = {"fk_frames", "rrr_fk_frames", row_fk_frames, 1, {"q"}, "q",
+                                     1, {3}, {{RRR_NFRAMES, 4, 4}}};
 static const map_spec S_JACOBIAN = {"jacobian", "rrr_jacobian", row_jacobian, 1, {"q"}, "q",
                                     1, {2}, {{NJ, NJ}}};
 static const map_spec S_TIP_MOTION = {"tip_motion", "rrr_tip_motion", row_tip_motion,
@@ -1056,6 +1065,7 @@ static PyObject *map_method(PyObject *self, const map_spec *s, PyObject *const *
     }
 
 MAP_METHOD(fk, S_FK)
+MAP_METHOD(fk_frames, S_FK_FRAMES)
 MAP_METHOD(jacobian, S_JACOBIAN)
 MAP_METHOD(tip_motion, S_TIP_MOTION)
 MAP_METHOD(joint_motion, S_JOINT_MOTION)
@@ -1506,6 +1516,7 @@ static PyObject *K_plant_accel(PyObject *self, PyObject *const *args, Py_ssize_t
 
 static PyMethodDef Kernels_methods[] = {
     FASTCALL(fk, "fk(q) -> (x, R)"),
+    FASTCALL(fk_frames, "fk_frames(q) -> T (4, 4, 4): DH frames 0..3 in frame 0"),
     FASTCALL(jacobian, "jacobian(q) -> J"),
     FASTCALL(tip_motion, "tip_motion(q, qd, qdd) -> (xd, xdd)"),
     FASTCALL(joint_motion, "joint_motion(q, xd, xdd) -> (qd, qdd)"),

@@ -253,6 +253,78 @@ static void test_singular_and_bad(const rrr_model *m)
     CHECK(qk[0] == 7.0);
 }
 
+/* out = a b for 4 x 4 transforms */
+static void mul44(const double a[4][4], const double b[4][4], double out[4][4])
+{
+    for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) {
+            out[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j] +
+                        a[i][3] * b[3][j];
+        }
+    }
+}
+
+/* The standard DH transform Rz(theta) Tz(d) Tx(a) Rx(alpha), built as the URDF builds the chain:
+ * the joint's rotation about z, then the fixed placement of the next joint. */
+static void dh44(double theta, double d, double a, double alpha, double T[4][4])
+{
+    const double ct = cos(theta), st = sin(theta), ca = cos(alpha), sa = sin(alpha);
+    const double rz[4][4] = {{ct, -st, 0, 0}, {st, ct, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    const double fixed[4][4] = {{1, 0, 0, a}, {0, ca, -sa, 0}, {0, sa, ca, d}, {0, 0, 0, 1}};
+    mul44(rz, fixed, T);
+}
+
+/* rrr_fk_frames against a generic DH chain (the URDF's joint/placement product) and rrr_fk */
+static void test_fk_frames(const rrr_model *m, rrr_rng *rng)
+{
+    const double d[3] = {m->d1, m->d2, m->d3}, a[3] = {0.0, m->a2, m->a3};
+    const double alpha[3] = {PI / 2.0, 0.0, 0.0};
+    for (int n = 0; n < 1000; ++n) {
+        const double q[3] = {rrr_rng_uniform(rng, -4.0, 4.0), rrr_rng_uniform(rng, -4.0, 4.0),
+                             rrr_rng_uniform(rng, -4.0, 4.0)};
+        double T[RRR_NFRAMES][4][4];
+        memset(T, 0xff, sizeof T); /* NaN everywhere: every entry must be written */
+        CHECK_STATUS(rrr_fk_frames(m, q, T), RRR_OK);
+        double chain[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+        for (int k = 0; k < RRR_NFRAMES; ++k) {
+            if (k > 0) {
+                double step[4][4], next[4][4];
+                dh44(q[k - 1], d[k - 1], a[k - 1], alpha[k - 1], step);
+                mul44((const double(*)[4])chain, (const double(*)[4])step, next);
+                memcpy(chain, next, sizeof chain);
+            }
+            for (int i = 0; i < 4; ++i) {
+                for (int j = 0; j < 4; ++j) {
+                    CHECK_CLOSE(T[k][i][j], chain[i][j], 1e-15);
+                }
+            }
+            CHECK(T[k][3][0] == 0.0 && T[k][3][1] == 0.0 && T[k][3][2] == 0.0 &&
+                  T[k][3][3] == 1.0);
+        }
+        double x[3], R[3][3];
+        CHECK_STATUS(rrr_fk(m, q, x, R), RRR_OK);
+        for (int i = 0; i < 3; ++i) {
+            CHECK(T[3][i][3] == x[i]); /* the tool is rrr_fk, bit for bit */
+            for (int j = 0; j < 3; ++j) {
+                CHECK(T[3][i][j] == R[i][j]);
+            }
+        }
+    }
+    double T[RRR_NFRAMES][4][4];
+    memset(T, 0, sizeof T);
+    const double q_nan[3] = {0.1, NAN, 0.3}, q_inf[3] = {(double)INFINITY, 0.0, 0.0};
+    const double q_ok[3] = {0.1, 0.2, 0.3};
+    CHECK_STATUS(rrr_fk_frames(m, q_nan, T), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_fk_frames(m, q_inf, T), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_fk_frames(NULL, q_ok, T), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_fk_frames(m, NULL, T), RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_fk_frames(m, q_ok, NULL), RRR_BAD_INPUT);
+    CHECK(T[0][0][0] == 0.0 && T[3][3][3] == 0.0); /* untouched on error */
+    rrr_model bad = *m;
+    bad.a2 = 0.0;
+    CHECK_STATUS(rrr_fk_frames(&bad, q_ok, T), RRR_BAD_INPUT);
+}
+
 int main(void)
 {
     rrr_model m;
@@ -268,6 +340,8 @@ int main(void)
     m2.d2 = -0.2;
     m2.d3 = 0.05;
     test_ik_round_trip(&m2, &rng);
+    test_fk_frames(&m, &rng);
+    test_fk_frames(&m2, &rng);
     test_ik_nearest(&m);
     test_singular_and_bad(&m);
     return rrr_test_report("test_kinematics");

@@ -33,6 +33,7 @@ REF = _ctypes_kernels.Kernels(MODEL.raw)
 # voltages), x (tip targets, inside the workspace), X (tip velocity, acceleration)
 SIGNATURES: dict[str, tuple[str, ...]] = {
     "fk": ("q",),
+    "fk_frames": ("q",),
     "jacobian": ("q",),
     "tip_motion": ("q", "v", "v"),
     "joint_motion": ("q", "X", "X"),

@@ -38,6 +38,46 @@ rrr_status rrr_fk(const rrr_model *m, const double q[3], double x[3], double R[3
     return RRR_OK;
 }
 
+/* One homogeneous transform from a rotation (row-major) and a position. */
+static void set_frame(double T[4][4], const double R[3][3], const double p[3])
+{
+    for (int i = 0; i < 3; ++i) {
+        T[i][0] = R[i][0];
+        T[i][1] = R[i][1];
+        T[i][2] = R[i][2];
+        T[i][3] = p[i];
+        T[3][i] = 0.0;
+    }
+    T[3][3] = 1.0;
+}
+
+rrr_status rrr_fk_frames(const rrr_model *m, const double q[3], double T[RRR_NFRAMES][4][4])
+{
+    if (m == NULL || q == NULL || T == NULL || !rrr_finite_n(q, 3) || !kin_ok(m)) {
+        return RRR_BAD_INPUT;
+    }
+    const double s1 = sin(q[0]), c1 = cos(q[0]);
+    const rrr_trig t = rrr_trig_of(q);
+    const double R0[3][3] = {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}};
+    const double p0[3] = {0.0, 0.0, 0.0};
+    /* frame 1: Rz(q1) Tz(d1) Rx(pi/2) */
+    const double R1[3][3] = {{c1, 0.0, s1}, {s1, 0.0, -c1}, {0.0, 1.0, 0.0}};
+    const double p1[3] = {0.0, 0.0, m->d1};
+    /* frame 2: frame 1 Rz(q2) Tz(d2) Tx(a2) */
+    const double r2 = m->a2 * t.c2;
+    const double R2[3][3] = {{c1 * t.c2, -c1 * t.s2, s1}, {s1 * t.c2, -s1 * t.s2, -c1},
+                             {t.s2, t.c2, 0.0}};
+    const double p2[3] = {c1 * r2 + m->d2 * s1, s1 * r2 - m->d2 * c1, m->a2 * t.s2 + m->d1};
+    /* frame 3, the tool: frame 2 Rz(q3) Tz(d3) Tx(a3), written as rrr_fk writes it */
+    double p3[3], R3[3][3];
+    (void)rrr_fk(m, q, p3, R3);
+    set_frame(T[0], R0, p0);
+    set_frame(T[1], R1, p1);
+    set_frame(T[2], R2, p2);
+    set_frame(T[3], (const double(*)[3])R3, p3);
+    return RRR_OK;
+}
+
 rrr_status rrr_jacobian(const rrr_model *m, const double q[3], double J[3][3])
 {
     if (m == NULL || q == NULL || J == NULL || !rrr_finite_n(q, 3) || !kin_ok(m)) {

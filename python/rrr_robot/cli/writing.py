@@ -53,13 +53,16 @@ def _cmd_writing(args: argparse.Namespace) -> int:
         out=Path(args.out), text=_text(args.text), scenarios=args.scenario or list(BUILTIN),
         robot=Path(args.robot) if args.robot else WritingJob.robot, scale=args.scale,
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
-        engine=args.engine, animate=args.animate, fps=args.fps,
+        engine=args.engine, animate=args.animate, fps=args.fps, mcap=args.mcap,
+        view=args.view,
     )
     with Bars(shown(quiet(args))) as bars:
         summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
     figures = ", figures" if job.figures else ""
+    figures += ", <scenario>.mcap" if job.mcap else ""
+    figures += ", view.html" if job.view else ""
     animations = sorted({Path(f).suffix for f in summary["files"] if f.startswith("anim_")})
     if animations:
         figures += f", anim_<scenario>{animations[0]}"
@@ -127,5 +130,13 @@ def register_cli(subparsers: Any) -> None:
     p_w.add_argument("--fps", type=_fps, default=15.0, metavar="F",
                      help="frames per simulated second of --animate (default 15); an animation "
                      "has at most 3000 frames: lower it for long texts")
+    p_w.add_argument("--mcap", action="store_true",
+                     help="also write <scenario>.mcap: the run as ROS 2 messages (/joint_states, "
+                     "/tf, /robot_description, the reference, the tip path, the voltages) for "
+                     "Foxglove, Lichtblick, Rerun or ros2 bag (needs pip install "
+                     "'rrr_robot[mcap]'; docs/viewing.md)")
+    p_w.add_argument("--view", action="store_true",
+                     help="also write view.html: the runs in a browser, the arm moving with a "
+                     "time slider beside its signals (rrr view; docs/viewing.md)")
     add_verbosity_arguments(p_w)
     p_w.set_defaults(func=_cmd_writing)

@@ -43,6 +43,9 @@ class Kernels:
         x, rot = self._rowwise("rrr_fk", [qs], [(3,), (3, 3)], "q")
         return (x, rot) if batch else (x[0], rot[0])
 
+    def fk_frames(self, q: ArrayLike, /) -> FloatArray:
+        return self._map1("rrr_fk_frames", q, "q", (4, 4, 4))
+
     def jacobian(self, q: ArrayLike, /) -> FloatArray:
         return self._map1("rrr_jacobian", q, "q", (3, 3))
 

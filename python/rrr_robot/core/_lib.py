@@ -151,6 +151,7 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_model_validate": [_M, _P(ct.c_char_p)],
     "rrr_bps_from_inertia": [_M, _P(RawInertial), _D],
     "rrr_fk": [_M, _D, _D, _D],
+    "rrr_fk_frames": [_M, _D, _D],
     "rrr_jacobian": [_M, _D, _D],
     "rrr_tip_motion": [_M, _D, _D, _D, _D, _D],
     "rrr_joint_motion": [_M, _D, _D, _D, _D, _D],
@@ -195,6 +196,7 @@ _TABLE_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "rrr_param_get": ([_M, ct.c_size_t], ct.c_double),
     "rrr_param_in_range": ([ct.c_size_t, ct.c_double], ct.c_int),
     "rrr_sample_time_default": ([], ct.c_double),
+    "rrr_version": ([], ct.c_char_p),
 }
 
 def library_path() -> Path:
@@ -232,6 +234,12 @@ def sample_time_default() -> float:
     """RRR_SAMPLE_TIME_DEFAULT (rrr_control.h), s: the control period of the FMUs' default
     experiment, of the CAN bench and of a robot file without [control] sample_time."""
     return float(LIB.rrr_sample_time_default())
+
+
+def library_version() -> str:
+    """The version librrr reports (``rrr_version``: its RRR_VERSION_STRING), which equals
+    ``rrr_robot.__version__`` for the library the package was built with."""
+    return bytes(LIB.rrr_version()).decode("ascii")
 
 
 def param_table() -> list[RawParamInfo]:

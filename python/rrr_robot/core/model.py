@@ -48,6 +48,7 @@ else:  # built without the Python headers: no _ext
 DH_KEYS = ("d1", "a2", "a3", "d2", "d3")
 SHOULDER = {"front": 0, "back": 1}
 ELBOW = {"up": 0, "down": 1}
+#: The packaged default robot file (``Model.default()`` reads it).
 DEFAULT_ROBOT_TOML = DATA_DIR / "default_robot.toml"
 
 
@@ -127,7 +128,7 @@ class Model:
     @classmethod
     def from_toml(cls, path: str | Path) -> Model:
         """Read a robot file in the format of data/default_robot.toml (every table checked once
-        by :func:`rrr_robot.core.robot_file.read_robot_data`; RobotFileError names the file, the
+        by ``rrr_robot.core.robot_file.read_robot_data``; RobotFileError names the file, the
         table and the key). :func:`rrr_robot.core.robot.read_robot_file` gives the other tables
         as well."""
         return cls(read_robot_data(path).raw_model(), validate=False)
@@ -229,6 +230,13 @@ class Model:
     def fk(self, q: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Tip position (3,) and orientation (3, 3) (eqs 3-5); (n, 3), (n, 3, 3) for batches."""
         return self._k.fk(q)
+
+    def fk_frames(self, q: ArrayLike) -> FloatArray:
+        """Every DH frame in frame 0 as 4 x 4 homogeneous transforms, shape (4, 4, 4) (frames
+        0..3; frame 3 is the tool, equal to :meth:`fk` bit for bit) or (n, 4, 4, 4) for a batch.
+        The URDF's ``link<k>`` (:func:`~rrr_robot.core.urdf.robot_urdf`) is frame k-1 turned
+        by q_k about its z."""
+        return self._k.fk_frames(q)
 
     def jacobian(self, q: ArrayLike) -> FloatArray:
         """Position Jacobian dx/dq (3, 3) or (n, 3, 3)."""

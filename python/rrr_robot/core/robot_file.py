@@ -206,7 +206,7 @@ class RobotData:
 
     def tables(self) -> dict[str, dict[str, Any]]:
         """The file's tables as checked (numbers as floats, arrays as lists), ready for
-        :func:`write_toml`."""
+        ``write_toml``."""
         out: dict[str, dict[str, Any]] = {}
         for table, groups in PARAM_TABLES.items():
             if table == "base_parameters" and self.links is not None:

@@ -32,6 +32,7 @@ __all__ = [
     "TABLE_FORMATS",
     "check_table_format",
     "read_csv_table",
+    "read_table",
     "write_csv",
     "write_parquet",
     "write_table",
@@ -132,3 +133,20 @@ def read_csv_table(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
     if data.size == 0:
         data = data.reshape(0, len(names))
     return {name: data[:, k] for k, name in enumerate(names)}
+
+
+def read_table(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
+    """A table written by :func:`write_table`, by its suffix (``.parquet``: pyarrow; otherwise
+    CSV), as name -> float64 column; BadInputError for a file that is not such a table."""
+    if Path(path).suffix == ".parquet":
+        _, pq = _pyarrow()
+        try:
+            table = pq.read_table(str(path))
+        except (OSError, ValueError) as exc:
+            raise BadInputError(f"{path}: not a Parquet table ({exc})") from None
+        return {name: table.column(name).to_numpy().astype(np.float64)
+                for name in table.column_names}
+    try:
+        return read_csv_table(path)
+    except ValueError as exc:
+        raise BadInputError(f"{path}: not a table of numbers ({exc})") from None

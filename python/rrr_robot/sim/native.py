@@ -116,10 +116,12 @@ def _run_in_parts(n: int, options: CosimOptions, args: tuple[Any, ...], t: Float
 
 def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
              x_ref: FloatArray, options: CosimOptions | None = None) -> CosimResult:
-    """The closed loop of :func:`run_cosim` in C, bit-identical to the FMUs' co-simulation.
+    """The closed loop of :func:`~rrr_robot.sim.cosim.run_cosim` in C, bit-identical to the
+    FMUs' co-simulation.
 
-    ``options`` as for :func:`run_cosim`; FMU files and the measurement/actuation hooks (a CAN
-    bench's quantisation) belong to the FMU engine and are refused here.
+    ``options`` as for :func:`~rrr_robot.sim.cosim.run_cosim`; FMU files and the
+    measurement/actuation hooks (a CAN bench's quantisation) belong to the FMU engine and are
+    refused here.
     """
     options = options if options is not None else CosimOptions()
     _check_reference(t, q_ref, qd_ref, qdd_ref, options.step)

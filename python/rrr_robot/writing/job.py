@@ -44,11 +44,29 @@ from .trajectory import (
 
 log = logging.getLogger(__name__)
 
+__all__ = [
+    "ENGINES",
+    "PAPER_RMS_U_C",
+    "PAPER_RMS_U_N",
+    "Prepared",
+    "WritingJob",
+    "controller_fmu_values",
+    "metrics",
+    "prepare",
+    "run_engine",
+    "run_writing",
+    "scenario_options",
+    "scenario_summary",
+    "writing_spec",
+]
+
 #: The engines of a writing job (WritingJob.engine).
 ENGINES = ("fmpy", "native")
 
-#: RMS voltages of the paper's eq 16 (real robot, PD + feedforward), V.
+#: RMS voltages of the paper's eq 16 (real robot, PD + feedforward), V: the feedforward part
+#: u_n of joints 1 to 3.
 PAPER_RMS_U_N = (0.25, 1.98, 0.78)
+#: The same for the PD part u_c.
 PAPER_RMS_U_C = (0.11, 0.24, 0.17)
 
 
@@ -70,6 +88,10 @@ class WritingJob:
     # an animation of the arm per scenario: None (none), "gif", "mp4" or "auto" (writing.animation)
     animate: str | None = None
     fps: float = FPS  # of the animations: frames per simulated second
+    # also <scenario>.mcap: the run as ROS 2 messages in MCAP (core.mcap_log; needs mcap)
+    mcap: bool = False
+    # also view.html: the runs in a browser (writing.view)
+    view: bool = False
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,
@@ -215,11 +237,17 @@ def run_writing(job: WritingJob,
         raise BadInputError(f"unknown engine {job.engine!r}: one of {', '.join(ENGINES)}")
     fmt = check_table_format(job.table_format)  # parquet without pyarrow fails here
     anim = None if job.animate is None else animation_format(job.animate)  # mp4: its package
+    if job.mcap:
+        from ..core.mcap_log import require_mcap
+
+        require_mcap()  # without the mcap package: refused before any run
     model, robot, scenarios, ref = prepare(job)
     if anim is not None:
         frame_indices(ref.t, job.fps)  # at most MAX_FRAMES frames: refused before any run
     for scn in scenarios:  # the output names, before anything runs
         check_name(f"{scn.name}.{fmt}")
+        if job.mcap:
+            check_name(f"{scn.name}.mcap")
         if anim is not None:
             check_name(f"anim_{scn.name}.{anim}")
     with ResultSet(job.out, kind="writing") as rs, \
@@ -243,6 +271,13 @@ def run_writing(job: WritingJob,
             start = time.perf_counter()
             res.write(rs.path(f"{scn.name}.{fmt}"), fmt)
             table_time += time.perf_counter() - start
+            if job.mcap:
+                from ..core.mcap_log import write_mcap
+
+                start = time.perf_counter()
+                write_mcap(rs.path(f"{scn.name}.mcap"), res.columns(), robot,
+                           metadata={"scenario": scn.name, "engine": job.engine})
+                log.info("%s.mcap: %.2f s", scn.name, time.perf_counter() - start)
             s = summary["scenarios"][scn.name] = scenario_summary(metrics(res))
             log.info("%s: %s", scn.name, _describe(s))
         log.info("%s tables: %.2f s", fmt, table_time)
@@ -278,6 +313,14 @@ def run_writing(job: WritingJob,
                 animate_result(rs.path(f"anim_{name}.{anim}"), model, ref, res, title=name,
                                fps=job.fps, fmt=anim, progress=frames)
             log.info("animations: %.2f s", time.perf_counter() - start)
+        if job.view:
+            from .view import view_html
+
+            start = time.perf_counter()
+            rs.write_text("view.html", view_html(
+                {name: res.columns() for name, res in results.items()}, robot,
+                f"rrr writing: {ref.spec.text!r}"))
+            log.info("view.html: %.2f s", time.perf_counter() - start)
         summary["files"] = sorted([*rs.names(), "summary.json"])
         summary = to_strict_json_value(summary)
         rs.write_text("summary.json", strict_json(summary) + "\n")

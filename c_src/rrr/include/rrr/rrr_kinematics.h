@@ -19,8 +19,15 @@ extern "C" {
  * (paper eq 6: "-" sign = elbow up, i.e. sin q3 <= 0; "+" sign = elbow down, sin q3 > 0).
  * The branch index is shoulder * 2 + elbow.
  */
-typedef enum rrr_shoulder { RRR_SHOULDER_FRONT = 0, RRR_SHOULDER_BACK = 1 } rrr_shoulder;
-typedef enum rrr_elbow { RRR_ELBOW_UP = 0, RRR_ELBOW_DOWN = 1 } rrr_elbow;
+typedef enum rrr_shoulder {
+    RRR_SHOULDER_FRONT = 0,      ///< r >= 0: the tip in front of the shoulder
+    RRR_SHOULDER_BACK = 1        ///< r < 0: the arm reaching back over the shoulder
+} rrr_shoulder;
+/** @brief The elbow branch (see rrr_shoulder): up is sin q3 <= 0, down sin q3 > 0. */
+typedef enum rrr_elbow {
+    RRR_ELBOW_UP = 0,            ///< sin q3 <= 0 (the "-" sign of eq 6)
+    RRR_ELBOW_DOWN = 1           ///< sin q3 > 0 (the "+" sign of eq 6)
+} rrr_elbow;
 
 /** @brief Every IK solution of one target. */
 typedef struct rrr_ik_set {
@@ -55,6 +62,22 @@ typedef struct rrr_singularity {
  * @return RRR_OK or RRR_BAD_INPUT
  */
 RRR_API rrr_status rrr_fk(const rrr_model *m, const double q[3], double x[3], double R[3][3]);
+
+/** Number of frames of rrr_fk_frames: DH frames 0..3 (frame 3 is the tool, the pen tip). */
+#define RRR_NFRAMES (RRR_NJ + 1)
+
+/**
+ * @brief Every DH frame of the chain and the tool pose, in frame 0 (for a TF tree or a viewer).
+ *
+ * T[k] is the homogeneous transform of DH frame k into frame 0 (row-major 4 x 4, last row
+ * 0 0 0 1): T[0] = I (the base), T[k] = T[k-1] Rz(q_k) Tz(d_k) Tx(a_k) Rx(alpha_k) with the DH
+ * table of docs/conventions.md, and T[3] the tool, whose rotation and position are those of
+ * rrr_fk bit for bit. The URDF link k (rrr urdf) is DH frame k-1 turned by q_k about its z.
+ * @param[out] T frames 0..3
+ * @return RRR_OK or RRR_BAD_INPUT (T untouched)
+ */
+RRR_API rrr_status rrr_fk_frames(const rrr_model *m, const double q[3],
+                                 double T[RRR_NFRAMES][4][4]);
 
 /**
  * @brief Position Jacobian J = dx/dq of the tip (3 x 3, row-major, J[i][j] = d x_i / d q_j).
