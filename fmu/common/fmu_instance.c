@@ -683,6 +683,17 @@ int fmu_allowed_state(fmu_instance *S, unsigned mask, const char *fn)
     return 0;
 }
 
+fmu_status fmu_check_tolerance(fmu_instance *S, const char *fn, int defined, double tolerance)
+{
+    if (defined && !(isfinite(tolerance) && tolerance > 0.0)) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: tolerance must be finite and > 0 when toleranceDefined is true, got %.17g",
+                fn, tolerance);
+        return FMU_ERROR;
+    }
+    return FMU_OK;
+}
+
 fmu_status fmu_setup_experiment(fmu_instance *S, const char *fn, double start, int stop_defined,
                                 double stop)
 {

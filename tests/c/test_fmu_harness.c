@@ -1464,7 +1464,14 @@ static void test_time_overflow(const fmu_api *plant)
     }
     const double t0 = 1.5e308;
     CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, (double)INFINITY, fmi2False, 0.0) == fmi2Error);
-    CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, t0, fmi2False, 0.0) == fmi2OK);
+    /* a defined tolerance must be finite and > 0; an undefined one is ignored */
+    log_clear(&p);
+    CHECK(plant->SetupExperiment(p.c, fmi2True, (double)NAN, 0.0, fmi2False, 0.0) == fmi2Error);
+    CHECK(strstr(p.log.last_error, "tolerance") != NULL);
+    CHECK(plant->SetupExperiment(p.c, fmi2True, -1.0, 0.0, fmi2False, 0.0) == fmi2Error);
+    CHECK(plant->SetupExperiment(p.c, fmi2True, (double)INFINITY, 0.0, fmi2False, 0.0) ==
+          fmi2Error);
+    CHECK(plant->SetupExperiment(p.c, fmi2False, (double)NAN, t0, fmi2False, 0.0) == fmi2OK);
     CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
     CHECK(plant->ExitInitializationMode(p.c) == fmi2OK);
     log_clear(&p);
