@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -38,6 +39,12 @@ def main() -> int:
         shutil.copytree(args.package, pkg, ignore=shutil.ignore_patterns("__pycache__", "*.so"))
         shutil.copy2(args.ext, pkg / "core" / args.ext.name)
         shutil.copy2(args.lib, pkg / "librrr.so")
+        # the version, as the wheel carries it (the staged copy is outside the source tree, so
+        # core/_version.py cannot read c_src/rrr/include/rrr/rrr_version.h beside it)
+        header = ROOT / "c_src" / "rrr" / "include" / "rrr" / "rrr_version.h"
+        version = re.findall(r'^#define RRR_VERSION_STRING "([^"]+)"$',
+                             header.read_text(encoding="utf-8"), re.M)
+        (pkg / "core" / "_build_version.py").write_text(f'version = "{version[0]}"\n')
         env = {**os.environ, "PYTHONPATH": tmp, "PYTHONDONTWRITEBYTECODE": "1"}
         env.pop("RRR_LIBRARY", None)
         where = subprocess.run(

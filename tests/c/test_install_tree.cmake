@@ -107,14 +107,18 @@ if(NOT libs MATCHES "-lrrr -lm")
 endif()
 
 # the documented pkg-config lines (README or docs/: the ```bash block that runs `pkg-config
-# --cflags --libs rrr`), run exactly as written by sh, with /opt/rrr replaced by this prefix,
+# --cflags --libs rrr` and builds examples/c_consumer/main.c; docs/c-library.md first), run
+# exactly as written by sh, with the prefix it installed into ($HOME/rrr or /opt/rrr) replaced
+# by this prefix,
 # in a folder with examples/c_consumer/main.c and no LD_LIBRARY_PATH: the rpath of rrr.pc
 # finds librrr.so.0
 set(block "")
 file(GLOB_RECURSE docs "${SOURCE}/docs/*.md")
-foreach(doc "${SOURCE}/README.md" ${docs})
+list(SORT docs)
+list(REMOVE_ITEM docs "${SOURCE}/docs/c-library.md")
+foreach(doc "${SOURCE}/docs/c-library.md" ${docs} "${SOURCE}/README.md")
   file(READ "${doc}" text)
-  string(REGEX MATCH "```bash\n(([^`]|`[^`])*pkg-config --cflags --libs rrr([^`]|`[^`])*)```"
+  string(REGEX MATCH "```bash\n(([^`]|`[^`])*pkg-config --cflags --libs rrr\\) -o ([^`]|`[^`])*)```"
          _ "${text}")
   if(CMAKE_MATCH_1)
     set(block "${CMAKE_MATCH_1}")
@@ -126,10 +130,16 @@ if(NOT block)
   message(FATAL_ERROR "no ```bash block with `pkg-config --cflags --libs rrr` in README.md or "
                       "docs/")
 endif()
-if(NOT block MATCHES "/opt/rrr")
-  message(FATAL_ERROR "the pkg-config block of ${block_doc} does not use the prefix /opt/rrr")
+if(NOT block MATCHES "examples/c_consumer/main.c")
+  message(FATAL_ERROR "the pkg-config block of ${block_doc} does not build examples/c_consumer")
 endif()
-string(REPLACE "/opt/rrr" "${prefix}" script "${block}")
+if(block MATCHES "\\$HOME/rrr")
+  string(REPLACE "$HOME/rrr" "${prefix}" script "${block}")
+elseif(block MATCHES "/opt/rrr")
+  string(REPLACE "/opt/rrr" "${prefix}" script "${block}")
+else()
+  message(FATAL_ERROR "the pkg-config block of ${block_doc} uses neither $HOME/rrr nor /opt/rrr")
+endif()
 set(demo "${WORK}/demo")
 file(MAKE_DIRECTORY "${demo}/examples/c_consumer")
 file(COPY "${SOURCE}/examples/c_consumer/main.c" DESTINATION "${demo}/examples/c_consumer")
