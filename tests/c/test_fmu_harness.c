@@ -2402,8 +2402,8 @@ static void test_me_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
 /* Samples of the table in <resources>/reference.csv (resources = "file://<dir>"). */
 static size_t table_samples(const char *resources)
 {
-    char path[1100];
-    snprintf(path, sizeof path, "%s/reference.csv", resources + strlen("file://"));
+    char path[4096];
+    snprintf(path, sizeof path, "%.4000s/reference.csv", resources + strlen("file://"));
     FILE *f = fopen(path, "r");
     size_t lines = 0;
     int c, last = '\n';
