@@ -4,9 +4,10 @@
 # aarch64 Linux binaries and the aarch64 bench nodes under qemu-user), the same CTest on the
 # README's default build (Release), ruff,
 # the Python package's import layers (lint-imports) and types (mypy), pytest (including the
-# generated-code checks, the CAN bench over SocketCAN in a QEMU guest), and a short libFuzzer run
-# on the CAN frame decoders. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium and clang
-# are installed with apt-get when missing and root.
+# generated-code checks, the CAN bench over SocketCAN in a QEMU guest), and short libFuzzer runs
+# on the CAN frame decoders and on forged FMU states (each FMU). mingw-w64, wine,
+# gcc-aarch64-linux-gnu, qemu-user, chromium and clang are installed with apt-get when missing
+# and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -128,11 +129,19 @@ if ! fuzzer_ok; then
     exit 1
   fi
 fi
-cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_BUILD_TESTS=OFF -DRRR_WERROR=ON \
+cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_FMU_FUZZ=ON \
+  -DRRR_BUILD_TESTS=OFF -DRRR_WERROR=ON -DRRR_FMU_WINDOWS=OFF -DRRR_FMU_AARCH64=OFF \
   -DCMAKE_BUILD_TYPE=Debug -DPython3_EXECUTABLE="$(command -v python)" >/dev/null
-cmake --build build-fuzz --target fuzz_hil_decode -j "$JOBS"
+cmake --build build-fuzz --target fuzz_hil_decode fuzz_fmu_state_plant fuzz_fmu_state_controller \
+  fuzz_fmu_state_reference -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
+echo "== libFuzzer on forged FMU states with valid checksums (each FMU, FMI 2 and 3; short run) =="
+for model in plant controller reference; do
+  mkdir -p "build-fuzz/corpus_$model"
+  build-fuzz/fmu/fuzz_fmu_state_$model -max_total_time="${RRR_FMU_FUZZ_SECONDS:-15}" -max_len=89 \
+    -print_final_stats=1 "build-fuzz/corpus_$model" 2>&1 | tail -n 4
+done
 echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, the manual, pytest, the" \
      "benchmarks' quick modes, libFuzzer) =="

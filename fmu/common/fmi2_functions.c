@@ -184,8 +184,9 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     TRACE("fmi2SetupExperiment(toleranceDefined=%d, tolerance=%.17g, startTime=%.17g, "
           "stopTimeDefined=%d, stopTime=%.17g)",
           (int)toleranceDefined, tolerance, startTime, (int)stopTimeDefined, stopTime);
-    (void)toleranceDefined; /* no iteration inside the model: nothing to tighten */
-    (void)tolerance;
+    /* no iteration inside the model: nothing to tighten, but a defined tolerance is checked */
+    CHECKED(fmu_check_tolerance(S, "fmi2SetupExperiment", toleranceDefined != fmi2False,
+                                tolerance));
     CHECKED(fmu_setup_experiment(S, "fmi2SetupExperiment", startTime, stopTimeDefined != fmi2False,
                                  stopTime));
     END_FUNCTION()

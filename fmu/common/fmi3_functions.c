@@ -244,8 +244,8 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     TRACE("fmi3EnterInitializationMode(toleranceDefined=%d, tolerance=%.17g, startTime=%.17g, "
           "stopTimeDefined=%d, stopTime=%.17g)",
           (int)toleranceDefined, tolerance, startTime, (int)stopTimeDefined, stopTime);
-    (void)toleranceDefined; /* no iteration inside the model: nothing to tighten */
-    (void)tolerance;
+    /* no iteration inside the model: nothing to tighten, but a defined tolerance is checked */
+    CHECKED(fmu_check_tolerance(S, fn_, toleranceDefined, tolerance));
     CHECKED(fmu_setup_experiment(S, fn_, startTime, stopTimeDefined, stopTime));
     S->state = FMU_INIT_MODE;
     S->dirty = 1;

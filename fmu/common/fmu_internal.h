@@ -183,6 +183,13 @@ int fmu_allowed_state(fmu_instance *S, unsigned mask, const char *fn);
 fmu_status fmu_check_step(fmu_instance *S, const char *fn, double t, double h);
 
 /**
+ * @brief Check the tolerance of setup or initialization: when defined (a nonzero `defined`) it
+ *        must be finite and > 0 (the models iterate nothing, so its value is not used); an
+ *        undefined one is ignored, as the standard says. Logs and returns FMU_ERROR otherwise.
+ */
+fmu_status fmu_check_tolerance(fmu_instance *S, const char *fn, int defined, double tolerance);
+
+/**
  * @brief Check a start/stop time pair of setup or initialization, then store it and set the time.
  */
 fmu_status fmu_setup_experiment(fmu_instance *S, const char *fn, double start, int stop_defined,

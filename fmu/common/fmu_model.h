@@ -252,6 +252,11 @@ struct fmu_instance {
     /** Memory the model owns outside `data` (host.alloc; freed by the model's release hook):
      *  not part of FMU state snapshots, which hold `data` only. NULL until the model sets it. */
     void *work;
+    /** The payload (instance fields and data) of the last FMU state this instance validated in
+     *  full (host.alloc, glue-owned; NULL: none): a state with exactly these bytes is accepted
+     *  without validating it again (DeserializeFMUstate then SetFMUstate of the same bytes).
+     *  Forgotten at reset (the model's tables may change). */
+    unsigned char *valid_state;
 };
 
 /** @brief Log categories declared in the XML, indices of fmu_instance.log_mask bits. */

@@ -16,6 +16,15 @@
 
 #define MODEL_IDENTIFIER "rrr_plant"
 
+/** The step budget of one doStep: at most this many internal steps (adaptive: attempted steps;
+ *  fixed step: substeps, refused before any work), then Discard with the reason logged and the
+ *  state unchanged. About 7 evaluations each: at most about 0.3 s of work per doStep on a
+ *  desktop core (docs/limits.md). A plant the FMU accepts (RRR_PLANT_STIFFNESS_MAX) needs
+ *  about 3e5 steps per simulated second at most for stability, so a 1 ms step takes about 300;
+ *  the budget matters only for states far from the accepted ones (velocities of 1e6 rad/s
+ *  and more) and for long communication steps. */
+#define PLANT_FMU_MAX_STEPS 100000L
+
 /** Value references (= rows of the variable table in model.c). */
 typedef enum plant_vr {
     vr_u = 0,                                  ///< u[1..3], input, V

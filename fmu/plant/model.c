@@ -84,6 +84,7 @@ static fmu_status set_defaults(void *d)
     if (rrr_plant_integrator_default(&p->integ) != RRR_OK) {
         return FMU_ERROR;
     }
+    p->integ.max_steps = PLANT_FMU_MAX_STEPS;
     return FMU_OK;
 }
 
@@ -163,11 +164,11 @@ static fmu_status check_state(fmu_instance *inst, const void *data, fmu_state st
                               const char *fn)
 {
     const plant_data *p = data;
-    if (p->integ.max_steps != RRR_PLANT_MAX_STEPS_DEFAULT) {
+    if (p->integ.max_steps != PLANT_FMU_MAX_STEPS) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
                 "%s: the FMU state holds an integrator budget of %ld internal steps per doStep; "
                 "this FMU's is %ld",
-                fn, p->integ.max_steps, (long)RRR_PLANT_MAX_STEPS_DEFAULT);
+                fn, p->integ.max_steps, (long)PLANT_FMU_MAX_STEPS);
         return FMU_ERROR;
     }
     if (!isfinite(p->x.h_guess) || !(p->x.h_guess >= 0.0) || !isfinite(p->x.err_prev) ||

@@ -1923,7 +1923,19 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
                      "stopTime < startTime", "stopTime", NULL);
         expect_error(&x, plant->EnterInitializationMode(x.c, false, 0.0, 0.0, true, (double)INFINITY),
                      "stopTime Inf", "stopTime", NULL);
+        /* a defined tolerance must be finite and > 0; an undefined one is ignored */
+        expect_error(&x, plant->EnterInitializationMode(x.c, true, (double)NAN, 0.0, false, 0.0),
+                     "tolerance NaN", "tolerance", NULL);
+        expect_error(&x, plant->EnterInitializationMode(x.c, true, (double)INFINITY, 0.0, false,
+                                                        0.0),
+                     "tolerance Inf", "tolerance", NULL);
+        expect_error(&x, plant->EnterInitializationMode(x.c, true, -1e-6, 0.0, false, 0.0),
+                     "tolerance < 0", "tolerance", NULL);
+        expect_error(&x, plant->EnterInitializationMode(x.c, true, 0.0, 0.0, false, 0.0),
+                     "tolerance 0", "tolerance", NULL);
         check_state(&x, ST_INST, "after refused enterInitializationMode arguments");
+        CHECK(plant->EnterInitializationMode(x.c, false, (double)NAN, 0.0, true, 2 * H) == fmi3OK);
+        CHECK(plant->Reset(x.c) == fmi3OK);
         CHECK(plant->EnterInitializationMode(x.c, true, 1e-6, 0.0, true, 2 * H) == fmi3OK);
         CHECK(plant->ExitInitializationMode(x.c) == fmi3OK);
         CHECK(do_step(&x, 0.0, H, NULL) == fmi3OK);

@@ -37,6 +37,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "fmi2FunctionTypes.h"
@@ -1463,7 +1464,14 @@ static void test_time_overflow(const fmu_api *plant)
     }
     const double t0 = 1.5e308;
     CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, (double)INFINITY, fmi2False, 0.0) == fmi2Error);
-    CHECK(plant->SetupExperiment(p.c, fmi2False, 0.0, t0, fmi2False, 0.0) == fmi2OK);
+    /* a defined tolerance must be finite and > 0; an undefined one is ignored */
+    log_clear(&p);
+    CHECK(plant->SetupExperiment(p.c, fmi2True, (double)NAN, 0.0, fmi2False, 0.0) == fmi2Error);
+    CHECK(strstr(p.log.last_error, "tolerance") != NULL);
+    CHECK(plant->SetupExperiment(p.c, fmi2True, -1.0, 0.0, fmi2False, 0.0) == fmi2Error);
+    CHECK(plant->SetupExperiment(p.c, fmi2True, (double)INFINITY, 0.0, fmi2False, 0.0) ==
+          fmi2Error);
+    CHECK(plant->SetupExperiment(p.c, fmi2False, (double)NAN, t0, fmi2False, 0.0) == fmi2OK);
     CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
     CHECK(plant->ExitInitializationMode(p.c) == fmi2OK);
     log_clear(&p);
@@ -2394,8 +2402,8 @@ static void test_me_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
 /* Samples of the table in <resources>/reference.csv (resources = "file://<dir>"). */
 static size_t table_samples(const char *resources)
 {
-    char path[1100];
-    snprintf(path, sizeof path, "%s/reference.csv", resources + strlen("file://"));
+    char path[4096];
+    snprintf(path, sizeof path, "%.4000s/reference.csv", resources + strlen("file://"));
     FILE *f = fopen(path, "r");
     size_t lines = 0;
     int c, last = '\n';
@@ -2473,6 +2481,62 @@ static void test_forged_states(const fmu_api *api, const forge_case *cases, size
     inst_free(&x);
     printf("%s: %zu of %zu forged FMU states with valid checksums refused, naming the field\n",
            api->id, refused, n_cases);
+}
+
+/* A state the checks cannot refuse (every field finite and in range) but far from any motion
+ * the arm makes: joint velocities of 1e3 to 1e12 rad/s, whose Coriolis terms make the plant
+ * arbitrarily stiff. Integrated at a bounded cost: doStep ends within its step budget
+ * (PLANT_FMU_MAX_STEPS internal steps) with OK or a Discard that says why, the state kept. */
+static double now_s(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static void test_forged_fast_state(const fmu_api *api)
+{
+    inst x;
+    if (inst_new(&x, api, "forged_fast")) {
+        return;
+    }
+    CHECK(drive(&x, ST_DONE) == 0);
+    size_t n = 0;
+    unsigned char *good = state_bytes(&x, &n);
+    if (good == NULL || !forge_layout_ok(n, sizeof(forge_plant))) {
+        CHECK(0 && "plant FMU state layout");
+        free(good);
+        inst_free(&x);
+        return;
+    }
+    double worst = 0.0;
+    int discarded = 0;
+    for (double qd = 1e3; qd <= 1e12; qd *= 1e3) {
+        forge_f64(good, FORGE_PLANT(x.qd[1]), qd);
+        forge_f64(good, FORGE_PLANT(x.qd[2]), -qd);
+        forge_reseal(good, n);
+        fmi2FMUstate s = NULL;
+        CHECK(api->DeSerializeFMUstate(x.c, (const fmi2Byte *)good, n, &s) == fmi2OK);
+        CHECK(api->SetFMUstate(x.c, s) == fmi2OK);
+        log_clear(&x);
+        const double t0 = now_s();
+        const fmi2Status st = api->DoStep(x.c, H, H, fmi2True);
+        const double took = now_s() - t0;
+        worst = took > worst ? took : worst;
+        CHECK(st == fmi2OK || st == fmi2Discard);
+        if (st == fmi2Discard) {
+            ++discarded;
+            CHECK(strstr(x.log.last, "internal steps") != NULL ||
+                  strstr(x.log.last, "failed") != NULL);
+        }
+        CHECK(api->SetFMUstate(x.c, s) == fmi2OK); /* out of StepFailed, if it failed */
+        CHECK(api->FreeFMUstate(x.c, &s) == fmi2OK);
+    }
+    printf("rrr_plant: forged velocities up to 1e12 rad/s: every doStep within %.3f s (%d "
+           "discarded within the step budget)\n", worst, discarded);
+    CHECK(worst < 30.0); /* the budget, under ASan on a loaded machine; about 0.3 s natively */
+    free(good);
+    inst_free(&x);
 }
 
 /* The reference: its cases for the FMU's own table, another table's hash, and a cursor that is
@@ -2831,6 +2895,7 @@ int main(int argc, char **argv)
     test_forged_states(&ctrl, forge_controller_cases,
                        sizeof forge_controller_cases / sizeof forge_controller_cases[0],
                        sizeof(forge_controller));
+    test_forged_fast_state(&plant);
     test_two_instances(&plant);
     test_logging(&plant);
     test_logging(&ctrl);

@@ -170,12 +170,17 @@ def _libcosim(arch: SspArchive, work: Path, real_time: bool, progress: Progress)
         return Signals(res["t"], values, float(res["wall_time"]), details)
 
 
+#: seconds the libcosim child has to end after SIGTERM before it is killed (libcosim acts on no
+#: signal during a call): a run stops within about this long of Ctrl-C or SIGTERM
+CHILD_STOP_GRACE = 1.0
+
+
 def _stop(child: subprocess.Popen[str]) -> None:
-    """End the child now if it still runs (SIGTERM, then SIGKILL after a second)."""
+    """End the child now if it still runs (SIGTERM, then SIGKILL after CHILD_STOP_GRACE)."""
     if child.poll() is None:
         child.terminate()
         try:
-            child.wait(timeout=1.0)
+            child.wait(timeout=CHILD_STOP_GRACE)
         except subprocess.TimeoutExpired:
             child.kill()
             child.wait()
