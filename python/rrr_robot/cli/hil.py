@@ -180,7 +180,9 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
                                     spin_us=DEFAULT_SPIN_US if args.spin_us is None
                                     else args.spin_us)
             side = sides.run_bench(ref, ctrl_values, work, frame_log=NODE_FRAMES,
-                                   realtime=realtime, progress=progress)
+                                   realtime=realtime, progress=progress,
+                                   socketcan=args.channel if args.interface == "socketcan"
+                                   else None)
         else:  # controller: the controller FMU under FMPy against a plant node
             side = sides.run_controller_side(ref, ctrl_values, work, conn,
                                              frame_log=NODE_FRAMES, progress=progress)
@@ -319,6 +321,17 @@ def add_bus_arguments(p: argparse.ArgumentParser) -> None:
                    help="socketcand bus name, or the SocketCAN interface (default bench0)")
 
 
+def add_node_bus_arguments(p: argparse.ArgumentParser) -> None:
+    """The bus of both C nodes (``bench`` only)."""
+    g = p.add_argument_group("bus")
+    g.add_argument("--interface", default="socketcand", choices=["socketcand", "socketcan"],
+                   help="socketcand: the plant node serves the socketcand protocol on loopback "
+                   "TCP, the controller connects (no kernel CAN needed; the default); "
+                   "socketcan: both nodes on the SocketCAN interface --channel")
+    g.add_argument("--channel", default="vcan0",
+                   help="with --interface socketcan: the interface (default vcan0)")
+
+
 def add_result_arguments(p: argparse.ArgumentParser) -> None:
     """The files of a run beside summary.json: the frame log and the figures."""
     g = p.add_argument_group("results")
@@ -369,10 +382,12 @@ def register_cli(subparsers: Any) -> None:
     actions = p.add_subparsers(dest="side", metavar="ACTION", required=True)
 
     b = _action(actions, "bench", "the C controller node against the C plant node",
-                "Run the C controller node against the C plant node (socketcand transport; "
-                "lockstep, or --realtime) and write " + _RESULTS,
+                "Run the C controller node against the C plant node (socketcand transport, or "
+                "SocketCAN with --interface socketcan; lockstep, or --realtime) and write "
+                + _RESULTS,
                 "rrr hil bench --realtime --duration 20 --out results/hil-rt")
     add_reference_arguments(b)
+    add_node_bus_arguments(b)
     add_realtime_arguments(b)
     add_result_arguments(b)
     add_verbosity_arguments(b)

@@ -9,6 +9,7 @@ the DBC's quantisation). The Python plant is in :mod:`rrr_robot.hil.plant`.
 from __future__ import annotations
 
 import contextlib
+import errno
 import shutil
 import tempfile
 import time
@@ -31,6 +32,7 @@ from .nodes import (
     read_node_log,
     start_controller,
     start_plant,
+    wait_for_boot_up,
 )
 from .protocol import (
     NMT_OPERATIONAL,
@@ -261,17 +263,41 @@ def _optional_atomic(path: Path | None) -> Iterator[Path | None]:
             yield tmp
 
 
+@contextlib.contextmanager
+def _boot_up_watch(socketcan: str | None) -> Iterator[Any]:
+    """A python-can bus on ``socketcan`` that receives only HeartbeatPlant, opened before the
+    plant starts (None without SocketCAN)."""
+    if not socketcan:
+        yield None
+        return
+    import can
+
+    try:
+        bus = can.Bus(interface="socketcan", channel=socketcan,
+                      can_filters=[{"can_id": 0x702, "can_mask": 0x7FF, "extended": False}])
+    except (OSError, can.CanError) as exc:
+        hint = (" (this kernel has no AF_CAN: use the socketcand transport; docs/socketcan.md)"
+                if getattr(exc, "errno", None) == errno.EAFNOSUPPORT else "")
+        raise HilError(f"cannot open the SocketCAN interface {socketcan}: {exc}{hint}") from exc
+    try:
+        yield bus
+    finally:
+        bus.shutdown()
+
+
 def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
                 workdir: Path | None = None, timeout: float = 300.0,
                 controller_values: Mapping[str, float | bool] = {}, *,
                 frame_log: str | None = None, realtime: RealTime | None = None,
-                progress: Progress | None = None) -> BenchRun:
+                progress: Progress | None = None, socketcan: str | None = None) -> BenchRun:
     """Both C nodes in lockstep (or ``realtime``) over the socketcand transport (plant =
-    server). The plant starts at (q_ref[0], qd_ref[0]) on the default robot; the controller uses
-    the default robot and gains changed by ``controller_values`` (controller FMU names, e.g. a
-    scenario's). The logs go to ``workdir``: plant.csv, controller.csv, the controller node's
-    frame log ``frame_log`` (a file name; rrr_robot.hil.framelog) and, in real time,
-    latency_controller.csv and latency_plant.csv."""
+    server), or over the SocketCAN interface ``socketcan`` (e.g. vcan0; the controller starts
+    once the plant's boot-up heartbeat is on the bus). The plant starts at (q_ref[0],
+    qd_ref[0]) on the default robot; the controller uses the default robot and gains changed by
+    ``controller_values`` (controller FMU names, e.g. a scenario's). The logs go to
+    ``workdir``: plant.csv, controller.csv, the controller node's frame log ``frame_log`` (a
+    file name; rrr_robot.hil.framelog) and, in real time, latency_controller.csv and
+    latency_plant.csv."""
     own = workdir is None
     work = Path(tempfile.mkdtemp(prefix="rrr_hil_")) if workdir is None else Path(workdir)
     n = t.shape[0]
@@ -295,20 +321,24 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                 rt_ctrl += ["--latency-log", str(lat_c)]
                 rt_plant += ["--latency-log", str(lat_p)]
             start = time.perf_counter()
-            with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log,
-                             extra=rt_plant) as plant, \
-                    start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
-                                     log_csv=ctrl_log, frame_log=frames,
-                                     extra=[*controller_node_args(controller_values),
-                                            *rt_ctrl]) as ctrl:
-                cs = _wait(ctrl, timeout, LogProgress(ctrl_log, n, progress))
-                if cs["exit"] != 0:  # the plant would wait for a controller that is gone
-                    # the node that died first is the one to name: a controller whose plant
-                    # was killed ends with an error of its own
-                    dead = plant if plant.died() else ctrl
-                    plant.close()
-                    raise dead.failure("the CAN bench failed", failure_folder(work))
-                ps = plant.wait(timeout)
+            with _boot_up_watch(socketcan) as watch, \
+                    start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log,
+                                extra=rt_plant, socketcan=socketcan) as plant:
+                if watch is not None:
+                    wait_for_boot_up(watch, plant)
+                ctrl = start_controller(ref_csv, connect=f"127.0.0.1:{plant.port}",
+                                        log_csv=ctrl_log, frame_log=frames,
+                                        extra=[*controller_node_args(controller_values),
+                                               *rt_ctrl], socketcan=socketcan)
+                with ctrl:
+                    cs = _wait(ctrl, timeout, LogProgress(ctrl_log, n, progress))
+                    if cs["exit"] != 0:  # the plant would wait for a controller that is gone
+                        # the node that died first is the one to name: a controller whose
+                        # plant was killed ends with an error of its own
+                        dead = plant if plant.died() else ctrl
+                        plant.close()
+                        raise dead.failure("the CAN bench failed", failure_folder(work))
+                    ps = plant.wait(timeout)
             wall = time.perf_counter() - start
             if ps["exit"] != 0:
                 raise plant.failure("the CAN bench failed", failure_folder(work))

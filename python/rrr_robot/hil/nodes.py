@@ -15,6 +15,7 @@ import re
 import shutil
 import signal
 import subprocess
+import time
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -28,7 +29,7 @@ from ..core._package import PACKAGE_DIR
 from ..core.outputs import STAGING_PREFIX, atomic_open, atomic_write_text
 from ..core.param_names import param_index
 from ..sim.fmus import fmu_path
-from .protocol import PERIOD, HilError
+from .protocol import NMT_BOOT, PERIOD, HilError
 
 log = logging.getLogger(__name__)
 
@@ -44,8 +45,11 @@ __all__ = [
     "start_controller",
     "start_listening_controller",
     "start_plant",
+    "wait_for_boot_up",
 ]
 
+#: HeartbeatPlant's identifier (0x700 + node id 2, rrr_bench.dbc).
+_HEARTBEAT_PLANT = 0x702
 _REF_HEADER = ["t"] + [f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref") for i in (1, 2, 3)]
 
 
@@ -257,14 +261,18 @@ def set_args(values: Mapping[str, float | bool]) -> list[str]:
 def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0, 0.0),
                 qd0: Sequence[float] = (0.0, 0.0, 0.0), values: Mapping[str, float] = {},
                 log_csv: Path | None = None, extra: Sequence[str] = (),
-                fmu: Path | None = None, frame_log: Path | None = None) -> NodeProcess:
+                fmu: Path | None = None, frame_log: Path | None = None,
+                socketcan: str | None = None) -> NodeProcess:
     """Start the C plant node as socketcand server on ``listen`` (port 0: any free port, read
-    back in ``.port``), on the plant FMU (default: the packaged one, unzipped to a temp dir);
-    ``frame_log``: its log of every frame (rrr_robot.hil.framelog)."""
+    back in ``.port``), or on the SocketCAN interface ``socketcan`` (e.g. vcan0: then wait for
+    its boot-up heartbeat with :func:`wait_for_boot_up` before starting a controller), on the
+    plant FMU (default: the packaged one, unzipped to a temp dir); ``frame_log``: its log of
+    every frame (rrr_robot.hil.framelog)."""
     from ..core.archives import extract_to_temp
 
     unzip = extract_to_temp(fmu or fmu_path("plant"), "FMU", prefix="rrr-fmu-")
-    args: list[str] = [str(node_executable("plant")), "--fmu", str(unzip), "--listen", listen,
+    link = ["--socketcan", socketcan] if socketcan else ["--listen", listen]
+    args: list[str] = [str(node_executable("plant")), "--fmu", str(unzip), *link,
                        "--q0", _vec(q0), "--qd0", _vec(qd0)]
     args += set_args(values)
     if log_csv is not None:
@@ -272,17 +280,22 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
     if frame_log is not None:
         args += ["--frame-log", str(frame_log)]
     try:
-        return NodeProcess("rrr_hil_plant", [*args, *extra], listening=True, cleanup=unzip)
+        return NodeProcess("rrr_hil_plant", [*args, *extra], listening=not socketcan,
+                           cleanup=unzip)
     except BaseException:
         shutil.rmtree(unzip, ignore_errors=True)
         raise
 
 
-def start_controller(reference_csv: Path, *, connect: str, log_csv: Path | None = None,
-                     extra: Sequence[str] = (), frame_log: Path | None = None) -> NodeProcess:
-    """Start the C controller node as socketcand client of ``connect`` (HOST:PORT)."""
-    args = [str(node_executable("controller")), "--reference", str(reference_csv),
-            "--connect", connect]
+def start_controller(reference_csv: Path, *, connect: str = "", log_csv: Path | None = None,
+                     extra: Sequence[str] = (), frame_log: Path | None = None,
+                     socketcan: str | None = None) -> NodeProcess:
+    """Start the C controller node as socketcand client of ``connect`` (HOST:PORT), or on the
+    SocketCAN interface ``socketcan``."""
+    if not socketcan and not connect:
+        raise ValueError("start_controller: give connect=HOST:PORT or socketcan=INTERFACE")
+    link = ["--socketcan", socketcan] if socketcan else ["--connect", connect]
+    args = [str(node_executable("controller")), "--reference", str(reference_csv), *link]
     if log_csv is not None:
         args += ["--log", str(log_csv)]
     if frame_log is not None:
@@ -334,3 +347,19 @@ def open_bus(interface: str = "socketcand", *, host: str = "127.0.0.1", port: in
     if interface == "socketcan":
         return can.Bus(interface="socketcan", channel=channel)
     raise ValueError(f"interface must be 'socketcand' or 'socketcan', got {interface!r}")
+
+
+def wait_for_boot_up(bus: Any, node: NodeProcess | None, timeout: float = 60.0) -> None:
+    """Wait for the plant's boot-up heartbeat (HeartbeatPlant, NMT state 0) on ``bus`` (a
+    python-can bus opened before the plant started): on SocketCAN a frame sent before a node
+    has bound its socket is lost to it, and the plant listens once it has sent this. HilError
+    when ``node`` ends first or nothing comes within ``timeout`` s."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        msg = bus.recv(timeout=0.2)
+        if (msg is not None and msg.arbitration_id == _HEARTBEAT_PLANT and len(msg.data) >= 1
+                and msg.data[0] == NMT_BOOT):
+            return
+        if node is not None and not node.running():
+            raise node.failure("the plant node ended before it was on the bus")
+    raise HilError(f"no boot-up heartbeat of the plant node within {timeout:g} s")

@@ -1,0 +1,120 @@
+"""The Python cases of test_socketcan_guest.py, run by ONE Python process inside the CAN test
+guest (Python starts slowly under emulation: its imports take many seconds there).
+
+    guest_python_sides.py OUT DURATION CHANNEL [UPTIME_AT_START]
+
+Runs, one after the other, on the SocketCAN interface CHANNEL, for DURATION seconds of the
+writing task (scenario ctc), each in a folder of OUT:
+
+- ``bench``: ``rrr hil bench --interface socketcan`` (both C nodes; summary, figures, frame log);
+- ``controller``: the C plant node on CHANNEL, then ``rrr hil controller --interface socketcan``
+  (the controller FMU under FMPy over python-can's socketcan interface) once the plant's
+  boot-up heartbeat is on the bus; the C plant's logs go to ``controller/node``;
+- ``plant``: ``rrr hil plant --interface socketcan`` (the plant FMU behind the C supervisor)
+  and the C controller node, started when the Python plant's boot-up heartbeat is on the bus;
+  the C controller's logs go to ``plant/node``.
+
+Writes OUT/cases.json: each case's exit statuses and seconds. The nodes' stdout and stderr go
+to files beside their logs.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import can
+from rrr_robot.cli.app import main as rrr
+from rrr_robot.hil.nodes import (
+    NodeProcess,
+    controller_node_args,
+    node_executable,
+    start_plant,
+    wait_for_boot_up,
+)
+from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
+
+
+def boot_up_bus(channel: str) -> can.BusABC:
+    return can.Bus(interface="socketcan", channel=channel,
+                   can_filters=[{"can_id": 0x702, "can_mask": 0x7FF, "extended": False}])
+
+
+def main(argv: list[str]) -> int:
+    out, duration, channel = Path(argv[0]), argv[1], argv[2]
+    t_start = time.monotonic()
+    cases: dict[str, Any] = {}
+    if len(argv) > 3:  # the guest's uptime when the process was started: the imports' time
+        cases["imports_s"] = float(Path("/proc/uptime").read_text().split()[0]) - float(argv[3])
+    common = ["--duration", duration, "--scenario", "ctc", "-q"]
+
+    t0 = time.monotonic()
+    rc = rrr(["hil", "bench", "--interface", "socketcan", "--channel", channel,
+              "--out", str(out / "bench"), *common])
+    cases["bench"] = {"rc": rc, "seconds": time.monotonic() - t0}
+
+    # the controller FMU against the C plant node on the bus
+    model, robot, scenarios, ref = prepare(WritingJob(out=out, scenarios=["ctc"]))
+    values = controller_fmu_values(scenarios[0], model, robot.require_control())
+    node = out / "controller" / "node"
+    node.mkdir(parents=True)
+    t0 = time.monotonic()
+    with boot_up_bus(channel) as watch, \
+            start_plant(q0=ref.q[0], qd0=ref.qd[0], log_csv=node / "plant.csv",
+                        frame_log=node / "frames.rrrcan", socketcan=channel) as plant:
+        wait_for_boot_up(watch, plant)
+        rc = rrr(["hil", "controller", "--interface", "socketcan", "--channel", channel,
+                  "--out", str(out / "controller"), "--no-figures", *common])
+        ps = plant.wait(120)
+    (node / "plant.out").write_text(plant.stdout)
+    (node / "plant.err").write_text(plant.stderr)
+    cases["controller"] = {"rc": rc, "node_rc": ps["exit"], "seconds": time.monotonic() - t0}
+
+    # the Python plant against the C controller node, started on the plant's boot-up heartbeat
+    node = out / "plant" / "node"
+    node.mkdir(parents=True)
+    assert rrr(["hil", "export-reference", "--out", str(node), *common]) == 0
+    started: dict[str, Any] = {}
+
+    def controller_on_boot_up() -> None:
+        try:
+            with boot_up_bus(channel) as bus:
+                ready.set()
+                wait_for_boot_up(bus, None, timeout=300)
+            started["node"] = NodeProcess("rrr_hil_controller", [
+                str(node_executable("controller")), "--reference", str(node / "reference.csv"),
+                "--socketcan", channel, "--log", str(node / "controller.csv"),
+                "--frame-log", str(node / "frames.rrrcan"), *controller_node_args(values)],
+                listening=False)
+        except BaseException as exc:  # reported below
+            started["error"] = repr(exc)
+            ready.set()
+
+    ready = threading.Event()
+    watcher = threading.Thread(target=controller_on_boot_up)
+    t0 = time.monotonic()
+    watcher.start()
+    ready.wait(60)
+    rc = rrr(["hil", "plant", "--interface", "socketcan", "--channel", channel,
+              "--out", str(out / "plant"), "--no-figures", *common])
+    watcher.join(60)
+    ctrl: NodeProcess | None = started.get("node")
+    cs = ctrl.wait(120) if ctrl is not None else {"exit": None}
+    if ctrl is not None:
+        (node / "controller.out").write_text(ctrl.stdout)
+        (node / "controller.err").write_text(ctrl.stderr)
+    cases["plant"] = {"rc": rc, "node_rc": cs["exit"], "seconds": time.monotonic() - t0,
+                      "error": started.get("error")}
+    cases["total_s"] = time.monotonic() - t_start
+    (out / "cases.json").write_text(json.dumps(cases, indent=1))
+    subprocess.run(["sync"], check=False)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
