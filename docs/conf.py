@@ -50,8 +50,10 @@ nitpick_ignore_regex = [
               r"|pyarrow|dask|distributed|matplotlib|ctypes|concurrent|threading|subprocess|io"
               r"|os)(\..*)?"),
     ("py:.*", r"(.*\.)?_[A-Za-z]\w*(\..*)?"),
+    # names that autodoc leaves unresolved in signatures (aliases, TYPE_CHECKING imports)
+    ("py:class", r"ArrayLike|Path|Mapping|Sequence|Callable|Iterator|Any|Progress"
+                 r"|ScipyStateSpace"),
 ]
-autodoc_type_aliases = {"FloatArray": "FloatArray", "ArrayLike": "ArrayLike"}
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
 

@@ -31,6 +31,8 @@ NOT_RUN_HERE = {
     ("docs/aarch64.md", "ctest --test-dir build -R aarch64 --output-on-failure"),
     ("docs/can-bench.md", "sudo ip link set can0 up type can bitrate 1000000"),
     ("docs/c-library.md", "cmake -S . -B build && cmake --build build -j2"),
+    ("docs/sweeps.md", "dask scheduler --host 0.0.0.0 --port 8786"),
+    ("docs/viewing.md", "foxglove-studio results/ctc.mcap"),
 }
 #: Seconds one block may take (the longest is the README's first command, about 15 s here).
 BLOCK_TIMEOUT = 120.0
