@@ -278,3 +278,65 @@ def test_without_mcap_the_run_is_refused_before_it_starts(tmp_path, monkeypatch)
         run_writing(WritingJob(out=tmp_path / "out", scenarios=["ctc"], figures=False,
                                engine="native", mcap=True))
     assert not (tmp_path / "out" / "ctc.csv").exists()
+
+
+@pytest.fixture(scope="module")
+def bench_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``rrr hil bench --mcap``: the C controller and plant nodes in lockstep."""
+    out = tmp_path_factory.mktemp("mcap_hil") / "hil"
+    subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "bench", "--scenario", "ctc",
+                    "--no-figures", "--no-can-log", "--mcap", "--out", str(out), "-q"],
+                   check=True, capture_output=True)
+    return out
+
+
+def test_the_bench_mcap_holds_its_frames_decoded_signals_and_faults(bench_run) -> None:
+    from rrr_robot.hil.framelog import read_node_log
+    from rrr_robot.hil.protocol import database
+
+    got, _ = rosbags_messages(bench_run / "bench.mcap")
+    records = read_node_log(bench_run / "frames.rrrcan")
+    plant = np.loadtxt(bench_run / "plant.csv", delimiter=",", skiprows=1, ndmin=2)
+    n = plant.shape[0]
+    t_ns = np.rint(plant[:, 1] * 1e9).astype(np.int64)
+    assert same(np.array([m[1].position for m in got["/joint_states"]]), plant[:n, 2:5])
+    assert same(np.array([m[1].data for m in got["/bench/faults"]]), plant[:, 12])
+    frames = [m[1] for m in got["/can/frames"]]
+    assert len(frames) == records.size
+    assert [f.id for f in frames] == (records["id"] & 0x1FFFFFFF).tolist()
+    assert [f.dlc for f in frames] == records["dlc"].tolist()
+    assert [f.header.frame_id for f in frames] == ["tx" if d else "rx" for d in records["dir"]]
+    for f, r in zip(frames, records, strict=True):
+        assert bytes(f.data[:f.dlc]) == bytes(r["data"][:r["dlc"]])
+    stamps = np.array([m[0] for m in got["/can/frames"]])
+    assert np.all(np.isin(stamps, t_ns)) and np.all(np.diff(stamps) >= 0)
+    # the period of each frame, from its stamp, is the cycle the controller's Sync frame counts
+    sync = got["/can/decoded/Sync"]
+    cycle = np.array([m[1].data[0] for m in sync])
+    period = np.searchsorted(t_ns, np.array([m[0] for m in sync]))
+    assert [d.label for d in sync[0][1].layout.dim] == ["Cycle"]
+    assert np.array_equal(cycle, period)
+    # decoded values are cantools' of the frames' bytes
+    db = database()
+    state = got["/can/decoded/JointState1"]
+    raw = [r for r in records if (r["id"] & 0x1FFFFFFF) == 0x201]
+    msg = db.get_message_by_frame_id(0x201)
+    assert [d.label for d in state[0][1].layout.dim] == [s.name for s in msg.signals]
+    for k in (0, len(raw) // 2, len(raw) - 1):
+        want = msg.decode(bytes(raw[k]["data"][:raw[k]["dlc"]]), decode_choices=False)
+        assert state[k][1].data.tolist() == [float(want[s.name]) for s in msg.signals]
+
+
+def test_run_ssp_writes_the_mcap_of_its_table(tmp_path) -> None:
+    """``rrr run-ssp --mcap`` (FMPy's SSP support): the file reads back equal to its CSV."""
+    ssp = tmp_path / "ctc.ssp"
+    for args in (["ssp", "--out", str(ssp)],
+                 ["run-ssp", str(ssp), "--tool", "fmpy", "--no-figures", "--mcap", "--out",
+                  str(tmp_path / "run")]):
+        subprocess.run([sys.executable, "-m", "rrr_robot", *args, "-q"], check=True,
+                       capture_output=True)
+    table = read_csv_table(tmp_path / "run" / "ctc.csv")
+    got, _ = rosbags_messages(tmp_path / "run" / "ctc.mcap")
+    assert same(np.array([m[1].position for m in got["/joint_states"]]), col3(table, "q"))
+    assert same(np.array([m[1].data for m in got["/control/u"]]), col3(table, "u"))
+    assert same(np.array([m[0] for m in got["/tip"]]), np.rint(table["t"] * 1e9))

@@ -210,3 +210,23 @@ def test_the_blocks_of_docs_viewing_run_as_written(tmp_path) -> None:
     done = subprocess.run([sys.executable, "-c", python], cwd=tmp_path, capture_output=True,
                           text=True, check=True)
     assert done.stdout.split() == printed.split()
+
+
+def test_a_diverged_run_beside_another_opens_at_its_last_finite_row(run, tmp_path) -> None:
+    """Two scenarios in one page, one of them diverged (NaN from row 3000 on): the page shows
+    it up to its last finite row, with no console line, and switches by #scenario=."""
+    table = read_csv_table(run / "ctc.csv")
+    broken = {k: v.copy() for k, v in table.items()}
+    for key in broken:
+        if key != "t":
+            broken[key][3000:] = np.nan
+    page = tmp_path / "two.html"
+    page.write_text(view_html({"ctc": table, "diverged": broken}, ROBOT), encoding="utf-8")
+    s = state(page, "#scenario=diverged&t=5.5", tmp_path)
+    assert s["state"] == "ready" and s["errors"] == "0" and s["scenario"] == "diverged"
+    assert abs(float(s["time"]) - table["t"][2999]) < 1e-9
+    s = state(page, "", tmp_path)
+    assert s["scenario"] == "ctc" and s["frame"] == "0"
+    with pytest.raises(rr.BadInputError, match="no row with finite t and q"):
+        view_html({"all_nan": {k: np.full_like(v, np.nan) if k != "t" else v
+                               for k, v in table.items()}}, ROBOT)

@@ -125,6 +125,10 @@ def _cmd_hil(args: argparse.Namespace) -> int:
 
     _check_options(args)
     out = check_folder(args.out)  # before anything is read or run
+    if getattr(args, "mcap", False):
+        from ..core.mcap_log import require_mcap
+
+        require_mcap()  # without the mcap package: refused before the run
     can_log = None if args.side == "export-reference" else _can_log_target(args, out)
     ref, ctrl_values, model = _writing_setup(args.text, args.scenario)
     realtime = getattr(args, "realtime", False)
@@ -217,7 +221,7 @@ def _results(args: argparse.Namespace, ref: Reference, run: BenchRun,
                    mode="realtime" if getattr(args, "realtime", False) else "lockstep",
                    scenario=args.scenario, node_log=NODE_FRAMES, view=_VIEW[args.side])
     summary = write_results(rs, info, ref, run, model, ctrl_values, nodes, can_log=can_log,
-                            figures=not args.no_figures)
+                            figures=not args.no_figures, mcap=args.mcap)
     _report(summary, rs.folder)
 
 
@@ -323,6 +327,10 @@ def add_result_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--no-can-log", action="store_true",
                    help="no .blf/.asc frame log (the node's own frames.rrrcan is still written)")
     g.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    g.add_argument("--mcap", action="store_true",
+                   help="also write bench.mcap: the run as ROS 2 messages (the writing task's "
+                   "topics, /can/frames, /can/decoded/<Message>, /bench/faults) for Foxglove, "
+                   "Rerun or ros2 bag (pip install 'rrr_robot[mcap]'; docs/viewing.md)")
 
 
 def add_realtime_arguments(p: argparse.ArgumentParser) -> None:

@@ -31,7 +31,7 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
 
     job = SspRun(ssp=Path(args.ssp), tool=args.tool, out=Path(args.out),
                  real_time=args.real_time, figures=not args.no_figures,
-                 robot=Path(args.robot) if args.robot else None)
+                 robot=Path(args.robot) if args.robot else None, mcap=args.mcap)
     with Bars(shown(quiet(args))) as bars:
         summary = run_ssp(job, progress=bars.callback(args.tool))
     for name, s in summary["scenarios"].items():
@@ -42,6 +42,7 @@ def _cmd_run_ssp(args: argparse.Namespace) -> int:
               f"{info['simulated_time']:.3f} s (simulated / wall-clock time; libcosim's own "
               f"figure at the end: {info['libcosim_real_time_factor']:.4f})")
     figures = ", figures" if job.figures else ""
+    figures += ", <scenario>.mcap" if job.mcap else ""
     print(f"results in {job.out}/ (summary.json, {', '.join(summary['scenarios'])}.csv"
           f"{figures})")
     return 0
@@ -90,6 +91,9 @@ def register_cli(subparsers: Any) -> None:
     r.add_argument("--no-figures", action="store_true",
                    help="skip the PNG figures (those of rrr writing: Figs 2-9, the tip error)")
     r.add_argument("--robot", help="the robot file the archive was written from, for the "
-                   "figures (default: the packaged default robot)")
+                   "figures and the MCAP's URDF (default: the packaged default robot)")
+    r.add_argument("--mcap", action="store_true",
+                   help="also write <scenario>.mcap: the run as ROS 2 messages (the topics of "
+                   "rrr writing --mcap; pip install 'rrr_robot[mcap]'; docs/viewing.md)")
     add_verbosity_arguments(r)
     r.set_defaults(func=_cmd_run_ssp)

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 import struct
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -37,12 +38,12 @@ from numpy.typing import ArrayLike
 from ..errors import BadInputError
 from ._arrays import FloatArray
 from .inertial import dh_links, dh_transform
-from .mcap_bulk import Stream, write_container
+from .mcap_bulk import Block, Stream, write_container
 from .outputs import atomic_open
 from .robot import RobotFile, read_robot_file
 from .urdf import robot_urdf
 
-__all__ = ["SCHEMAS", "TOPICS", "require_mcap", "write_mcap"]
+__all__ = ["SCHEMAS", "TOPICS", "CdrLayout", "Topic", "require_mcap", "write_mcap"]
 
 JOINTS = ("joint1", "joint2", "joint3")
 _SEP = "=" * 80 + "\n"
@@ -107,7 +108,7 @@ def require_mcap() -> None:
                             "'rrr_robot[mcap]'") from None
 
 
-class _Cdr:
+class CdrLayout:
     """One message layout in little-endian CDR: fixed bytes and named per-row fields.
 
     Offsets align relative to the end of the 4-byte encapsulation header, as CDR does."""
@@ -119,30 +120,51 @@ class _Cdr:
     def _align(self, n: int) -> None:
         self.buf += b"\x00" * (-(len(self.buf) - 4) % n)
 
-    def u32(self, value: int) -> _Cdr:
+    def u32(self, value: int) -> CdrLayout:
         self._align(4)
         self.buf += struct.pack("<I", value)
         return self
 
-    def string(self, text: str) -> _Cdr:
+    def string(self, text: str) -> CdrLayout:
         data = text.encode() + b"\x00"
         self.u32(len(data))
         self.buf += data
         return self
 
-    def header(self, frame_id: str) -> _Cdr:
+    def header(self, frame_id: str, key: str | None = None) -> CdrLayout:
+        """std_msgs/Header: the stamp's fields ``sec`` and ``nanosec`` per row; the frame id
+        fixed, or per row as field ``key`` (bytes of the length of ``frame_id``)."""
         self._align(4)
         self.fields += [("sec", len(self.buf), "<i4"), ("nanosec", len(self.buf) + 4, "<u4")]
         self.buf += bytes(8)
-        return self.string(frame_id)
+        if key is None:
+            return self.string(frame_id)
+        self.u32(len(frame_id.encode()) + 1)
+        self.raw(key, len(frame_id.encode()))
+        self.buf += b"\x00"
+        return self
 
-    def f64(self, key: str) -> _Cdr:
+    def field(self, key: str, dtype: str) -> CdrLayout:
+        """A number per row (``<u4``, ``u1``, ...), aligned to its size."""
+        size = np.dtype(dtype).itemsize
+        self._align(size)
+        self.fields.append((key, len(self.buf), dtype))
+        self.buf += bytes(size)
+        return self
+
+    def raw(self, key: str, size: int) -> CdrLayout:
+        """``size`` bytes per row (a fixed uint8[size] array, or a string's characters)."""
+        self.fields.append((key, len(self.buf), f"V{size}"))
+        self.buf += bytes(size)
+        return self
+
+    def f64(self, key: str) -> CdrLayout:
         self._align(8)
         self.fields.append((key, len(self.buf), "<f8"))
         self.buf += bytes(8)
         return self
 
-    def f64s(self, keys: Sequence[str]) -> _Cdr:
+    def f64s(self, keys: Sequence[str]) -> CdrLayout:
         self.u32(len(keys))
         for key in keys:
             self.f64(key)
@@ -155,25 +177,28 @@ class _Cdr:
         out[:] = np.frombuffer(bytes(self.buf), dtype=np.uint8)
         for key, offset, dtype in self.fields:
             width = np.dtype(dtype).itemsize
-            out[:, offset:offset + width].view(dtype)[:, 0] = values[key]
+            if dtype.startswith("V"):
+                out[:, offset:offset + width] = values[key]
+            else:
+                out[:, offset:offset + width].view(dtype)[:, 0] = values[key]
         return out
 
 
-def _float_array(label: str) -> _Cdr:
-    cdr = _Cdr().u32(1).string(label).u32(3).u32(1).u32(0)   # one dimension: 3 joints
+def _float_array(label: str) -> CdrLayout:
+    cdr = CdrLayout().u32(1).string(label).u32(3).u32(1).u32(0)   # one dimension: 3 joints
     return cdr.f64s(("0", "1", "2"))
 
 
-def _joint_state(with_effort: bool) -> _Cdr:
-    cdr = _Cdr().header("").u32(len(JOINTS))
+def _joint_state(with_effort: bool) -> CdrLayout:
+    cdr = CdrLayout().header("").u32(len(JOINTS))
     for name in JOINTS:
         cdr.string(name)
     cdr.f64s(("p0", "p1", "p2")).f64s(("v0", "v1", "v2"))
     return cdr.f64s(("e0", "e1", "e2") if with_effort else ())
 
 
-def _tf_layout(frames: Sequence[tuple[str, str]], prefix: str) -> _Cdr:
-    cdr = _Cdr().u32(len(frames))
+def _tf_layout(frames: Sequence[tuple[str, str]], prefix: str) -> CdrLayout:
+    cdr = CdrLayout().u32(len(frames))
     for k, (parent, child) in enumerate(frames):
         cdr.header(parent).string(child)
         for axis in ("tx", "ty", "tz", "rx", "ry", "rz", "rw"):
@@ -252,17 +277,40 @@ def _stamps(t: FloatArray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     if not np.all(np.isfinite(t)) or t.min() < 0.0 or t.max() > 2.0**31:
         raise BadInputError("column 't' must be finite times in [0, 2^31) s (the simulation "
                             "clock of the MCAP's messages)")
+    if np.any(np.diff(t) < 0):
+        raise BadInputError("column 't' must not decrease (the rows are the run's samples)")
     ns = np.rint(t * 1e9).astype(np.int64)
     return ns, {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
 
 
+@dataclass(frozen=True)
+class Topic:
+    """Messages of one more topic: ``data`` (n, size) CDR messages (e.g. :class:`CdrLayout`'s
+    ``encode``) at the log times ``ns`` (n,) (uint64 ns, non-decreasing) of the simulation
+    clock; ``schema``: its ros2msg text when the type is not one of :data:`SCHEMAS`."""
+
+    name: str
+    msgtype: str
+    ns: np.ndarray
+    data: np.ndarray
+    schema: str = ""
+    latched: bool = False
+
+
 def write_mcap(path: str | Path, columns: Mapping[str, ArrayLike],
                robot: RobotFile | str | Path | None = None, *,
-               metadata: Mapping[str, str] | None = None) -> Path:
+               metadata: Mapping[str, str] | None = None, extra: Sequence[Topic] = ()) -> Path:
     """Write a result table (name -> column, e.g. ``CosimResult.columns()`` or
     ``read_csv_table``) as MCAP with the topics of the module doc, atomically; ``robot`` (default:
     the packaged robot) gives the URDF, the DH placements and the motor model; ``metadata`` is
-    written as an MCAP metadata record ``rrr_robot``. Returns the path."""
+    written as an MCAP metadata record ``rrr_robot``; ``extra``: more topics on their own times
+    (the CAN bench's frames and faults). Returns the path."""
+    for more in extra:
+        if more.msgtype not in SCHEMAS and not more.schema:
+            raise BadInputError(f"topic {more.name}: no schema for {more.msgtype}")
+        if more.ns.shape[0] != more.data.shape[0] or np.any(np.diff(more.ns.astype(
+                np.int64)) < 0):
+            raise BadInputError(f"topic {more.name}: one non-decreasing time per message")
     require_mcap()
     robot_file = robot if isinstance(robot, RobotFile) else \
         read_robot_file(robot) if robot is not None else read_robot_file()
@@ -300,7 +348,7 @@ def write_mcap(path: str | Path, columns: Mapping[str, ArrayLike],
         streams.append(("/reference/joint_states", _joint_state(False).encode(n, ref)))
     for group, topic in (("x_ref", "/reference/tip"), ("tip", "/tip")):
         if group in groups:
-            point = _Cdr().header("base_link").f64("x").f64("y").f64("z")
+            point = CdrLayout().header("base_link").f64("x").f64("y").f64("z")
             xyz = groups[group]
             streams.append((topic, point.encode(n, stamp | {"x": xyz[:, 0], "y": xyz[:, 1],
                                                               "z": xyz[:, 2]})))
@@ -315,26 +363,32 @@ def write_mcap(path: str | Path, columns: Mapping[str, ArrayLike],
     frames, static = _static_transforms(dh)
     first_stamp: dict[str, Any] = {"sec": stamp["sec"][:1], "nanosec": stamp["nanosec"][:1]}
     static_msg = _tf_layout(frames, "s").encode(1, first_stamp | static)
-    description = _Cdr().string(urdf).encode(1, {})
-    kinds = [("/robot_description", True), ("/tf_static", True)] + [(t, False)
-                                                                   for t, _ in streams]
+    description = CdrLayout().string(urdf).encode(1, {})
+    t0 = ns[:1]
+    topics: list[Topic] = [
+        Topic("/robot_description", "std_msgs/msg/String", t0, description, latched=True),
+        Topic("/tf_static", "tf2_msgs/msg/TFMessage", t0, static_msg, latched=True),
+        *(Topic(topic, TOPICS.get(topic, "std_msgs/msg/Float64MultiArray"), ns, msgs)
+          for topic, msgs in streams), *extra]
     schema_ids: dict[str, int] = {}
     channels = []
-    for cid, (topic, latched) in enumerate(kinds, start=1):
-        kind = TOPICS.get(topic, "std_msgs/msg/Float64MultiArray")
-        schema_ids.setdefault(kind, len(schema_ids) + 1)
-        channels.append((cid, topic, "cdr", schema_ids[kind],
-                         {"offered_qos_profiles": _LATCHED_QOS} if latched else {}))
-    schemas = [(sid, kind, "ros2msg", SCHEMAS[kind].encode()) for kind, sid in schema_ids.items()]
-    t0 = int(ns[0])
+    for cid, tp in enumerate(topics, start=1):
+        schema_ids.setdefault(tp.msgtype, len(schema_ids) + 1)
+        channels.append((cid, tp.name, "cdr", schema_ids[tp.msgtype],
+                         {"offered_qos_profiles": _LATCHED_QOS} if tp.latched else {}))
+    texts = SCHEMAS | {t.msgtype: t.schema for t in topics if t.schema}
+    schemas = [(sid, kind, "ros2msg", texts[kind].encode()) for kind, sid in schema_ids.items()]
+    # the latched messages, then the run's rows, then each extra topic: equal times keep this
+    # order in the file
+    blocks = [Block(topics[0].ns, [Stream(1, topics[0].data)]),
+              Block(topics[1].ns, [Stream(2, topics[1].data)]),
+              Block(ns, [Stream(3 + k, msgs) for k, (_, msgs) in enumerate(streams)]),
+              *(Block(t.ns, [Stream(3 + len(streams) + k, t.data)])
+                for k, t in enumerate(extra))]
     meta = {"rrr_robot": {str(k): str(v) for k, v in metadata.items()}} if metadata else {}
     with atomic_open(path, "wb") as fh:
         write_container(fh, profile="ros2", library=f"rrr_robot {_version()}", schemas=schemas,
-                        channels=channels, first=[(1, t0, description[0].tobytes()),
-                                                  (2, t0, static_msg[0].tobytes())],
-                        ns=ns, streams=[Stream(cid, msgs) for cid, (_, msgs)
-                                        in zip(range(3, len(kinds) + 1), streams, strict=True)],
-                        metadata=meta)
+                        channels=channels, blocks=blocks, metadata=meta)
     return Path(path)
 
 

@@ -189,17 +189,19 @@ class RunInfo:
 def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, model: Model,
                   controller_values: Mapping[str, float | bool],
                   nodes: Mapping[str, Mapping[str, Any]], *, can_log: Path | None,
-                  figures: bool = True) -> dict[str, Any]:
+                  figures: bool = True, mcap: bool = False) -> dict[str, Any]:
     """Evaluate a run whose logs (plant.csv, the node's frame log, in real time the latency
     logs) are in the result set's staging folder: the unquantised co-simulation, the standard
     frame log (``can_log``: in the output folder, or elsewhere, written atomically), the
-    figures and summary.json. Returns the summary."""
+    figures, with ``mcap`` the run as ``bench.mcap`` (hil.mcap) and summary.json. Returns the
+    summary."""
     from . import framelog as fl
     from .busload import measured_load, schedule_load
     from .protocol import DBC_PATH, database
 
     work = rs.staging
-    bench = bench_result(ref, run, read_plant_log(work / "plant.csv"))
+    plant_log = read_plant_log(work / "plant.csv")
+    bench = bench_result(ref, run, plant_log)
     if bench.t.shape[0] < 2:
         raise HilError(f"the bench ran {bench.t.shape[0]} periods: nothing to evaluate")
     ref_run = extend_reference(ref, float(bench.t[-1] - bench.t[0]))
@@ -213,6 +215,15 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
         inside = can_log.parent.resolve() == rs.folder.resolve()
         fl.write_can_log(records, rs.path(can_log.name) if inside else can_log)
         bus["can_log"] = can_log.name if inside else str(can_log)
+    if mcap:
+        from ..core.robot import read_robot_file
+        from .mcap import write_bench_mcap
+
+        m = bench.t.shape[0]
+        write_bench_mcap(rs.path("bench.mcap"), bench.columns(), read_robot_file(), records,
+                         plant_log[:m, PLANT_LOG_COLUMNS["faults"]][:, 0],
+                         metadata={"side": info.side, "mode": info.mode,
+                                   "scenario": info.scenario, "view": info.view})
     realtime: dict[str, Any] | None = None
     latencies: dict[str, FloatArray] = {}
     stats: dict[str, dict[str, Any]] = {}

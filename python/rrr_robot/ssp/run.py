@@ -79,6 +79,7 @@ class SspRun:
     real_time: bool = False
     figures: bool = True
     robot: Path | None = None
+    mcap: bool = False   # also <scenario>.mcap: the run as ROS 2 messages (core.mcap_log)
 
 
 def _figures(job: SspRun, arch: SspArchive, res: CosimResult, folder: Path) -> None:
@@ -260,6 +261,10 @@ def run_ssp(job: SspRun, progress: Progress = None) -> dict[str, Any]:
         raise BadInputError(f"unknown tool {job.tool!r}: one of {', '.join(TOOLS)}")
     if job.real_time and job.tool != "libcosim":
         raise BadInputError("--real-time needs --tool libcosim (FMPy has no real-time mode)")
+    if job.mcap:
+        from ..core.mcap_log import require_mcap
+
+        require_mcap()   # without the mcap package: refused before the run
     # the archive's checked entries, the tools' temporary folders: in one fresh folder that
     # goes when the run ends, however it ends
     with scratch_folder("rrr-run-ssp-") as work:
@@ -275,6 +280,12 @@ def _run(job: SspRun, arch: SspArchive, work: Path, progress: Progress) -> dict[
                else _fmpy(arch, work, progress))
         res = _result(arch, sig)
         res.write(rs.path(f"{name}.csv"), "csv")
+        if job.mcap:
+            from ..core.mcap_log import write_mcap
+
+            write_mcap(rs.path(f"{name}.mcap"), res.columns(), job.robot,
+                       metadata={"scenario": name, "engine": f"ssp:{job.tool}",
+                                 "ssp": str(job.ssp)})
         s = scenario_summary(metrics(res))
         simulated = float(sig.t[-1] - arch.start_time)
         summary: dict[str, Any] = {
