@@ -8,6 +8,7 @@ from __future__ import annotations
 import importlib
 import importlib.metadata
 import re
+import runpy
 import subprocess
 import sys
 import tomllib
@@ -100,3 +101,10 @@ def test_the_changelog_has_the_version():
     text = (REPO / "CHANGELOG.md").read_text(encoding="utf-8")
     versions = re.findall(r"^## \[([^\]]+)\]", text, re.M)
     assert versions[0] == "Unreleased" and VERSION in versions, versions
+
+
+def test_the_manual_reports_it():
+    """docs/conf.py's release (the site's title and the version Sphinx shows)."""
+    conf = runpy.run_path(str(REPO / "docs" / "conf.py"))
+    assert conf["release"] == conf["version"] == VERSION
+    assert conf["html_title"] == f"rrr_robot {VERSION}"
