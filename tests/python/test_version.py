@@ -8,6 +8,7 @@ from __future__ import annotations
 import importlib
 import importlib.metadata
 import re
+import runpy
 import subprocess
 import sys
 import tomllib
@@ -100,3 +101,24 @@ def test_the_changelog_has_the_version():
     text = (REPO / "CHANGELOG.md").read_text(encoding="utf-8")
     versions = re.findall(r"^## \[([^\]]+)\]", text, re.M)
     assert versions[0] == "Unreleased" and VERSION in versions, versions
+
+
+def test_the_manual_reports_it():
+    """docs/conf.py's release (the site's title and the version Sphinx shows)."""
+    conf = runpy.run_path(str(REPO / "docs" / "conf.py"))
+    assert conf["release"] == conf["version"] == VERSION
+    assert conf["html_title"] == f"rrr_robot {VERSION}"
+
+
+def test_a_copy_of_the_package_folder_still_imports(tmp_path):
+    """Neither the built version module nor the source header beside it (the CTest pyext_smoke
+    imports such a copy): the installed distribution's version, and ``import`` never fails."""
+    import shutil
+
+    pkg = Path(rr.__file__).parent
+    shutil.copytree(pkg, tmp_path / "rrr_robot",
+                    ignore=shutil.ignore_patterns("__pycache__", "_build_version.py"))
+    out = subprocess.run([sys.executable, "-c", "import rrr_robot; print(rrr_robot.__version__)"],
+                         cwd=tmp_path, env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin"},
+                         check=True, capture_output=True, text=True).stdout
+    assert out.strip() == VERSION

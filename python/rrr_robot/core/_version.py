@@ -27,10 +27,26 @@ def header_version(text: str) -> str:
     return str(found[0])
 
 
+#: The version reported when none of the sources below is there (a copy of the package folder
+#: outside a build, a source tree and an installation).
+UNKNOWN = "0+unknown"
+
+
 def package_version() -> str:
-    """The version of this installation: the one the build wrote, else the source tree's."""
+    """The version of this installation: the one the build wrote into the wheel; else, in a
+    source tree, the header's; else the installed distribution's metadata (a copy of the
+    package folder, as the CTest pyext_smoke stages one); else :data:`UNKNOWN`."""
     try:
         built = importlib.import_module(f"{__package__}._build_version")
     except ModuleNotFoundError:
+        pass
+    else:
+        return str(built.version)
+    if SOURCE_HEADER.is_file():
         return header_version(SOURCE_HEADER.read_text(encoding="utf-8"))
-    return str(built.version)
+    from importlib import metadata  # only here: it costs a few ms at import
+
+    try:
+        return metadata.version("rrr_robot")
+    except metadata.PackageNotFoundError:
+        return UNKNOWN
