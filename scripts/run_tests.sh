@@ -4,13 +4,13 @@
 # aarch64 Linux binaries and the aarch64 bench nodes under qemu-user), the same CTest on the
 # README's default build (Release), ruff,
 # the Python package's import layers (lint-imports) and types (mypy), pytest (including the
-# generated-code checks), and a short libFuzzer run on the CAN frame decoders. mingw-w64, wine,
-# gcc-aarch64-linux-gnu, qemu-user, chromium and clang are installed with apt-get when missing and
-# root.
+# generated-code checks, the CAN bench over SocketCAN in a QEMU guest), and a short libFuzzer run
+# on the CAN frame decoders. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium and clang
+# are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
-export RRR_PIP_TARGET=".[test,bench]"
+export RRR_PIP_TARGET=".[test,bench,docs]"
 # The Windows binaries of the FMUs are cross-compiled with mingw-w64 and tested under wine: both
 # must be present before the FMUs are built (by pip install below and by CMake).
 windows_tools_ok() {
@@ -53,6 +53,12 @@ if ! command -v pkg-config >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v a
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq pkg-config >/dev/null
 fi
+# The SocketCAN tests (tests/python/test_socketcan_guest.py, docs/socketcan.md) boot a QEMU guest
+# with Debian's kernel (AF_CAN, vcan): can_guest.py installs qemu-system-x86, busybox-static,
+# cpio and can-utils with apt-get when missing and root, and downloads the kernel package into
+# ~/.cache/rrr-can-guest (never installed); it names what is missing otherwise.
+echo "== the SocketCAN test guest: tools, kernel, initramfs (tests/python/can_guest.py) =="
+python3 tests/python/can_guest.py prepare
 # chromium: tests/python/test_view.py opens the page of `rrr view` in headless Chromium
 if ! command -v chromium >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
   echo "== installing chromium (the browser view's test, headless) =="
@@ -88,7 +94,10 @@ ruff check python tests bench tools c_src/rrr/gen
 # that setup_env.sh has just installed from this tree
 lint-imports
 mypy python/rrr_robot
-echo "== pytest =="
+echo "== the manual: sphinx-build with warnings as errors (docs/ -> build-docs/index.html) =="
+# a broken link or anchor, an unresolved reference or a page outside the navigation fails it
+sphinx-build -q -W --keep-going -n -b html docs build-docs
+echo "== pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py) =="
 python -m pytest -q tests/python
 echo "== every bench script's quick mode (bench/: they print their tables; no number is checked) =="
 if ! wait "$BENCH_BUILD"; then
@@ -125,5 +134,5 @@ cmake --build build-fuzz --target fuzz_hil_decode -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
-echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, pytest, the benchmarks'" \
-     "quick modes, libFuzzer) =="
+echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, the manual, pytest, the" \
+     "benchmarks' quick modes, libFuzzer) =="

@@ -11,6 +11,12 @@ fi
 # shellcheck disable=SC1091
 . .venv/bin/activate
 RRR_TARGET="${RRR_PIP_TARGET:-.[verify]}"
+# RRR_SKIP_INSTALL=1: use the package already installed in .venv (the docs test runs
+# scripts/writing_task.sh right after the test command installed it)
+if [ "${RRR_SKIP_INSTALL:-0}" = 1 ] && python -c "import rrr_robot" 2>/dev/null; then
+  echo "== RRR_SKIP_INSTALL=1: using the rrr_robot installed in .venv =="
+  return 0 2>/dev/null || exit 0
+fi
 echo "== pip install '$RRR_TARGET' into .venv: the dependencies, then librrr, the FMUs, the" \
      "CAN bench nodes and the extension module built with CMake (usually 2 to 4 minutes on a" \
      "fresh machine, under a minute when nothing changed; pip prints nothing meanwhile) =="

@@ -820,8 +820,84 @@ static uint64_t payload_checksum(const unsigned char *block, size_t size)
                      size - sizeof(snapshot_header));
 }
 
-/* 0 when the n bytes at block are a snapshot of this model; logs the reason otherwise. */
-static int snapshot_check(fmu_instance *S, const char *fn, const unsigned char *block, size_t n)
+/* The machine states a snapshot of an instance of this interface type may hold: those it can
+ * enter and take a snapshot in (StepCanceled and StepInProgress are never entered). */
+static unsigned snapshot_states(const fmu_instance *S)
+{
+    const unsigned shared = FMU_INSTANTIATED | FMU_INIT_MODE | FMU_TERMINATED | FMU_ERROR_STATE;
+    return shared | (S->interface == FMU_MODEL_EXCHANGE ? (FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
+                                                         : (FMU_STEP_MODE | FMU_STEP_FAILED));
+}
+
+/* Every field of a snapshot whose header and checksum are right, against the model: the
+ * instance fields, each table row (Reals finite, Booleans 0 or 1), then the model's own checks
+ * (check_state hook). The checksum only detects accidents: the bytes may have been forged.
+ * 0 when the state is one this instance could have been in; logs the field otherwise. */
+static int snapshot_validate(fmu_instance *S, const char *fn, const snapshot_fields *f,
+                             const unsigned char *data)
+{
+    const fmu_model *m = S->model;
+    if ((f->state & snapshot_states(S)) == 0u) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds the machine state %s, which a %s instance is never in",
+                fn, fmu_state_name(S->fmi_version, (fmu_state)f->state),
+                S->interface == FMU_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation");
+        return 1;
+    }
+    if ((f->dirty != 0 && f->dirty != 1) || (f->stop_time_defined != 0 &&
+                                              f->stop_time_defined != 1) || f->reserved != 0u) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds invalid flags (dirty %d, stop time defined %d, reserved "
+                "%u; each must be 0 or 1, reserved 0)",
+                fn, (int)f->dirty, (int)f->stop_time_defined, (unsigned)f->reserved);
+        return 1;
+    }
+    if (!isfinite(f->time) || !isfinite(f->start_time) || !isfinite(f->stop_time) ||
+        (f->stop_time_defined && !(f->stop_time >= f->start_time))) {
+        fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds an invalid time (time %.17g, start time %.17g, stop time "
+                "%.17g%s): each must be finite, the stop time not before the start time",
+                fn, f->time, f->start_time, f->stop_time,
+                f->stop_time_defined ? "" : " undefined");
+        return 1;
+    }
+    for (size_t i = 0; i < m->n_vars; ++i) {
+        const fmu_variable *v = &m->vars[i];
+        if (v->causality == FMU_INDEPENDENT) {
+            continue;
+        }
+        if (v->type == FMU_REAL) {
+            double x;
+            memcpy(&x, data + v->offset, sizeof x);
+            if (!isfinite(x)) {
+                fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                        "%s: the FMU state holds %s = %.17g: every Real must be finite", fn,
+                        v->name, x);
+                return 1;
+            }
+        } else {
+            int b;
+            memcpy(&b, data + v->offset, sizeof b);
+            if (b != 0 && b != 1) {
+                fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
+                        "%s: the FMU state holds the Boolean %s = %d: it must be 0 or 1", fn,
+                        v->name, b);
+                return 1;
+            }
+        }
+    }
+    if (m->check_state != NULL &&
+        m->check_state(S, data, (fmu_state)f->state, fn) != FMU_OK) {
+        return 1;
+    }
+    return 0;
+}
+
+/* 0 when the n bytes at block are a snapshot of this model; logs the reason otherwise. With
+ * deep nonzero (a state that is about to be restored or was passed in as bytes) every field is
+ * validated as well (snapshot_validate). */
+static int snapshot_check(fmu_instance *S, const char *fn, const unsigned char *block, size_t n,
+                          int deep)
 {
     snapshot_header h;
     snapshot_fields f;
@@ -866,6 +942,9 @@ static int snapshot_check(fmu_instance *S, const char *fn, const unsigned char *
     if (f.state == 0u || (f.state & (f.state - 1u)) != 0u || (f.state & SNAPSHOT_STATES) == 0u) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: FMU state holds an invalid machine state 0x%x",
                 fn, (unsigned)f.state);
+        return 1;
+    }
+    if (deep && snapshot_validate(S, fn, &f, block + sizeof h + sizeof f) != 0) {
         return 1;
     }
     return 0;
@@ -933,7 +1012,7 @@ fmu_status fmu_snapshot_set(fmu_instance *S, const char *fn, const void *state)
                 S->model->identifier);
         return FMU_ERROR;
     }
-    if (snapshot_check(S, fn, block, (size_t)h.size) != 0) {
+    if (snapshot_check(S, fn, block, (size_t)h.size, 1) != 0) {
         return FMU_ERROR;
     }
     snapshot_fields f;
@@ -974,7 +1053,7 @@ fmu_status fmu_snapshot_size(fmu_instance *S, const char *fn, const void *state,
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: FMUstate must not be NULL", fn);
         return FMU_ERROR;
     }
-    if (snapshot_check(S, fn, state, snapshot_size(S)) != 0) {
+    if (snapshot_check(S, fn, state, snapshot_size(S), 0) != 0) {
         return FMU_ERROR;
     }
     *size = snapshot_size(S);
@@ -989,7 +1068,7 @@ fmu_status fmu_snapshot_serialize(fmu_instance *S, const char *fn, const void *s
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: FMUstate must not be NULL", fn);
         return FMU_ERROR;
     }
-    if (snapshot_check(S, fn, state, n) != 0) {
+    if (snapshot_check(S, fn, state, n, 0) != 0) {
         return FMU_ERROR;
     }
     if (size < n) {
@@ -1004,7 +1083,7 @@ fmu_status fmu_snapshot_serialize(fmu_instance *S, const char *fn, const void *s
 fmu_status fmu_snapshot_deserialize(fmu_instance *S, const char *fn, const unsigned char buf[],
                                     size_t size, void **state)
 {
-    if (snapshot_check(S, fn, buf, size) != 0) {
+    if (snapshot_check(S, fn, buf, size, 1) != 0) {
         return FMU_ERROR;
     }
     unsigned char *block = *state;

@@ -188,7 +188,26 @@ typedef struct fmu_model {
      *  the model data, e.g. a table read from resources/) and set work to NULL; called at
      *  reset and when the instance is freed. */
     void (*release)(fmu_instance *inst);
+    /** Optional (NULL: the glue's checks only): check the model data of an FMU state before
+     *  SetFMUstate or DeSerializeFMUstate accepts it. The glue has already checked the header,
+     *  the checksum, the instance fields and every table row (Reals finite, Booleans 0 or 1);
+     *  the hook checks what the table does not say: the fields outside the table (indices,
+     *  counters, step-size memory), ranges, and, for a state in which the parameters have
+     *  passed `initialize` (`state` after initialization), the parameters as `initialize`
+     *  checks them. A checksum only detects accidents: every field is untrusted input. Logs the
+     *  field at fault under function name fn and returns FMU_ERROR, or FMU_OK. */
+    fmu_status (*check_state)(fmu_instance *inst, const void *data, fmu_state state,
+                              const char *fn);
 } fmu_model;
+
+/** @brief 1 when an instance in machine state s has passed initialization (its parameters were
+ *         accepted by the initialize hook): every state after ExitInitializationMode except
+ *         the Error state (which a failed initialization enters too). */
+static inline int fmu_state_initialized(fmu_state s)
+{
+    return (s & (FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE | FMU_STEP_IN_PROGRESS |
+                 FMU_STEP_FAILED | FMU_STEP_CANCELED | FMU_TERMINATED)) != 0u;
+}
 
 /** The one model linked into this binary (defined in fmu/<model>/model.c). */
 extern const fmu_model FMU_MODEL;

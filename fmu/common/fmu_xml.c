@@ -17,7 +17,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define GENERATOR "rrr fmu/common/fmu_xml.c"
+#include "rrr/rrr_version.h"
+
+/* generationTool and version of every modelDescription.xml: the toolkit's one version */
+#define GENERATOR "rrr_robot " RRR_VERSION_STRING " (fmu/common/fmu_xml.c)"
 
 /* Shortest "%.*g" text that reads back as the same double. */
 static void fmt_real(char *buf, size_t n, double v)
@@ -320,6 +323,7 @@ static void write_xml2(const fmu_model *m, const void *data, const char *token, 
             "  modelName=\"%s\"\n"
             "  guid=\"%s\"\n"
             "  description=\"%s\"\n"
+            "  version=\"" RRR_VERSION_STRING "\"\n"
             "  generationTool=\"" GENERATOR "\"\n"
             "  variableNamingConvention=\"structured\"\n"
             "  numberOfEventIndicators=\"0\">\n",
@@ -392,6 +396,7 @@ static void write_xml3(const fmu_model *m, const void *data, const char *token, 
             "  modelName=\"%s\"\n"
             "  instantiationToken=\"%s\"\n"
             "  description=\"%s\"\n"
+            "  version=\"" RRR_VERSION_STRING "\"\n"
             "  generationTool=\"" GENERATOR "\"\n"
             "  variableNamingConvention=\"structured\">\n",
             m->identifier, token, m->description);

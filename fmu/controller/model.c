@@ -74,9 +74,8 @@ static fmu_status set_defaults(void *d)
 }
 
 /* Names the first negative gain (rrr_ctc only says RRR_BAD_INPUT). */
-static fmu_status check_gains(fmu_instance *inst, const char *fn)
+static fmu_status check_gains_of(fmu_instance *inst, const controller_data *c, const char *fn)
 {
-    const controller_data *c = data_of(inst);
     for (int i = 0; i < RRR_NJ; ++i) {
         if (!(c->gains.kp[i] >= 0.0) || !(c->gains.kd[i] >= 0.0)) {
             const int bad_kp = !(c->gains.kp[i] >= 0.0);
@@ -88,15 +87,19 @@ static fmu_status check_gains(fmu_instance *inst, const char *fn)
     return FMU_OK;
 }
 
-static fmu_status initialize(fmu_instance *inst)
+static fmu_status check_gains(fmu_instance *inst, const char *fn)
 {
-    const controller_data *c = data_of(inst);
+    return check_gains_of(inst, data_of(inst), fn);
+}
+
+/* The parameters as ExitInitializationMode accepts them; logs the one at fault under fn. */
+static fmu_status check_parameters(fmu_instance *inst, const controller_data *c, const char *fn)
+{
     const char *field = "";
     const rrr_status st = rrr_model_validate(&c->model, &field);
     if (st != RRR_OK) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
-                "%s: parameter %s is invalid (%s)%s", FMU_FN(inst, "ExitInitializationMode"),
-                field, rrr_status_str(st),
+                "%s: parameter %s is invalid (%s)%s", fn, field, rrr_status_str(st),
                 st == RRR_NOT_POSITIVE_DEFINITE
                     ? ": p[1]..p[16] give an inertia matrix D(q) that is not positive definite"
                     : "");
@@ -104,10 +107,41 @@ static fmu_status initialize(fmu_instance *inst)
     }
     if (!(c->lead >= 0.0 && c->lead <= 1.0)) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR, "%s: parameter lead must be in [0, 1] s, got %.17g",
-                FMU_FN(inst, "ExitInitializationMode"), c->lead);
+                fn, c->lead);
         return FMU_ERROR;
     }
-    return check_gains(inst, FMU_FN(inst, "ExitInitializationMode"));
+    return check_gains_of(inst, c, fn);
+}
+
+static fmu_status initialize(fmu_instance *inst)
+{
+    return check_parameters(inst, data_of(inst), FMU_FN(inst, "ExitInitializationMode"));
+}
+
+/* An FMU state's data (the glue has checked every table row finite and feedforward 0 or 1):
+ * the saturation bits name joints 1..3 only, and once initialized the parameters are as
+ * ExitInitializationMode accepts them (skipped when they are the ones this initialized instance
+ * holds: those were accepted). */
+static fmu_status check_state(fmu_instance *inst, const void *data, fmu_state state,
+                              const char *fn)
+{
+    const controller_data *c = data;
+    if (c->out.saturated > 7u) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds saturation bits 0x%x: only joints 1..3 (0x7) exist", fn,
+                c->out.saturated);
+        return FMU_ERROR;
+    }
+    if (!fmu_state_initialized(state)) {
+        return FMU_OK; /* the parameters are checked when initialization ends */
+    }
+    const controller_data *now = data_of(inst);
+    if (fmu_state_initialized(inst->state) &&
+        memcmp(&c->model, &now->model, sizeof c->model) == 0 &&
+        memcmp(&c->gains, &now->gains, sizeof c->gains) == 0 && c->lead == now->lead) {
+        return FMU_OK;
+    }
+    return check_parameters(inst, c, fn);
 }
 
 static fmu_status calculate(fmu_instance *inst)
@@ -307,4 +341,5 @@ const fmu_model FMU_MODEL = {
     .depends = depends,
     .depends_initial = depends_initial,
     .partials = partials,
+    .check_state = check_state,
 };

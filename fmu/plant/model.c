@@ -6,6 +6,7 @@
  */
 #include "config.h"
 
+#include <math.h>
 #include <string.h>
 
 #define T plant_data
@@ -86,15 +87,15 @@ static fmu_status set_defaults(void *d)
     return FMU_OK;
 }
 
-static fmu_status initialize(fmu_instance *inst)
+/* The parameters as ExitInitializationMode accepts them (the model, the integrator settings, a
+ * stiffness the integrator can afford); logs the parameter at fault under fn. */
+static fmu_status check_parameters(fmu_instance *inst, const plant_data *p, const char *fn)
 {
-    plant_data *p = data_of(inst);
     const char *field = "";
-    const rrr_status st = rrr_model_validate(&p->model, &field);
+    rrr_status st = rrr_model_validate(&p->model, &field);
     if (st != RRR_OK) {
         fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
-                "%s: parameter %s is invalid (%s)%s", FMU_FN(inst, "ExitInitializationMode"),
-                field, rrr_status_str(st),
+                "%s: parameter %s is invalid (%s)%s", fn, field, rrr_status_str(st),
                 st == RRR_NOT_POSITIVE_DEFINITE
                     ? ": p[1]..p[16] give an inertia matrix D(q) that is not positive definite"
                     : "");
@@ -103,13 +104,48 @@ static fmu_status initialize(fmu_instance *inst)
     if (rrr_plant_integrator_check(&p->integ, &field) != RRR_OK) {
         if (strcmp(field, "rtol") == 0 || strcmp(field, "atol") == 0) {
             fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
-                    "%s: parameter %s must be in [%g, %g], got %.17g",
-                    FMU_FN(inst, "ExitInitializationMode"), field, RRR_PLANT_TOL_MIN,
-                    RRR_PLANT_TOL_MAX, field[0] == 'r' ? p->integ.rtol : p->integ.atol);
+                    "%s: parameter %s must be in [%g, %g], got %.17g", fn, field,
+                    RRR_PLANT_TOL_MIN, RRR_PLANT_TOL_MAX,
+                    field[0] == 'r' ? p->integ.rtol : p->integ.atol);
         } else {
             fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR, "%s: parameter h_int must be > 0, got %.17g",
-                    FMU_FN(inst, "ExitInitializationMode"), p->integ.h_int);
+                    fn, p->integ.h_int);
         }
+        return FMU_ERROR;
+    }
+    double lambda = 0.0;
+    st = rrr_plant_stiffness(&p->model, &lambda, &field);
+    if (st != RRR_OK) {
+        const int j = field[0] != '\0' ? field[2] - '1' : 0;
+        const int k = field[0] == 'w' ? field[4] - '1' : -1;
+        if (st == RRR_TOO_STIFF && k >= 0) {
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: parameters f[%d,%d] = %.6g and w[%d,%d] = %.6g make the plant too stiff "
+                    "for its integrator: its stiffness |d qdd/d qd| reaches %.3g 1/s (the "
+                    "friction slope k_t |f| w over the inertia), more than the %.0e 1/s it "
+                    "accepts (an integration would cost more than %.0e internal steps per "
+                    "simulated second)",
+                    fn, j + 1, k + 1, p->model.f[j][k], j + 1, k + 1, p->model.w[j][k], lambda,
+                    RRR_PLANT_STIFFNESS_MAX, RRR_PLANT_STIFFNESS_MAX / 3.3);
+        } else if (st == RRR_TOO_STIFF) {
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: parameter b[%d] = %.6g makes the plant too stiff for its integrator: "
+                    "its stiffness |d qdd/d qd| reaches %.3g 1/s, more than the %.0e 1/s it "
+                    "accepts",
+                    fn, j + 1, p->model.b[j], lambda, RRR_PLANT_STIFFNESS_MAX);
+        } else {
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR, "%s: the stiffness of the plant: %s", fn,
+                    rrr_status_str(st));
+        }
+        return FMU_ERROR;
+    }
+    return FMU_OK;
+}
+
+static fmu_status initialize(fmu_instance *inst)
+{
+    plant_data *p = data_of(inst);
+    if (check_parameters(inst, p, FMU_FN(inst, "ExitInitializationMode")) != FMU_OK) {
         return FMU_ERROR;
     }
     /* the step-size history starts empty: the first doStep estimates a step */
@@ -117,6 +153,41 @@ static fmu_status initialize(fmu_instance *inst)
         return FMU_ERROR; /* q0, qd0 are finite (the glue refuses others): not reached */
     }
     return FMU_OK;
+}
+
+/* An FMU state's data (the glue has checked every table row finite and adaptive 0 or 1): the
+ * integrator's budget is the FMU's (never a variable), the step-size memory finite and >= 0, and
+ * once initialized the parameters as ExitInitializationMode accepts them (skipped when they are
+ * the ones this initialized instance holds: those were accepted). */
+static fmu_status check_state(fmu_instance *inst, const void *data, fmu_state state,
+                              const char *fn)
+{
+    const plant_data *p = data;
+    if (p->integ.max_steps != RRR_PLANT_MAX_STEPS_DEFAULT) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds an integrator budget of %ld internal steps per doStep; "
+                "this FMU's is %ld",
+                fn, p->integ.max_steps, (long)RRR_PLANT_MAX_STEPS_DEFAULT);
+        return FMU_ERROR;
+    }
+    if (!isfinite(p->x.h_guess) || !(p->x.h_guess >= 0.0) || !isfinite(p->x.err_prev) ||
+        !(p->x.err_prev >= 0.0)) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds an invalid step-size memory (h_guess %.17g s, err_prev "
+                "%.17g): both must be finite and >= 0",
+                fn, p->x.h_guess, p->x.err_prev);
+        return FMU_ERROR;
+    }
+    if (!fmu_state_initialized(state)) {
+        return FMU_OK; /* the parameters are checked when initialization ends */
+    }
+    const plant_data *now = data_of(inst);
+    if (fmu_state_initialized(inst->state) &&
+        memcmp(&p->model, &now->model, sizeof p->model) == 0 &&
+        memcmp(&p->integ, &now->integ, sizeof p->integ) == 0) {
+        return FMU_OK;
+    }
+    return check_parameters(inst, p, fn);
 }
 
 /* qdd and tip from the state and the current input; before initialization the state is
@@ -338,4 +409,5 @@ const fmu_model FMU_MODEL = {
     .depends = depends,
     .depends_initial = depends_initial,
     .partials = partials,
+    .check_state = check_state,
 };

@@ -377,6 +377,9 @@ static size_t find_interval(const reference_table *tb, size_t cursor, double t)
 {
     const double *v = tb->v;
 #define TIME(i) v[(i) * REF_COLUMNS]
+    if (cursor >= tb->n) {
+        cursor = 0; /* FMU states are checked (check_state): not reached */
+    }
     if (cursor + 1 < tb->n && TIME(cursor) <= t && t < TIME(cursor + 1)) {
         return cursor;
     }
@@ -497,6 +500,58 @@ static fmu_status do_step(fmu_instance *inst, double h)
     return FMU_OK;
 }
 
+/* An FMU state's data (the glue has checked every table row finite): the look-up cursor is an
+ * interval of the table the state was taken with (hash), which must be this instance's (read
+ * now if it has not been yet); a state with no table (hash 0) has cursor 0; once initialized
+ * the lookahead is in its range. Any other value is refused here, before a look-up could read
+ * outside the table. */
+static fmu_status check_state(fmu_instance *inst, const void *data, fmu_state state,
+                              const char *fn)
+{
+    const reference_data *r = data;
+    if (fmu_state_initialized(state) &&
+        !(r->lookahead >= 0.0 && r->lookahead <= REF_LOOKAHEAD_MAX)) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds lookahead = %.17g s, outside [0, %g]", fn, r->lookahead,
+                REF_LOOKAHEAD_MAX);
+        return FMU_ERROR;
+    }
+    if (r->table_hash == 0) {
+        if (r->cursor != 0) {
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: the FMU state holds the look-up cursor %llu but no reference table", fn,
+                    (unsigned long long)r->cursor);
+            return FMU_ERROR;
+        }
+        return FMU_OK;
+    }
+    if (inst->work == NULL) {
+        inst->work = read_table(inst); /* logs why it cannot */
+        if (inst->work == NULL) {
+            fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                    "%s: the FMU state was taken with a reference table, and this instance "
+                    "cannot read resources/%s",
+                    fn, REF_TABLE_FILE);
+            return FMU_ERROR;
+        }
+    }
+    const reference_table *tb = inst->work;
+    if (r->table_hash != tb->hash) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state was taken with another reference table than resources/%s", fn,
+                REF_TABLE_FILE);
+        return FMU_ERROR;
+    }
+    if (r->cursor >= tb->n - 1) {
+        fmu_log(inst, FMU_ERROR, FMU_LOG_ERROR,
+                "%s: the FMU state holds the look-up cursor %llu: the table has %zu samples, so "
+                "the intervals are 0..%zu",
+                fn, (unsigned long long)r->cursor, tb->n, tb->n - 2);
+        return FMU_ERROR;
+    }
+    return FMU_OK;
+}
+
 /* The outputs depend on the time only (no inputs, no states). */
 static int depends(fmu_vr unknown, fmu_vr known)
 {
@@ -522,4 +577,5 @@ const fmu_model FMU_MODEL = {
     .do_step = do_step,
     .depends = depends,
     .release = release,
+    .check_state = check_state,
 };

@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
+from .core._version import package_version
 from .errors import (
     BadInputError,
     CosimError,
@@ -31,15 +32,17 @@ from .errors import (
 if TYPE_CHECKING:
     from .core.control import CtcGains
     from .core.integrator import PlantIntegrator
-    from .core.linearize import LinearSystem, linearize
+    from .core.linearization import LinearSystem, linearize
     from .core.mcap_log import write_mcap
     from .core.model import Model, Singularity, bps_from_inertia
     from .core.plant import Plant, PlantSnapshot, PlantStats
     from .core.robot import RobotFile, read_robot_file
     from .core.tables import read_table
     from .core.urdf import robot_urdf, write_urdf
+    from .sim.cosim import CosimOptions, CosimResult
     from .sim.fmus import fmu_path
     from .sim.native import simulate
+    from .writing.trajectory import Reference, WritingSpec, make_reference
     from .writing.view import write_view
 
 #: The re-exported names that need numpy and librrr, imported on first use (``rr.Model``), so
@@ -50,8 +53,8 @@ _LAZY = {
     "Singularity": ".core.model",
     "bps_from_inertia": ".core.model",
     "PlantIntegrator": ".core.integrator",
-    "LinearSystem": ".core.linearize",
-    "linearize": ".core.linearize",
+    "LinearSystem": ".core.linearization",
+    "linearize": ".core.linearization",
     "Plant": ".core.plant",
     "PlantSnapshot": ".core.plant",
     "PlantStats": ".core.plant",
@@ -59,11 +62,16 @@ _LAZY = {
     "read_robot_file": ".core.robot",
     "robot_urdf": ".core.urdf",
     "write_urdf": ".core.urdf",
+    "CosimOptions": ".sim.cosim",
+    "CosimResult": ".sim.cosim",
     "fmu_path": ".sim.fmus",
     "simulate": ".sim.native",
     "write_mcap": ".core.mcap_log",
     "read_table": ".core.tables",
     "write_view": ".writing.view",
+    "Reference": ".writing.trajectory",
+    "WritingSpec": ".writing.trajectory",
+    "make_reference": ".writing.trajectory",
 }
 
 
@@ -80,11 +88,15 @@ def __dir__() -> list[str]:
     return sorted({*globals(), *_LAZY})
 
 
-__version__ = "0.1.0"
+#: The toolkit's version (``X.Y.Z``), from its one source ``rrr_version.h`` (also librrr's
+#: ``RRR_VERSION_STRING``, the FMUs' ``version`` and the CMake package's).
+__version__: str = package_version()
 
 __all__ = [
     "BadInputError",
     "CosimError",
+    "CosimOptions",
+    "CosimResult",
     "CtcGains",
     "LinearSystem",
     "Model",
@@ -94,6 +106,7 @@ __all__ = [
     "PlantIntegrator",
     "PlantSnapshot",
     "PlantStats",
+    "Reference",
     "RobotFile",
     "RobotFileError",
     "RrrError",
@@ -102,10 +115,12 @@ __all__ = [
     "Singularity",
     "SweepSpecError",
     "UnreachableError",
+    "WritingSpec",
     "__version__",
     "bps_from_inertia",
     "fmu_path",
     "linearize",
+    "make_reference",
     "read_robot_file",
     "read_table",
     "robot_urdf",

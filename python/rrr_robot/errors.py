@@ -36,7 +36,7 @@ class BadInputError(RrrError, ValueError):
 class ArchiveError(BadInputError):
     """A zip archive (an SSP, an FMU) refused before anything in it is used: an entry name that
     could leave the extraction folder, a link, a duplicate, sizes or a compression ratio beyond
-    the bounds of :mod:`rrr_robot.core.archives`, or data that does not match its headers."""
+    the bounds of ``rrr_robot.core.archives``, or data that does not match its headers."""
 
 
 class ModelError(RrrError, ValueError):

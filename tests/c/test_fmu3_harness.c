@@ -39,6 +39,7 @@
 #include "fmi2FunctionTypes.h"
 #include "fmi3FunctionTypes.h"
 #include "rrr/rrr.h"
+#include "fmu_state_forge.h"
 #include "fmu_test_io.h"
 #include "rrr_test.h"
 
@@ -2534,6 +2535,101 @@ static void test_me_fmu_state(const fmu3 *plant)
 }
 
 /* Two instances of one FMU in one process do not share anything. */
+/* Forged FMU states (fmu_state_forge.h): the bytes of a good state with fields overwritten and
+ * the checksum made valid again are refused by fmi3DeserializeFMUState, and by fmi3SetFMUState
+ * when the importer overwrote a state block it holds, with fmi3Error, a message naming the
+ * field, and the instance unchanged; in Model Exchange too (me: ContinuousTimeMode, where
+ * the Co-Simulation StepMode case is the foreign one). */
+static unsigned char *state_bytes3(inst *x, size_t *n)
+{
+    const fmu3 *a = x->api;
+    fmi3FMUState s = NULL;
+    unsigned char *buf = NULL;
+    *n = 0;
+    if (a->GetFMUState(x->c, &s) == fmi3OK && a->SerializedFMUStateSize(x->c, s, n) == fmi3OK &&
+        *n > 0) {
+        buf = malloc(*n);
+        if (buf != NULL && a->SerializeFMUState(x->c, s, buf, *n) != fmi3OK) {
+            free(buf);
+            buf = NULL;
+        }
+    }
+    if (s != NULL) {
+        a->FreeFMUState(x->c, &s);
+    }
+    return buf;
+}
+
+static void test_forged_states(const fmu3 *api, int me, const forge_case *cases,
+                               size_t n_cases, size_t data_size)
+{
+    inst x;
+    if (inst_new(&x, api, "forged", me)) {
+        return;
+    }
+    drive(&x, me ? ST_CONT : ST_STEP);
+    size_t n = 0;
+    unsigned char *good = state_bytes3(&x, &n);
+    unsigned char *buf = malloc(n + 1);
+    CHECK(good != NULL && buf != NULL && forge_layout_ok(n, data_size));
+    if (good == NULL || buf == NULL || !forge_layout_ok(n, data_size)) {
+        fprintf(stderr, "%s: FMU state of %zu bytes, the forger expects %zu\n", api->id, n,
+                (size_t)FORGE_DATA + data_size);
+        free(good);
+        free(buf);
+        inst_free(&x);
+        return;
+    }
+    memcpy(buf, good, n);
+    forge_reseal(buf, n);
+    CHECK(memcmp(buf, good, n) == 0);
+    fmi3FMUState s = NULL;
+    CHECK(api->DeserializeFMUState(x.c, buf, n, &s) == fmi3OK && s != NULL);
+    size_t refused = 0;
+    for (size_t i = 0; i < n_cases; ++i) {
+        forge_case fc = cases[i];
+        if (me && fc.w[0].at == FORGE_STATE && fc.w[0].bits == (1u << 3)) {
+            fc.w[0].bits = 1u << 5; /* StepMode: never entered by Model Exchange */
+        }
+        forge_apply(&fc, good, buf, n);
+        log_clear(&x);
+        fmi3FMUState junk = NULL;
+        const fmi3Status st = api->DeserializeFMUState(x.c, buf, n, &junk);
+        const int named = strstr(x.log.last_error, fc.needle) != NULL;
+        memcpy(s, buf, n);
+        log_clear(&x);
+        const fmi3Status st_set = api->SetFMUState(x.c, s);
+        const int named_set = strstr(x.log.last_error, fc.needle) != NULL;
+        if (st != fmi3Error || junk != NULL || !named || st_set != fmi3Error || !named_set) {
+            fprintf(stderr, "%s %s forged state \"%s\": deserialize %d, set %d, message \"%s\" "
+                    "(expected fmi3Error naming \"%s\")\n",
+                    api->id, interface_names[me], fc.what, (int)st, (int)st_set,
+                    x.log.last_error, fc.needle);
+            rrr_test_failures++;
+        } else {
+            ++refused;
+        }
+        if (junk != NULL) {
+            api->FreeFMUState(x.c, &junk);
+        }
+        size_t m = 0;
+        unsigned char *now = state_bytes3(&x, &m);
+        CHECK(now != NULL && m == n && memcmp(now, good, n) == 0);
+        free(now);
+    }
+    memcpy(s, good, n);
+    CHECK(api->SetFMUState(x.c, s) == fmi3OK);
+    if (!me) {
+        CHECK(do_step(&x, H, H, NULL) == fmi3OK);
+    }
+    CHECK(api->FreeFMUState(x.c, &s) == fmi3OK);
+    free(good);
+    free(buf);
+    inst_free(&x);
+    printf("%s %s: %zu of %zu forged FMU states with valid checksums refused, naming the "
+           "field\n", api->id, interface_names[me], refused, n_cases);
+}
+
 static void test_two_instances(const fmu3 *plant)
 {
     enum { N = 200 };
@@ -2686,6 +2782,14 @@ int main(int argc, char **argv)
     test_model_exchange(&plant, &ctrl);
     test_me_against_cs(&plant);
     test_me_fmu_state(&plant);
+    for (int me = 0; me < 2; ++me) {
+        test_forged_states(&plant, me, forge_plant_cases,
+                           sizeof forge_plant_cases / sizeof forge_plant_cases[0],
+                           sizeof(forge_plant));
+        test_forged_states(&ctrl, me, forge_controller_cases,
+                           sizeof forge_controller_cases / sizeof forge_controller_cases[0],
+                           sizeof(forge_controller));
+    }
     test_two_instances(&plant);
     test_logging(&plant);
     test_logging(&ctrl);

@@ -41,6 +41,7 @@
 
 #include "fmi2FunctionTypes.h"
 #include "rrr/rrr.h"
+#include "fmu_state_forge.h"
 #include "fmu_test_io.h"
 #include "rrr_test.h"
 
@@ -2385,6 +2386,135 @@ static void test_me_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
     inst_free(&c);
 }
 
+/* ==== forged FMU states ========================================================================
+ * A state with a valid checksum whose fields were overwritten (fmu_state_forge.h) is refused by
+ * DeSerializeFMUstate, and by SetFMUstate when the importer overwrote a state block it holds,
+ * with fmi2Error, a message naming the field, and the instance unchanged. */
+
+/* Samples of the table in <resources>/reference.csv (resources = "file://<dir>"). */
+static size_t table_samples(const char *resources)
+{
+    char path[1100];
+    snprintf(path, sizeof path, "%s/reference.csv", resources + strlen("file://"));
+    FILE *f = fopen(path, "r");
+    size_t lines = 0;
+    int c, last = '\n';
+    while (f != NULL && (c = fgetc(f)) != EOF) {
+        lines += c == '\n';
+        last = c;
+    }
+    lines += last != '\n';
+    if (f != NULL) {
+        fclose(f);
+    }
+    return lines > 0 ? lines - 1 : 0;
+}
+
+static void test_forged_states(const fmu_api *api, const forge_case *cases, size_t n_cases,
+                               size_t data_size)
+{
+    inst x;
+    if (inst_new(&x, api, "forged")) {
+        return;
+    }
+    CHECK(drive(&x, ST_DONE) == 0);
+    CHECK(api->DoStep(x.c, H, H, fmi2True) == fmi2OK);
+    size_t n = 0;
+    unsigned char *good = state_bytes(&x, &n);
+    unsigned char *buf = malloc(n + 1);
+    CHECK(good != NULL && buf != NULL && forge_layout_ok(n, data_size));
+    if (good == NULL || buf == NULL || !forge_layout_ok(n, data_size)) {
+        fprintf(stderr, "%s: FMU state of %zu bytes, the forger expects %zu\n", api->id, n,
+                (size_t)FORGE_DATA + data_size);
+        free(good);
+        free(buf);
+        inst_free(&x);
+        return;
+    }
+    /* the good bytes, resealed: accepted (the forger writes the checksum right) */
+    memcpy(buf, good, n);
+    forge_reseal(buf, n);
+    CHECK(memcmp(buf, good, n) == 0);
+    fmi2FMUstate s = NULL;
+    CHECK(api->DeSerializeFMUstate(x.c, (const fmi2Byte *)buf, n, &s) == fmi2OK && s != NULL);
+    size_t refused = 0;
+    for (size_t i = 0; i < n_cases; ++i) {
+        const forge_case *fc = &cases[i];
+        forge_apply(fc, good, buf, n);
+        log_clear(&x);
+        fmi2FMUstate junk = NULL;
+        const fmi2Status st = api->DeSerializeFMUstate(x.c, (const fmi2Byte *)buf, n, &junk);
+        const int named = strstr(x.log.last_error, fc->needle) != NULL;
+        /* the importer overwrites a state block it holds: SetFMUstate checks it again */
+        memcpy(s, buf, n);
+        log_clear(&x);
+        const fmi2Status st_set = api->SetFMUstate(x.c, s);
+        const int named_set = strstr(x.log.last_error, fc->needle) != NULL;
+        if (st != fmi2Error || junk != NULL || !named || st_set != fmi2Error || !named_set) {
+            fprintf(stderr, "%s forged state \"%s\": deserialize %d, set %d, message \"%s\" "
+                    "(expected fmi2Error naming \"%s\")\n",
+                    api->id, fc->what, (int)st, (int)st_set, x.log.last_error, fc->needle);
+            rrr_test_failures++;
+        } else {
+            ++refused;
+        }
+        if (junk != NULL) {
+            api->FreeFMUstate(x.c, &junk);
+        }
+        CHECK(same_state(&x, good, n));
+    }
+    /* the block restored: accepted, and the instance steps on */
+    memcpy(s, good, n);
+    CHECK(api->SetFMUstate(x.c, s) == fmi2OK);
+    CHECK(api->DoStep(x.c, 2 * H, H, fmi2True) == fmi2OK);
+    CHECK(api->FreeFMUstate(x.c, &s) == fmi2OK);
+    free(good);
+    free(buf);
+    inst_free(&x);
+    printf("%s: %zu of %zu forged FMU states with valid checksums refused, naming the field\n",
+           api->id, refused, n_cases);
+}
+
+/* The reference: its cases for the FMU's own table, another table's hash, and a cursor that is
+ * a valid interval (accepted: it is a hint of where the look-up starts). */
+static void test_forged_reference(const fmu_api *api)
+{
+    const size_t n_samples = table_samples(api->resources);
+    CHECK(n_samples >= 2);
+    const forge_case cases[] = {
+        FORGE_REFERENCE_CASES(n_samples),
+        {"cursor = the number of samples", {U8(FORGE_REF(cursor), n_samples), NONE}, "cursor"},
+    };
+    test_forged_states(api, cases, sizeof cases / sizeof cases[0], sizeof(forge_reference));
+    inst x;
+    if (inst_new(&x, api, "forged_ref")) {
+        return;
+    }
+    CHECK(drive(&x, ST_DONE) == 0);
+    size_t n = 0;
+    unsigned char *good = state_bytes(&x, &n);
+    if (good != NULL && forge_layout_ok(n, sizeof(forge_reference))) {
+        const uint64_t hash = forge_get_u64(good, FORGE_REF(table_hash));
+        forge_u64(good, FORGE_REF(table_hash), hash ^ 2u);
+        forge_reseal(good, n);
+        fmi2FMUstate s = NULL;
+        log_clear(&x);
+        CHECK(api->DeSerializeFMUstate(x.c, (const fmi2Byte *)good, n, &s) == fmi2Error && s == NULL);
+        CHECK(strstr(x.log.last_error, "another reference table") != NULL);
+        forge_u64(good, FORGE_REF(table_hash), hash);
+        forge_u64(good, FORGE_REF(cursor), n_samples - 2u); /* the last interval */
+        forge_reseal(good, n);
+        CHECK(api->DeSerializeFMUstate(x.c, (const fmi2Byte *)good, n, &s) == fmi2OK && s != NULL);
+        CHECK(api->SetFMUstate(x.c, s) == fmi2OK);
+        CHECK(api->DoStep(x.c, H, H, fmi2True) == fmi2OK);
+        CHECK(api->FreeFMUstate(x.c, &s) == fmi2OK);
+    } else {
+        CHECK(0 && "reference FMU state layout");
+    }
+    free(good);
+    inst_free(&x);
+}
+
 /* ==== the reference FMU (rrr_reference) ======================================================= */
 
 static const char ref_header[] =
@@ -2643,12 +2773,11 @@ static void test_reference(const fmu_api *api)
         CHECK(api->SetFMUstate(b.c, sb) == fmi2OK);
         CHECK(get1(&b, "q_ref[1]") == mid);
         CHECK(api->DoStep(b.c, 0.005, 0.01, fmi2True) == fmi2OK && get1(&b, "q_ref[1]") == later);
-        /* into an instance with another table: refused at the next evaluation */
+        /* into an instance with another table: refused at once, the instance unchanged */
         fmi2FMUstate sc = NULL;
-        CHECK(bytes != NULL && api->DeSerializeFMUstate(c.c, bytes, n, &sc) == fmi2OK);
-        CHECK(api->SetFMUstate(c.c, sc) == fmi2OK);
         log_clear(&c);
-        CHECK(api->DoStep(c.c, 0.005, 0.01, fmi2True) == fmi2Error);
+        CHECK(bytes != NULL && api->DeSerializeFMUstate(c.c, bytes, n, &sc) == fmi2Error &&
+              sc == NULL);
         CHECK(strstr(c.log.last_error, "another reference table") != NULL);
         api->FreeFMUstate(a.c, &s);
         api->FreeFMUstate(b.c, &sb);
@@ -2697,6 +2826,11 @@ int main(int argc, char **argv)
     test_discard(&plant);
     test_time_overflow(&plant);
     test_fmu_state(&plant, &ctrl);
+    test_forged_states(&plant, forge_plant_cases,
+                       sizeof forge_plant_cases / sizeof forge_plant_cases[0], sizeof(forge_plant));
+    test_forged_states(&ctrl, forge_controller_cases,
+                       sizeof forge_controller_cases / sizeof forge_controller_cases[0],
+                       sizeof(forge_controller));
     test_two_instances(&plant);
     test_logging(&plant);
     test_logging(&ctrl);
@@ -2727,6 +2861,7 @@ int main(int argc, char **argv)
         test_illegal_sequences(&ref, &me_machine);
         test_logging(&ref);
         test_reference(&ref);
+        test_forged_reference(&ref);
         fmu_unload(&ref);
     }
 

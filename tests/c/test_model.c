@@ -142,6 +142,8 @@ static void test_validate(void)
     CHECK_STATUS(rrr_model_validate(NULL, NULL), RRR_BAD_INPUT);
     CHECK(strcmp(rrr_status_str(RRR_UNREACHABLE), "RRR_UNREACHABLE") == 0);
     CHECK(strcmp(rrr_status_str((rrr_status)99), "RRR_UNKNOWN_STATUS") == 0);
+    /* the library reports the version of the header it was built from */
+    CHECK(strcmp(rrr_version(), RRR_VERSION_STRING) == 0);
 }
 
 /* The parameter table: one row per scalar of rrr_model, in the struct's order (the FMUs derive

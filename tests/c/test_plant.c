@@ -499,8 +499,71 @@ static void test_bad_input(void)
     CHECK_STATUS(rrr_plant_step(&m, &f, u, 2.5e-4, &x, NULL, NULL), RRR_OK); /* NULL outputs */
 }
 
+/* The stiffness estimate: the infinity norm of d qdd / d qd at rest (rrr_plant_jacobian, the
+ * exact derivatives) maximised over (q2, q3); the default robot is far below the limit, the
+ * reporter's f[1,1] = w[1,1] = 1e4 far above it, named. */
+static void test_stiffness(void)
+{
+    rrr_model m;
+    rrr_model_default(&m);
+    double lambda = 0.0;
+    const char *field = "x";
+    CHECK_STATUS(rrr_plant_stiffness(&m, &lambda, &field), RRR_OK);
+    CHECK(strcmp(field, "") == 0);
+    CHECK(lambda > 10.0 && lambda < RRR_PLANT_STIFFNESS_MAX / 100.0);
+    printf("stiffness estimate of the default robot: %.4g 1/s (limit %.0e 1/s)\n", lambda,
+           RRR_PLANT_STIFFNESS_MAX);
+    /* with every f >= 0 the friction slope is largest at qd = 0 and equals b + sum f w: the
+     * estimate is the largest row sum of |d qdd / d qd| at rest over the grid */
+    rrr_model pos = m;
+    for (int i = 0; i < 3; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            pos.f[i][k] = fabs(pos.f[i][k]);
+        }
+    }
+    double est = 0.0;
+    CHECK_STATUS(rrr_plant_stiffness(&pos, &est, NULL), RRR_OK);
+    double worst = 0.0;
+    for (int a = 0; a < 32; ++a) {
+        for (int b = 0; b < 32; ++b) {
+            const rrr_plant_state x = {{0.0, -RRR_PI + 2.0 * RRR_PI * a / 32,
+                                        -RRR_PI + 2.0 * RRR_PI * b / 32},
+                                       {0.0, 0.0, 0.0}, 0.0, 0.0};
+            const double u[3] = {0.0, 0.0, 0.0};
+            rrr_plant_derivatives d;
+            CHECK_STATUS(rrr_plant_jacobian(&pos, &x, u, &d), RRR_OK);
+            for (int i = 0; i < 3; ++i) {
+                const double row = fabs(d.dqdd_dqd[i][0]) + fabs(d.dqdd_dqd[i][1]) +
+                                   fabs(d.dqdd_dqd[i][2]);
+                worst = row > worst ? row : worst;
+            }
+        }
+    }
+    CHECK(fabs(est - worst) <= 1e-9 * worst);
+    /* the reporter's set: every value within the robot file's bounds, 1e6 times too stiff */
+    rrr_model stiff = m;
+    stiff.f[0][0] = 1e4;
+    stiff.w[0][0] = 1e4;
+    CHECK_STATUS(rrr_plant_stiffness(&stiff, &lambda, &field), RRR_TOO_STIFF);
+    CHECK(strcmp(field, "w[1,1]") == 0 && lambda > 1e8);
+    printf("f[1,1] = w[1,1] = 1e4: %.4g 1/s, %s named\n", lambda, field);
+    stiff = m;
+    stiff.b[2] = 1e6;
+    CHECK_STATUS(rrr_plant_stiffness(&stiff, &lambda, &field), RRR_TOO_STIFF);
+    CHECK(strcmp(field, "b[3]") == 0);
+    stiff = m;
+    stiff.w[1][2] = INFINITY;
+    CHECK_STATUS(rrr_plant_stiffness(&stiff, &lambda, &field), RRR_BAD_MODEL);
+    stiff = m;
+    stiff.p[0] = -1e3;
+    CHECK_STATUS(rrr_plant_stiffness(&stiff, &lambda, &field), RRR_NOT_POSITIVE_DEFINITE);
+    CHECK_STATUS(rrr_plant_stiffness(NULL, &lambda, &field), RRR_BAD_INPUT);
+    CHECK(strcmp(rrr_status_str(RRR_TOO_STIFF), "RRR_TOO_STIFF") == 0);
+}
+
 int main(void)
 {
+    test_stiffness();
     test_tanh();
     test_trig_near();
     test_step_qdd_is_accel();

@@ -114,6 +114,60 @@ int main(void)
     fixed.adaptive = 0;
     equals_the_public_loop(&m, fixed, &g, "fixed step: rrr_sim_closed_loop == the public loop");
 
+    /* in parts of 1, 7 and 999 samples: bit for bit the one call */
+    static double part_p[N][RRR_SIM_PLANT_COLS], part_c[N][RRR_SIM_CTRL_COLS];
+    const size_t counts[3] = {1, 7, N - 1};
+    for (int c = 0; c < 3; ++c) {
+        for (int a = 0; a < 2; ++a) {
+            rrr_plant_integrator sa = s;
+            sa.adaptive = a;
+            CHECK_STATUS(rrr_sim_closed_loop(&m, &sa, ref[0], ref[0] + 3, &m, &g, N, STEP,
+                                             ref[0], pout[0], cout_[0], &done),
+                         RRR_OK);
+            memset(part_p, 0, sizeof part_p);
+            memset(part_c, 0, sizeof part_c);
+            rrr_sim_carry carry;
+            memset(&carry, 0, sizeof carry);
+            size_t calls = 0;
+            rrr_status st = RRR_OK;
+            while (st == RRR_OK && carry.next < N && calls < N + 1) {
+                st = rrr_sim_closed_loop_part(&m, &sa, ref[0], ref[0] + 3, &m, &g, N, STEP,
+                                              ref[0], part_p[0], part_c[0], counts[c], &carry,
+                                              &done);
+                ++calls;
+                CHECK(done == carry.next);
+            }
+            CHECK(st == RRR_OK && carry.next == N);
+            CHECK(calls == (N + counts[c] - 1) / counts[c]);
+            CHECK(memcmp(part_p, pout, sizeof pout) == 0 && memcmp(part_c, cout_, sizeof cout_) == 0);
+            /* a complete run: a further part does nothing */
+            CHECK_STATUS(rrr_sim_closed_loop_part(&m, &sa, ref[0], ref[0] + 3, &m, &g, N, STEP,
+                                                  ref[0], part_p[0], part_c[0], 5, &carry, &done),
+                         RRR_OK);
+            CHECK(done == N);
+        }
+    }
+    rrr_sim_carry carry;
+    memset(&carry, 0, sizeof carry);
+    CHECK_STATUS(rrr_sim_closed_loop_part(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
+                                          pout[0], cout_[0], 0, &carry, &done),
+                 RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_sim_closed_loop_part(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
+                                          pout[0], cout_[0], 3, NULL, &done),
+                 RRR_BAD_INPUT);
+    carry.next = N + 1;
+    CHECK_STATUS(rrr_sim_closed_loop_part(&m, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
+                                          pout[0], cout_[0], 3, &carry, &done),
+                 RRR_BAD_INPUT);
+    /* a plant too stiff for its integrator is refused before any sample */
+    rrr_model stiff = m;
+    stiff.f[0][0] = 1e4;
+    stiff.w[0][0] = 1e4;
+    CHECK_STATUS(rrr_sim_closed_loop(&stiff, &s, ref[0], ref[0] + 3, &m, &g, N, STEP, ref[0],
+                                     pout[0], cout_[0], &done),
+                 RRR_TOO_STIFF);
+    CHECK(done == 0);
+
     /* refusals */
     CHECK_STATUS(rrr_sim_closed_loop(&m, &s, ref[0], ref[0] + 3, &m, &g, 0, STEP, ref[0], pout[0],
                                      cout_[0], &done),

@@ -73,6 +73,8 @@ CASES: dict[str, tuple[list[str], str]] = {
     "experiment-periods-negative": (["identify-experiment", "--periods", "-3"], "--periods"),
     "experiment-periods-not-a-number": (["identify-experiment", "--periods", "x"], "--periods"),
     "experiment-seed-negative": (["identify-experiment", "--seed", "-1"], "--seed"),
+    "experiment-speeds-too-few": (["identify-experiment", "--speeds", "7"], "--speeds"),
+    "experiment-speeds-not-a-number": (["identify-experiment", "--speeds", "x"], "--speeds"),
     "experiment-binary-robot": (["identify-experiment", "--robot", "binary.toml"],
                                 "binary.toml"),
     "experiment-missing-robot": (["identify-experiment", "--robot", "missing.toml"],

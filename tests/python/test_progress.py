@@ -216,3 +216,29 @@ def test_quiet_prints_only_the_results(tmp_path: Path) -> None:
     assert len(lines) == 2, lines
     assert lines[0].lstrip().startswith("ctc: tip error max"), lines
     assert lines[1].startswith("results in "), lines
+
+
+@pytest.mark.parametrize("verbose", [False, True])
+def test_a_library_traceback_is_one_line_unless_verbose(verbose: bool) -> None:
+    """python-can writes a traceback into its message when a peer resets the connection; the
+    command's log keeps one line of it (the cause) unless -v asks for the detail."""
+    import logging
+
+    from rrr_robot.cli.app import _LineFormatter
+
+    try:
+        raise ConnectionResetError(104, "Connection reset by peer")
+    except ConnectionResetError as exc:
+        import traceback
+        message = f"Failed to receive: {exc}  {traceback.format_exc()}"
+        inside = logging.LogRecord("can.x", logging.ERROR, __file__, 1, message, None, None)
+        import sys as _sys
+        attached = logging.LogRecord("can.y", logging.ERROR, __file__, 1, "lost", None,
+                                     _sys.exc_info())
+    fmt = _LineFormatter(tracebacks=verbose)
+    one, two = fmt.format(inside), fmt.format(attached)
+    if verbose:
+        assert "Traceback" in one and "Traceback" in two
+    else:
+        assert one == "ERROR can.x: Failed to receive: [Errno 104] Connection reset by peer"
+        assert two == "ERROR can.y: lost ([Errno 104] Connection reset by peer)"

@@ -236,18 +236,3 @@ def test_drake_keeps_the_tool_frame_and_the_dynamics(name: str, tmp_path: Path) 
         plant.CalcForceElementsContribution(ctx, forces)
         assert_close(plant.CalcInverseDynamics(ctx, qdd[k], forces) + rotor * qdd[k], tau[k],
                      f"Drake, state {k}")
-
-
-def test_the_loading_code_of_docs_urdf_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-                                            ) -> None:
-    """docs/urdf.md's blocks as written: its `rrr urdf` command, then each Python block."""
-    import re
-
-    text = (Path(__file__).resolve().parents[2] / "docs" / "urdf.md").read_text()
-    monkeypatch.chdir(tmp_path)
-    (command,) = re.findall(r"```bash\n(.*?)```", text, re.S)
-    subprocess.run(command, shell=True, check=True, capture_output=True)
-    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
-    assert len(blocks) == 3
-    for i, block in enumerate(blocks):
-        exec(compile(block, f"docs/urdf.md block {i + 1}", "exec"), {})

@@ -517,3 +517,116 @@ rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s, con
     none.q[0] = (double)NAN; /* belongs to no state: x's first half is computed */
     return rrr_plant_step_prepared(m, s, u, h, x, qdd, stats, &none);
 }
+
+/* ---- stiffness ------------------------------------------------------------------------------ */
+
+/* Grid of (q2, q3) over which the stiffness estimate is maximised. */
+#define STIFF_GRID 32
+
+/* Inverse of a symmetric positive definite 3 x 3 matrix by its adjugate; 0 when it is not
+ * positive definite (a leading minor <= 0) or the inverse is not finite. */
+static int spd_inverse3(double D[3][3], double Di[3][3])
+{
+    const double c00 = D[1][1] * D[2][2] - D[1][2] * D[2][1];
+    const double c01 = D[1][2] * D[2][0] - D[1][0] * D[2][2];
+    const double c02 = D[1][0] * D[2][1] - D[1][1] * D[2][0];
+    const double det = D[0][0] * c00 + D[0][1] * c01 + D[0][2] * c02;
+    const double m2 = D[0][0] * D[1][1] - D[0][1] * D[1][0];
+    if (!(D[0][0] > 0.0) || !(m2 > 0.0) || !(det > 0.0)) {
+        return 0;
+    }
+    Di[0][0] = c00 / det;
+    Di[0][1] = (D[0][2] * D[2][1] - D[0][1] * D[2][2]) / det;
+    Di[0][2] = (D[0][1] * D[1][2] - D[0][2] * D[1][1]) / det;
+    Di[1][0] = c01 / det;
+    Di[1][1] = (D[0][0] * D[2][2] - D[0][2] * D[2][0]) / det;
+    Di[1][2] = (D[0][2] * D[1][0] - D[0][0] * D[1][2]) / det;
+    Di[2][0] = c02 / det;
+    Di[2][1] = (D[0][1] * D[2][0] - D[0][0] * D[2][1]) / det;
+    Di[2][2] = m2 / det;
+    return rrr_finite_n(&Di[0][0], 9);
+}
+
+rrr_status rrr_plant_stiffness(const rrr_model *m, double *lambda, const char **field)
+{
+    if (field != NULL) {
+        *field = "";
+    }
+    if (m == NULL) {
+        return RRR_BAD_INPUT;
+    }
+    /* the largest friction slope of each joint, k_t times it, and its largest term */
+    double k[3];
+    int top[3]; /* 0..2: the term k of f/w with the largest |f| w; 3: b */
+    for (int i = 0; i < 3; ++i) {
+        if (!isfinite(m->kt[i]) || !(m->kt[i] > 0.0) || !isfinite(m->b[i]) || !(m->b[i] >= 0.0)) {
+            return RRR_BAD_MODEL;
+        }
+        double s = m->b[i];
+        double best = m->b[i];
+        top[i] = 3;
+        for (int t = 0; t < RRR_NF; ++t) {
+            const double fw = fabs(m->f[i][t]) * m->w[i][t];
+            if (!isfinite(m->f[i][t]) || !isfinite(m->w[i][t]) || !(m->w[i][t] >= 0.0)) {
+                return RRR_BAD_MODEL;
+            }
+            s += fw;
+            if (fw > best) {
+                best = fw;
+                top[i] = t;
+            }
+        }
+        k[i] = m->kt[i] * s;
+        if (!isfinite(k[i])) {
+            k[i] = HUGE_VAL; /* beyond any limit: too stiff */
+        }
+    }
+    double worst = 0.0;
+    int worst_col = 0;
+    for (int a = 0; a < STIFF_GRID; ++a) {
+        for (int b = 0; b < STIFF_GRID; ++b) {
+            const double q[3] = {0.0, -RRR_PI + 2.0 * RRR_PI * a / STIFF_GRID,
+                                 -RRR_PI + 2.0 * RRR_PI * b / STIFF_GRID};
+            double D[3][3], Di[3][3];
+            const rrr_status st = rrr_mass_matrix(m, q, D);
+            if (st == RRR_BAD_INPUT) {
+                return RRR_BAD_MODEL; /* a non-finite a2 or p */
+            }
+            if (st != RRR_OK || !spd_inverse3(D, Di)) {
+                return RRR_NOT_POSITIVE_DEFINITE;
+            }
+            for (int i = 0; i < 3; ++i) {
+                double row = 0.0;
+                double share = 0.0;
+                int col = 0;
+                for (int j = 0; j < 3; ++j) {
+                    const double v = fabs(Di[i][j]) * k[j];
+                    row += v;
+                    if (v > share) {
+                        share = v;
+                        col = j;
+                    }
+                }
+                if (row > worst || isnan(row)) {
+                    worst = isnan(row) ? HUGE_VAL : row;
+                    worst_col = col;
+                }
+            }
+        }
+    }
+    if (lambda != NULL) {
+        *lambda = worst;
+    }
+    if (!(worst <= RRR_PLANT_STIFFNESS_MAX)) {
+        if (field != NULL) {
+            /* the row of w[i,k] or b[i] in the parameter table (read-only, no pointers) */
+            const size_t w0 = offsetof(rrr_model, w) / sizeof(double);
+            const size_t b0 = offsetof(rrr_model, b) / sizeof(double);
+            const int t = top[worst_col];
+            const size_t row = t < 3 ? w0 + (size_t)(3 * worst_col + t) : b0 + (size_t)worst_col;
+            *field = rrr_param_table(NULL)[row].name;
+        }
+        return RRR_TOO_STIFF;
+    }
+    return RRR_OK;
+}

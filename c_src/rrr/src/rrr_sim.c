@@ -11,45 +11,68 @@ static void put_plant(double row[RRR_SIM_PLANT_COLS], const rrr_plant_state *x,
     memcpy(row + 9, tip, 3 * sizeof(double));
 }
 
-rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_integrator *integ,
-                               const double q0[3], const double qd0[3], const rrr_model *ctrl,
-                               const rrr_ctc_gains *gains, size_t n, double step,
-                               const double ref[], double plant_out[], double ctrl_out[],
-                               size_t *done)
+/* The setup of the FMUs' initialization: the models validated (the plant's stiffness too, as the
+ * plant FMU checks it), the plant at (q0, qd0) with its first outputs under u = 0. */
+static rrr_status setup(const rrr_model *plant, const rrr_model *ctrl, const double q0[3],
+                        const double qd0[3], rrr_sim_carry *c)
 {
-    if (done != NULL) {
-        *done = 0;
-    }
-    if (plant == NULL || integ == NULL || q0 == NULL || qd0 == NULL || ctrl == NULL ||
-        gains == NULL || ref == NULL || plant_out == NULL || ctrl_out == NULL || n == 0 ||
-        !isfinite(step) || !(step > 0.0) || rrr_plant_integrator_check(integ, NULL) != RRR_OK) {
-        return RRR_BAD_INPUT;
-    }
-    /* the FMUs' ExitInitializationMode: both models validated */
     rrr_status st = rrr_model_validate(plant, NULL);
     if (st == RRR_OK) {
         st = rrr_model_validate(ctrl, NULL);
     }
-    if (st != RRR_OK) {
-        return st;
+    if (st == RRR_OK) {
+        st = rrr_plant_stiffness(plant, NULL, NULL);
     }
-    rrr_plant_state x;
-    st = rrr_plant_state_init(q0, qd0, &x);
-    if (st != RRR_OK) {
-        return st;
+    if (st == RRR_OK) {
+        st = rrr_plant_state_init(q0, qd0, &c->x);
     }
-    /* the plant's first outputs: qdd under its start input u = 0, the tip at q0 */
     const double u0[3] = {0.0, 0.0, 0.0};
+    if (st == RRR_OK) {
+        st = rrr_plant_accel(plant, &c->x, u0, c->qdd);
+    }
+    if (st == RRR_OK) {
+        st = rrr_fk(plant, c->x.q, c->tip, NULL);
+    }
+    return st;
+}
+
+rrr_status rrr_sim_closed_loop_part(const rrr_model *plant, const rrr_plant_integrator *integ,
+                                    const double q0[3], const double qd0[3],
+                                    const rrr_model *ctrl, const rrr_ctc_gains *gains, size_t n,
+                                    double step, const double ref[], double plant_out[],
+                                    double ctrl_out[], size_t count, rrr_sim_carry *carry,
+                                    size_t *done)
+{
+    if (done != NULL) {
+        *done = carry != NULL && carry->next <= n ? carry->next : 0;
+    }
+    if (plant == NULL || integ == NULL || q0 == NULL || qd0 == NULL || ctrl == NULL ||
+        gains == NULL || ref == NULL || plant_out == NULL || ctrl_out == NULL || n == 0 ||
+        count == 0 || carry == NULL || carry->next > n || !isfinite(step) || !(step > 0.0) ||
+        rrr_plant_integrator_check(integ, NULL) != RRR_OK) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_status st = RRR_OK;
+    if (carry->next == 0) {
+        rrr_sim_carry c;
+        memset(&c, 0, sizeof c);
+        st = setup(plant, ctrl, q0, qd0, &c);
+        if (st != RRR_OK) {
+            return st;
+        }
+        *carry = c;
+    }
+    rrr_plant_state x = carry->x;
     double qdd[3], tip[3];
-    /* rrr_plant_accel in its two halves: the state's half is reused by the first step (and each
-     * step leaves its end state's for the next), the same numbers as computing it again */
+    memcpy(qdd, carry->qdd, sizeof qdd);
+    memcpy(tip, carry->tip, sizeof tip);
+    /* rrr_plant_accel in its two halves: the state's half is reused by the next step (and each
+     * step leaves its end state's for the next one), the same numbers as computing it again,
+     * which a part does for its first sample */
     rrr_plant_prep prep;
     rrr_plant_prepare(plant, rrr_actuator_params_ok(plant), x.q, x.qd, &prep);
-    st = rrr_plant_accel_prepared(plant, &prep, u0, qdd);
-    if (st == RRR_OK) {
-        st = rrr_fk(plant, x.q, tip, NULL);
-    }
-    for (size_t k = 0; st == RRR_OK && k < n; ++k) {
+    const size_t end = count < n - carry->next ? carry->next + count : n;
+    for (size_t k = carry->next; k < end; ++k) {
         const double *r = ref + k * RRR_SIM_REF_COLS;
         double *c = ctrl_out + k * RRR_SIM_CTRL_COLS;
         put_plant(plant_out + k * RRR_SIM_PLANT_COLS, &x, qdd, tip);
@@ -80,18 +103,32 @@ rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_integrato
                 st = rrr_fk(plant, next.q, tip_next, NULL);
             }
             if (st != RRR_OK) {
-                if (done != NULL) {
-                    *done = k + 1;
-                }
-                return st;
+                carry->next = k + 1; /* row k is complete; the run cannot go on */
+                break;
             }
             x = next;
             memcpy(qdd, qdd_next, sizeof qdd);
             memcpy(tip, tip_next, sizeof tip);
         }
-        if (done != NULL) {
-            *done = k + 1;
-        }
+        carry->next = k + 1;
+        carry->x = x;
+        memcpy(carry->qdd, qdd, sizeof qdd);
+        memcpy(carry->tip, tip, sizeof tip);
+    }
+    if (done != NULL) {
+        *done = carry->next;
     }
     return st;
+}
+
+rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_integrator *integ,
+                               const double q0[3], const double qd0[3], const rrr_model *ctrl,
+                               const rrr_ctc_gains *gains, size_t n, double step,
+                               const double ref[], double plant_out[], double ctrl_out[],
+                               size_t *done)
+{
+    rrr_sim_carry carry;
+    memset(&carry, 0, sizeof carry);
+    return rrr_sim_closed_loop_part(plant, integ, q0, qd0, ctrl, gains, n, step, ref, plant_out,
+                                    ctrl_out, n == 0 ? 1 : n, &carry, done);
 }

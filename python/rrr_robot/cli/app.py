@@ -38,6 +38,8 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``rrr`` with every subcommand (nothing heavy is imported: each command
+    imports its library when it runs)."""
     parser = argparse.ArgumentParser(
         prog="rrr",
         description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench, "
@@ -88,6 +90,26 @@ def _one_line(exc: BaseException) -> str:
     return text or type(exc).__name__
 
 
+class _LineFormatter(logging.Formatter):
+    """``LEVEL logger: message`` on one line. Without ``-v`` a record's traceback is left out,
+    whether it comes as the record's exception or inside the message (python-can's socketcand
+    bus writes one into the message when its peer goes away): the exception is kept as one
+    line, so the error the command reports stays the one that reads as the cause."""
+
+    def __init__(self, tracebacks: bool) -> None:
+        super().__init__("%(levelname)s %(name)s: %(message)s")
+        self._tracebacks = tracebacks
+
+    def format(self, record: logging.LogRecord) -> str:
+        if self._tracebacks:
+            return super().format(record)
+        record.message = record.getMessage()
+        line = self.formatMessage(record).split("\n", 1)[0]
+        line = line.partition("Traceback (most recent call last)")[0].rstrip(" :")
+        exc = record.exc_info[1] if record.exc_info else None
+        return f"{line} ({_one_line(exc)})" if exc is not None else line
+
+
 @contextlib.contextmanager
 def _logging(verbose: bool, quiet: bool) -> Iterator[None]:
     """The log lines of a command on stderr: WARNING and above with ``-q``, INFO by default,
@@ -98,7 +120,7 @@ def _logging(verbose: bool, quiet: bool) -> Iterator[None]:
 
     root = logging.getLogger()
     handler = LogHandler()
-    handler.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+    handler.setFormatter(_LineFormatter(tracebacks=verbose))
     level = logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO
     handler.setLevel(level)  # also for the libraries whose loggers set their own level (Dask)
     previous = root.level
@@ -116,9 +138,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     (one line ``rrr: error: ...``; argparse's own errors also exit 2), 130 Ctrl-C (``rrr:
     interrupted``), 143 SIGTERM (``rrr: terminated``); a command may return others (``rrr hil
     plant``: 3 when the plant latched a fault). Nothing is printed as a traceback for these:
-    every error of the package (:class:`RrrError`), of the file system (OSError: a path that
-    cannot be read or written) and of decoding (UnicodeError: a binary file given as text)
-    ends here, and an interrupted run leaves its previous results as they were
+    every error of the package (:class:`~rrr_robot.errors.RrrError`), of the file system
+    (OSError: a path that cannot be read or written) and of decoding (UnicodeError: a binary
+    file given as text) ends here, and an interrupted run leaves its previous results as they were
     (rrr_robot.core.outputs)."""
     previous = None
     if threading.current_thread() is threading.main_thread():

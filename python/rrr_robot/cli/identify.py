@@ -117,7 +117,8 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
         traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
         traj.to_json(rs.path("excitation.json"))
         note = f"simulated, sensors: {sensors}"
-        ex.friction_experiment(model, step=step, sensors=sensors,
+        design = ex.SweepDesign(speeds=tuple(np.geomspace(0.002, 4.0, args.speeds)))
+        ex.friction_experiment(model, design, step=step, sensors=sensors,
                                progress=bars.callback("friction sweep")).to_csv(
             rs.path("friction.csv"), note)
         ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors,
@@ -127,6 +128,15 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
           "excitation.csv, excitation.json)")
     print("identify from them with: " + identify_command(out, args.robot))
     return 0
+
+
+def _sweep_speeds(text: str) -> int:
+    """--speeds: an integer >= 8 (the friction fit has 7 unknowns per joint, and each speed
+    above rrr identify's --v-min gives two points: 8 speeds from 0.002 rad/s give 4 or 5)."""
+    value = positive_int(text)
+    if value < 8:
+        raise argparse.ArgumentTypeError(f"an integer >= 8 expected, got {value}")
+    return value
 
 
 def identify_command(out: Path, robot: str | None) -> str:
@@ -184,6 +194,10 @@ def register_cli(sub: Any) -> None:
     e.add_argument("--noise-free", action="store_true", help="ideal sensors (logs qd, qdd)")
     e.add_argument("--seed", type=nonnegative_int, default=1,
                    help="seed of the sensor noise and of the excitation design (>= 0)")
+    e.add_argument("--speeds", type=_sweep_speeds, default=14,
+                   help="constant speeds of the friction sweep, from 0.002 to 4 rad/s, each "
+                   "joint and direction (default 14; at least 8, of which rrr identify fits those "
+                   "above --v-min: fewer make a quicker, rougher friction fit)")
     e.add_argument("--periods", type=positive_int, default=1,
                    help="excitation periods of 10 s (an experiment has at most 1,000,000 "
                    "samples: 1000 s at 1 ms)")

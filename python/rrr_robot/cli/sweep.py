@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +29,33 @@ def _mm(stats: dict[str, Any], key: str) -> str:
     return f"{1e3 * stats[key]:.3f} mm" if key in stats else "n/a"
 
 
+def _examples_epilog() -> str:
+    """The shipped example specs, for ``--help`` (reads only their first lines)."""
+    from ..sweep.examples import EXAMPLES_DIR, example_summary, examples
+
+    found = examples()
+    if not found:
+        return ""
+    width = max(len(n) for n in found)
+    lines = [f"  {name:<{width}}  {example_summary(path)}" for name, path in found.items()]
+    return ("example specs (rrr sweep --example NAME prints one; the files are in "
+            f"{EXAMPLES_DIR}):\n" + "\n".join(lines))
+
+
 def _cmd_sweep(args: argparse.Namespace) -> int:
+    if args.example is not None:
+        if args.spec is not None or args.out is not None:
+            args.parser.error("--example prints an example spec: give it alone (save the spec "
+                              "with > FILE.toml, then run rrr sweep FILE.toml --out DIR)")
+        from ..sweep.examples import example_path
+
+        sys.stdout.write(example_path(args.example).read_text(encoding="utf-8"))
+        return 0
+    missing = [name for name, value in (("spec", args.spec), ("--out", args.out))
+               if value is None]
+    if missing:
+        args.parser.error(f"the following arguments are required: {', '.join(missing)} (or "
+                          "--example NAME)")
     from ..sweep.job import SweepJob, run_sweep
 
     job = SweepJob(spec=Path(args.spec), out=Path(args.out), workers=args.workers,
@@ -59,16 +86,21 @@ def register_cli(subparsers: Any) -> None:
     """Add the ``sweep`` subcommand to the ``rrr`` command line."""
     p = command_parser(
         subparsers, "sweep", help="run a Monte Carlo sweep of writing-task scenarios on Dask",
-        example="rrr sweep spec.toml --out results/sweep --engine native",
+        example=["rrr sweep spec.toml --out results/sweep --engine native",
+                 "rrr sweep --example monte_carlo > mc.toml"],
+        epilog=_examples_epilog(),
         description="Run the writing task for every sample of a sweep spec (a base scenario "
         "with fields drawn from distributions, a Latin hypercube or a grid) on a Dask cluster: "
         "a local one, or a running one with --scheduler. Writes results.parquet (one row per "
         "run, written batch by batch), summary.json with a sensitivity ranking, and the "
         "figures into --out. Needs the sweep extra: pip install 'rrr_robot[sweep]'.",
     )
-    p.add_argument("spec", help="the sweep spec (TOML: [sweep] and [vary])")
-    p.add_argument("--out", required=True, type=output_path,
-                   help="output folder (a new one, or with --resume the sweep's own)")
+    p.add_argument("spec", nargs="?", help="the sweep spec (TOML: [sweep] and [vary])")
+    p.add_argument("--out", type=output_path,
+                   help="output folder (a new one, or with --resume the sweep's own); required "
+                   "with a spec")
+    p.add_argument("--example", metavar="NAME", choices=sorted(_example_names()),
+                   help="print the shipped example spec NAME (listed below) and exit")
     p.add_argument("--workers", type=positive_int, metavar="N",
                    help="worker processes of the local cluster (default: one per core)")
     p.add_argument("--scheduler", type=scheduler_address, metavar="ADDRESS",
@@ -83,4 +115,10 @@ def register_cli(subparsers: Any) -> None:
                    help="runs per Dask task (default: from the number of runs and workers)")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     add_verbosity_arguments(p)
-    p.set_defaults(func=_cmd_sweep)
+    p.set_defaults(func=_cmd_sweep, parser=p)
+
+
+def _example_names() -> list[str]:
+    from ..sweep.examples import examples
+
+    return list(examples())

@@ -6,7 +6,7 @@ binding: structures, signatures, the parameter table), _status (statuses and the
 _arrays (vector and batch shapes), model (:class:`Model` and its closed-form algorithms, all in
 C), control (:class:`CtcGains`, the gains of the computed-torque law), integrator
 (:class:`PlantIntegrator`, the plant's integrator settings), plant (:class:`Plant`, the plant
-stepped through librrr's rrr_plant_step), linearize (:func:`linearize`: the plant's and the
+stepped through librrr's rrr_plant_step), linearization (:func:`linearize`: the plant's and the
 closed loop's state-space matrices from librrr's exact partial derivatives), param_names (the C
 parameter table: the model's parameters under the FMUs' variable names), checked (checked
 reading of TOML files), robot_file (the one robot file reader: :class:`RobotData`), robot
@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from .control import CtcGains
     from .integrator import PlantIntegrator
-    from .linearize import LinearSystem, linearize
+    from .linearization import LinearSystem, linearize
     from .model import DEFAULT_ROBOT_TOML, Model, Singularity, bps_from_inertia
     from .param_names import model_fmu_values
     from .plant import Plant, PlantSnapshot, PlantStats
@@ -37,8 +37,8 @@ _LAZY = {
     "Singularity": ".model",
     "bps_from_inertia": ".model",
     "PlantIntegrator": ".integrator",
-    "LinearSystem": ".linearize",
-    "linearize": ".linearize",
+    "LinearSystem": ".linearization",
+    "linearize": ".linearization",
     "Plant": ".plant",
     "PlantSnapshot": ".plant",
     "PlantStats": ".plant",

@@ -111,6 +111,12 @@ class RawPlantState(ct.Structure):
     _fields_ = [("q", D3), ("qd", D3), ("h_guess", ct.c_double), ("err_prev", ct.c_double)]
 
 
+class RawSimCarry(ct.Structure):
+    """Mirror of ``rrr_sim_carry`` (rrr_sim.h): where a closed loop run in parts stands."""
+
+    _fields_ = [("x", RawPlantState), ("qdd", D3), ("tip", D3), ("next", ct.c_size_t)]
+
+
 class RawPlantStats(ct.Structure):
     """Mirror of ``rrr_plant_stats``: the work of one ``rrr_plant_step`` call."""
 
@@ -169,6 +175,7 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_plant_integrator_default": [_P(RawPlantIntegrator)],
     "rrr_plant_integrator_check": [_P(RawPlantIntegrator), _P(ct.c_char_p)],
     "rrr_plant_state_init": [_D, _D, _P(RawPlantState)],
+    "rrr_plant_stiffness": [_M, _P(ct.c_double), _P(ct.c_char_p)],
     "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
     "rrr_plant_jacobian": [_M, _P(RawPlantState), _D, _P(RawPlantDerivatives)],
     "rrr_ctc_jacobian": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcDerivatives)],
@@ -176,6 +183,9 @@ _SIGNATURES: dict[str, list[Any]] = {
                        _P(RawPlantStats)],
     "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
                             ct.c_size_t, ct.c_double, _D, _D, _D, _P(ct.c_size_t)],
+    "rrr_sim_closed_loop_part": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
+                                 ct.c_size_t, ct.c_double, _D, _D, _D, ct.c_size_t,
+                                 _P(RawSimCarry), _P(ct.c_size_t)],
     "rrr_param_set": [_M, ct.c_size_t, ct.c_double],
 }
 
@@ -186,6 +196,7 @@ _TABLE_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "rrr_param_get": ([_M, ct.c_size_t], ct.c_double),
     "rrr_param_in_range": ([ct.c_size_t, ct.c_double], ct.c_int),
     "rrr_sample_time_default": ([], ct.c_double),
+    "rrr_version": ([], ct.c_char_p),
 }
 
 def library_path() -> Path:
@@ -223,6 +234,12 @@ def sample_time_default() -> float:
     """RRR_SAMPLE_TIME_DEFAULT (rrr_control.h), s: the control period of the FMUs' default
     experiment, of the CAN bench and of a robot file without [control] sample_time."""
     return float(LIB.rrr_sample_time_default())
+
+
+def library_version() -> str:
+    """The version librrr reports (``rrr_version``: its RRR_VERSION_STRING), which equals
+    ``rrr_robot.__version__`` for the library the package was built with."""
+    return bytes(LIB.rrr_version()).decode("ascii")
 
 
 def param_table() -> list[RawParamInfo]:

@@ -27,6 +27,7 @@ STATUS_NAMES = (
     "RRR_UNREACHABLE",
     "RRR_SINGULAR",
     "RRR_NUMERIC",
+    "RRR_TOO_STIFF",
 )
 
 #: the exception class of each non-OK status (RrrError for any other value)
@@ -37,6 +38,7 @@ ERRORS: dict[int, type[RrrError]] = {
     4: UnreachableError,
     5: SingularError,
     6: NumericError,
+    7: ModelError,
 }
 
 #: what each non-OK status means, in the messages
@@ -47,6 +49,7 @@ MEANING: dict[int, str] = {
     4: "target is outside the workspace",
     5: "singular configuration",
     6: "result would be non-finite",
+    7: "the plant is too stiff for its integrator at a bounded cost",
 }
 
 

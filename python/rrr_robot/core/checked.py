@@ -97,11 +97,11 @@ class Invalid(Exception):  # internal signal, converted to the package's error
 
 
 class Field(ABC):
-    """A field check: ``check(value)`` returns the value converted or raises :class:`Invalid`."""
+    """A field check: ``check(value)`` returns the value converted or raises ``Invalid``."""
 
     @abstractmethod
     def check(self, value: Any) -> Any:
-        """The value converted, or :class:`Invalid`."""
+        """The value converted, or ``Invalid``."""
 
     @abstractmethod
     def describe(self) -> str:

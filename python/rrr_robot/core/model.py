@@ -48,6 +48,7 @@ else:  # built without the Python headers: no _ext
 DH_KEYS = ("d1", "a2", "a3", "d2", "d3")
 SHOULDER = {"front": 0, "back": 1}
 ELBOW = {"up": 0, "down": 1}
+#: The packaged default robot file (``Model.default()`` reads it).
 DEFAULT_ROBOT_TOML = DATA_DIR / "default_robot.toml"
 
 
@@ -127,7 +128,7 @@ class Model:
     @classmethod
     def from_toml(cls, path: str | Path) -> Model:
         """Read a robot file in the format of data/default_robot.toml (every table checked once
-        by :func:`rrr_robot.core.robot_file.read_robot_data`; RobotFileError names the file, the
+        by ``rrr_robot.core.robot_file.read_robot_data``; RobotFileError names the file, the
         table and the key). :func:`rrr_robot.core.robot.read_robot_file` gives the other tables
         as well."""
         return cls(read_robot_data(path).raw_model(), validate=False)

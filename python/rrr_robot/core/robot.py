@@ -21,12 +21,13 @@ __all__ = ["RobotFile", "read_robot_file", "robot_file_from_dict"]
 class RobotFile:
     """A checked robot file and the model built from it.
 
-    ``model``: the validated :class:`Model`; ``control``: the [control] gains and sample period
-    (None without a [control] table); ``sample_time``: the sample period of the writing task's
-    reference and of the co-simulation (s); ``writing``: the checked [writing] values, built into
-    a WritingSpec by ``rrr_robot.writing`` (``WritingSpec.from_robot``); ``links``,
-    ``rotor_inertia``: the link tables (None when the file gives [base_parameters]);
-    ``data``: everything, as :class:`RobotData` (``data.tables()`` writes it back)."""
+    ``model``: the validated :class:`~rrr_robot.core.model.Model`; ``control``: the [control]
+    gains and sample period (None without a [control] table); ``sample_time``: the sample
+    period of the writing task's reference and of the co-simulation (s); ``writing``: the
+    checked [writing] values, built into a WritingSpec by ``rrr_robot.writing``
+    (``WritingSpec.from_robot``); ``links``, ``rotor_inertia``: the link tables (None when the
+    file gives [base_parameters]); ``data``: everything, as
+    :class:`~rrr_robot.core.robot_file.RobotData` (``data.tables()`` writes it back)."""
 
     source: str
     model: Model

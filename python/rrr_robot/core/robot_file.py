@@ -32,6 +32,7 @@ from ..errors import RobotFileError, RrrError
 from . import _lib
 from .checked import Document, Field, Flag, Matrix, Number, Text, Vector, load_toml, show
 from .param_names import PARAMS, ParamInfo, group_shape, param
+from .stiffness import Stiffness, stiffness
 
 __all__ = [
     "DEFAULT_SAMPLE_TIME",
@@ -205,7 +206,7 @@ class RobotData:
 
     def tables(self) -> dict[str, dict[str, Any]]:
         """The file's tables as checked (numbers as floats, arrays as lists), ready for
-        :func:`write_toml`."""
+        ``write_toml``."""
         out: dict[str, dict[str, Any]] = {}
         for table, groups in PARAM_TABLES.items():
             if table == "base_parameters" and self.links is not None:
@@ -319,6 +320,10 @@ def _validate(doc: Document, data: RobotData) -> None:
     raw = data.raw_model()
     status = _lib.LIB.rrr_model_validate(ct.byref(raw), ct.byref(field))
     if status == 0:
+        try:
+            stiffness(raw, data.params)
+        except Stiffness as exc:
+            doc.fail("friction", exc.field.split("[")[0], f"[friction] {exc}")
         return
     name = (field.value or b"?").decode()
     status_name = _lib.STATUS_NAMES[status] if 0 <= status < len(_lib.STATUS_NAMES) else "?"

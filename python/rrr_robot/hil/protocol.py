@@ -42,6 +42,7 @@ __all__ = [
     "quantise_state",
 ]
 
+#: The bench's CAN database (DBC) shipped with the package.
 DBC_PATH = DATA_DIR / "rrr_bench.dbc"
 #: s: the period of the bench's C nodes, RRR_SAMPLE_TIME_DEFAULT (rrr_control.h, 1 ms), the
 #: package's default sample time; a reference for the bench must be sampled at it.
@@ -52,7 +53,12 @@ DATA_IDS = {"VoltageCmd": 0x10, "StopCmd": 0x11, "JointState1": 0x21, "JointStat
 #: Latched fault bits of PlantStatus.Faults.
 FAULT_BITS = {"timeout": 1, "crc": 2, "counter": 4, "range": 8, "format": 16, "sync": 32,
               "bus": 64}
-NMT_BOOT, NMT_STOPPED, NMT_OPERATIONAL = 0, 4, 5
+#: Heartbeat NmtState of a node that has booted (CANopen's NMT state numbers).
+NMT_BOOT = 0
+#: Heartbeat NmtState of a stopped node.
+NMT_STOPPED = 4
+#: Heartbeat NmtState of an operational node.
+NMT_OPERATIONAL = 5
 
 
 class HilError(RrrError):

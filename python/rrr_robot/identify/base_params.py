@@ -47,6 +47,11 @@ class Estimate:
 
 @dataclass(frozen=True)
 class BaseParamResult:
+    """The base parameters estimated from a log: ``ls`` (least squares) and ``wls`` (weighted
+    by each joint's residual variance), each an :class:`Estimate`; ``cond`` the condition
+    number of the stacked regressor, ``rows`` the regressor rows used, ``samples`` the log
+    samples they came from."""
+
     ls: Estimate
     wls: Estimate
     cond: float             # condition number of the stacked regressor (rows used)

@@ -32,6 +32,11 @@ log = logging.getLogger(__name__)
 
 @dataclass(frozen=True)
 class Settings:
+    """How to identify: the derivatives' filter (``butter``, ``savgol`` or ``log``: the logged
+    ones), its cutoff for the excitation log and for the friction log (Hz), the friction fit
+    (``nls``: f, w and b; ``ls``: w fixed from the prior), the base-parameter estimator
+    (``ls`` or ``wls``) and the least joint speed of the friction samples (rad/s)."""
+
     derivatives: str = "butter"     # butter | savgol | log
     cutoff: float = 15.0            # Hz, excitation log
     friction_cutoff: float = 5.0    # Hz, friction log
@@ -58,11 +63,17 @@ def check_voltages(lg: Log, u_max: float) -> None:
 
 @dataclass(frozen=True)
 class Identified:
+    """The result of :func:`identify`: the identified ``model`` (the prior with the estimated
+    friction and base parameters), the friction fit of each joint (None without a friction
+    log) and the base-parameter estimates; :meth:`report` gives it as JSON values."""
+
     model: Model
     friction: list[FrictionFit] | None
     base: BaseParamResult
 
     def report(self) -> dict[str, Any]:
+        """The result as JSON values: the estimated p with its standard deviations, the
+        estimator, the regressor's condition and rows, and the friction fits."""
         est = self.base.wls if self.model_uses_wls else self.base.ls
         other = self.base.ls if self.model_uses_wls else self.base.wls
         out: dict[str, Any] = {

@@ -27,6 +27,8 @@ from .fmus import fmu_path
 
 log = logging.getLogger(__name__)
 
+__all__ = ["CosimOptions", "CosimResult", "run_cosim"]
+
 J = (1, 2, 3)
 CTRL_IN = [f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref", "q", "qd") for i in J]
 CTRL_OUT = [f"{s}[{i}]" for s in ("u", "u_n", "u_c") for i in J]

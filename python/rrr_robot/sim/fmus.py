@@ -18,10 +18,23 @@ from ..core._package import PACKAGE_DIR
 from ..core.archives import CheckedZip
 from ..errors import ArchiveError, BadInputError, RrrError
 
+__all__ = [
+    "FMI_VERSIONS",
+    "FMU_NAMES",
+    "HOST_VARIANTS",
+    "FmuVariant",
+    "describe",
+    "fmu_dir",
+    "fmu_path",
+    "variants",
+]
+
+#: The packaged FMUs' files by role.
 FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu",
              "reference": "rrr_reference.fmu"}
+#: The FMI versions each FMU is built for.
 FMI_VERSIONS = (2, 3)
-# fmus/<folder>/: FMI 2.0 archives for the hosts of another CPU, binaries/linux64 built for it
+#: fmus/<folder>/: FMI 2.0 archives for the hosts of another CPU, binaries/linux64 built for it.
 HOST_VARIANTS = ("aarch64-linux",)
 # ELF e_machine -> CPU, to tell what a linux32/linux64 folder (FMI 2.0: no CPU in the name) holds
 _ELF_MACHINES = {3: "x86", 62: "x86_64", 40: "arm", 183: "aarch64"}

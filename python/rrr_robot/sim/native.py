@@ -14,6 +14,7 @@ from __future__ import annotations
 import ctypes as ct
 import time
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -22,6 +23,7 @@ from ..core._arrays import FloatArray, ptr
 from ..core.control import CtcGains
 from ..core.integrator import PlantIntegrator
 from ..core.param_names import param_index, set_values
+from ..core.stiffness import stiffness
 from ..errors import BadInputError
 from .cosim import CosimOptions, CosimResult, _check_reference
 
@@ -81,12 +83,45 @@ def _controller(values: Mapping[str, float | bool]) -> tuple[_lib.RawModel, _lib
     return _model(model), _lib.RawCtcGains.from_buffer_copy(gains.packed)
 
 
+#: wall time one C call of the loop may take before Python runs again (Ctrl-C, SIGTERM, the
+#: progress callback), s; the parts are sized from the time the previous one took
+PART_SECONDS = 0.05
+_FIRST_PART = 256  # samples of the first call (its setup validates both models: about 2 ms)
+_MAX_PART = 1 << 20
+
+
+def _run_in_parts(n: int, options: CosimOptions, args: tuple[Any, ...], t: FloatArray) -> None:
+    """``rrr_sim_closed_loop_part`` until the n samples are written, each call about
+    PART_SECONDS long: a signal handler (KeyboardInterrupt, the CLI's SIGTERM) runs between two
+    calls, so a run ends within about that time; no allocation in C, the state between the calls
+    is the caller's :class:`_lib.RawSimCarry`."""
+    carry = _lib.RawSimCarry()
+    done = ct.c_size_t(0)
+    count = _FIRST_PART
+    part = _lib.FUNCS["rrr_sim_closed_loop_part"]
+    while carry.next < n:
+        begin = time.perf_counter()
+        status = part(*args, count, ct.byref(carry), ct.byref(done))
+        if status != 0:
+            k = int(done.value)  # 0 also when the setup (models, settings, initial state) failed
+            where = (f"sample {k} (t = {t[min(k, n - 1)]:.6f} s)"
+                     + (" or its setup" if k == 0 else ""))
+            _lib.raise_for("rrr_sim_closed_loop", status, f"at {where}")
+        elapsed = time.perf_counter() - begin
+        if options.progress is not None:
+            options.progress(int(carry.next) - 1, n)
+        scale = PART_SECONDS / elapsed if elapsed > 0.0 else 4.0
+        count = max(1, min(_MAX_PART, int(count * min(4.0, scale))))
+
+
 def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
              x_ref: FloatArray, options: CosimOptions | None = None) -> CosimResult:
-    """The closed loop of :func:`run_cosim` in C, bit-identical to the FMUs' co-simulation.
+    """The closed loop of :func:`~rrr_robot.sim.cosim.run_cosim` in C, bit-identical to the
+    FMUs' co-simulation.
 
-    ``options`` as for :func:`run_cosim`; FMU files and the measurement/actuation hooks (a CAN
-    bench's quantisation) belong to the FMU engine and are refused here.
+    ``options`` as for :func:`~rrr_robot.sim.cosim.run_cosim`; FMU files and the
+    measurement/actuation hooks (a CAN bench's quantisation) belong to the FMU engine and are
+    refused here.
     """
     options = options if options is not None else CosimOptions()
     _check_reference(t, q_ref, qd_ref, qdd_ref, options.step)
@@ -105,18 +140,12 @@ def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Floa
     ref = np.ascontiguousarray(np.hstack([q_ref, qd_ref, qdd_ref]), dtype=np.float64)
     plant_rec = np.empty((n, 12))
     ctrl_rec = np.empty((n, 9))
-    done = ct.c_size_t(0)
+    stiffness(plant)  # a plant too stiff to integrate: refused with the numbers, at once
     start, start_cpu = time.perf_counter(), time.thread_time()
-    status = _lib.FUNCS["rrr_sim_closed_loop"](
+    _run_in_parts(n, options, (
         ct.byref(plant), ct.byref(integ), ptr(q0), ptr(qd0), ct.byref(ctrl), ct.byref(gains),
-        n, float(options.step), ptr(ref), ptr(plant_rec), ptr(ctrl_rec), ct.byref(done))
+        n, float(options.step), ptr(ref), ptr(plant_rec), ptr(ctrl_rec)), t)
     wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
-    if status != 0:
-        k = int(done.value)  # 0 also when the setup (models, settings, initial state) failed
-        where = f"sample {k} (t = {t[min(k, n - 1)]:.6f} s)" + (" or its setup" if k == 0 else "")
-        _lib.raise_for("rrr_sim_closed_loop", status, f"at {where}")
-    if options.progress is not None:
-        options.progress(n - 1, n)
     return CosimResult(
         t=t, q_ref=q_ref, qd_ref=qd_ref, x_ref=x_ref,
         q=plant_rec[:, 0:3], qd=plant_rec[:, 3:6], qdd=plant_rec[:, 6:9], tip=plant_rec[:, 9:12],

@@ -61,6 +61,7 @@ log = logging.getLogger(__name__)
 
 __all__ = ["TOOLS", "SspRun", "run_ssp"]
 
+#: The tools that run an archive (``rrr run-ssp --tool``).
 TOOLS = ("libcosim", "fmpy")
 #: what is recorded of each component (the columns of rrr writing that come from the FMUs)
 RECORDED = {"plant": list(PLANT_OUT), "controller": list(CTRL_OUT)}

@@ -65,7 +65,9 @@ log = logging.getLogger(__name__)
 
 __all__ = ["SPEC_COPY", "SWEEP_META", "SweepJob", "require_dependencies", "run_sweep"]
 
+#: The copy of the spec file in the output folder (byte for byte).
 SPEC_COPY = "spec.toml"
+#: What defines the runs, and its SHA-256 fingerprint, in the output folder.
 SWEEP_META = "sweep.json"
 #: The packages a sweep needs beyond the base install (the ``sweep`` extra).
 DEPENDENCIES = ("dask", "distributed", "pyarrow")

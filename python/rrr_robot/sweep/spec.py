@@ -50,7 +50,9 @@ __all__ = [
     "spec_from_dict",
 ]
 
+#: The designs of ``[sweep] method``: independent random draws, a Latin hypercube, a grid.
 METHODS = ("random", "lhs", "grid")
+#: The distributions of a ``[vary]`` entry.
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "values")
 #: Runs of one sweep.
 MAX_SAMPLES = 1_000_000

@@ -44,11 +44,29 @@ from .trajectory import (
 
 log = logging.getLogger(__name__)
 
+__all__ = [
+    "ENGINES",
+    "PAPER_RMS_U_C",
+    "PAPER_RMS_U_N",
+    "Prepared",
+    "WritingJob",
+    "controller_fmu_values",
+    "metrics",
+    "prepare",
+    "run_engine",
+    "run_writing",
+    "scenario_options",
+    "scenario_summary",
+    "writing_spec",
+]
+
 #: The engines of a writing job (WritingJob.engine).
 ENGINES = ("fmpy", "native")
 
-#: RMS voltages of the paper's eq 16 (real robot, PD + feedforward), V.
+#: RMS voltages of the paper's eq 16 (real robot, PD + feedforward), V: the feedforward part
+#: u_n of joints 1 to 3.
 PAPER_RMS_U_N = (0.25, 1.98, 0.78)
+#: The same for the PD part u_c.
 PAPER_RMS_U_C = (0.11, 0.24, 0.17)
 
 

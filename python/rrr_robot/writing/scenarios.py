@@ -47,7 +47,22 @@ from ..core.param_names import GROUPS, PARAMS, ParamInfo, group_shape, set_value
 from ..core.robot_file import GAIN
 from ..errors import ModelError, ScenarioError
 
+__all__ = [
+    "BUILTIN",
+    "MAX_SCENARIOS",
+    "SCENARIO_DIR",
+    "SCHEMA",
+    "Scenario",
+    "check_run",
+    "load_scenario",
+    "read_scenario_file",
+    "scenario_from_dict",
+]
+
+#: The packaged scenario files (``<name>.toml``).
 SCENARIO_DIR = DATA_DIR / "scenarios"
+#: The built-in scenarios, by name: PD only, PD + feedforward (computed torque), and the latter
+#: with a perturbed controller model.
 BUILTIN = ("pd", "ctc", "mismatch")
 #: Scenarios of one run (each is one co-simulation of the whole reference).
 MAX_SCENARIOS = 20
@@ -71,6 +86,8 @@ def _mismatch_field(group: str) -> Field:
     return ScalarOrArray(MISMATCH, Matrix(shape[0], shape[1], lambda i, k: MISMATCH))
 
 
+#: What a scenario file may hold: its tables, and each key's check (a sweep varies the same
+#: fields by dotted name: rrr_robot.sweep.keys).
 SCHEMA: dict[str, dict[str, Field]] = {
     "scenario": {
         "name": Text(max_len=64, pattern=NAME_PATTERN, pattern_text=(

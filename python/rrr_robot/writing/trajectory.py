@@ -91,7 +91,9 @@ DEFAULT_TEXT = "a\u03c9m\u03b3"  # "a omega m gamma"
 #: points) and at most 1,000,000 samples (1000 s at 1 ms; the co-simulation of one scenario
 #: then takes about half a minute). MAX_TEXT (200 characters) bounds the text.
 MAX_PATH_LENGTH = 100.0
+#: The longest reference of one run, s (see MAX_PATH_LENGTH).
 MAX_REFERENCE_DURATION = 1000.0
+#: The most samples of one run's reference (see MAX_PATH_LENGTH).
 MAX_REFERENCE_SAMPLES = 1_000_000
 _TIME_GRID = 5e-4            # s, grid of the timing law's quintic spline
 _PATH_GRID = 1e-4            # m, grid of s for the speed limit
@@ -496,7 +498,7 @@ def numeric_ik_path(
     the DH chain of the model, position only), each seeded with the previous solution; the
     comparison of the paper's Fig 5. Needs ``roboticstoolbox-python``.
 
-    ``tol`` bounds RTB's error measure E = 1/2 |x_err|^2, so 1e-28 means |x_err| < 1.4e-14 m
+    ``tol`` bounds RTB's error measure ``E = 1/2 |x_err|^2``, so 1e-28 means ``|x_err| < 1.4e-14`` m
     (about 1e-14 rad here); much below 1e-30 LM stalls at round-off and fails. A row that does
     not converge raises NumericError."""
     import roboticstoolbox as rtb

@@ -136,7 +136,7 @@ def _blends(pieces: list[_Piece], starts: FloatArray, opt: PathOptions) -> list[
 
 @dataclass(frozen=True)
 class WritingPath:
-    """The whole writing path C(s), s in [0, length]; see :func:`build_path`."""
+    """The whole writing path C(s), s in [0, length]; see ``build_path``."""
 
     pieces: tuple[_Piece, ...]
     starts: FloatArray

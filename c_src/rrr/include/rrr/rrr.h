@@ -14,7 +14,5 @@
 #include "rrr_plant.h"
 #include "rrr_sim.h"
 #include "rrr_derivatives.h"
-
-/** Version of librrr. */
-#define RRR_VERSION_STRING "0.1.0"
+#include "rrr_version.h"
 #endif /* RRR_H */

@@ -85,7 +85,7 @@ typedef enum rrr_ctc_input {
     RRR_CTC_QDD_REF,     ///< reference acceleration, rad/s^2
     RRR_CTC_Q,           ///< measured position, rad
     RRR_CTC_QD,          ///< measured velocity, rad/s
-    RRR_CTC_INPUT_COUNT
+    RRR_CTC_INPUT_COUNT  ///< number of inputs (5)
 } rrr_ctc_input;
 
 /** @brief The law's output and its partial derivatives with respect to each input vector. */

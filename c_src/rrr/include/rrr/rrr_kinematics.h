@@ -19,8 +19,15 @@ extern "C" {
  * (paper eq 6: "-" sign = elbow up, i.e. sin q3 <= 0; "+" sign = elbow down, sin q3 > 0).
  * The branch index is shoulder * 2 + elbow.
  */
-typedef enum rrr_shoulder { RRR_SHOULDER_FRONT = 0, RRR_SHOULDER_BACK = 1 } rrr_shoulder;
-typedef enum rrr_elbow { RRR_ELBOW_UP = 0, RRR_ELBOW_DOWN = 1 } rrr_elbow;
+typedef enum rrr_shoulder {
+    RRR_SHOULDER_FRONT = 0,      ///< r >= 0: the tip in front of the shoulder
+    RRR_SHOULDER_BACK = 1        ///< r < 0: the arm reaching back over the shoulder
+} rrr_shoulder;
+/** @brief The elbow branch (see rrr_shoulder): up is sin q3 <= 0, down sin q3 > 0. */
+typedef enum rrr_elbow {
+    RRR_ELBOW_UP = 0,            ///< sin q3 <= 0 (the "-" sign of eq 6)
+    RRR_ELBOW_DOWN = 1           ///< sin q3 > 0 (the "+" sign of eq 6)
+} rrr_elbow;
 
 /** @brief Every IK solution of one target. */
 typedef struct rrr_ik_set {

@@ -28,7 +28,7 @@ typedef enum rrr_param_bound {
     RRR_PARAM_POS = 2              ///< > 0
 } rrr_param_bound;
 
-/* Units of the table (FMU unit names). */
+/** Units of the table (the FMUs' unit names). */
 #define RRR_U_M "m"
 #define RRR_U_G "m/s2"
 #define RRR_U_P2 "kg.m2"
@@ -38,7 +38,8 @@ typedef enum rrr_param_bound {
 #define RRR_U_W "s/rad"
 #define RRR_U_B "V.s/rad"
 
-/* Rows of a 3-vector, and of a 3 x 3 matrix (joint i, term k). */
+/** Helpers of RRR_MODEL_PARAMS: the rows of a 3-vector, of a 3 x 3 matrix (joint i, term k)
+ *  and of base parameter p_i. */
 #define RRR_PARAMS_J(X, N, M, U, B, D)                                                        \
     X(N "[1]", M[0], U, B, D " of joint 1")                                                  \
     X(N "[2]", M[1], U, B, D " of joint 2")                                                  \

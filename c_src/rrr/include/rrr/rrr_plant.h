@@ -61,6 +61,13 @@ extern "C" {
  *  a guard against an interval that would not finish. */
 #define RRR_PLANT_MAX_STEPS_DEFAULT 10000000L
 
+/** Largest stiffness estimate (rrr_plant_stiffness) of a plant that is accepted for simulation,
+ *  1/s. The adaptive method is stable for |lambda| h <= 3.3, so a plant of stiffness lambda costs
+ *  at least lambda / 3.3 internal steps (6 evaluations each) per simulated second whatever the
+ *  tolerances: at this limit about 3e5 steps, 1.8e6 evaluations (docs/limits.md has the
+ *  measured seconds). The default robot's estimate is about 1.6e3 1/s. */
+#define RRR_PLANT_STIFFNESS_MAX 1e6
+
 /** @brief How the plant integrates (plain data; rrr_plant_integrator_default fills it). */
 typedef struct rrr_plant_integrator {
     int adaptive;        ///< nonzero (default): Dormand-Prince 5(4), error-controlled;
@@ -120,6 +127,27 @@ RRR_API rrr_status rrr_plant_state_init(const double q0[3], const double qd0[3],
  */
 RRR_API rrr_status rrr_plant_accel(const rrr_model *m, const rrr_plant_state *x, const double u[3],
                                    double qdd[3]);
+
+/**
+ * @brief Stiffness estimate of the plant, |d qdd / d qd|, and the check against
+ *        RRR_PLANT_STIFFNESS_MAX: what makes a parameter set too costly to integrate.
+ *
+ * d qdd / d qd = -D(q)^-1 (d tau / d qd + diag(k_t,i u_f,i'(qd_i))) (rrr_derivatives.h). The
+ * friction slope u_f,i' = b_i + sum_k f_ik w_ik (1 - tanh^2(w_ik qd_i)) is at most
+ * s_i = b_i + sum_k |f_ik| w_ik (reached at qd_i = 0 when every f_ik >= 0), and the Coriolis part
+ * vanishes at rest, so the estimate is
+ *     lambda = max over (q2, q3) of max_i sum_j |D(q)^-1_ij| k_t,j s_j
+ * (the infinity norm of the matrix at rest, an upper bound of its spectral radius), maximised
+ * over a 32 x 32 grid of (q2, q3) (D does not depend on q1). Costs about 0.1 ms.
+ * @param[out] lambda if not NULL, the estimate, 1/s (written unless RRR_BAD_INPUT/RRR_BAD_MODEL)
+ * @param[out] field  if not NULL, on RRR_TOO_STIFF the name of the parameter with the largest
+ *                    share of the stiffest row ("w[1,1]", "b[2]", ...; a static string of the
+ *                    parameter table), else ""
+ * @return RRR_OK (lambda <= RRR_PLANT_STIFFNESS_MAX), RRR_TOO_STIFF, RRR_BAD_INPUT (NULL),
+ *         RRR_BAD_MODEL (non-finite or out-of-range friction or motor parameters),
+ *         RRR_NOT_POSITIVE_DEFINITE (D(q) singular at a grid point)
+ */
+RRR_API rrr_status rrr_plant_stiffness(const rrr_model *m, double *lambda, const char **field);
 
 /**
  * @brief Advance the state by h seconds under constant input voltage u.

@@ -60,6 +60,42 @@ RRR_API rrr_status rrr_sim_closed_loop(const rrr_model *plant, const rrr_plant_i
                                        double step, const double ref[], double plant_out[],
                                        double ctrl_out[], size_t *done);
 
+/**
+ * @brief Where a closed loop run in parts (rrr_sim_closed_loop_part) stands: caller-owned plain
+ *        data, zero-filled before the first part.
+ */
+typedef struct rrr_sim_carry {
+    rrr_plant_state x;    ///< the plant's state at sample `next`
+    double qdd[3];        ///< the plant's qdd output at that sample (before the controller)
+    double tip[3];        ///< its tip output
+    size_t next;          ///< samples fully written so far (0: the run has not started)
+} rrr_sim_carry;
+
+/**
+ * @brief rrr_sim_closed_loop in parts of at most `count` samples, so that a caller can do
+ *        something between them (a Python caller handles Ctrl-C and SIGTERM there, a GUI
+ *        reports progress): the parts together write exactly what one rrr_sim_closed_loop call
+ *        writes, bit for bit. No allocation: the state between parts is in *carry.
+ *
+ * The first call (carry->next = 0) checks the arguments and the models as
+ * rrr_sim_closed_loop does, then runs samples 0 .. min(count, n) - 1; each further call, with
+ * the same arguments and carry, runs the next `count` samples. The run is complete when
+ * carry->next = n (a further call then does nothing and returns RRR_OK).
+ * @param[in]     count at least 1 sample per call
+ * @param[in,out] carry where the run stands; carry->next is the number of samples written
+ * @param[out]    done  if not NULL, carry->next after the call (the sample that failed on an
+ *                      error, as rrr_sim_closed_loop's done)
+ * @return rrr_sim_closed_loop's statuses; RRR_BAD_INPUT also for count = 0, a NULL carry or
+ *         carry->next > n
+ */
+RRR_API rrr_status rrr_sim_closed_loop_part(const rrr_model *plant,
+                                            const rrr_plant_integrator *integ,
+                                            const double q0[3], const double qd0[3],
+                                            const rrr_model *ctrl, const rrr_ctc_gains *gains,
+                                            size_t n, double step, const double ref[],
+                                            double plant_out[], double ctrl_out[], size_t count,
+                                            rrr_sim_carry *carry, size_t *done);
+
 #ifdef __cplusplus
 }
 #endif

@@ -26,11 +26,13 @@ typedef enum rrr_status {
     RRR_NOT_POSITIVE_DEFINITE = 3, ///< inertia matrix D(q) not positive definite; outputs untouched
     RRR_UNREACHABLE = 4,        ///< IK target outside the workspace; outputs untouched
     RRR_SINGULAR = 5,           ///< singular configuration where a unique answer does not exist; outputs untouched
-    RRR_NUMERIC = 6             ///< a result would be non-finite (e.g. the integration diverged); outputs untouched
+    RRR_NUMERIC = 6,            ///< a result would be non-finite (e.g. the integration diverged); outputs untouched
+    RRR_TOO_STIFF = 7           ///< the plant is too stiff for its integrator at a bounded cost
+                                ///< (rrr_plant_stiffness); outputs untouched
 } rrr_status;
 
 /** Number of status codes. */
-#define RRR_STATUS_COUNT 7
+#define RRR_STATUS_COUNT 8
 
 /** @brief Human-readable name of a status ("RRR_OK", ...); "RRR_UNKNOWN_STATUS" for other values. */
 RRR_API const char *rrr_status_str(rrr_status s);

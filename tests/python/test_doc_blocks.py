@@ -1,0 +1,101 @@
+"""Every command and code block of README.md and docs/ runs as written (tests/python/doc_blocks.py
+says how each kind of block is run): a block fails the test when it fails, when its shown output
+is not what it prints, or when it is of no known kind; the blocks that cannot run here are
+listed below, each with its reason."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import pytest
+from doc_blocks import (
+    ROOT,
+    Block,
+    Workdir,
+    all_blocks,
+    blocks_of,
+    check_output,
+    doc_pages,
+    run_block,
+)
+
+#: The blocks marked ``# not run here: <reason>``: (page, first command). A new one must be
+#: added here (and its reason be one a reader accepts: hardware or privileges this machine
+#: lacks, or the test command itself).
+NOT_RUN_HERE = {
+    ("README.md", "bash scripts/run_tests.sh"),
+    ("docs/getting-started.md", "bash scripts/run_tests.sh"),
+    ("docs/can-bench.md", "sudo ip link set can0 up type can bitrate 1000000"),
+    ("docs/c-library.md", "cmake -S . -B build && cmake --build build -j2"),
+}
+#: Seconds one block may take (the longest is the README's first command, about 15 s here).
+BLOCK_TIMEOUT = 120.0
+#: Environment of the blocks: scripts/setup_env.sh skips its pip install (the test command
+#: installed the package into this venv just before), so `bash scripts/writing_task.sh` runs
+#: the writing task itself.
+BLOCK_ENV = {"RRR_SKIP_INSTALL": "1"}
+
+
+def _pages_with_runnable_blocks() -> list[str]:
+    return [str(p.relative_to(ROOT)) for p in doc_pages()
+            if any(b.kind in ("run", "file") for b in blocks_of(p))]
+
+
+def _first_command(block: Block) -> str:
+    for line in block.text.split("\n"):
+        if line.startswith("$ "):
+            return line[2:].strip()
+    return ""
+
+
+def test_every_block_is_run_or_of_a_known_kind() -> None:
+    problems = []
+    blocks = all_blocks()
+    assert len(blocks) > 50
+    for k, b in enumerate(blocks):
+        if b.kind == "unknown":
+            lang = b.lang or "(none)"
+            problems.append(f"{b.where}: a block of language {lang}: neither run nor a known "
+                            "listing (tests/python/doc_blocks.py lists the kinds)")
+        if b.kind == "output":
+            before = next((x for x in reversed(blocks[:k]) if x.page == b.page
+                           and x.kind in ("run", "output")), None)
+            if before is None or before.kind != "run":
+                problems.append(f"{b.where}: a 'text output' block must follow a runnable one")
+    assert not problems, "\n".join(problems)
+
+
+def test_not_run_here_blocks_are_listed() -> None:
+    found = {(b.page, _first_command(b)): b.not_run_here for b in all_blocks()
+             if b.kind == "not-run-here"}
+    for (page, cmd), reason in sorted(found.items()):
+        print(f"not run here: {page}: $ {cmd}  ({reason})")
+        assert reason, f"{page}: '# not run here:' needs a reason"
+    assert set(found) == NOT_RUN_HERE
+
+
+def test_page_runnable_block_count() -> None:
+    # the README's quick starts are among the runnable blocks
+    kinds = [b.kind for b in blocks_of(ROOT / "README.md")]
+    assert kinds.count("run") >= 4 and "file" in kinds
+
+
+@pytest.mark.parametrize("page", _pages_with_runnable_blocks())
+def test_runnable_blocks_of_page(page: str, tmp_path: Path) -> None:
+    work = Workdir.make(tmp_path / "work", BLOCK_ENV)
+    printed = ""
+    t0 = time.monotonic()
+    for block in blocks_of(ROOT / page):
+        if block.kind == "file":
+            assert block.file, f"{block.where}: file= needs a name"
+            target = work.path / block.file
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_text(block.text, encoding="utf-8")
+        elif block.kind == "run":
+            t = time.monotonic()
+            printed = run_block(block, work, BLOCK_TIMEOUT)
+            print(f"{block.where}: {block.lang} block ran in {time.monotonic() - t:.1f} s")
+        elif block.kind == "output":
+            check_output(block.text.split("\n"), printed, block.where)
+    print(f"{page}: every block ran in {time.monotonic() - t0:.1f} s")

@@ -1,0 +1,127 @@
+"""Nothing of the old README is lost: each of its sections (the headings of README.md at
+50ca721, before it was shortened into the manual) maps to a heading of a page of the manual or
+of today's README, and that heading exists. And the schema page lists every key the robot and
+scenario file readers accept."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: heading of the old README -> (file, heading there)
+OLD_README = {
+    "rrr_robot: closed-form models of an RRR robot arm, as a C core, FMUs and Python tools":
+        ("README.md", "rrr_robot: closed-form models of an RRR robot arm, as a C core, FMUs and "
+                      "Python tools"),
+    "Two commands": ("README.md", "Two commands"),
+    "Layout": ("docs/layout.md", "Layout of the repository"),
+    "The FMUs": ("docs/fmus.md", "The FMUs"),
+    "The plant's integrator": ("docs/fmus.md", "The plant's integrator"),
+    "The writing task (the main job)": ("docs/writing.md", "The writing task"),
+    "Benchmark of the core": ("docs/performance.md",
+                              "The core against Pinocchio and the Robotics Toolbox"),
+    "Through Python": ("docs/performance.md", "Through Python"),
+    "The CAN bench (hardware in the loop)": ("docs/can-bench.md",
+                                             "The CAN bench (hardware in the loop)"),
+    "Results of a bench run": ("docs/can-bench.md", "Results of a bench run"),
+    "Frame logs": ("docs/can-bench.md", "Frame logs"),
+    "Bus load": ("docs/can-bench.md", "Bus load"),
+    "Real time": ("docs/can-bench.md", "Real time"),
+    "Identification": ("docs/identification.md", "Identification"),
+    "Using it from C, ROS and notebooks": ("docs/c-library.md",
+                                           "The C library as a CMake package"),
+    "The C library as a CMake package": ("docs/c-library.md", "The C library as a CMake package"),
+    "URDF: Pinocchio, ROS and other URDF tools": ("docs/urdf.md",
+                                                  "URDF: Pinocchio, ROS and other URDF tools"),
+    "The notebook": ("docs/python.md", "The notebook"),
+    "Outputs and exit statuses": ("docs/outputs.md", "Outputs and exit statuses"),
+    "Known limits": ("docs/known-limits.md", "Known limits"),
+    "Conventions (in full: `docs/conventions.md`)": ("docs/conventions.md", "In brief"),
+    "Python": ("docs/python.md", "Using rrr_robot from Python"),
+    "The closed loop from Python": ("docs/python.md", "The closed loop from Python"),
+    "The binding": ("docs/python.md", "The binding"),
+    "Robot and scenario files": ("docs/files.md", "Robot and scenario files"),
+    "The default robot": ("docs/files.md", "The default robot"),
+    "Dependencies and what each is for": ("docs/getting-started.md",
+                                          "Dependencies and what each is for"),
+    "Verification": ("docs/verification.md", "Verification"),
+}
+#: The measured tables of the old README: (file, the start of a row of each table), so that no
+#: measurement is lost either.
+TABLE_ROWS = [
+    ("docs/performance.md", "| FK (position + orientation) | `rrr_fk` | 41.0 / 42.2 / 48.7"),
+    ("docs/performance.md", "| IK, all branches (4 solutions) | `rrr_ik` | 85.8 / 90.9 / 122"),
+    ("docs/performance.md", "| tau = R p, one state | `Model.inverse_dynamics` | 354 / 386 / 484"),
+    ("docs/performance.md", "| IK, all 4 branches (`rrr_ik`) | 46 flops"),
+    ("docs/performance.md", "| open loop, 2 s | 1.83 / 2.24 / 4.90"),
+    ("docs/performance.md", "| the three `<scenario>.csv` | 0.51 / 0.54 / 0.73"),
+    ("docs/performance.md", "| `rr.simulate`: the same loop in C (`rrr_sim_closed_loop`) | 549.6x"),
+    ("docs/performance.md", "| plain | controller | 27.8 / 32.0 / 33.1"),
+    ("docs/fmus.md", "| 2 s open loop, u = [0.5, 1, 0.3] V"),
+    ("docs/writing.md", "| `ctc` (PD + feedforward) | 0.099 mm | 0.039 mm"),
+    ("docs/can-bench.md", "| the same | CAN FD 1 / 2 Mbit/s (`--fd 2000000`) | 45.12 %"),
+    ("docs/getting-started.md", "| numpy, scipy | arrays, filtering and least squares"),
+    ("docs/c-library.md", "| `lib/pkgconfig/rrr.pc` |"),
+    ("docs/python.md", "| `core/` | `_ext` (the compiled binding"),
+    ("docs/layout.md", "| `c_src/hil/` | the CAN bench"),
+]
+
+
+def headings(path: Path) -> set[str]:
+    """The headings of a Markdown page (# to ######), outside fenced blocks."""
+    out: set[str] = set()
+    fence = False
+    for line in path.read_text(encoding="utf-8").split("\n"):
+        if re.match(r"^\s*(```|~~~)", line):
+            fence = not fence
+        elif not fence:
+            m = re.match(r"^#{1,6}\s+(.*?)\s*$", line)
+            if m:
+                out.add(m.group(1))
+    return out
+
+
+@pytest.mark.parametrize("old", sorted(OLD_README))
+def test_old_readme_section_has_a_place(old: str) -> None:
+    page, heading = OLD_README[old]
+    assert heading in headings(ROOT / page), f"{old!r}: no heading {heading!r} in {page}"
+
+
+def test_table_rows_kept() -> None:
+    missing = [(page, row) for page, row in TABLE_ROWS
+               if row not in (ROOT / page).read_text(encoding="utf-8")]
+    assert not missing
+
+
+def test_readme_is_short() -> None:
+    n = len((ROOT / "README.md").read_text(encoding="utf-8").splitlines())
+    assert n <= 260, f"README.md has {n} lines: move text into a page of docs/"
+
+
+def test_files_page_lists_every_key() -> None:
+    from rrr_robot.core.robot_file import (
+        CONTROL_FIELDS,
+        IDENTIFICATION_FIELDS,
+        LINK_FIELDS,
+        PARAM_TABLES,
+        TABLES,
+        WRITING_FIELDS,
+    )
+    from rrr_robot.writing.scenarios import SCHEMA
+
+    text = (ROOT / "docs" / "files.md").read_text(encoding="utf-8")
+    keys = {*LINK_FIELDS, *CONTROL_FIELDS, *WRITING_FIELDS, *IDENTIFICATION_FIELDS,
+            "rotor_inertia", *(k for groups in PARAM_TABLES.values() for k in groups)}
+    missing = sorted(k for k in keys if f"`{k}`" not in text)
+    missing += sorted(f"[{t}]" for t in TABLES if t not in ("link1", "link2", "link3")
+                      and f"`[{t}]`" not in text)
+    for table, fields in SCHEMA.items():
+        missing += [f"[{table}]"] if f"`[{table}]`" not in text else []
+        missing += sorted(k for k in fields if k != "name" and f"`{k}`" not in text
+                          and not k.endswith("_rel"))
+        missing += sorted(k for k in fields if k.endswith("_rel") and f"`{k}`" not in text)
+    assert not missing, f"docs/files.md does not describe: {missing}"
