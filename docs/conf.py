@@ -15,10 +15,11 @@ DOCS = Path(__file__).resolve().parent
 
 
 def _version() -> str:
-    """The installed package's version (autodoc documents the installed package too)."""
-    import rrr_robot
+    """The package's version (rrr_robot.core._version: the built one, or the source header's),
+    the one the package, librrr and the FMUs report."""
+    from rrr_robot.core._version import package_version
 
-    return str(rrr_robot.__version__)
+    return str(package_version())
 
 
 project = "rrr_robot"
@@ -29,7 +30,6 @@ release = version = _version()
 extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
-    "sphinx.ext.napoleon",
 ]
 source_suffix = {".md": "markdown"}
 root_doc = "index"
@@ -43,6 +43,17 @@ myst_heading_anchors = 3
 # -n: every reference must resolve. Links from pages to files of the repository outside docs/
 # (sources, the DBC, READMEs next to the code) become download links, which Sphinx checks too.
 nitpicky = True
+# types of other packages (the build is offline: no intersphinx) and the package's private
+# helpers in signatures
+nitpick_ignore_regex = [
+    ("py:.*", r"(numpy|pathlib|collections\.abc|typing|argparse|scipy|can|cantools|fmpy|pandas"
+              r"|pyarrow|dask|distributed|matplotlib|ctypes|concurrent|threading|subprocess|io"
+              r"|os)(\..*)?"),
+    ("py:.*", r"(.*\.)?_[A-Za-z]\w*(\..*)?"),
+    # names that autodoc leaves unresolved in signatures (aliases, TYPE_CHECKING imports)
+    ("py:class", r"ArrayLike|Path|Mapping|Sequence|Callable|Iterator|Any|Progress"
+                 r"|ScipyStateSpace"),
+]
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
 

@@ -171,9 +171,10 @@ def pattern(expected: str) -> re.Pattern[str]:
 
 
 def check_output(shown: list[str], printed: str, where: str) -> None:
-    """Every shown line (blank ones aside) matches a printed line, in order."""
+    """Every shown line (blank ones and lines of only ``...`` aside) matches a printed line
+    (stdout and stderr as they came), in order."""
     lines = iter(printed.splitlines())
-    for want in (s for s in shown if s.strip()):
+    for want in (s for s in shown if s.strip() not in ("", "...")):
         pat = pattern(want)
         if not any(pat.match(line) for line in lines):
             raise AssertionError(f"{where}: the block shows the line\n    {want}\nwhich its "
@@ -237,7 +238,8 @@ class Workdir:
             stdin: str | None = None) -> subprocess.CompletedProcess[str]:
         try:
             return subprocess.run(args, cwd=self.path, env=self.env, input=stdin,
-                                  capture_output=True, text=True, timeout=timeout)
+                                  stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                                  timeout=timeout)
         except subprocess.TimeoutExpired as exc:
             raise AssertionError(f"{where}: still running after {timeout:.0f} s (a docs block "
                                  "must be short: use a short-duration option)") from exc
@@ -247,14 +249,14 @@ def run_block(block: Block, work: Workdir, timeout: float) -> str:
     """Run one runnable block; returns what it printed. Raises AssertionError when it fails."""
     if block.lang in SHELL:
         res = work.run(["bash", "-euo", "pipefail", "-c", block.text], block.where, timeout)
-        printed = res.stdout + res.stderr
+        printed = res.stdout
         if res.returncode != 0:
             raise AssertionError(f"{block.where}: the {block.lang} block exited with "
                                  f"{res.returncode}:\n{block.text}\n--- printed:\n{printed}")
         return printed
     if block.lang == "python":
         res = work.run([sys.executable, "-"], block.where, timeout, stdin=block.text)
-        printed = res.stdout + res.stderr
+        printed = res.stdout
         if res.returncode != 0:
             raise AssertionError(f"{block.where}: the python block exited with "
                                  f"{res.returncode}:\n{block.text}\n--- printed:\n{printed}")
@@ -268,7 +270,7 @@ def run_block(block: Block, work: Workdir, timeout: float) -> str:
     for k, (cmd, shown) in enumerate(commands):
         script = cmd if cmd.strip() != "echo $?" else f"echo {status}"
         res = work.run(["bash", "-o", "pipefail", "-c", script], block.where, timeout)
-        printed = res.stdout + res.stderr
+        printed = res.stdout
         status = res.returncode
         checked_next = k + 1 < len(commands) and commands[k + 1][0].strip() == "echo $?"
         if status != 0 and not checked_next:

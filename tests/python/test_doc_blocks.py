@@ -22,12 +22,17 @@ from doc_blocks import (
 
 #: The blocks marked ``# not run here: <reason>``: (page, first command). A new one must be
 #: added here (and its reason be one a reader accepts: hardware or privileges this machine
-#: lacks, or the test command itself).
+#: lacks, or a command that the test command itself runs elsewhere: the test command, the
+#: builds it makes and the tests it runs).
 NOT_RUN_HERE = {
     ("README.md", "bash scripts/run_tests.sh"),
-    ("docs/getting-started.md", "bash scripts/run_tests.sh"),
+    ("docs/aarch64.md",
+     "cmake -S . -B build-aarch64 -DCMAKE_TOOLCHAIN_FILE=cmake/aarch64-linux-gnu.cmake"),
+    ("docs/aarch64.md", "ctest --test-dir build -R aarch64 --output-on-failure"),
     ("docs/can-bench.md", "sudo ip link set can0 up type can bitrate 1000000"),
     ("docs/c-library.md", "cmake -S . -B build && cmake --build build -j2"),
+    ("docs/sweeps.md", "dask scheduler --host 0.0.0.0 --port 8786"),
+    ("docs/viewing.md", "foxglove-studio results/ctc.mcap"),
 }
 #: Seconds one block may take (the longest is the README's first command, about 15 s here).
 BLOCK_TIMEOUT = 120.0
@@ -45,7 +50,7 @@ def _pages_with_runnable_blocks() -> list[str]:
 def _first_command(block: Block) -> str:
     for line in block.text.split("\n"):
         if line.startswith("$ "):
-            return line[2:].strip()
+            return line[2:].rstrip(" \\").strip()
     return ""
 
 

@@ -234,7 +234,8 @@ class Model:
     def fk_frames(self, q: ArrayLike) -> FloatArray:
         """Every DH frame in frame 0 as 4 x 4 homogeneous transforms, shape (4, 4, 4) (frames
         0..3; frame 3 is the tool, equal to :meth:`fk` bit for bit) or (n, 4, 4, 4) for a batch.
-        The URDF's ``link<k>`` (:func:`robot_urdf`) is frame k-1 turned by q_k about its z."""
+        The URDF's ``link<k>`` (:func:`~rrr_robot.core.urdf.robot_urdf`) is frame k-1 turned
+        by q_k about its z."""
         return self._k.fk_frames(q)
 
     def jacobian(self, q: ArrayLike) -> FloatArray:

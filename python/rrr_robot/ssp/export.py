@@ -22,7 +22,7 @@ computed from the reference and the measurement of one step earlier. The archive
 inside the system, by ``lookahead_steps`` communication steps (default 1): the reference FMU's
 ``lookahead`` gives the controller the reference of the step the plant will integrate, and the
 controller's ``lead`` carries the measured state forward by as much (``rrr_predict_state``)
-(README, "The writing task as an SSP system").
+(docs/ssp.md).
 """
 
 from __future__ import annotations
