@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -38,6 +39,12 @@ def main() -> int:
         shutil.copytree(args.package, pkg, ignore=shutil.ignore_patterns("__pycache__", "*.so"))
         shutil.copy2(args.ext, pkg / "core" / args.ext.name)
         shutil.copy2(args.lib, pkg / "librrr.so")
+        # the version module a built package has (the staged copy is outside the source tree,
+        # whose header rrr_robot.core._version would read otherwise)
+        header = (ROOT / "c_src" / "rrr" / "include" / "rrr" / "rrr_version.h").read_text()
+        version = re.search(r'^#define RRR_VERSION_STRING "([^"]+)"$', header, re.M)
+        assert version is not None, "rrr_version.h defines no RRR_VERSION_STRING"
+        (pkg / "core" / "_build_version.py").write_text(f'version = "{version[1]}"\n')
         env = {**os.environ, "PYTHONPATH": tmp, "PYTHONDONTWRITEBYTECODE": "1"}
         env.pop("RRR_LIBRARY", None)
         where = subprocess.run(
