@@ -106,30 +106,36 @@ if(NOT libs MATCHES "-lrrr -lm")
   message(FATAL_ERROR "pkg-config --libs rrr has no -lm after -lrrr: ${libs}")
 endif()
 
-# the documented pkg-config lines (README or docs/: the ```bash block that runs `pkg-config
-# --cflags --libs rrr`), run exactly as written by sh, with /opt/rrr replaced by this prefix,
-# in a folder with examples/c_consumer/main.c and no LD_LIBRARY_PATH: the rpath of rrr.pc
-# finds librrr.so.0
+# the documented pkg-config lines (docs/ or README: the ```bash block that runs `pkg-config
+# --cflags --libs rrr` against an installed prefix, /opt/rrr or "$HOME/rrr", and builds nothing
+# with cmake itself), run exactly as written by sh, with the prefix replaced by this one, in a
+# folder with examples/c_consumer/main.c and no LD_LIBRARY_PATH: the rpath of rrr.pc finds
+# librrr.so.0
 set(block "")
 file(GLOB_RECURSE docs "${SOURCE}/docs/*.md")
-foreach(doc "${SOURCE}/README.md" ${docs})
+foreach(doc ${docs} "${SOURCE}/README.md")
   file(READ "${doc}" text)
-  string(REGEX MATCH "```bash\n(([^`]|`[^`])*pkg-config --cflags --libs rrr([^`]|`[^`])*)```"
-         _ "${text}")
-  if(CMAKE_MATCH_1)
-    set(block "${CMAKE_MATCH_1}")
-    set(block_doc "${doc}")
+  string(REGEX MATCHALL "```bash\n([^`]|`[^`])*```" fences "${text}")
+  foreach(fence IN LISTS fences)
+    if(fence MATCHES "pkg-config --cflags --libs rrr" AND NOT fence MATCHES "cmake "
+       AND (fence MATCHES "/opt/rrr" OR fence MATCHES "\\$HOME/rrr"))
+      string(REGEX REPLACE "^```bash\n" "" block "${fence}")
+      string(REGEX REPLACE "```$" "" block "${block}")
+      set(block_doc "${doc}")
+      break()
+    endif()
+  endforeach()
+  if(block)
     break()
   endif()
 endforeach()
 if(NOT block)
-  message(FATAL_ERROR "no ```bash block with `pkg-config --cflags --libs rrr` in README.md or "
-                      "docs/")
+  message(FATAL_ERROR "no ```bash block with `pkg-config --cflags --libs rrr` and the prefix "
+                      "/opt/rrr or \"$HOME/rrr\" in docs/ or README.md")
 endif()
-if(NOT block MATCHES "/opt/rrr")
-  message(FATAL_ERROR "the pkg-config block of ${block_doc} does not use the prefix /opt/rrr")
-endif()
-string(REPLACE "/opt/rrr" "${prefix}" script "${block}")
+string(REPLACE "\"$HOME/rrr\"" "${prefix}" script "${block}")
+string(REPLACE "$HOME/rrr" "${prefix}" script "${script}")
+string(REPLACE "/opt/rrr" "${prefix}" script "${script}")
 set(demo "${WORK}/demo")
 file(MAKE_DIRECTORY "${demo}/examples/c_consumer")
 file(COPY "${SOURCE}/examples/c_consumer/main.c" DESTINATION "${demo}/examples/c_consumer")
