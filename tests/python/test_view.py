@@ -194,24 +194,6 @@ def test_bad_folders_are_refused(tmp_path, files, message) -> None:
     assert done.returncode != 0 and "not a folder" in done.stderr
 
 
-def test_the_blocks_of_docs_viewing_run_as_written(tmp_path) -> None:
-    """docs/viewing.md: its bash block, then its Python block, whose printed lines are the
-    ```text output``` block after it."""
-    text = (Path(__file__).resolve().parents[2] / "docs" / "viewing.md").read_text()
-    (bash,) = re.findall(r"```bash\n(.*?)```", text, re.S)
-    (python,) = re.findall(r"```python\n(.*?)```", text, re.S)
-    (printed,) = re.findall(r"```text output\n(.*?)```", text, re.S)
-    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}")
-    subprocess.run(["bash", "-euo", "pipefail", "-c", bash], cwd=tmp_path, env=env, check=True,
-                   capture_output=True)
-    for name in ("ctc.csv", "ctc.mcap", "view.html"):
-        assert (tmp_path / "results" / name).is_file()
-    assert (tmp_path / "ctc.html").is_file()
-    done = subprocess.run([sys.executable, "-c", python], cwd=tmp_path, capture_output=True,
-                          text=True, check=True)
-    assert done.stdout.split() == printed.split()
-
-
 def test_a_diverged_run_beside_another_opens_at_its_last_finite_row(run, tmp_path) -> None:
     """Two scenarios in one page, one of them diverged (NaN from row 3000 on): the page shows
     it up to its last finite row, with no console line, and switches by #scenario=."""

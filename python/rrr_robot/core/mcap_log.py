@@ -1,5 +1,5 @@
 """A run's signal table as an MCAP file with ROS 2 messages (rosbag2's storage format), for
-Foxglove, Lichtblick, Rerun, RViz and ``ros2 bag``: :func:`write_mcap` (docs/mcap.md).
+Foxglove, Lichtblick, Rerun, RViz and ``ros2 bag``: :func:`write_mcap` (docs/viewing.md).
 
 Topics, on the simulation clock (log time = header stamp = the table's ``t`` in ns):
 
@@ -285,9 +285,9 @@ def _stamps(t: FloatArray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
 
 @dataclass(frozen=True)
 class Topic:
-    """Messages of one more topic: ``data`` (n, size) CDR messages (e.g. :class:`CdrLayout`'s
-    ``encode``) at the log times ``ns`` (n,) (uint64 ns, non-decreasing) of the simulation
-    clock; ``schema``: its ros2msg text when the type is not one of :data:`SCHEMAS`."""
+    """Messages of one more topic: ``data`` (n, size) CDR messages (e.g. ``CdrLayout.encode``)
+    at the log times ``ns`` (n,) (uint64 ns, non-decreasing) of the simulation clock;
+    ``schema``: its ros2msg text when the type is not one of ``SCHEMAS``."""
 
     name: str
     msgtype: str

@@ -136,7 +136,7 @@ def read_csv_table(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
 
 
 def read_table(path: str | os.PathLike[str]) -> dict[str, np.ndarray]:
-    """A table written by :func:`write_table`, by its suffix (``.parquet``: pyarrow; otherwise
+    """A table written by ``write_table``, by its suffix (``.parquet``: pyarrow; otherwise
     CSV), as name -> float64 column; BadInputError for a file that is not such a table."""
     if Path(path).suffix == ".parquet":
         _, pq = _pyarrow()
