@@ -5,7 +5,10 @@ listed below, each with its reason."""
 
 from __future__ import annotations
 
+import os
 import time
+from collections.abc import Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
@@ -42,6 +45,8 @@ NOT_RUN_HERE = {
 }
 #: Seconds one block may take (the longest is the README's first command, about 15 s here).
 BLOCK_TIMEOUT = 120.0
+#: Pages run side by side (RRR_DOC_TEST_JOBS; default: the CPUs, at most 2).
+JOBS = int(os.environ.get("RRR_DOC_TEST_JOBS", "0")) or min(2, os.cpu_count() or 1)
 #: Environment of the blocks: scripts/setup_env.sh skips its pip install (the test command
 #: installed the package into this venv just before), so `bash scripts/writing_task.sh` runs
 #: the writing task itself.
@@ -92,9 +97,11 @@ def test_page_runnable_block_count() -> None:
     assert kinds.count("run") >= 4 and "file" in kinds
 
 
-@pytest.mark.parametrize("page", _pages_with_runnable_blocks())
-def test_runnable_blocks_of_page(page: str, tmp_path: Path) -> None:
-    work = Workdir.make(tmp_path / "work", BLOCK_ENV)
+def run_page(page: str, folder: Path) -> str:
+    """Run the blocks of one page in order in a working folder; returns its log (what ran, how
+    long). Raises AssertionError at the first block that fails."""
+    work = Workdir.make(folder, BLOCK_ENV)
+    log = []
     printed = ""
     t0 = time.monotonic()
     for block in blocks_of(ROOT / page):
@@ -106,7 +113,26 @@ def test_runnable_blocks_of_page(page: str, tmp_path: Path) -> None:
         elif block.kind == "run":
             t = time.monotonic()
             printed = run_block(block, work, BLOCK_TIMEOUT)
-            print(f"{block.where}: {block.lang} block ran in {time.monotonic() - t:.1f} s")
+            log.append(f"{block.where}: {block.lang} block ran in {time.monotonic() - t:.1f} s")
         elif block.kind == "output":
             check_output(block.text.split("\n"), printed, block.where)
-    print(f"{page}: every block ran in {time.monotonic() - t0:.1f} s")
+    log.append(f"{page}: every block ran in {time.monotonic() - t0:.1f} s")
+    return "\n".join(log)
+
+
+@pytest.fixture(scope="module")
+def page_runs(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Future[str]]]:
+    """Every page's blocks, started at once on JOBS threads (the blocks are processes: the
+    pages run side by side, each in order in its own folder); each test waits for its page."""
+    pages = _pages_with_runnable_blocks()
+    with ThreadPoolExecutor(max_workers=JOBS) as pool:
+        futures = {page: pool.submit(run_page, page, tmp_path_factory.mktemp("doc") / "work")
+                   for page in pages}
+        yield futures
+        for future in futures.values():
+            future.cancel()
+
+
+@pytest.mark.parametrize("page", _pages_with_runnable_blocks())
+def test_runnable_blocks_of_page(page: str, page_runs: dict[str, Future[str]]) -> None:
+    print(page_runs[page].result())
