@@ -99,7 +99,7 @@ echo "== the manual: sphinx-build with warnings as errors (docs/ -> build-docs/i
 # a broken link or anchor, an unresolved reference or a page outside the navigation fails it
 sphinx-build -q -W --keep-going -n -b html docs build-docs
 echo "== pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py) =="
-python -m pytest -q tests/python
+python -m pytest -q --durations=25 tests/python
 echo "== every bench script's quick mode (bench/: they print their tables; no number is checked) =="
 if ! wait "$BENCH_BUILD"; then
   cat build-bench/build.log >&2
