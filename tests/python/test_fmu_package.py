@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -81,8 +82,10 @@ def test_fmpy_simulate_runs_the_default_experiment(which: str) -> None:
 
 
 def test_fmpy_simulate_cli(tmp_path: object) -> None:
-    fmpy_exe = shutil.which("fmpy")
-    assert fmpy_exe is not None, "the fmpy command (installed with FMPy) is not on PATH"
+    # the fmpy command that FMPy installed beside this interpreter (a venv need not be
+    # activated, so PATH is not asked)
+    fmpy_exe = shutil.which("fmpy", path=str(Path(sys.executable).parent))
+    assert fmpy_exe is not None, f"no fmpy command beside {sys.executable} (installed with FMPy)"
     for which in FMU_NAMES:
         out = f"{tmp_path}/{which}.csv"
         cli = subprocess.run(
