@@ -57,8 +57,8 @@ def test_every_help_has_a_description_and_one_example(path: str) -> None:
 #: the options of each rrr hil action, no more
 HIL = {
     "bench": {"--text", "--scenario", "--duration", "--out", "--realtime", "--no-fifo",
-              "--spin-us", "--can-log", "--no-can-log", "--no-figures", "--mcap", "-q", "--quiet",
-              "-v", "--verbose"},
+              "--interface", "--channel", "--spin-us", "--can-log", "--no-can-log",
+              "--no-figures", "--mcap", "-q", "--quiet", "-v", "--verbose"},
     "controller": {"--text", "--scenario", "--duration", "--out", "--interface", "--connect",
                    "--channel", "--can-log", "--no-can-log", "--no-figures", "--mcap", "-q",
                    "--quiet", "-v", "--verbose"},
