@@ -99,7 +99,7 @@ def test_identify_experiment_shows_bars_and_q_hides_them(
     short = ex.SweepDesign(speeds=(0.5,), cruise=0.2, settle=0.1, ramp=0.1, hold=0.1)
     original = ex.friction_experiment
     monkeypatch.setattr(ex, "friction_experiment",
-                        lambda model, **kw: original(model, design=short, **kw))
+                        lambda model, design=None, **kw: original(model, short, **kw))
 
     class Tty(io.StringIO):
         def isatty(self) -> bool:
