@@ -41,7 +41,6 @@ NOT_RUN_HERE = {
                           "# 1 Mbit/s; restart after bus-off"),
     ("docs/c-library.md", "cmake -S . -B build && cmake --build build -j2"),
     ("docs/sweeps.md", "dask scheduler --host 0.0.0.0 --port 8786"),
-    ("docs/viewing.md", "foxglove-studio results/ctc.mcap"),
 }
 #: Seconds one block may take (the longest is the README's first command, about 15 s here).
 BLOCK_TIMEOUT = 120.0
