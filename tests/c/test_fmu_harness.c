@@ -44,6 +44,7 @@
 #include "fmu_state_forge.h"
 #include "rrr_fmi_funcs.h"
 #include "rrr_fmi_import.h"
+#include "fmu_harness_common.h"
 #include "rrr_test.h"
 
 #define H 1e-3 /* communication step, s */
@@ -329,46 +330,6 @@ static void vrs3(const fmu_api *api, const char *base, fmi2ValueReference vr[3])
 
 /* ---- the model parameters, named as in both FMUs ------------------------------------------------ */
 
-#define N_MODEL_PARAMS (6 + RRR_NP + 3 + 9 + 9 + 3 + 1)
-
-static void model_params(const rrr_model *m, char names[N_MODEL_PARAMS][16],
-                         double values[N_MODEL_PARAMS])
-{
-    int k = 0;
-    const char *scalars[] = {"d1", "a2", "a3", "d2", "d3", "g"};
-    const double sv[] = {m->d1, m->a2, m->a3, m->d2, m->d3, m->g};
-    for (int i = 0; i < 6; ++i, ++k) {
-        snprintf(names[k], 16, "%s", scalars[i]);
-        values[k] = sv[i];
-    }
-    for (int i = 0; i < RRR_NP; ++i, ++k) {
-        snprintf(names[k], 16, "p[%d]", i + 1);
-        values[k] = m->p[i];
-    }
-    for (int i = 0; i < 3; ++i, ++k) {
-        snprintf(names[k], 16, "kt[%d]", i + 1);
-        values[k] = m->kt[i];
-    }
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j, ++k) {
-            snprintf(names[k], 16, "f[%d,%d]", i + 1, j + 1);
-            values[k] = m->f[i][j];
-        }
-    }
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j, ++k) {
-            snprintf(names[k], 16, "w[%d,%d]", i + 1, j + 1);
-            values[k] = m->w[i][j];
-        }
-    }
-    for (int i = 0; i < 3; ++i, ++k) {
-        snprintf(names[k], 16, "b[%d]", i + 1);
-        values[k] = m->b[i];
-    }
-    snprintf(names[k], 16, "u_max");
-    values[k] = m->u_max;
-}
-
 /* Value after instantiation (read in initialization mode) = XML start = expected. */
 static void check_default(inst *x, const char *name, double expected)
 {
@@ -495,19 +456,6 @@ static void loop_vrs(loop *L)
     vrs3(L->c->api, "q", L->c_q);
     vrs3(L->c->api, "qd", L->c_qd);
     vrs3(L->c->api, "u", L->c_u);
-}
-
-/* Smooth reference: q_ref, qd_ref, qdd_ref at t. */
-static void reference(double t, double r[9])
-{
-    const double q0[3] = {0.1, 0.3, -0.8};
-    const double a[3] = {0.6, 0.4, 0.5};
-    const double w[3] = {3.0, 4.5, 4.0};
-    for (int i = 0; i < 3; ++i) {
-        r[i] = q0[i] + a[i] * sin(w[i] * t);
-        r[3 + i] = a[i] * w[i] * cos(w[i] * t);
-        r[6 + i] = -a[i] * w[i] * w[i] * sin(w[i] * t);
-    }
 }
 
 /* Instantiate-to-StepComplete for both, plant started on the reference. */

@@ -41,6 +41,7 @@
 #include "fmi2FunctionTypes.h"
 #include "fmi3FunctionTypes.h"
 #include "rrr_fmi_import.h"
+#include "../fmu_test_reference.h"
 
 #define STEP 1e-3        /* communication step, s */
 #define MAX_STEPS 100000 /* at most 100 s */
@@ -450,19 +451,6 @@ static void voltages(double t, double u[3])
     u[0] = 0.5 + 1.0 * sin(2.0 * pi * 1.5 * t);
     u[1] = 2.6 + 1.5 * cos(2.0 * pi * 2.0 * t);
     u[2] = 0.8 + 1.2 * sin(2.0 * pi * 3.0 * t + 0.5);
-}
-
-/* Smooth joint reference: q_ref, qd_ref, qdd_ref at t. */
-static void reference(double t, double r[9])
-{
-    const double q0[3] = {0.1, 0.3, -0.8};
-    const double a[3] = {0.6, 0.4, 0.5};
-    const double w[3] = {3.0, 4.5, 4.0};
-    for (int i = 0; i < 3; ++i) {
-        r[i] = q0[i] + a[i] * sin(w[i] * t);
-        r[3 + i] = a[i] * w[i] * cos(w[i] * t);
-        r[6 + i] = -a[i] * w[i] * w[i] * sin(w[i] * t);
-    }
 }
 
 /* (a) the plant alone, from a non-trivial initial state, under voltages(t). */
