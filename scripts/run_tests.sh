@@ -5,7 +5,7 @@
 # README's default build (Release), ruff,
 # the Python package's import layers (lint-imports) and types (mypy), pytest (including the
 # generated-code checks, the CAN bench over SocketCAN in a QEMU guest), and short libFuzzer runs
-# on the CAN frame decoders and on forged FMU states (each FMU). mingw-w64, wine,
+# on the CAN frame decoders, on forged FMU states (each FMU) and on the FMU importer's scanner. mingw-w64, wine,
 # gcc-aarch64-linux-gnu, qemu-user, chromium and clang are installed with apt-get when missing
 # and root.
 set -euo pipefail
@@ -133,7 +133,7 @@ cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_FMU_FU
   -DRRR_BUILD_TESTS=OFF -DRRR_WERROR=ON -DRRR_FMU_WINDOWS=OFF -DRRR_FMU_AARCH64=OFF \
   -DCMAKE_BUILD_TYPE=Debug -DPython3_EXECUTABLE="$(command -v python)" >/dev/null
 cmake --build build-fuzz --target fuzz_hil_decode fuzz_fmu_state_plant fuzz_fmu_state_controller \
-  fuzz_fmu_state_reference -j "$JOBS"
+  fuzz_fmu_state_reference fuzz_fmi_import -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
@@ -143,5 +143,11 @@ for model in plant controller reference; do
   build-fuzz/fmu/fuzz_fmu_state_$model -max_total_time="${RRR_FMU_FUZZ_SECONDS:-15}" -max_len=89 \
     -print_final_stats=1 "build-fuzz/corpus_$model" 2>&1 | tail -n 4
 done
+echo "== libFuzzer on the FMU importer's modelDescription scanner (c_src/fmi_import; short run) =="
+mkdir -p build-fuzz/corpus_fmi_import
+cp fmu/controller/modelDescription.xml build-fuzz/corpus_fmi_import/controller.xml
+cp fmu/reference/modelDescription.xml build-fuzz/corpus_fmi_import/reference.xml
+build-fuzz/c_src/fmi_import/fuzz_fmi_import -max_total_time="${RRR_FMI_FUZZ_SECONDS:-15}" \
+  -max_len=65536 -print_final_stats=1 build-fuzz/corpus_fmi_import 2>&1 | tail -n 4
 echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, the manual, pytest, the" \
      "benchmarks' quick modes, libFuzzer) =="

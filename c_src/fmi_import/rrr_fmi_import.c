@@ -538,6 +538,16 @@ int rrr_fmi_md_start(const rrr_fmi_md *md, const char *name, char *out, size_t n
 
 /* ---- the binary ------------------------------------------------------------------------------- */
 
+const char *rrr_fmi_platform(int fmi)
+{
+    return fmi == 2 ? FMI2_PLATFORM : FMI3_PLATFORM;
+}
+
+const char *rrr_fmi_lib_ext(void)
+{
+    return LIB_EXT;
+}
+
 int rrr_fmi_binary_path(char *out, size_t n, const char *dir, int fmi, const char *id)
 {
     const int len = snprintf(out, n, "%s/binaries/%s/%s%s", dir,

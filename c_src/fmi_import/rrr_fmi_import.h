@@ -119,6 +119,11 @@ int rrr_fmi_var_attr(const rrr_fmi_var *var, const char *attr, char *out, size_t
 /** Start value of variable name as text ("" when it has none): 0, or nonzero (no variable). */
 int rrr_fmi_md_start(const rrr_fmi_md *md, const char *name, char *out, size_t n);
 
+/** This build's platform folder below binaries/ for FMI version fmi (2 or 3), e.g. linux64. */
+const char *rrr_fmi_platform(int fmi);
+/** This build's shared-library suffix: ".so", ".dll" or ".dylib". */
+const char *rrr_fmi_lib_ext(void);
+
 /** binaries/<platform>/<id><ext> below dir for this build's platform and FMI version. */
 int rrr_fmi_binary_path(char *out, size_t n, const char *dir, int fmi, const char *id);
 

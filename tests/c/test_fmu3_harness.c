@@ -28,7 +28,6 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <ctype.h>
-#include <dlfcn.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -40,121 +39,51 @@
 #include "fmi3FunctionTypes.h"
 #include "rrr/rrr.h"
 #include "fmu_state_forge.h"
-#include "fmu_test_io.h"
+#include "rrr_fmi_funcs.h"
+#include "rrr_fmi_import.h"
+#include "fmu_harness_common.h"
 #include "rrr_test.h"
 
 #define H 1e-3          /* communication step, s */
 #define MAX_VARS 128    /* variables per FMU */
 #define MAX_STATES 8    /* continuous states per FMU */
 
-/* ---- modelDescription.xml: just enough of a reader ------------------------------------------- */
+/* ---- modelDescription.xml: through c_src/fmi_import -------------------------------------------- */
 
-/* Value of attribute attr of the element that starts at elem ('<'); 0 when found. Walks the
- * attributes one by one (descriptions may hold '>', never '"'). */
-static int elem_attr(const char *elem, const char *attr, char *out, size_t n)
+/* The function pointer, copied from the binary; aborts the run when it is missing. */
+static void load_sym(const rrr_fmi_lib *lib, const char *id, const char *name, void *dst,
+                     size_t size)
 {
-    const char *p = elem + 1;
-    while (*p != '\0' && !isspace((unsigned char)*p) && *p != '>' && *p != '/') {
-        ++p;
-    }
-    for (;;) {
-        while (isspace((unsigned char)*p)) {
-            ++p;
-        }
-        if (*p == '\0' || *p == '>' || *p == '/') {
-            return 1;
-        }
-        const char *name = p;
-        while (*p != '\0' && *p != '=' && !isspace((unsigned char)*p)) {
-            ++p;
-        }
-        const size_t len = (size_t)(p - name);
-        while (isspace((unsigned char)*p)) {
-            ++p;
-        }
-        if (*p != '=') {
-            return 1;
-        }
-        ++p;
-        while (isspace((unsigned char)*p)) {
-            ++p;
-        }
-        if (*p != '"') {
-            return 1;
-        }
-        const char *v = ++p;
-        const char *e = strchr(v, '"');
-        if (e == NULL) {
-            return 1;
-        }
-        if (len == strlen(attr) && strncmp(name, attr, len) == 0) {
-            if ((size_t)(e - v) >= n) {
-                return 1;
-            }
-            memcpy(out, v, (size_t)(e - v));
-            out[e - v] = '\0';
-            return 0;
-        }
-        p = e + 1;
-    }
-}
-
-static int elem_attr_vr(const char *elem, const char *attr, fmi3ValueReference *vr)
-{
-    char buf[32];
-    if (elem_attr(elem, attr, buf, sizeof buf) != 0) {
-        return 1;
-    }
-    *vr = (fmi3ValueReference)strtoul(buf, NULL, 10);
-    return 0;
-}
-
-static void load_sym(void *dl, const char *id, const char *name, void *dst, size_t size)
-{
-    void *p = dlsym(dl, name);
-    if (p == NULL || size != sizeof p) {
-        fprintf(stderr, "%s: missing symbol %s\n", id, name);
+    char err[256];
+    if (rrr_fmi_lib_sym(lib, name, dst, size, err, sizeof err) != 0) {
+        fprintf(stderr, "%s: %s\n", id, err);
         exit(2);
     }
-    memcpy(dst, &p, sizeof p); /* object pointer to function pointer, the POSIX way */
 }
 
 /* ---- an FMI 3.0 FMU loaded like an importer does --------------------------------------------- */
 
-/* Every function of fmi3Functions.h: each must be exported. */
-#define FMI3_FUNCTIONS(X)                                                                     \
-    X(GetVersion) X(SetDebugLogging) X(InstantiateModelExchange) X(InstantiateCoSimulation)   \
-    X(InstantiateScheduledExecution) X(FreeInstance) X(EnterInitializationMode)               \
-    X(ExitInitializationMode) X(EnterEventMode) X(Terminate) X(Reset) X(GetFloat32)           \
-    X(GetFloat64) X(GetInt8) X(GetUInt8) X(GetInt16) X(GetUInt16) X(GetInt32) X(GetUInt32)    \
-    X(GetInt64) X(GetUInt64) X(GetBoolean) X(GetString) X(GetBinary) X(GetClock)              \
-    X(SetFloat32) X(SetFloat64) X(SetInt8) X(SetUInt8) X(SetInt16) X(SetUInt16) X(SetInt32)   \
-    X(SetUInt32) X(SetInt64) X(SetUInt64) X(SetBoolean) X(SetString) X(SetBinary)             \
-    X(SetClock) X(GetNumberOfVariableDependencies) X(GetVariableDependencies)                 \
-    X(GetFMUState) X(SetFMUState) X(FreeFMUState) X(SerializedFMUStateSize)                   \
-    X(SerializeFMUState) X(DeserializeFMUState) X(GetDirectionalDerivative)                   \
-    X(GetAdjointDerivative) X(EnterConfigurationMode) X(ExitConfigurationMode)                \
-    X(GetIntervalDecimal) X(GetIntervalFraction) X(GetShiftDecimal) X(GetShiftFraction)       \
-    X(SetIntervalDecimal) X(SetIntervalFraction) X(SetShiftDecimal) X(SetShiftFraction)       \
-    X(EvaluateDiscreteStates) X(UpdateDiscreteStates) X(EnterContinuousTimeMode)              \
-    X(CompletedIntegratorStep) X(SetTime) X(SetContinuousStates)                              \
-    X(GetContinuousStateDerivatives) X(GetEventIndicators) X(GetContinuousStates)             \
-    X(GetNominalsOfContinuousStates) X(GetNumberOfEventIndicators)                            \
-    X(GetNumberOfContinuousStates) X(EnterStepMode) X(GetOutputDerivatives) X(DoStep)         \
-    X(ActivateModelPartition)
+/* Every function of fmi3Functions.h (RRR_FMI3_FUNCTIONS): each must be exported. */
+#define FMI3_FUNCTIONS(X) RRR_FMI3_FUNCTIONS(X)
 
 typedef struct xml_var {
-    char name[48];
+    char name[RRR_FMI_NAME_MAX];
     fmi3ValueReference vr;
-    int is_bool;      /* <Boolean> (else <Float64>) */
-    const char *elem; /* the element in the XML text */
+    int is_bool;            /* <Boolean> (else <Float64>) */
+    const rrr_fmi_var *var; /* the importer's entry (start, derivative, nominal) */
 } xml_var;
 
+/* Attribute attr of v's element: 0 when found. */
+static int var_attr(const xml_var *v, const char *attr, char *out, size_t n)
+{
+    return rrr_fmi_var_attr(v->var, attr, out, n) != RRR_FMI_OK;
+}
+
 typedef struct fmu3 {
-    void *dl;
-    char *xml;
+    rrr_fmi_lib lib;
+    rrr_fmi_md md;
     char id[64];
-    char token[64];
+    char token[128];
     int is_plant;
     xml_var vars[MAX_VARS];
     size_t nvars;
@@ -193,18 +122,12 @@ static fmi3ValueReference vr_of(const fmu3 *api, const char *name)
 
 static int parse_vars(fmu3 *api)
 {
-    const char *p = strstr(api->xml, "<ModelVariables>");
-    const char *end = p != NULL ? strstr(p, "</ModelVariables>") : NULL;
-    if (p == NULL || end == NULL) {
-        return 1;
-    }
-    while ((p = strchr(p + 1, '<')) != NULL && p < end) {
-        const int f64 = strncmp(p, "<Float64 ", 9) == 0;
-        const int b = strncmp(p, "<Boolean ", 9) == 0;
+    for (size_t i = 0; i < api->md.nvars; ++i) {
+        const rrr_fmi_var *iv = &api->md.vars[i];
+        const int f64 = strcmp(iv->type, "Float64") == 0;
+        const int b = strcmp(iv->type, "Boolean") == 0;
         if (!f64 && !b) {
-            if (p[1] != '/' && p[1] != '!') {
-                api->n_other_elements++;
-            }
+            api->n_other_elements++;
             continue;
         }
         if (api->nvars == MAX_VARS) {
@@ -212,19 +135,14 @@ static int parse_vars(fmu3 *api)
         }
         xml_var *v = &api->vars[api->nvars++];
         v->is_bool = b;
-        v->elem = p;
-        char causality[32];
-        if (elem_attr(p, "name", v->name, sizeof v->name) != 0 ||
-            elem_attr_vr(p, "valueReference", &v->vr) != 0) {
-            return 1;
+        v->var = iv;
+        v->vr = (fmi3ValueReference)iv->vr;
+        snprintf(v->name, sizeof v->name, "%s", iv->name);
+        if (strcmp(iv->causality, "input") == 0 && api->input_vr == (fmi3ValueReference)-1) {
+            api->input_vr = v->vr;
         }
-        if (elem_attr(p, "causality", causality, sizeof causality) == 0) {
-            if (strcmp(causality, "input") == 0 && api->input_vr == (fmi3ValueReference)-1) {
-                api->input_vr = v->vr;
-            }
-            if (strcmp(causality, "independent") == 0) {
-                api->time_vr = v->vr;
-            }
+        if (strcmp(iv->causality, "independent") == 0) {
+            api->time_vr = v->vr;
         }
     }
     return 0;
@@ -244,22 +162,26 @@ static const xml_var *var_by_vr(const fmu3 *api, fmi3ValueReference vr)
  * variable d has derivative="x", the state. */
 static int parse_states(fmu3 *api)
 {
-    const char *p = strstr(api->xml, "<ModelStructure>");
-    while (p != NULL && (p = strstr(p + 1, "<ContinuousStateDerivative ")) != NULL) {
-        fmi3ValueReference dvr = 0, xvr = 0;
-        if (api->nx == MAX_STATES || elem_attr_vr(p, "valueReference", &dvr) != 0) {
+    const char *end = api->md.xml + api->md.len;
+    rrr_fmi_tag t;
+    if (rrr_fmi_find_tag(api->md.xml, end, "ModelStructure", &t) != RRR_FMI_OK) {
+        return 0;
+    }
+    char buf[32];
+    while (rrr_fmi_find_tag(t.end, end, "ContinuousStateDerivative", &t) == RRR_FMI_OK) {
+        if (api->nx == MAX_STATES || rrr_fmi_attr(&t, "valueReference", buf, sizeof buf) != 0) {
             return 1;
         }
-        const xml_var *d = var_by_vr(api, dvr);
-        if (d == NULL || elem_attr_vr(d->elem, "derivative", &xvr) != 0) {
+        const xml_var *d = var_by_vr(api, (fmi3ValueReference)strtoul(buf, NULL, 10));
+        if (d == NULL || var_attr(d, "derivative", buf, sizeof buf) != 0) {
             return 1;
         }
-        const xml_var *x = var_by_vr(api, xvr);
+        const xml_var *x = var_by_vr(api, (fmi3ValueReference)strtoul(buf, NULL, 10));
         if (x == NULL) {
             return 1;
         }
         char nominal[32];
-        const int has_nominal = elem_attr(x->elem, "nominal", nominal, sizeof nominal) == 0;
+        const int has_nominal = var_attr(x, "nominal", nominal, sizeof nominal) == 0;
         api->nominal[api->nx] = has_nominal ? strtod(nominal, NULL) : 1.0;
         api->x_var[api->nx] = (size_t)(x - api->vars);
         api->dx_var[api->nx] = (size_t)(d - api->vars);
@@ -271,36 +193,31 @@ static int parse_states(fmu3 *api)
 static int fmu3_load(fmu3 *api, const char *dir)
 {
     char path[1024];
+    char err[512];
     memset(api, 0, sizeof *api);
     api->input_vr = (fmi3ValueReference)-1;
     api->time_vr = (fmi3ValueReference)-1;
-    snprintf(path, sizeof path, "%s/modelDescription.xml", dir);
-    api->xml = read_file(path);
-    const char *root = api->xml != NULL ? strstr(api->xml, "<fmiModelDescription") : NULL;
-    const char *cs = api->xml != NULL ? strstr(api->xml, "<CoSimulation") : NULL;
-    const char *me = api->xml != NULL ? strstr(api->xml, "<ModelExchange") : NULL;
-    char fmi_version[16], me_id[64];
-    if (root == NULL || cs == NULL || me == NULL ||
-        elem_attr(root, "fmiVersion", fmi_version, sizeof fmi_version) != 0 ||
-        strcmp(fmi_version, "3.0") != 0 ||
-        elem_attr(root, "instantiationToken", api->token, sizeof api->token) != 0 ||
-        elem_attr(cs, "modelIdentifier", api->id, sizeof api->id) != 0 ||
-        elem_attr(me, "modelIdentifier", me_id, sizeof me_id) != 0 || strcmp(me_id, api->id) != 0 ||
+    if (rrr_fmi_md_load(&api->md, dir, err, sizeof err) != 0) {
+        fprintf(stderr, "%s: %s\n", dir, err);
+        return 1;
+    }
+    if (api->md.fmi != 3 || strcmp(api->md.me_id, api->md.id) != 0 ||
         parse_vars(api) != 0 || parse_states(api) != 0 ||
         api->input_vr == (fmi3ValueReference)-1 || api->time_vr == (fmi3ValueReference)-1) {
         fprintf(stderr, "%s: not an FMI 3.0 modelDescription.xml with Model Exchange and "
                         "Co-Simulation of one modelIdentifier, inputs and a time variable\n",
-                path);
+                dir);
         return 1;
     }
+    snprintf(api->id, sizeof api->id, "%s", api->md.id);
+    snprintf(api->token, sizeof api->token, "%s", api->md.token);
     api->is_plant = strcmp(api->id, "rrr_plant") == 0;
-    snprintf(path, sizeof path, "%s/binaries/x86_64-linux/%s.so", dir, api->id);
-    api->dl = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (api->dl == NULL) {
-        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
+    if (rrr_fmi_binary_path(path, sizeof path, dir, 3, api->id) != 0 ||
+        rrr_fmi_lib_open(&api->lib, path, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
         return 1;
     }
-#define LOAD(F) load_sym(api->dl, api->id, "fmi3" #F, &api->F, sizeof api->F);
+#define LOAD(F) load_sym(&api->lib, api->id, "fmi3" #F, &api->F, sizeof api->F);
     FMI3_FUNCTIONS(LOAD)
 #undef LOAD
     return 0;
@@ -308,20 +225,18 @@ static int fmu3_load(fmu3 *api, const char *dir)
 
 static void fmu3_unload(fmu3 *api)
 {
-    if (api->dl != NULL) {
-        dlclose(api->dl);
-    }
-    free(api->xml);
+    rrr_fmi_lib_close(&api->lib);
+    rrr_fmi_md_free(&api->md);
     memset(api, 0, sizeof *api);
 }
 
 /* ---- the FMI 2.0 build, for comparisons ------------------------------------------------------ */
 
 typedef struct fmu2 {
-    void *dl;
-    char *xml;
+    rrr_fmi_lib lib;
+    rrr_fmi_md md;
     char id[64];
-    char guid[64];
+    char guid[128];
     fmi2InstantiateTYPE *Instantiate;
     fmi2FreeInstanceTYPE *FreeInstance;
     fmi2SetupExperimentTYPE *SetupExperiment;
@@ -340,23 +255,20 @@ typedef struct fmu2 {
 static int fmu2_load(fmu2 *api, const char *dir)
 {
     char path[1024];
+    char err[512];
     memset(api, 0, sizeof *api);
-    snprintf(path, sizeof path, "%s/modelDescription.xml", dir);
-    api->xml = read_file(path);
-    const char *root = api->xml != NULL ? strstr(api->xml, "<fmiModelDescription") : NULL;
-    const char *cs = api->xml != NULL ? strstr(api->xml, "<CoSimulation") : NULL;
-    if (root == NULL || cs == NULL || elem_attr(root, "guid", api->guid, sizeof api->guid) != 0 ||
-        elem_attr(cs, "modelIdentifier", api->id, sizeof api->id) != 0) {
-        fprintf(stderr, "cannot read guid and modelIdentifier from %s\n", path);
+    if (rrr_fmi_md_load(&api->md, dir, err, sizeof err) != 0 || api->md.fmi != 2) {
+        fprintf(stderr, "%s: %s\n", dir, api->md.xml == NULL ? err : "not FMI 2.0");
         return 1;
     }
-    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", dir, api->id);
-    api->dl = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (api->dl == NULL) {
-        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
+    snprintf(api->id, sizeof api->id, "%s", api->md.id);
+    snprintf(api->guid, sizeof api->guid, "%s", api->md.token);
+    if (rrr_fmi_binary_path(path, sizeof path, dir, 2, api->id) != 0 ||
+        rrr_fmi_lib_open(&api->lib, path, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
         return 1;
     }
-#define LOAD2(F) load_sym(api->dl, api->id, "fmi2" #F, &api->F, sizeof api->F);
+#define LOAD2(F) load_sym(&api->lib, api->id, "fmi2" #F, &api->F, sizeof api->F);
     LOAD2(Instantiate) LOAD2(FreeInstance) LOAD2(SetupExperiment) LOAD2(EnterInitializationMode)
     LOAD2(ExitInitializationMode) LOAD2(Terminate) LOAD2(GetReal) LOAD2(SetReal) LOAD2(DoStep)
     LOAD2(GetFMUstate) LOAD2(FreeFMUstate) LOAD2(SerializedFMUstateSize) LOAD2(SerializeFMUstate)
@@ -366,21 +278,17 @@ static int fmu2_load(fmu2 *api, const char *dir)
 
 static void fmu2_unload(fmu2 *api)
 {
-    if (api->dl != NULL) {
-        dlclose(api->dl);
-    }
-    free(api->xml);
+    rrr_fmi_lib_close(&api->lib);
+    rrr_fmi_md_free(&api->md);
     memset(api, 0, sizeof *api);
 }
 
 static fmi2ValueReference vr2_of(const fmu2 *api, const char *name)
 {
-    char key[96];
-    fmi3ValueReference vr = 0;
-    snprintf(key, sizeof key, "<ScalarVariable name=\"%s\"", name);
-    const char *v = strstr(api->xml, key);
-    if (v == NULL || elem_attr_vr(v, "valueReference", &vr) != 0) {
-        fprintf(stderr, "%s (FMI 2): no variable %s in modelDescription.xml\n", api->id, name);
+    char err[256];
+    unsigned long vr = 0;
+    if (rrr_fmi_md_vr(&api->md, name, NULL, &vr, err, sizeof err) != 0) {
+        fprintf(stderr, "(FMI 2) %s\n", err);
         exit(2);
     }
     return (fmi2ValueReference)vr;
@@ -586,25 +494,15 @@ static void test_xml(const fmu3 *api, const fmu2 *v2)
     }
     CHECK(strcmp(api->id, v2->id) == 0);
     CHECK(strcmp(api->token, v2->guid) == 0); /* the token names the model, not the binary */
-    size_t n2 = 0;
-    for (const char *p = strstr(v2->xml, "<ScalarVariable "); p != NULL;
-         p = strstr(p + 1, "<ScalarVariable ")) {
-        ++n2;
-    }
-    CHECK(n2 + 1 == api->nvars); /* FMI 3 adds the independent variable */
+    CHECK(v2->md.nvars + 1 == api->nvars); /* FMI 3 adds the independent variable */
     for (size_t i = 0; i < api->nvars; ++i) {
         const xml_var *v = &api->vars[i];
         if (v->vr == api->time_vr) {
             continue;
         }
-        char key[96];
-        snprintf(key, sizeof key, "<ScalarVariable name=\"%s\"", v->name);
-        const char *e2 = strstr(v2->xml, key);
-        fmi3ValueReference vr2 = 0;
-        const char *type2 = e2 != NULL ? strchr(e2 + 1, '<') : NULL;
-        const char *want2 = v->is_bool ? "<Boolean" : "<Real";
-        if (e2 == NULL || elem_attr_vr(e2, "valueReference", &vr2) != 0 || vr2 != v->vr ||
-            type2 == NULL || strncmp(type2, want2, strlen(want2)) != 0) {
+        const rrr_fmi_var *e2 = rrr_fmi_md_var(&v2->md, v->name);
+        if (e2 == NULL || e2->vr != v->vr ||
+            strcmp(e2->type, v->is_bool ? "Boolean" : "Real") != 0) {
             fprintf(stderr, "%s: %s (vr %u) differs between the FMI 2 and FMI 3 XML\n", api->id,
                     v->name, (unsigned)v->vr);
             rrr_test_failures++;
@@ -1071,52 +969,12 @@ static void test_null_instance(const fmu3 *api)
 
 /* ---- start values --------------------------------------------------------------------------- */
 
-#define N_MODEL_PARAMS (6 + RRR_NP + 3 + 9 + 9 + 3 + 1)
-
-static void model_params(const rrr_model *m, char names_[N_MODEL_PARAMS][16],
-                         double values[N_MODEL_PARAMS])
-{
-    int k = 0;
-    const char *scalars[] = {"d1", "a2", "a3", "d2", "d3", "g"};
-    const double sv[] = {m->d1, m->a2, m->a3, m->d2, m->d3, m->g};
-    for (int i = 0; i < 6; ++i, ++k) {
-        snprintf(names_[k], 16, "%s", scalars[i]);
-        values[k] = sv[i];
-    }
-    for (int i = 0; i < RRR_NP; ++i, ++k) {
-        snprintf(names_[k], 16, "p[%d]", i + 1);
-        values[k] = m->p[i];
-    }
-    for (int i = 0; i < 3; ++i, ++k) {
-        snprintf(names_[k], 16, "kt[%d]", i + 1);
-        values[k] = m->kt[i];
-    }
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j, ++k) {
-            snprintf(names_[k], 16, "f[%d,%d]", i + 1, j + 1);
-            values[k] = m->f[i][j];
-        }
-    }
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j, ++k) {
-            snprintf(names_[k], 16, "w[%d,%d]", i + 1, j + 1);
-            values[k] = m->w[i][j];
-        }
-    }
-    for (int i = 0; i < 3; ++i, ++k) {
-        snprintf(names_[k], 16, "b[%d]", i + 1);
-        values[k] = m->b[i];
-    }
-    snprintf(names_[k], 16, "u_max");
-    values[k] = m->u_max;
-}
-
 /* Value after instantiation (read in initialization mode) = XML start = expected. */
 static void check_default(inst *x, const char *name, double expected)
 {
     char start[64] = "";
     const xml_var *v = find_var(x->api, name);
-    const int has_start = v != NULL && elem_attr(v->elem, "start", start, sizeof start) == 0;
+    const int has_start = v != NULL && var_attr(v, "start", start, sizeof start) == 0;
     const double got = get1(x, name);
     if (!(got == expected) || !has_start || !(strtod(start, NULL) == expected)) {
         fprintf(stderr, "%s (%s): %s = %.17g, XML start \"%s\", librrr default %.17g\n",
@@ -1155,7 +1013,7 @@ static void test_defaults(const fmu3 *plant, const fmu3 *ctrl)
             char start_ad[16] = "";
             fmi3Boolean on = false;
             CHECK(ad != NULL && ad->is_bool &&
-                  elem_attr(ad->elem, "start", start_ad, sizeof start_ad) == 0);
+                  var_attr(ad, "start", start_ad, sizeof start_ad) == 0);
             CHECK(ad != NULL && plant->GetBoolean(p.c, &ad->vr, 1, &on, 1) == fmi3OK && on);
             CHECK(strcmp(start_ad, "true") == 0);
         }
@@ -1179,12 +1037,12 @@ static void test_defaults(const fmu3 *plant, const fmu3 *ctrl)
         const xml_var *ff = find_var(ctrl, "feedforward");
         char start[16] = "";
         fmi3Boolean b = !g.feedforward;
-        CHECK(ff != NULL && ff->is_bool && elem_attr(ff->elem, "start", start, sizeof start) == 0);
+        CHECK(ff != NULL && ff->is_bool && var_attr(ff, "start", start, sizeof start) == 0);
         CHECK(ctrl->GetBoolean(c.c, &ff->vr, 1, &b, 1) == fmi3OK);
         CHECK(b == (g.feedforward != 0));
         CHECK(strcmp(start, g.feedforward ? "true" : "false") == 0);
         /* the independent variable has no start value; it is the startTime */
-        CHECK(elem_attr(find_var(plant, "time")->elem, "start", start, sizeof start) != 0);
+        CHECK(var_attr(find_var(plant, "time"), "start", start, sizeof start) != 0);
         CHECK(get1(&p, "time") == 0.0 && get1(&c, "time") == 0.0);
         inst_free(&p);
         inst_free(&c);
@@ -1212,19 +1070,6 @@ static void loop_vrs(loop *L)
     vrs3(L->c->api, "q", L->c_q);
     vrs3(L->c->api, "qd", L->c_qd);
     vrs3(L->c->api, "u", L->c_u);
-}
-
-/* Smooth reference: q_ref, qd_ref, qdd_ref at t. */
-static void reference(double t, double r[9])
-{
-    const double q0[3] = {0.1, 0.3, -0.8};
-    const double a[3] = {0.6, 0.4, 0.5};
-    const double w[3] = {3.0, 4.5, 4.0};
-    for (int i = 0; i < 3; ++i) {
-        r[i] = q0[i] + a[i] * sin(w[i] * t);
-        r[3 + i] = a[i] * w[i] * cos(w[i] * t);
-        r[6 + i] = -a[i] * w[i] * w[i] * sin(w[i] * t);
-    }
 }
 
 /* Instantiated to StepMode for both, plant started on the reference. */

@@ -30,7 +30,6 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include <ctype.h>
-#include <dlfcn.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -43,7 +42,9 @@
 #include "fmi2FunctionTypes.h"
 #include "rrr/rrr.h"
 #include "fmu_state_forge.h"
-#include "fmu_test_io.h"
+#include "rrr_fmi_funcs.h"
+#include "rrr_fmi_import.h"
+#include "fmu_harness_common.h"
 #include "rrr_test.h"
 
 #define H 1e-3 /* communication step, s */
@@ -73,130 +74,46 @@ static void count_free(void *p)
 /* ---- an FMU loaded like an importer does ------------------------------------------------------ */
 
 typedef struct fmu_api {
-    void *dl;
-    char *xml;       /* modelDescription.xml */
+    rrr_fmi_lib lib;
+    rrr_fmi_md md;   /* modelDescription.xml, parsed by c_src/fmi_import */
     char id[64];     /* modelIdentifier */
-    char guid[64];
+    char guid[128];
     char resources[1100]; /* fmuResourceLocation: file://<unzip dir>/resources */
-    fmi2GetTypesPlatformTYPE *GetTypesPlatform;
-    fmi2GetVersionTYPE *GetVersion;
-    fmi2SetDebugLoggingTYPE *SetDebugLogging;
-    fmi2InstantiateTYPE *Instantiate;
-    fmi2FreeInstanceTYPE *FreeInstance;
-    fmi2SetupExperimentTYPE *SetupExperiment;
-    fmi2EnterInitializationModeTYPE *EnterInitializationMode;
-    fmi2ExitInitializationModeTYPE *ExitInitializationMode;
-    fmi2TerminateTYPE *Terminate;
-    fmi2ResetTYPE *Reset;
-    fmi2GetRealTYPE *GetReal;
-    fmi2GetIntegerTYPE *GetInteger;
-    fmi2GetBooleanTYPE *GetBoolean;
-    fmi2GetStringTYPE *GetString;
-    fmi2SetRealTYPE *SetReal;
-    fmi2SetIntegerTYPE *SetInteger;
-    fmi2SetBooleanTYPE *SetBoolean;
-    fmi2SetStringTYPE *SetString;
-    fmi2GetFMUstateTYPE *GetFMUstate;
-    fmi2SetFMUstateTYPE *SetFMUstate;
-    fmi2FreeFMUstateTYPE *FreeFMUstate;
-    fmi2SerializedFMUstateSizeTYPE *SerializedFMUstateSize;
-    fmi2SerializeFMUstateTYPE *SerializeFMUstate;
-    fmi2DeSerializeFMUstateTYPE *DeSerializeFMUstate;
-    fmi2GetDirectionalDerivativeTYPE *GetDirectionalDerivative;
-    fmi2SetRealInputDerivativesTYPE *SetRealInputDerivatives;
-    fmi2GetRealOutputDerivativesTYPE *GetRealOutputDerivatives;
-    fmi2DoStepTYPE *DoStep;
-    fmi2CancelStepTYPE *CancelStep;
-    fmi2GetStatusTYPE *GetStatus;
-    fmi2GetRealStatusTYPE *GetRealStatus;
-    fmi2GetIntegerStatusTYPE *GetIntegerStatus;
-    fmi2GetBooleanStatusTYPE *GetBooleanStatus;
-    fmi2GetStringStatusTYPE *GetStringStatus;
-    /* Model Exchange */
-    fmi2EnterEventModeTYPE *EnterEventMode;
-    fmi2NewDiscreteStatesTYPE *NewDiscreteStates;
-    fmi2EnterContinuousTimeModeTYPE *EnterContinuousTimeMode;
-    fmi2CompletedIntegratorStepTYPE *CompletedIntegratorStep;
-    fmi2SetTimeTYPE *SetTime;
-    fmi2SetContinuousStatesTYPE *SetContinuousStates;
-    fmi2GetDerivativesTYPE *GetDerivatives;
-    fmi2GetEventIndicatorsTYPE *GetEventIndicators;
-    fmi2GetContinuousStatesTYPE *GetContinuousStates;
-    fmi2GetNominalsOfContinuousStatesTYPE *GetNominalsOfContinuousStates;
+#define DECLARE(F) fmi2##F##TYPE *F;
+    RRR_FMI2_FUNCTIONS(DECLARE)
+#undef DECLARE
     /* continuous states from <ModelStructure><Derivatives>, in that order (the state vector) */
     size_t nx;                            /* number of continuous states */
     size_t ni;                            /* numberOfEventIndicators */
-    char x_name[MAX_STATES][32];          /* state variable, e.g. "q[1]" */
-    char dx_name[MAX_STATES][32];         /* its derivative, e.g. "qd[1]" */
+    char x_name[MAX_STATES][RRR_FMI_NAME_MAX];  /* state variable, e.g. "q[1]" */
+    char dx_name[MAX_STATES][RRR_FMI_NAME_MAX]; /* its derivative, e.g. "qd[1]" */
     fmi2ValueReference x_vr[MAX_STATES];
     fmi2ValueReference dx_vr[MAX_STATES];
 } fmu_api;
 
-/* Value of the first attribute `attr="..."` at or after from. */
-static int xml_attr(const char *from, const char *attr, char *out, size_t n)
-{
-    char key[80];
-    snprintf(key, sizeof key, " %s=\"", attr);
-    const char *p = strstr(from, key);
-    if (p == NULL) {
-        return 1;
-    }
-    p += strlen(key);
-    const char *e = strchr(p, '"');
-    if (e == NULL || (size_t)(e - p) >= n) {
-        return 1;
-    }
-    memcpy(out, p, (size_t)(e - p));
-    out[e - p] = '\0';
-    return 0;
-}
-
-/* The <ScalarVariable ...> element of a variable, or NULL (also for a name too long to be
- * one). */
-static const char *xml_var(const fmu_api *api, const char *name)
-{
-    char key[1024];
-    int len = snprintf(key, sizeof key, "<ScalarVariable name=\"%s\"", name);
-    if (len < 0 || (size_t)len >= sizeof key) {
-        return NULL;
-    }
-    return strstr(api->xml, key);
-}
-
 /* Value reference of a variable from the XML; aborts the test run if it is missing. */
 static fmi2ValueReference vr_of(const fmu_api *api, const char *name)
 {
-    char buf[32];
-    const char *v = xml_var(api, name);
-    if (v == NULL || xml_attr(v, "valueReference", buf, sizeof buf) != 0) {
-        fprintf(stderr, "%s: no variable %s in modelDescription.xml\n", api->id, name);
+    char err[256];
+    unsigned long vr = 0;
+    if (rrr_fmi_md_vr(&api->md, name, NULL, &vr, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
         exit(2);
     }
-    return (fmi2ValueReference)strtoul(buf, NULL, 10);
+    return (fmi2ValueReference)vr;
 }
 
-/* Start attribute of a variable (within its element), "" when it has none. */
+/* Start attribute of a variable, "" when it has none. */
 static void start_of(const fmu_api *api, const char *name, char *out, size_t n)
 {
-    const char *v = xml_var(api, name);
-    const char *end = v ? strstr(v, "</ScalarVariable>") : NULL;
-    out[0] = '\0';
-    if (v != NULL && end != NULL) {
-        const char *s = strstr(v, " start=\"");
-        if (s != NULL && s < end) {
-            xml_attr(s, "start", out, n);
-        }
-    }
+    (void)rrr_fmi_md_start(&api->md, name, out, n);
 }
 
-/* The k-th (1-based, the XML's index) <ScalarVariable> of <ModelVariables>, or NULL. */
-static const char *xml_var_at(const fmu_api *api, unsigned long k)
+/* The k-th (1-based, the XML's index) variable of <ModelVariables>, or NULL. */
+static const rrr_fmi_var *var_at(const fmu_api *api, const char *index)
 {
-    const char *p = strstr(api->xml, "<ModelVariables>");
-    for (unsigned long i = 0; p != NULL && i < k; ++i) {
-        p = strstr(p + 1, "<ScalarVariable ");
-    }
-    return k > 0 ? p : NULL;
+    const unsigned long k = strtoul(index, NULL, 10);
+    return k > 0 && k <= api->md.nvars ? &api->md.vars[k - 1] : NULL;
 }
 
 /* The continuous states in the order of <ModelStructure><Derivatives> (FMI 2.0.4 section 3.3:
@@ -205,123 +122,68 @@ static const char *xml_var_at(const fmu_api *api, unsigned long k)
 static int parse_states(fmu_api *api)
 {
     char buf[32];
+    const char *end = api->md.xml + api->md.len;
+    rrr_fmi_tag t;
     api->nx = 0;
     api->ni = 0;
-    if (xml_attr(api->xml, "numberOfEventIndicators", buf, sizeof buf) == 0) {
+    if (rrr_fmi_find_tag(api->md.xml, end, "fmiModelDescription", &t) == RRR_FMI_OK &&
+        rrr_fmi_attr(&t, "numberOfEventIndicators", buf, sizeof buf) == RRR_FMI_OK) {
         api->ni = strtoul(buf, NULL, 10);
     }
-    const char *d = strstr(api->xml, "<Derivatives>");
-    if (d == NULL) {
+    if (rrr_fmi_find_tag(api->md.xml, end, "Derivatives", &t) != RRR_FMI_OK) {
         return 0; /* no continuous states */
     }
-    const char *end = strstr(d, "</Derivatives>");
-    if (end == NULL) {
-        return 1;
-    }
-    for (const char *u = strstr(d, "<Unknown "); u != NULL && u < end;
-         u = strstr(u + 1, "<Unknown ")) {
+    for (const char *p = t.end; rrr_fmi_next_tag(p, end, &t) == RRR_FMI_OK; p = t.end) {
+        if (t.closing) {
+            return strncmp(t.name, "Derivatives", t.name_len) == 0 ? 0 : 1;
+        }
         const size_t k = api->nx;
-        if (k == MAX_STATES || xml_attr(u, "index", buf, sizeof buf) != 0) {
+        if (k == MAX_STATES || rrr_fmi_attr(&t, "index", buf, sizeof buf) != RRR_FMI_OK) {
             return 1;
         }
-        const char *dv = xml_var_at(api, strtoul(buf, NULL, 10));
-        const char *dv_end = dv != NULL ? strstr(dv, "</ScalarVariable>") : NULL;
-        const char *der = dv != NULL ? strstr(dv, " derivative=\"") : NULL;
-        if (dv_end == NULL || der == NULL || der > dv_end ||
-            xml_attr(der, "derivative", buf, sizeof buf) != 0) {
+        const rrr_fmi_var *dv = var_at(api, buf);
+        if (dv == NULL || rrr_fmi_var_attr(dv, "derivative", buf, sizeof buf) != RRR_FMI_OK) {
             return 1;
         }
-        const char *sv = xml_var_at(api, strtoul(buf, NULL, 10));
-        if (sv == NULL || xml_attr(dv, "name", api->dx_name[k], sizeof api->dx_name[k]) != 0 ||
-            xml_attr(sv, "name", api->x_name[k], sizeof api->x_name[k]) != 0) {
+        const rrr_fmi_var *sv = var_at(api, buf);
+        if (sv == NULL) {
             return 1;
         }
-        api->dx_vr[k] = vr_of(api, api->dx_name[k]);
-        api->x_vr[k] = vr_of(api, api->x_name[k]);
+        snprintf(api->dx_name[k], sizeof api->dx_name[k], "%s", dv->name);
+        snprintf(api->x_name[k], sizeof api->x_name[k], "%s", sv->name);
+        api->dx_vr[k] = (fmi2ValueReference)dv->vr;
+        api->x_vr[k] = (fmi2ValueReference)sv->vr;
         api->nx = k + 1;
     }
-    return 0;
+    return 1; /* the text ends or a tag is cut off inside <Derivatives> */
 }
-
-static void load_sym(fmu_api *api, const char *name, void *dst, size_t size)
-{
-    void *p = dlsym(api->dl, name);
-    if (p == NULL || size != sizeof p) {
-        fprintf(stderr, "%s: missing symbol %s\n", api->id, name);
-        exit(2);
-    }
-    memcpy(dst, &p, sizeof p); /* object pointer to function pointer, the POSIX way */
-}
-
-#define LOAD(F) load_sym(api, "fmi2" #F, &api->F, sizeof api->F)
 
 static int fmu_load(fmu_api *api, const char *dir)
 {
     char path[1024];
+    char err[512];
     memset(api, 0, sizeof *api);
-    snprintf(path, sizeof path, "%s/modelDescription.xml", dir);
-    api->xml = read_file(path);
-    if (api->xml == NULL || xml_attr(api->xml, "modelIdentifier", api->id, sizeof api->id) != 0 ||
-        xml_attr(api->xml, "guid", api->guid, sizeof api->guid) != 0) {
-        fprintf(stderr, "cannot read modelIdentifier and guid from %s\n", path);
+    if (rrr_fmi_md_load(&api->md, dir, err, sizeof err) != 0 || api->md.fmi != 2) {
+        fprintf(stderr, "%s: %s\n", dir, api->md.xml == NULL ? err : "not FMI 2.0");
         return 1;
     }
+    snprintf(api->id, sizeof api->id, "%s", api->md.id);
+    snprintf(api->guid, sizeof api->guid, "%s", api->md.token);
     snprintf(api->resources, sizeof api->resources, "file://%s/resources", dir);
-    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", dir, api->id);
-    api->dl = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (api->dl == NULL) {
-        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
+    if (rrr_fmi_binary_path(path, sizeof path, dir, 2, api->id) != 0 ||
+        rrr_fmi_lib_open(&api->lib, path, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
         return 1;
     }
-    LOAD(GetTypesPlatform);
-    LOAD(GetVersion);
-    LOAD(SetDebugLogging);
-    LOAD(Instantiate);
-    LOAD(FreeInstance);
-    LOAD(SetupExperiment);
-    LOAD(EnterInitializationMode);
-    LOAD(ExitInitializationMode);
-    LOAD(Terminate);
-    LOAD(Reset);
-    LOAD(GetReal);
-    LOAD(GetInteger);
-    LOAD(GetBoolean);
-    LOAD(GetString);
-    LOAD(SetReal);
-    LOAD(SetInteger);
-    LOAD(SetBoolean);
-    LOAD(SetString);
-    LOAD(GetFMUstate);
-    LOAD(SetFMUstate);
-    LOAD(FreeFMUstate);
-    LOAD(SerializedFMUstateSize);
-    LOAD(SerializeFMUstate);
-    LOAD(DeSerializeFMUstate);
-    LOAD(GetDirectionalDerivative);
-    LOAD(SetRealInputDerivatives);
-    LOAD(GetRealOutputDerivatives);
-    LOAD(DoStep);
-    LOAD(CancelStep);
-    LOAD(GetStatus);
-    LOAD(GetRealStatus);
-    LOAD(GetIntegerStatus);
-    LOAD(GetBooleanStatus);
-    LOAD(GetStringStatus);
-    LOAD(EnterEventMode);
-    LOAD(NewDiscreteStates);
-    LOAD(EnterContinuousTimeMode);
-    LOAD(CompletedIntegratorStep);
-    LOAD(SetTime);
-    LOAD(SetContinuousStates);
-    LOAD(GetDerivatives);
-    LOAD(GetEventIndicators);
-    LOAD(GetContinuousStates);
-    LOAD(GetNominalsOfContinuousStates);
+#define LOAD(F)                                                                                  \
+    if (rrr_fmi_lib_sym(&api->lib, "fmi2" #F, &api->F, sizeof api->F, err, sizeof err) != 0) { \
+        fprintf(stderr, "%s: %s\n", api->id, err);                                              \
+        return 1;                                                                                \
+    }
+    RRR_FMI2_FUNCTIONS(LOAD)
+#undef LOAD
     /* one binary, both interface types: <ModelExchange> names the same modelIdentifier */
-    const char *me = strstr(api->xml, "<ModelExchange");
-    char me_id[64];
-    if (me == NULL || xml_attr(me, "modelIdentifier", me_id, sizeof me_id) != 0 ||
-        strcmp(me_id, api->id) != 0 || parse_states(api) != 0) {
+    if (strcmp(api->md.me_id, api->id) != 0 || parse_states(api) != 0) {
         fprintf(stderr, "%s: no <ModelExchange> for the same binary, or unreadable "
                         "<Derivatives> in %s\n", api->id, dir);
         return 1;
@@ -331,10 +193,8 @@ static int fmu_load(fmu_api *api, const char *dir)
 
 static void fmu_unload(fmu_api *api)
 {
-    if (api->dl != NULL) {
-        dlclose(api->dl);
-    }
-    free(api->xml);
+    rrr_fmi_lib_close(&api->lib);
+    rrr_fmi_md_free(&api->md);
     memset(api, 0, sizeof *api);
 }
 
@@ -470,46 +330,6 @@ static void vrs3(const fmu_api *api, const char *base, fmi2ValueReference vr[3])
 
 /* ---- the model parameters, named as in both FMUs ------------------------------------------------ */
 
-#define N_MODEL_PARAMS (6 + RRR_NP + 3 + 9 + 9 + 3 + 1)
-
-static void model_params(const rrr_model *m, char names[N_MODEL_PARAMS][16],
-                         double values[N_MODEL_PARAMS])
-{
-    int k = 0;
-    const char *scalars[] = {"d1", "a2", "a3", "d2", "d3", "g"};
-    const double sv[] = {m->d1, m->a2, m->a3, m->d2, m->d3, m->g};
-    for (int i = 0; i < 6; ++i, ++k) {
-        snprintf(names[k], 16, "%s", scalars[i]);
-        values[k] = sv[i];
-    }
-    for (int i = 0; i < RRR_NP; ++i, ++k) {
-        snprintf(names[k], 16, "p[%d]", i + 1);
-        values[k] = m->p[i];
-    }
-    for (int i = 0; i < 3; ++i, ++k) {
-        snprintf(names[k], 16, "kt[%d]", i + 1);
-        values[k] = m->kt[i];
-    }
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j, ++k) {
-            snprintf(names[k], 16, "f[%d,%d]", i + 1, j + 1);
-            values[k] = m->f[i][j];
-        }
-    }
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j, ++k) {
-            snprintf(names[k], 16, "w[%d,%d]", i + 1, j + 1);
-            values[k] = m->w[i][j];
-        }
-    }
-    for (int i = 0; i < 3; ++i, ++k) {
-        snprintf(names[k], 16, "b[%d]", i + 1);
-        values[k] = m->b[i];
-    }
-    snprintf(names[k], 16, "u_max");
-    values[k] = m->u_max;
-}
-
 /* Value after instantiation (read in initialization mode) = XML start = expected. */
 static void check_default(inst *x, const char *name, double expected)
 {
@@ -636,19 +456,6 @@ static void loop_vrs(loop *L)
     vrs3(L->c->api, "q", L->c_q);
     vrs3(L->c->api, "qd", L->c_qd);
     vrs3(L->c->api, "u", L->c_u);
-}
-
-/* Smooth reference: q_ref, qd_ref, qdd_ref at t. */
-static void reference(double t, double r[9])
-{
-    const double q0[3] = {0.1, 0.3, -0.8};
-    const double a[3] = {0.6, 0.4, 0.5};
-    const double w[3] = {3.0, 4.5, 4.0};
-    for (int i = 0; i < 3; ++i) {
-        r[i] = q0[i] + a[i] * sin(w[i] * t);
-        r[3 + i] = a[i] * w[i] * cos(w[i] * t);
-        r[6 + i] = -a[i] * w[i] * w[i] * sin(w[i] * t);
-    }
 }
 
 /* Instantiate-to-StepComplete for both, plant started on the reference. */

@@ -6,7 +6,8 @@
  *
  * Usage: fmu_run <2|3> <plant unzip dir> <controller unzip dir> [seconds]
  *
- * Reads each modelDescription.xml (modelIdentifier, guid / instantiationToken, value references
+ * Reads each modelDescription.xml through c_src/fmi_import (modelIdentifier, guid /
+ * instantiationToken, value references
  * by name), loads binaries/<platform>/<modelIdentifier>.<so|dll> (platform chosen at compile
  * time: linux64 / x86_64-linux, win64 / x86_64-windows) and runs Co-Simulation at 1 ms over
  * [0, seconds] (default 1 s):
@@ -24,7 +25,6 @@
 #define _POSIX_C_SOURCE 200809L
 #endif
 
-#include <ctype.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
@@ -36,156 +36,16 @@
 #ifdef _WIN32
 #include <fcntl.h>
 #include <io.h>
-#include <windows.h>
-#else
-#include <dlfcn.h>
 #endif
 
 #include "fmi2FunctionTypes.h"
 #include "fmi3FunctionTypes.h"
-#include "../fmu_test_io.h"
-
-/* ---- platform: binaries/<folder>/<id><ext>, chosen at compile time --------------------------- */
-
-#if defined(_WIN32)
-#define LIB_EXT ".dll"
-#if defined(_WIN64) && (defined(__x86_64__) || defined(_M_X64))
-#define FMI2_PLATFORM "win64"
-#define FMI3_PLATFORM "x86_64-windows"
-#elif defined(_WIN64) && (defined(__aarch64__) || defined(_M_ARM64))
-#define FMI2_PLATFORM "win64"
-#define FMI3_PLATFORM "aarch64-windows"
-#else
-#define FMI2_PLATFORM "win32"
-#define FMI3_PLATFORM "x86-windows"
-#endif
-#elif defined(__APPLE__)
-#define LIB_EXT ".dylib"
-#define FMI2_PLATFORM "darwin64"
-#if defined(__aarch64__)
-#define FMI3_PLATFORM "aarch64-darwin"
-#else
-#define FMI3_PLATFORM "x86_64-darwin"
-#endif
-#elif defined(__linux__)
-#define LIB_EXT ".so"
-#if defined(__x86_64__)
-#define FMI2_PLATFORM "linux64"
-#define FMI3_PLATFORM "x86_64-linux"
-#elif defined(__aarch64__)
-#define FMI2_PLATFORM "linux64"
-#define FMI3_PLATFORM "aarch64-linux"
-#elif defined(__i386__)
-#define FMI2_PLATFORM "linux32"
-#define FMI3_PLATFORM "x86-linux"
-#else
-#error "fmu_run: unknown Linux architecture"
-#endif
-#else
-#error "fmu_run: unknown platform"
-#endif
+#include "rrr_fmi_import.h"
+#include "../fmu_test_reference.h"
 
 #define STEP 1e-3        /* communication step, s */
 #define MAX_STEPS 100000 /* at most 100 s */
 #define PATH_LEN 4096
-
-/* ---- shared libraries ------------------------------------------------------------------------- */
-
-#ifdef _WIN32
-typedef HMODULE lib_handle;
-#else
-typedef void *lib_handle;
-#endif
-
-static lib_handle lib_open(const char *path)
-{
-#ifdef _WIN32
-    /* LoadLibrary wants backslashes; "/tmp/x" becomes "\tmp\x" on the current drive (under wine
-     * Z:, the Unix root, when started from a Unix directory) */
-    char win[PATH_LEN];
-    snprintf(win, sizeof win, "%s", path);
-    for (char *p = win; *p != '\0'; ++p) {
-        if (*p == '/') {
-            *p = '\\';
-        }
-    }
-    HMODULE h = LoadLibraryA(win);
-    if (h == NULL) {
-        fprintf(stderr, "fmu_run: LoadLibraryA(%s) failed, error %lu\n", win,
-                (unsigned long)GetLastError());
-    }
-    return h;
-#else
-    void *h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (h == NULL) {
-        fprintf(stderr, "fmu_run: dlopen(%s) failed: %s\n", path, dlerror());
-    }
-    return h;
-#endif
-}
-
-static void lib_close(lib_handle h)
-{
-    if (h != NULL) {
-#ifdef _WIN32
-        FreeLibrary(h);
-#else
-        dlclose(h);
-#endif
-    }
-}
-
-/* Looks up name and stores the function pointer in *dst (size bytes); 1 when missing. The
- * pointer is copied bytewise: no cast between object and function pointers (dlsym) or between
- * function pointer types (GetProcAddress). */
-static int lib_sym(lib_handle h, const char *name, void *dst, size_t size)
-{
-#ifdef _WIN32
-    FARPROC p = GetProcAddress(h, name);
-#else
-    void *p = dlsym(h, name);
-#endif
-    if (p == NULL || size != sizeof p) {
-        fprintf(stderr, "fmu_run: the FMU binary does not export %s\n", name);
-        return 1;
-    }
-    memcpy(dst, &p, sizeof p);
-    return 0;
-}
-
-/* ---- modelDescription.xml: just enough string matching for the files of this project --------- */
-
-static char *read_text(const char *path)
-{
-    char *buf = read_file(path);
-    if (buf == NULL) {
-        fprintf(stderr, "fmu_run: cannot read %s (missing or empty)\n", path);
-    }
-    return buf;
-}
-
-/* Value of attribute attr="..." (preceded by white space) in [from, end), end NULL: anywhere
- * after from; 1 when absent or longer than n - 1. */
-static int xml_attr(const char *from, const char *end, const char *attr, char *out, size_t n)
-{
-    char key[80];
-    snprintf(key, sizeof key, "%s=\"", attr);
-    for (const char *p = strstr(from, key); p != NULL && (end == NULL || p < end);
-         p = strstr(p + 1, key)) {
-        if (p == from || !isspace((unsigned char)p[-1])) {
-            continue; /* the tail of a longer name */
-        }
-        p += strlen(key);
-        const char *e = strchr(p, '"');
-        if (e == NULL || (end != NULL && e >= end) || (size_t)(e - p) >= n) {
-            return 1;
-        }
-        memcpy(out, p, (size_t)(e - p));
-        out[e - p] = '\0';
-        return 0;
-    }
-    return 1;
-}
 
 /* ---- an FMU: its XML, its binary, one instance -------------------------------------------------- */
 
@@ -193,11 +53,10 @@ typedef enum var_type { VT_REAL, VT_BOOL } var_type;
 
 typedef struct fmu {
     int fmi; /* 2 or 3 */
-    char *xml;
-    char id[128];
-    char token[128]; /* FMI 2 guid, FMI 3 instantiationToken */
+    rrr_fmi_md md;   /* modelDescription.xml (c_src/fmi_import) */
+    const char *id;  /* md.id: the modelIdentifier */
     char resource_uri[PATH_LEN + 32];
-    lib_handle dl;
+    rrr_fmi_lib dl;
     void *inst; /* fmi2Component or fmi3Instance */
     char inst_name[64];
     /* FMI 2.0 */
@@ -289,55 +148,44 @@ static int check(const fmu *f, const char *call, unsigned int status)
 
 /* ---- loading ------------------------------------------------------------------------------------- */
 
-#define SYM(FIELD, NAME) lib_sym(f->dl, NAME, &f->FIELD, sizeof f->FIELD)
+#define SYM(FIELD, NAME) sym(f, NAME, &f->FIELD, sizeof f->FIELD)
+
+static int sym(fmu *f, const char *name, void *dst, size_t size)
+{
+    char err[256];
+    if (rrr_fmi_lib_sym(&f->dl, name, dst, size, err, sizeof err) != 0) {
+        fprintf(stderr, "fmu_run: %s\n", err);
+        return 1;
+    }
+    return 0;
+}
 
 static int fmu_load(fmu *f, int fmi, const char *dir, const char *inst_name)
 {
     char path[PATH_LEN];
+    char err[512];
     memset(f, 0, sizeof *f);
     f->fmi = fmi;
+    f->id = "";
     snprintf(f->inst_name, sizeof f->inst_name, "%s", inst_name);
-    if (snprintf(path, sizeof path, "%s/modelDescription.xml", dir) >= (int)sizeof path) {
-        fprintf(stderr, "fmu_run: path too long: %s\n", dir);
+    if (rrr_fmi_md_load(&f->md, dir, err, sizeof err) != 0) {
+        fprintf(stderr, "fmu_run: %s\n", err);
         return 1;
     }
-    f->xml = read_text(path);
-    if (f->xml == NULL) {
+    if (f->md.fmi != fmi) {
+        fprintf(stderr, "fmu_run: %s/modelDescription.xml is not an FMI %d.0 model description\n",
+                dir, fmi);
         return 1;
     }
-    char version[16];
-    const char *token_attr = fmi == 2 ? "guid" : "instantiationToken";
-    if (xml_attr(f->xml, NULL, "fmiVersion", version, sizeof version) != 0 ||
-        strcmp(version, fmi == 2 ? "2.0" : "3.0") != 0) {
-        fprintf(stderr, "fmu_run: %s is not an FMI %d.0 model description\n", path, fmi);
-        return 1;
-    }
-    const char *cs = strstr(f->xml, "<CoSimulation");
-    if (cs == NULL || xml_attr(cs, strchr(cs, '>'), "modelIdentifier", f->id, sizeof f->id) != 0 ||
-        xml_attr(f->xml, NULL, token_attr, f->token, sizeof f->token) != 0) {
-        fprintf(stderr, "fmu_run: no <CoSimulation modelIdentifier> or %s in %s\n", token_attr,
-                path);
-        return 1;
-    }
-
+    f->id = f->md.id;
     /* resources: FMI 2 wants a URI, FMI 3 a path; this FMU has none, but pass them properly */
-    char abs[PATH_LEN];
-    snprintf(abs, sizeof abs, "%s", dir);
-    for (char *p = abs; *p != '\0'; ++p) {
-        if (*p == '\\') {
-            *p = '/';
-        }
-    }
-    snprintf(f->resource_uri, sizeof f->resource_uri, "file://%s%s/resources",
-             abs[0] == '/' ? "" : "/", abs);
-
-    if (snprintf(path, sizeof path, "%s/binaries/%s/%s%s", dir,
-                 fmi == 2 ? FMI2_PLATFORM : FMI3_PLATFORM, f->id, LIB_EXT) >= (int)sizeof path) {
+    if (rrr_fmi_resource_uri(f->resource_uri, sizeof f->resource_uri, dir) != 0 ||
+        rrr_fmi_binary_path(path, sizeof path, dir, fmi, f->id) != 0) {
         fprintf(stderr, "fmu_run: path too long: %s\n", dir);
         return 1;
     }
-    f->dl = lib_open(path);
-    if (f->dl == NULL) {
+    if (rrr_fmi_lib_open(&f->dl, path, err, sizeof err) != 0) {
+        fprintf(stderr, "fmu_run: %s\n", err);
         return 1;
     }
     int bad = 0;
@@ -401,44 +249,18 @@ static void free_instance(fmu *f)
 static void fmu_unload(fmu *f)
 {
     free_instance(f);
-    lib_close(f->dl);
-    f->dl = NULL;
-    free(f->xml);
-    f->xml = NULL;
+    rrr_fmi_lib_close(&f->dl);
+    rrr_fmi_md_free(&f->md);
 }
 
 /* Value reference of the variable called name with the given type; 1 when there is none. */
 static int fmu_vr(const fmu *f, const char *name, var_type type, unsigned *vr)
 {
-    char key[160];
-    const char *elem = NULL;
-    const char *end = NULL;
-    if (f->fmi == 2) {
-        snprintf(key, sizeof key, "<ScalarVariable name=\"%s\"", name);
-        elem = strstr(f->xml, key);
-        const char *close = elem != NULL ? strstr(elem, "</ScalarVariable>") : NULL;
-        const char *child = NULL;
-        if (close != NULL) {
-            child = strstr(elem, type == VT_REAL ? "<Real" : "<Boolean");
-        }
-        if (child == NULL || child > close) {
-            elem = NULL; /* absent or of another type */
-        }
-    } else {
-        snprintf(key, sizeof key, "<%s name=\"%s\"", type == VT_REAL ? "Float64" : "Boolean", name);
-        elem = strstr(f->xml, key);
-    }
-    char buf[32];
-    end = elem != NULL ? strchr(elem, '>') : NULL;
-    if (end == NULL || xml_attr(elem, end, "valueReference", buf, sizeof buf) != 0) {
-        fprintf(stderr, "fmu_run: %s: no %s variable \"%s\" in modelDescription.xml\n", f->id,
-                type == VT_REAL ? "Real/Float64" : "Boolean", name);
-        return 1;
-    }
-    char *tail = NULL;
-    const unsigned long v = strtoul(buf, &tail, 10);
-    if (tail == buf || *tail != '\0' || v > 0xFFFFFFFFul) {
-        fprintf(stderr, "fmu_run: %s: bad valueReference \"%s\" of %s\n", f->id, buf, name);
+    char err[512];
+    unsigned long v = 0;
+    if (rrr_fmi_md_vr(&f->md, name, type == VT_REAL ? "Real" : "Boolean", &v, err,
+                      sizeof err) != 0) {
+        fprintf(stderr, "fmu_run: %s\n", err);
         return 1;
     }
     *vr = (unsigned)v;
@@ -465,10 +287,11 @@ static int fmu_instantiate(fmu *f)
         f->f2cb.freeMemory = cb_free;
         f->f2cb.stepFinished = NULL;
         f->f2cb.componentEnvironment = f;
-        f->inst = f->f2Instantiate(f->inst_name, fmi2CoSimulation, f->token, f->resource_uri,
+        f->inst = f->f2Instantiate(f->inst_name, fmi2CoSimulation, f->md.token, f->resource_uri,
                                    &f->f2cb, fmi2False, fmi2False);
     } else {
-        f->inst = f->f3InstantiateCoSimulation(f->inst_name, f->token, NULL, fmi3False, fmi3False,
+        f->inst = f->f3InstantiateCoSimulation(f->inst_name, f->md.token, NULL, fmi3False,
+                                               fmi3False,
                                                fmi3False, fmi3False, NULL, 0, f, log3_cb, NULL);
     }
     if (f->inst == NULL) {
@@ -630,19 +453,6 @@ static void voltages(double t, double u[3])
     u[2] = 0.8 + 1.2 * sin(2.0 * pi * 3.0 * t + 0.5);
 }
 
-/* Smooth joint reference: q_ref, qd_ref, qdd_ref at t. */
-static void reference(double t, double r[9])
-{
-    const double q0[3] = {0.1, 0.3, -0.8};
-    const double a[3] = {0.6, 0.4, 0.5};
-    const double w[3] = {3.0, 4.5, 4.0};
-    for (int i = 0; i < 3; ++i) {
-        r[i] = q0[i] + a[i] * sin(w[i] * t);
-        r[3 + i] = a[i] * w[i] * cos(w[i] * t);
-        r[6 + i] = -a[i] * w[i] * w[i] * sin(w[i] * t);
-    }
-}
-
 /* (a) the plant alone, from a non-trivial initial state, under voltages(t). */
 static int run_plant(fmu *plant, int n_steps)
 {
@@ -735,7 +545,7 @@ static int usage(void)
 {
     fprintf(stderr, "usage: fmu_run <2|3> <plant unzip dir> <controller unzip dir> [seconds]\n"
                     "  runs the FMUs' binaries/%s|%s/*%s over [0, seconds] (default 1) at 1 ms\n",
-            FMI2_PLATFORM, FMI3_PLATFORM, LIB_EXT);
+            rrr_fmi_platform(2), rrr_fmi_platform(3), rrr_fmi_lib_ext());
     return 2;
 }
 
