@@ -28,7 +28,7 @@ from ..core.model import Model
 from ..core.param_names import model_fmu_values
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
-from ..sim.fmu_slave import FmuSlave
+from ..sim.fmu_slave import pooled_slave
 from ..sim.fmus import fmu_path
 from .excitation import FourierTrajectory
 from .logs import Log
@@ -90,7 +90,7 @@ def simulate(model: Model, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     values = model_fmu_values(model) | {f"q0[{i}]": float(q_ref[0, i - 1]) for i in J}
     values |= {f"qd0[{i}]": float(qd_ref[0, i - 1]) for i in J}
     rec = np.empty((n, 12))
-    with FmuSlave(fmu_path("plant"), "identification plant") as plant:
+    with pooled_slave(fmu_path("plant"), "identification plant") as plant:
         plant.initialize(float(t[0]), values)
         state = plant.real_block([f"{s}[{i}]" for s in ("q", "qd") for i in J])
         acc = plant.real_block([f"qdd[{i}]" for i in J])

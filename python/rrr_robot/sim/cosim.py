@@ -22,7 +22,7 @@ from ..core._arrays import FloatArray
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..core.tables import write_table
 from ..errors import BadInputError
-from .fmu_slave import FmuSlave
+from .fmu_slave import FmuSlave, pooled_slave
 from .fmus import fmu_path
 
 log = logging.getLogger(__name__)
@@ -143,7 +143,7 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
     plant_values |= dict(options.plant_values)
     ctrl_fmu = options.controller_fmu or fmu_path("controller", options.fmi_version)
     plant_fmu = options.plant_fmu or fmu_path("plant", options.fmi_version)
-    with FmuSlave(ctrl_fmu, "controller") as ctrl, FmuSlave(plant_fmu, "plant") as plant:
+    with pooled_slave(ctrl_fmu, "controller") as ctrl, pooled_slave(plant_fmu, "plant") as plant:
         ctrl.initialize(float(t[0]), options.controller_values)
         plant.initialize(float(t[0]), plant_values)
         c_in, c_out = ctrl.real_block(CTRL_IN), ctrl.real_block(CTRL_OUT)

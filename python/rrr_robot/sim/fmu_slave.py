@@ -11,11 +11,15 @@ callers never see the difference.
 
 from __future__ import annotations
 
+import atexit
 import ctypes as ct
 import logging
+import os
 import shutil
+import threading
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -301,6 +305,14 @@ class FmuSlave:
         self.time = start_time
         self._initialized = True
 
+    def reset(self) -> None:
+        """Back to the state right after instantiation (fmi2Reset / fmi3Reset): every variable
+        at its default, ready for :meth:`initialize` of another run."""
+        self._guard("Reset", self._fmu.reset)
+        self._initialized = False
+        self.time = 0.0
+        self.last_message = ""
+
     def do_step(self, h: float) -> None:
         self._guard("DoStep", self._api.do_step, self.time, h)
         self.time += h
@@ -385,3 +397,71 @@ class FmuSlave:
         if not getattr(self, "_closed", True):
             warnings.warn(f"FmuSlave {self.name} was not closed", ResourceWarning, stacklevel=1)
             self.close()
+
+
+# ---- instances reused across runs --------------------------------------------------------------
+# Extracting an FMU and instantiating it costs tens of milliseconds, more than a short run's
+# stepping. pooled_slave() keeps the instances of the runs that succeeded, reset (fmi2Reset /
+# fmi3Reset: every variable back at its default), and hands them to the next run of the same
+# FMU file in the process; an instance whose run failed is closed, never reused.
+
+#: Idle instances kept per FMU file and instance name.
+POOL_SIZE = 4
+_pool: dict[tuple[str, str, int, int], list[FmuSlave]] = {}
+_pool_lock = threading.Lock()
+_pool_pid = os.getpid()  # a forked child must not use (or remove) its parent's instances
+
+
+def _pool_key(path: Path, name: str) -> tuple[str, str, int, int]:
+    try:
+        st = os.stat(path)
+    except OSError:  # FmuSlave reports the missing file
+        return (str(path), name, -1, -1)
+    return (os.path.realpath(path), name, st.st_mtime_ns, st.st_size)
+
+
+@contextmanager
+def pooled_slave(path: Path, instance_name: str) -> Iterator[FmuSlave]:
+    """An instantiated slave of ``path`` for one run: an idle one of an earlier run in this
+    process (reset) or a new one. After a run that succeeded it goes back to the pool, reset;
+    after a run that raised it is closed. The results equal those of a fresh instance bit for
+    bit (tests/python/test_fmu_reuse.py)."""
+    global _pool_pid
+    key = _pool_key(Path(path), instance_name)
+    with _pool_lock:
+        if _pool_pid != os.getpid():
+            _pool.clear()
+            _pool_pid = os.getpid()
+        idle = _pool.get(key)
+        slave = idle.pop() if idle else None
+    if slave is None:
+        slave = FmuSlave(path, instance_name)
+    try:
+        yield slave
+    except BaseException:
+        slave.close()
+        raise
+    try:
+        slave.reset()
+    except CosimError:
+        slave.close()
+        return
+    with _pool_lock:
+        idle = _pool.setdefault(key, [])
+        if len(idle) < POOL_SIZE:
+            idle.append(slave)
+            return
+    slave.close()
+
+
+def clear_pool() -> None:
+    """Close every idle instance (at exit, or to make the next run instantiate afresh)."""
+    with _pool_lock:
+        slaves = ([s for idle in _pool.values() for s in idle] if _pool_pid == os.getpid()
+                  else [])
+        _pool.clear()
+    for slave in slaves:
+        slave.close()
+
+
+atexit.register(clear_pool)
