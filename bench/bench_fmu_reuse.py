@@ -20,7 +20,6 @@ from _quick import add_quick, apply_quick
 from rrr_robot.sim import fmu_slave
 from rrr_robot.sim.cosim import CosimOptions, CosimResult, run_cosim
 
-
 Ref = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
