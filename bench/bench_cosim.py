@@ -27,6 +27,7 @@ from collections.abc import Callable
 import numpy as np
 import rrr_robot as rr
 from _quick import add_quick, apply_quick
+from _timing import CLOCKS_S
 from rrr_robot.sim.cosim import (
     CTRL_IN,
     CTRL_OUT,
@@ -39,7 +40,7 @@ from rrr_robot.sim.cosim import (
 from rrr_robot.sim.fmu_slave import FmuSlave
 from rrr_robot.writing.trajectory import make_reference
 
-CLOCKS: dict[str, Callable[[], float]] = {"cpu": time.thread_time, "wall": time.perf_counter}
+CLOCKS = CLOCKS_S
 clock: Callable[[], float] = time.thread_time
 
 

@@ -21,13 +21,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import sys
 import tempfile
 from pathlib import Path
 from typing import Any
 
 from _quick import add_quick, apply_quick
+from _timing import mmm
 from rrr_robot.hil.bench import RealTime, run_c_bench
 from rrr_robot.hil.results import extend_reference
 from rrr_robot.writing.job import WritingJob, prepare
@@ -83,8 +83,7 @@ def main() -> int:
             cells = []
             for key in KEYS:
                 v = [float(r[node].get(key, float("nan"))) for r in ok]
-                cells.append(f"{min(v):.1f} / {statistics.median(v):.1f} / {max(v):.1f}"
-                             if v else "n/a")
+                cells.append(mmm(v, ".1f") if v else "n/a")
             print(f"{name:>6} {node:>10} {cells[0]:>20} {cells[1]:>22} {cells[2]:>24} "
                   f"{cells[3]:>26} {cells[4]:>14}")
         faults = [r["plant_faults"] for r in ok]

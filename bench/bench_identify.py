@@ -16,16 +16,15 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from _quick import add_quick, apply_quick
+from _timing import Series, mmm, timed
 from rrr_robot.core.model import Model
 from rrr_robot.identify import _threads
 from rrr_robot.identify import experiments as ex
@@ -41,9 +40,7 @@ MODES = {"1 thread (package)": 1, "BLAS default": None}
 def _timed(fn: Callable[[], object], threads: int | None) -> float:
     _threads.BLAS_THREADS = threads
     try:
-        start = time.perf_counter()
-        fn()
-        return time.perf_counter() - start
+        return timed(fn)[1]
     finally:
         _threads.BLAS_THREADS = 1
 
@@ -102,9 +99,8 @@ def main() -> int:
     print("| phase | BLAS threads | min [s] | median [s] | max [s] |")
     print("|---|---|---:|---:|---:|")
     for (mode, phase), values in sorted(times.items(), key=lambda kv: kv[0][::-1]):
-        print(f"| {phase} | {mode} | {min(values):.3f} | {statistics.median(values):.3f} | "
-              f"{max(values):.3f} |")
-    pinned = statistics.median(times[("1 thread (package)", "read + base parameters")])
+        print(f"| {phase} | {mode} | {mmm(values, '.3f', ' | ')} |")
+    pinned = Series.of(times[("1 thread (package)", "read + base parameters")]).median
     return 0 if pinned < 1.0 else 1
 
 

@@ -43,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 from _quick import add_quick, apply_quick
+from _timing import logger
 
 ROOT = Path(__file__).resolve().parent.parent
 DRIVER = ROOT / "bench" / "bench_plant_step.c"
@@ -51,8 +52,7 @@ OPEN_LOOP_Q0 = (0.1, 0.4, 1.0)
 OPEN_LOOP_U = (0.5, 1.0, 0.3)
 
 
-def log(msg: str) -> None:
-    print(f"[bench_plant_step] {msg}", file=sys.stderr, flush=True)
+log = logger("bench_plant_step")
 
 
 class Binary:

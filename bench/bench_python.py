@@ -28,12 +28,10 @@ from __future__ import annotations
 import argparse
 import ctypes as ct
 import datetime as dt
-import gc
 import json
 import os
 import platform
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -45,18 +43,13 @@ from typing import Any
 
 import numpy as np
 from _quick import add_quick, apply_quick
+from _timing import CLOCKS, Series, interleaved, logger, mmm
 
 ROOT = Path(__file__).resolve().parent.parent
 ALPHA = (np.pi / 2, 0.0, 0.0)
 IK_Q0 = np.array([0.1, 0.2, 1.0])  # the start of run_bench.py's LM references
 POSITION_MASK = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
-# the clock of the blocks: the CPU time of this thread (the time spent waiting for a core on a
-# loaded machine is left out; every call timed here runs on the calling thread) or the wall clock
-CLOCKS: dict[str, Callable[[], int]] = {"cpu": time.thread_time_ns, "wall": time.perf_counter_ns}
-
-
-def log(msg: str) -> None:
-    print(f"[bench_python] {msg}", file=sys.stderr, flush=True)
+log = logger("bench_python")
 
 
 @dataclass
@@ -90,17 +83,9 @@ class Pair:
         for k in range(min(self.calls, 20)):  # warm-up
             self.ours(k)
             self.ref(k)
-        gc.disable()
-        try:
-            for r in range(repeats):
-                if r % 2 == 0:
-                    self.ours_ns.append(self.block(self.ours))
-                    self.ref_ns.append(self.block(self.ref))
-                else:
-                    self.ref_ns.append(self.block(self.ref))
-                    self.ours_ns.append(self.block(self.ours))
-        finally:
-            gc.enable()
+        ours, ref = interleaved([lambda: self.block(self.ours), lambda: self.block(self.ref)],
+                                repeats, warmup=False)
+        self.ours_ns, self.ref_ns = list(ours.values), list(ref.values)
 
     @property
     def ratios(self) -> list[float]:
@@ -111,14 +96,10 @@ class Pair:
             return ""
         ok = True
         if self.target_ratio is not None:
-            ok &= statistics.median(self.ratios) >= self.target_ratio
+            ok &= Series.of(self.ratios).median >= self.target_ratio
         if self.target_ns is not None:
-            ok &= statistics.median(self.ours_ns) <= self.target_ns
+            ok &= Series.of(self.ours_ns).median <= self.target_ns
         return f"{self.target}: {'met' if ok else 'NOT met'}"
-
-
-def mmm(values: list[float], fmt: Callable[[float], str]) -> str:
-    return " / ".join(fmt(v) for v in (min(values), statistics.median(values), max(values)))
 
 
 def fmt_ns(ns: float) -> str:

@@ -11,11 +11,11 @@ from __future__ import annotations
 import argparse
 import re
 import tempfile
-import time
 import zipfile
 from pathlib import Path
 
 from _quick import add_quick, apply_quick
+from _timing import timed
 from rrr_robot.ssp.export import SspJob, export_ssp
 from rrr_robot.ssp.run import SspRun, run_ssp
 from rrr_robot.writing.job import WritingJob, run_writing
@@ -77,10 +77,8 @@ def main() -> int:
                 print(f"| `{scn}` | {1e3 * w['tip_error_max']:.3f} / "
                       f"{1e3 * w['tip_error_rms']:.3f} | {label} | {cells[0]} | {cells[1]} |")
         if not args.no_real_time:
-            start = time.perf_counter()
-            s = run_ssp(SspRun(ssp=root / "ctc.ssp", tool="libcosim", out=root / "rt",
-                               real_time=True))
-            wall = time.perf_counter() - start
+            s, wall = timed(lambda: run_ssp(SspRun(ssp=root / "ctc.ssp", tool="libcosim",
+                                                    out=root / "rt", real_time=True)))
             info = s["ssp"]
             print(f"\nreal time (libcosim, ctc): {info['simulated_time']:.3f} s simulated in "
                   f"{info['wall_time']:.3f} s: real-time factor {info['real_time_factor']:.4f} "

@@ -14,20 +14,18 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
-import statistics
 import subprocess
 import sys
-import time
 
 from _quick import add_quick, apply_quick
+from _timing import Series, timed
 
 HEAVY = ("numpy", "scipy", "matplotlib", "fmpy", "cantools", "can", "pandas", "pyarrow")
 
 
 def _time(cmd: list[str]) -> float:
-    start = time.perf_counter()
-    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - start
+    return timed(lambda: subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL,
+                                        stderr=subprocess.DEVNULL))[1]
 
 
 def _heavy_imports(args: list[str]) -> list[str]:
@@ -62,9 +60,9 @@ def main() -> int:
     print(f"{args.repeats} interleaved runs each, load average {load:.2f}")
     print("| command | min [ms] | median [ms] | max [ms] | median / numpy's |")
     print("|---|---:|---:|---:|---:|")
-    base = statistics.median(times['python -c "import numpy"'])
+    base = Series.of(times['python -c "import numpy"']).median
     for name, ts in times.items():
-        med = statistics.median(ts)
+        med = Series.of(ts).median
         print(f"| `{name}` | {1e3 * min(ts):.0f} | {1e3 * med:.0f} | {1e3 * max(ts):.0f} | "
               f"{med / base:.2f} |")
     for argv in (["--help"], ["fmus"]):

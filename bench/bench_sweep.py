@@ -36,8 +36,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-import numpy as np
 from _quick import add_quick, apply_quick
+from _timing import mmm
 from rrr_robot.sweep.execution import batch_size, batches, dask_client, execute, worker_threads
 from rrr_robot.sweep.job import make_plan
 from rrr_robot.sweep.results import schema, write_part
@@ -55,11 +55,6 @@ seed = 11
 "mismatch.f_rel" = {{ normal = [0.0, 0.2], per_element = true }}
 "gains.kp" = {{ values = [[20.0, 50.0, 20.0], [40.0, 100.0, 40.0]] }}
 """
-
-
-def mmm(values: list[float], fmt: str = ".3g") -> str:
-    v = np.asarray(values, dtype=float)
-    return " / ".join(format(x, fmt) for x in (v.min(), np.median(v), v.max()))
 
 
 def cpu_seconds(client: object) -> float:

@@ -28,7 +28,6 @@ import argparse
 import json
 import os
 import pickle
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -36,6 +35,7 @@ import time
 from pathlib import Path
 
 from _quick import add_quick, apply_quick
+from _timing import mmm
 
 PHASES = r"""
 import json, pickle, sys, tempfile, time
@@ -116,8 +116,7 @@ def _whole(pythonpath: str | None, folder: Path) -> tuple[float, float | None]:
 
 
 def _row(name: str, values: list[float]) -> str:
-    return (f"| {name} | {min(values):.3f} | {statistics.median(values):.3f} | "
-            f"{max(values):.3f} |")
+    return f"| {name} | {mmm(values, '.3f', ' | ')} |"
 
 
 def main() -> int:

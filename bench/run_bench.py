@@ -29,18 +29,15 @@ from __future__ import annotations
 import argparse
 import ctypes as ct
 import datetime as dt
-import gc
 import json
 import os
 import platform
 import re
 import shutil
-import statistics
 import subprocess
 import sys
 import sysconfig
 import tempfile
-import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,6 +46,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 from _quick import add_quick, apply_quick
+from _timing import CLOCKS, Series, interleaved, logger, timed
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -67,8 +65,7 @@ IK_Q0 = np.array([0.1, 0.2, 1.0])  # the same start as the C++ LM reference
 POSITION_MASK = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 
 
-def log(msg: str) -> None:
-    print(f"[run_bench] {msg}", file=sys.stderr, flush=True)
+log = logger("run_bench")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -92,10 +89,9 @@ def build(build_dir: Path, cmake: str, werror: bool = False) -> None:
     log("configure: " + " ".join(configure))
     subprocess.run(configure, check=True, stdout=subprocess.DEVNULL)
     log("build (one Pinocchio translation unit: about 1.5-3 min on 2 cores)")
-    t0 = time.perf_counter()
-    subprocess.run([cmake, "--build", str(build_dir), "-j", "2"], check=True,
-                   stdout=subprocess.DEVNULL)
-    log(f"built in {time.perf_counter() - t0:.0f} s")
+    _, seconds = timed(lambda: subprocess.run([cmake, "--build", str(build_dir), "-j", "2"],
+                                              check=True, stdout=subprocess.DEVNULL))
+    log(f"built in {seconds:.0f} s")
 
 
 def run_core(exe: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
@@ -111,49 +107,6 @@ def run_core(exe: Path, args: argparse.Namespace) -> list[dict[str, Any]]:
 # ---------------------------------------------------------------------------------------------
 # librrr in C loops (one ctypes call per block) against the Robotics Toolbox, interleaved
 # ---------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class Series:
-    """Values per repeat (ns per call, or ratios) with their min / median / max."""
-
-    values: tuple[float, ...]
-
-    @property
-    def min(self) -> float:
-        return min(self.values)
-
-    @property
-    def median(self) -> float:
-        return statistics.median(self.values)
-
-    @property
-    def max(self) -> float:
-        return max(self.values)
-
-    def over(self, other: Series) -> Series:
-        """The per-repeat ratio self / other (both of the same interleaved repeats)."""
-        return Series(tuple(a / b for a, b in zip(self.values, other.values, strict=True)))
-
-
-CLOCKS: dict[str, Callable[[], int]] = {"cpu": time.thread_time_ns, "wall": time.perf_counter_ns}
-
-
-def interleaved(blocks: Sequence[Callable[[], float]], repeats: int) -> list[Series]:
-    """Run one block of each callable per repeat (in order on even repeats, reversed on odd
-    ones), after one warm-up block each; each block returns its ns per call."""
-    for run in blocks:
-        run()
-    ns: list[list[float]] = [[] for _ in blocks]
-    gc.disable()
-    try:
-        for r in range(repeats):
-            order = range(len(blocks)) if r % 2 == 0 else reversed(range(len(blocks)))
-            for j in order:
-                ns[j].append(blocks[j]())
-    finally:
-        gc.enable()
-    return [Series(tuple(v)) for v in ns]
-
-
 def per_call_block(fn: Callable[[int], object], n: int, clock: Callable[[], int]
                    ) -> Callable[[], float]:
     """A block of Python calls fn(0), ..., fn(n - 1): ns per call."""
@@ -473,10 +426,6 @@ def fmt_diff(value: float | None) -> str:
     return "" if value is None else f"{value:.1e}"
 
 
-def mmm(s: Series, fmt: Callable[[float], str]) -> str:
-    return " / ".join(fmt(v) for v in (s.min, s.median, s.max))
-
-
 def core_series(core: list[dict[str, Any]]) -> dict[str, Series]:
     """The driver's groups: every operation's ns per repeat, keyed '<group>:<op id>'."""
     out: dict[str, Series] = {}
@@ -524,8 +473,9 @@ def render_rows(rows: Sequence[Row]) -> list[str]:
     ]
     for r in rows:
         out.append(
-            f"| {r.operation} | {r.ours} | {mmm(r.ours_ns, fmt_ns)} | {r.ref} "
-            f"| {mmm(r.ref_ns, fmt_ns)} | {mmm(r.ratio, fmt_ratio)} | {r.diff} | {r.verdict()} |"
+            f"| {r.operation} | {r.ours} | {r.ours_ns.format(fmt_ns)} | {r.ref} "
+            f"| {r.ref_ns.format(fmt_ns)} | {r.ratio.format(fmt_ratio)} | {r.diff} "
+            f"| {r.verdict()} |"
         )
     return out
 
@@ -618,15 +568,15 @@ def report(
     add(f"- C/C++ rows: {meta['states']} random states (q in [-pi, pi], qd in [-3, 3], "
         f"qdd in [-10, 10]), the same for ours and Pinocchio; blocks of {calls} calls "
         f"(the C++ LM: {lm_calls}), ns/call (throughput loop; empty loop "
-        f"{mmm(d['loop.empty'], fmt_ns)} ns, not subtracted)")
+        f"{d['loop.empty'].format(fmt_ns)} ns, not subtracted)")
     add(f"- libm floor in the same driver: sin + cos of q2 and q3 as in rrr_trig_of "
-        f"(two sincos calls) {mmm(d['floor.trig'], fmt_ns)} ns, one atan2 "
-        f"{mmm(d['floor.atan2'], fmt_ns)} ns (`rrr_ik` calls atan2 {ik_all.atan2} times, "
+        f"(two sincos calls) {d['floor.trig'].format(fmt_ns)} ns, one atan2 "
+        f"{d['floor.atan2'].format(fmt_ns)} ns (`rrr_ik` calls atan2 {ik_all.atan2} times, "
         f"`rrr_ik_branch` {ik_one.atan2} times)")
     if "kernel.tau" in d:
         add(f"- diagnostic: the tau kernel alone (rrr_trig_of + generated code, no argument "
-            f"checks, called from the driver) {mmm(d['kernel.tau'], fmt_ns)} ns against "
-            f"{mmm(d['tau.ours'], fmt_ns)} ns of `rrr_inverse_dynamics` in the same repeats")
+            f"checks, called from the driver) {d['kernel.tau'].format(fmt_ns)} ns against "
+            f"{d['tau.ours'].format(fmt_ns)} ns of `rrr_inverse_dynamics` in the same repeats")
     add(f"- RTB rows: {args.py_states} inputs (accel: {min(args.py_states, 256)}); "
         "the reference block is one Python call per "
         f"input, ours one ctypes call of a C loop over the same inputs ({py.info['loops']}, "
@@ -698,10 +648,11 @@ def report(
     key = {name: {"min": r.ratio.min, "median": r.ratio.median, "max": r.ratio.max}
            for name, r in key_rows.items()}
     add(f"Key ratios (min / median / max): tau = R p vs rnea "
-        f"{mmm(key_rows['tau_vs_rnea'].ratio, fmt_ratio)} ({key_rows['tau_vs_rnea'].verdict()}); "
-        f"IK (C, all branches) vs ets.ik_LM {mmm(key_rows['ik_vs_ik_lm'].ratio, fmt_ratio)} "
+        f"{key_rows['tau_vs_rnea'].ratio.format(fmt_ratio)} "
+        f"({key_rows['tau_vs_rnea'].verdict()}); "
+        f"IK (C, all branches) vs ets.ik_LM {key_rows['ik_vs_ik_lm'].ratio.format(fmt_ratio)} "
         f"({key_rows['ik_vs_ik_lm'].verdict()}), one branch "
-        f"{mmm(key_rows['ik_branch_vs_ik_lm'].ratio, fmt_ratio)}.")
+        f"{key_rows['ik_branch_vs_ik_lm'].ratio.format(fmt_ratio)}.")
     return "\n".join(lines), key
 
 

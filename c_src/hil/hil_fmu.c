@@ -1,57 +1,10 @@
 /* A minimal FMI 2.0 co-simulation importer (see hil_fmu.h). */
-#define _DEFAULT_SOURCE /* realpath; implies POSIX.1-2008 */
-
 #include "hil_fmu.h"
 
-#include <dlfcn.h>
-#include <limits.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static char *read_text(const char *path)
-{
-    FILE *fp = fopen(path, "rb");
-    if (fp == NULL) {
-        return NULL;
-    }
-    char *buf = NULL;
-    if (fseek(fp, 0, SEEK_END) == 0) {
-        const long n = ftell(fp);
-        if (n > 0 && fseek(fp, 0, SEEK_SET) == 0) {
-            buf = malloc((size_t)n + 1u);
-            if (buf != NULL && fread(buf, 1, (size_t)n, fp) == (size_t)n) {
-                buf[n] = '\0';
-            } else {
-                free(buf);
-                buf = NULL;
-            }
-        }
-    }
-    fclose(fp);
-    return buf;
-}
-
-/* Value of the first attribute ` attr="..."` at or after from, before the element's end. */
-static int xml_attr(const char *from, const char *attr, char *out, size_t n)
-{
-    char key[80];
-    snprintf(key, sizeof key, " %s=\"", attr);
-    const char *p = strstr(from, key);
-    const char *gt = strchr(from, '>');
-    if (p == NULL || (gt != NULL && p > gt)) {
-        return -1;
-    }
-    p += strlen(key);
-    const char *e = strchr(p, '"');
-    if (e == NULL || (size_t)(e - p) >= n) {
-        return -1;
-    }
-    memcpy(out, p, (size_t)(e - p));
-    out[e - p] = '\0';
-    return 0;
-}
 
 static void fmu_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                        fmi2String category, fmi2String message, ...)
@@ -71,39 +24,30 @@ static void fmu_logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2St
 
 static const fmi2CallbackFunctions callbacks = {fmu_logger, calloc, free, NULL, NULL};
 
-static int load_sym(rrr_hil_fmu *f, const char *name, void *dst, size_t size)
-{
-    void *p = dlsym(f->dl, name);
-    if (p == NULL || size != sizeof p) {
-        snprintf(f->last_error, sizeof f->last_error, "FMU %s: missing symbol %s", f->id, name);
-        return -1;
-    }
-    memcpy(dst, &p, sizeof p); /* object pointer to function pointer, the POSIX way */
-    return 0;
-}
-
-#define LOAD(F) load_sym(f, "fmi2" #F, &f->F, sizeof f->F)
+#define LOAD(F) rrr_fmi_lib_sym(&f->lib, "fmi2" #F, &f->F, sizeof f->F, f->last_error, \
+                               sizeof f->last_error)
 
 int rrr_hil_fmu_open(rrr_hil_fmu *f, const char *dir, const char *instance_name)
 {
     memset(f, 0, sizeof *f);
-    char path[PATH_MAX + 64];
-    char guid[128];
-    snprintf(path, sizeof path, "%s/modelDescription.xml", dir);
-    f->xml = read_text(path);
-    const char *cs = f->xml ? strstr(f->xml, "<CoSimulation") : NULL;
-    if (f->xml == NULL || cs == NULL || xml_attr(cs, "modelIdentifier", f->id, sizeof f->id) != 0 ||
-        xml_attr(strstr(f->xml, "<fmiModelDescription"), "guid", guid, sizeof guid) != 0) {
-        snprintf(f->last_error, sizeof f->last_error,
-                 "cannot read the CoSimulation modelIdentifier and the guid from %.200s "
-                 "(--fmu must name an unzipped FMU directory)", path);
+    char why[300];
+    if (rrr_fmi_md_load(&f->md, dir, why, sizeof why) != 0 || f->md.fmi != 2) {
+        snprintf(f->last_error, sizeof f->last_error, "%.250s (--fmu must name an unzipped FMI 2.0 "
+                 "FMU directory: %.200s)", f->md.fmi == 2 || f->md.xml == NULL ? why :
+                 "not FMI 2.0", dir);
         rrr_hil_fmu_close(f);
         return -1;
     }
-    snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", dir, f->id);
-    f->dl = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (f->dl == NULL) {
-        snprintf(f->last_error, sizeof f->last_error, "dlopen %.200s: %s", path, dlerror());
+    snprintf(f->id, sizeof f->id, "%s", f->md.id);
+    char path[4096];
+    char resources[4096 + 32];
+    if (rrr_fmi_binary_path(path, sizeof path, dir, 2, f->id) != 0 ||
+        rrr_fmi_resource_uri(resources, sizeof resources, dir) != 0) {
+        snprintf(f->last_error, sizeof f->last_error, "path too long: %.200s", dir);
+        rrr_hil_fmu_close(f);
+        return -1;
+    }
+    if (rrr_fmi_lib_open(&f->lib, path, f->last_error, sizeof f->last_error) != 0) {
         rrr_hil_fmu_close(f);
         return -1;
     }
@@ -113,12 +57,8 @@ int rrr_hil_fmu_open(rrr_hil_fmu *f, const char *dir, const char *instance_name)
         rrr_hil_fmu_close(f);
         return -1;
     }
-    char abs_dir[PATH_MAX];
-    char resources[PATH_MAX + 32];
-    snprintf(resources, sizeof resources, "file://%s/resources",
-             realpath(dir, abs_dir) ? abs_dir : dir);
-    f->c = f->Instantiate(instance_name, fmi2CoSimulation, guid, resources, &callbacks, fmi2False,
-                          fmi2False);
+    f->c = f->Instantiate(instance_name, fmi2CoSimulation, f->md.token, resources, &callbacks,
+                          fmi2False, fmi2False);
     if (f->c == NULL) {
         snprintf(f->last_error, sizeof f->last_error, "FMU %s: fmi2Instantiate failed", f->id);
         rrr_hil_fmu_close(f);
@@ -129,17 +69,11 @@ int rrr_hil_fmu_open(rrr_hil_fmu *f, const char *dir, const char *instance_name)
 
 long rrr_hil_fmu_vr(rrr_hil_fmu *f, const char *name)
 {
-    char key[128];
-    char buf[32];
-    snprintf(key, sizeof key, "<ScalarVariable name=\"%s\"", name);
-    const char *p = strstr(f->xml, key);
-    if (p == NULL || xml_attr(p, "valueReference", buf, sizeof buf) != 0) {
-        snprintf(f->last_error, sizeof f->last_error, "FMU %s has no variable '%s'", f->id, name);
+    unsigned long vr = 0;
+    if (rrr_fmi_md_vr(&f->md, name, "Real", &vr, f->last_error, sizeof f->last_error) != 0) {
         return -1;
     }
-    char *end;
-    const unsigned long v = strtoul(buf, &end, 10);
-    return (*end == '\0' && v <= 0x7FFFFFFFul) ? (long)v : -1;
+    return vr <= 0x7FFFFFFFul ? (long)vr : -1;
 }
 
 int rrr_hil_fmu_set(rrr_hil_fmu *f, const fmi2ValueReference *vr, size_t n, const double *v)
@@ -207,10 +141,6 @@ void rrr_hil_fmu_close(rrr_hil_fmu *f)
         f->FreeInstance(f->c);
         f->c = NULL;
     }
-    if (f->dl != NULL) {
-        dlclose(f->dl);
-        f->dl = NULL;
-    }
-    free(f->xml);
-    f->xml = NULL;
+    rrr_fmi_lib_close(&f->lib);
+    rrr_fmi_md_free(&f->md);
 }

@@ -1,7 +1,8 @@
 /**
  * @file hil_fmu.h
  * @brief A minimal FMI 2.0 co-simulation importer for the plant node: reads modelIdentifier,
- *        guid and value references from the unzipped FMU's modelDescription.xml, dlopens
+ *        guid and value references from the unzipped FMU's modelDescription.xml (through
+ *        c_src/fmi_import, the project's one importer), dlopens
  *        binaries/linux64/<id>.so and drives it (instantiate, set reals by name, initialise,
  *        doStep, get reals). Lifecycle: rrr_hil_fmu_open -> set/init -> step/get -> close.
  */
@@ -11,11 +12,12 @@
 #include <stddef.h>
 
 #include "fmi2FunctionTypes.h"
+#include "rrr_fmi_import.h"
 
 /** A loaded FMU instance. */
 typedef struct rrr_hil_fmu {
-    void *dl;                  ///< dlopen handle
-    char *xml;                 ///< modelDescription.xml (heap)
+    rrr_fmi_lib lib;           ///< the loaded binary
+    rrr_fmi_md md;             ///< modelDescription.xml, parsed (c_src/fmi_import)
     char id[64];               ///< modelIdentifier
     fmi2Component c;           ///< instance
     double time;               ///< current communication point, s

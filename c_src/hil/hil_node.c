@@ -73,6 +73,8 @@ const char *rrr_hil_exit_str(int code)
         return "fault";
     case RRR_HIL_EXIT_STOPPED_EARLY:
         return "stopped early by the controller";
+    case RRR_HIL_EXIT_SAFETY:
+        return "completed, safety policy fired";
     default:
         return "unknown";
     }

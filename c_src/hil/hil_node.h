@@ -30,8 +30,12 @@ typedef enum rrr_hil_exit {
     RRR_HIL_EXIT_INTERRUPTED = 4, ///< SIGINT or SIGTERM
     RRR_HIL_EXIT_FAULT = 5,       ///< a fault of the node itself: the FMU failed (plant), a command
                                   ///< that cannot be encoded (controller)
-    RRR_HIL_EXIT_STOPPED_EARLY = 6 ///< plant: the controller's StopCmd gave a reason other than
-                                   ///< the end of the run (it was interrupted, faulted, lost us)
+    RRR_HIL_EXIT_STOPPED_EARLY = 6, ///< plant: the controller's StopCmd gave a reason other than
+                                    ///< the end of the run (it was interrupted, faulted, lost us)
+    RRR_HIL_EXIT_SAFETY = 7 ///< the run completed (as for 0), but the safety policy fired: plant:
+                            ///< a fault latched (even if reset later) or 0 V was forced for at
+                            ///< least one period; controller: a PlantStatus frame reported a
+                            ///< latched fault or 0 V (docs/can-bench.md, "Exit status")
 } rrr_hil_exit;
 
 /** Static name of an exit status ("completed", "peer lost", ...). */

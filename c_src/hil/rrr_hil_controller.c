@@ -23,7 +23,8 @@
  * with --log, one CSV row per period (k, t, measured q and qd, u, u_n, u_c).
  * Exit status (rrr_hil_exit, hil_node.h): 0 every period done and StopCmd sent; 1 usage; 2 setup
  * failed; 3 the plant was lost (hang-up, no joint state within --timeout-ms, transport error);
- * 4 SIGINT/SIGTERM; 5 a fault of the controller (a command it cannot encode).
+ * 4 SIGINT/SIGTERM; 5 a fault of the controller (a command it cannot encode); 7 completed, but a
+ * PlantStatus frame reported a latched fault or 0 V (the plant's safety policy fired).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -68,6 +69,7 @@ typedef struct ctrl {
     uint32_t ctc_failed;
     rrr_hil_plant_status status; /* newest PlantStatus */
     uint32_t status_faulty;  /* PlantStatus frames with a fault */
+    uint32_t status_zero;    /* PlantStatus frames with ZeroVoltage */
     uint8_t hb_counter;
     uint8_t last_cmd_counter; /* alive counter of the last VoltageCmd sent */
     uint32_t cmds_sent;     /* VoltageCmd frames sent */
@@ -91,7 +93,9 @@ static void usage(void)
             "  to rrr_ctc_gains_default; --timeout-ms (5000): longest wait for a joint state\n"
             "  real time: Sync is not sent (it is the lockstep time base)\n"
             RRR_HIL_RT_USAGE
-            "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault\n");
+            "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault,\n"
+            "  7 completed but the plant's safety policy fired (PlantStatus: a fault latched or\n"
+            "  0 V forced; docs/can.md, Exit statuses)\n");
 }
 
 static int parse_args(int argc, char **argv, opts *o)
@@ -224,6 +228,9 @@ static int handle(ctrl *c, const rrr_hil_frame *f)
         c->status = m.u.status;
         if (m.u.status.faults != 0u) {
             ++c->status_faulty;
+        }
+        if (m.u.status.zero_voltage != 0u) {
+            ++c->status_zero;
         }
         return 0;
     }
@@ -450,6 +457,21 @@ static int run_realtime(ctrl *c, const opts *o, FILE *latency_log)
     return rc;
 }
 
+/* A run that completed (exit 0) while the plant reported the safety policy firing (PlantStatus:
+ * a latched fault, or 0 V forced) ends with its own status, as the plant does. */
+static int safety_status(ctrl *c, int rc)
+{
+    if (rc != RRR_HIL_EXIT_OK || (c->status_faulty == 0u && c->status_zero == 0u)) {
+        return rc;
+    }
+    const size_t n = strlen(c->why);
+    (void)snprintf(c->why + n, sizeof c->why - n,
+                   "; the plant's safety policy fired: %u PlantStatus frames with a fault, %u "
+                   "with 0 V",
+                   c->status_faulty, c->status_zero);
+    return RRR_HIL_EXIT_SAFETY;
+}
+
 static void summary(const ctrl *c, int rc)
 {
     fprintf(stderr,
@@ -461,10 +483,11 @@ static void summary(const ctrl *c, int rc)
             (unsigned)c->status.faults, c->status_faulty, c->ctc_failed);
     printf("RRR_HIL_SUMMARY {\"node\": \"controller\", \"exit\": %d, \"states\": %u, "
            "\"rx_bad_crc\": %u, \"rx_bad_dlc\": %u, \"rx_unknown_id\": %u, \"out_of_order\": %u, "
-           "\"stale\": %u, \"plant_faults\": %u, \"ctc_failed\": %u, ",
+           "\"stale\": %u, \"plant_faults\": %u, \"plant_status_faulty\": %u, "
+           "\"plant_status_zero\": %u, \"ctc_failed\": %u, ",
            rc, c->states, c->rx_bad[RRR_HIL_RX_BAD_CRC], c->rx_bad[RRR_HIL_RX_BAD_DLC],
            c->rx_bad[RRR_HIL_RX_UNKNOWN_ID], c->out_of_order, c->stale,
-           (unsigned)c->status.faults, c->ctc_failed);
+           (unsigned)c->status.faults, c->status_faulty, c->status_zero, c->ctc_failed);
     rrr_hil_link_json(stdout, c->tr);
     printf("}\n");
     fflush(stdout);
@@ -525,7 +548,8 @@ int main(int argc, char **argv)
     int rc = end_run(&c, RRR_HIL_EXIT_SETUP, "the transport did not open");
     if (rrr_hil_link_open(&o.link, &link, rx_ids, 5u, PROG, &frames) == 0) {
         c.tr = &link.base;
-        rc = o.realtime ? run_realtime(&c, &o, latency_log) : run_lockstep(&c, &o);
+        rc = safety_status(&c, o.realtime ? run_realtime(&c, &o, latency_log)
+                                          : run_lockstep(&c, &o));
         latency_log = NULL; /* the real-time loop owns it */
         (void)rrr_hil_framelog_close(&frames); /* reported in the summary */
         summary(&c, rc);

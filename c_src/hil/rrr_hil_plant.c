@@ -22,7 +22,8 @@
  * Exit status (rrr_hil_exit, hil_node.h): 0 the controller's StopCmd "end of run" (or --duration
  * in real time); 1 usage; 2 setup failed (FMU, transport); 3 the controller was lost (hang-up,
  * silence, transport error); 4 SIGINT/SIGTERM; 5 the FMU failed; 6 the controller's StopCmd
- * gave another reason (interrupted, fault, plant lost).
+ * gave another reason (interrupted, fault, plant lost); 7 the run ended as for 0, but the safety
+ * policy fired (a fault latched, even if reset later, or 0 V forced for at least one period).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -92,7 +93,8 @@ static void usage(void)
             "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n"
             RRR_HIL_RT_USAGE
             "  exit: 0 end of run (the controller's StopCmd), 1 usage, 2 setup, 3 controller lost,\n"
-            "  4 SIGINT/SIGTERM, 5 FMU failed, 6 the controller stopped early\n");
+            "  4 SIGINT/SIGTERM, 5 FMU failed, 6 the controller stopped early, 7 end of run but the\n"
+            "  safety policy fired (a fault latched or 0 V forced; docs/can.md, Exit statuses)\n");
 }
 
 static int parse_args(int argc, char **argv, opts *o)
@@ -241,6 +243,23 @@ static int stopped(plant *p)
     const unsigned r = p->sup.stop_reason;
     return end_run(p, r == RRR_HIL_STOP_END_OF_RUN ? RRR_HIL_EXIT_OK : RRR_HIL_EXIT_STOPPED_EARLY,
                    "the controller's StopCmd: %s", rrr_hil_stop_reason_str(r));
+}
+
+/* A run that completed (exit 0) in which the safety policy fired (a fault latched, even if reset
+ * later, or 0 V forced for a period) ends with its own status, so that a bench job fails. */
+static int safety_status(plant *p, int rc)
+{
+    const rrr_hil_sup_err *e = &p->sup.err;
+    if (rc != RRR_HIL_EXIT_OK ||
+        (p->sup.faults == 0u && e->fault_events == 0u && e->zero_periods == 0u)) {
+        return rc;
+    }
+    const size_t n = strlen(p->why);
+    (void)snprintf(p->why + n, sizeof p->why - n,
+                   "; the safety policy fired: %u fault events, faults latched 0x%02X, %u "
+                   "periods at 0 V",
+                   e->fault_events, (unsigned)p->sup.faults, e->zero_periods);
+    return RRR_HIL_EXIT_SAFETY;
 }
 
 static int interrupted(plant *p)
@@ -593,7 +612,8 @@ int main(int argc, char **argv)
         }
     }
     p.last_rx_ms = now_ms();
-    const int rc = o.realtime ? run_realtime(&p, &o, latency_log) : run_lockstep(&p, &o);
+    const int rc =
+        safety_status(&p, o.realtime ? run_realtime(&p, &o, latency_log) : run_lockstep(&p, &o));
     (void)rrr_hil_framelog_close(&frames); /* reported in the summary */
     summary(&p, rc);
     rrr_hil_close(p.tr);

@@ -6,7 +6,8 @@
  * reset frame only arms it); unauthenticated stop requests (bad CRC, stale counter, wrong DLC,
  * the heartbeat "stopped") are ignored and counted while the run goes on; an extra client is
  * refused while the controller is connected; the authenticated StopCmd ends the run with
- * status 0, or 6 when its reason is not the end of the run; a controller that stops talking or
+ * status 0, 7 when the safety policy fired during the run (a fault latched, even if reset, or
+ * 0 V forced), or 6 when its reason is not the end of the run; a controller that stops talking or
  * hangs up mid-run ends it with status 3; SIGTERM with 4.
  * Part 2 runs the lockstep bench (both nodes, as tests/c/test_hil_lockstep.cmake does) and
  * stops it in the middle: SIGINT or SIGKILL to the controller, SIGTERM to the plant, a fault of
@@ -364,8 +365,11 @@ static void test_reset_stop_extra_client(void)
     CHECK(fake_period(&f) == 0 && fake_period(&f) == 0);
     /* the authenticated stop: the next counter of the command sequence */
     CHECK(fake_stop(&f, f.counter, RRR_HIL_STOP_END_OF_RUN) == 0);
-    CHECK(finish(&plant, 20000) == 0);
-    CHECK(exit_line(&plant, "rrr_hil_plant", 0, "the controller's StopCmd: end of run"));
+    /* the run completed, but a fault latched (and 0 V was forced) on the way: status 7 */
+    CHECK(finish(&plant, 20000) == 7);
+    CHECK(exit_line(&plant, "rrr_hil_plant", 7, "the controller's StopCmd: end of run; the "
+                    "safety policy fired: 1 fault events, faults latched 0x00, 4 periods at 0 V"));
+    CHECK(has(plant.out, "\"exit\": 7,"));
     CHECK(has(plant.out, "\"stop_rejected\": 3,") && has(plant.out, "\"refused\": 1,"));
     CHECK(has(plant.out, "\"resets\": 1,") && has(plant.out, "\"stop_reason\": 0,"));
     CHECK(has(plant.out, "\"crc\": 1,") && has(plant.out, "\"bus\": 0,"));

@@ -7,6 +7,8 @@ Runs, one after the other, on the SocketCAN interface CHANNEL, for DURATION seco
 writing task (scenario ctc), each in a folder of OUT:
 
 - ``bench``: ``rrr hil bench --interface socketcan`` (both C nodes; summary, figures, frame log);
+- ``bench_fault``: the same with a VoltageCmd of a wrong CRC put on the bus at period 200 (the
+  safety policy fires: exit status 7);
 - ``controller``: the C plant node on CHANNEL, then ``rrr hil controller --interface socketcan``
   (the controller FMU under FMPy over python-can's socketcan interface) once the plant's
   boot-up heartbeat is on the bus; the C plant's logs go to ``controller/node``;
@@ -45,6 +47,31 @@ def boot_up_bus(channel: str) -> can.BusABC:
                    can_filters=[{"can_id": 0x702, "can_mask": 0x7FF, "extended": False}])
 
 
+def inject_bad_crc(channel: str, injected: dict[str, Any], listening: threading.Event) -> None:
+    """Once the bench's Sync of period INJECT_AT is on the bus, send one VoltageCmd (0x100) of
+    eight zero bytes (a wrong CRC); says in ``injected`` when, or why not."""
+    try:
+        with can.Bus(interface="socketcan", channel=channel,
+                     can_filters=[{"can_id": 0x80, "can_mask": 0x7FF, "extended": False}]) as bus:
+            listening.set()
+            deadline = time.monotonic() + 300
+            while time.monotonic() < deadline:
+                msg = bus.recv(1.0)
+                if msg is not None and int.from_bytes(msg.data[:4], "little") >= INJECT_AT:
+                    bus.send(can.Message(arbitration_id=0x100, data=bytes(8),
+                                         is_extended_id=False))
+                    injected["injected_after_sync"] = int.from_bytes(msg.data[:4], "little")
+                    return
+            injected["error"] = f"no Sync of period {INJECT_AT}"
+    except BaseException as exc:  # reported in cases.json
+        injected["error"] = repr(exc)
+        listening.set()
+
+
+#: Period after whose Sync the bad frame goes on the bus (of the 1001 of a 1 s run).
+INJECT_AT = 200
+
+
 def main(argv: list[str]) -> int:
     out, duration, channel = Path(argv[0]), argv[1], argv[2]
     t_start = time.monotonic()
@@ -57,6 +84,19 @@ def main(argv: list[str]) -> int:
     rc = rrr(["hil", "bench", "--interface", "socketcan", "--channel", channel,
               "--out", str(out / "bench"), *common])
     cases["bench"] = {"rc": rc, "seconds": time.monotonic() - t0}
+
+    # the same bench with a VoltageCmd of a wrong CRC put on the bus at period 200 (what
+    # `cansend CHANNEL 100#0000000000000000` does): the run completes, the safety policy fired
+    t0 = time.monotonic()
+    injected: dict[str, Any] = {}
+    listening = threading.Event()
+    injector = threading.Thread(target=inject_bad_crc, args=(channel, injected, listening))
+    injector.start()
+    listening.wait(60)
+    rc = rrr(["hil", "bench", "--interface", "socketcan", "--channel", channel,
+              "--out", str(out / "bench_fault"), "--no-figures", *common])
+    injector.join(60)
+    cases["bench_fault"] = {"rc": rc, "seconds": time.monotonic() - t0, **injected}
 
     # the controller FMU against the C plant node on the bus
     model, robot, scenarios, ref = prepare(WritingJob(out=out, scenarios=["ctc"]))

@@ -34,3 +34,18 @@ def test_contributing_names_the_fast_subset_and_the_markers() -> None:
         "ini_options"]["markers"]
     for marker in markers:
         assert f"`{marker.split(':')[0]}`" in text
+
+
+def test_bench_scripts_share_their_timing_helpers() -> None:
+    """bench/_timing.py is the one home of the clocks, the interleaved blocks, the min / median /
+    max series and the progress log: no bench script writes its own again."""
+    import re
+
+    own = re.compile(r"^(def (mmm|log|interleaved)\(|class Series\b|CLOCKS(_S)?\s*[:=]\s*(dict|\{))"
+                     r"|^import statistics\b", re.M)
+    scripts = sorted((ROOT / "bench").glob("*.py"))
+    assert len(scripts) >= 10
+    found = {p.name: own.findall(p.read_text()) for p in scripts if p.name != "_timing.py"}
+    assert {name: hits for name, hits in found.items() if hits} == {}
+    users = [p.name for p in scripts if "from _timing import" in p.read_text()]
+    assert len(users) >= 10, users

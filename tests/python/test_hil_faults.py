@@ -1,7 +1,9 @@
 """Fault injection against the C plant node, with python-can's socketcand interface as the
 controller: dropped frames, a silent controller, corrupted CRC, repeated counter, out-of-range
 voltage, wrong DLC, unknown ids, malformed socketcand input, a disconnect. The plant must apply
-0 V within 3 periods and latch the fault (PlantStatus), count every event, and never crash.
+0 V within 3 periods and latch the fault (PlantStatus), count every event, and never crash; a
+run in which a fault latched or 0 V was forced ends with EXIT_SAFETY (7), one in which frames were
+only counted and ignored with 0.
 
 Plant log rows: row 0 is the initial state, row k + 1 the state after period k, with the voltage
 applied during period k.
@@ -19,6 +21,7 @@ import pytest
 from rrr_robot.hil.nodes import open_bus, start_plant
 from rrr_robot.hil.protocol import (
     DATA_IDS,
+    EXIT_SAFETY,
     FAULT_BITS,
     NMT_OPERATIONAL,
     NMT_STOPPED,
@@ -112,6 +115,7 @@ def test_silent_controller_zero_volts_within_three_periods(rig: Rig) -> None:
     # latched: the controller's return is not enough (its counter jumped by 7: flagged as well)
     assert rig.period()["Faults"] == F["timeout"] | F["counter"]
     summary, log = rig.finish()
+    assert summary["exit"] == EXIT_SAFETY  # completed, but the safety policy fired
     assert summary["timeout"] == 1 and summary["counter"] == 1
     assert summary["cmd_missed"] == 7  # 6 silent periods + the rejected command
     np.testing.assert_allclose(applied(log, 3), U)
@@ -152,7 +156,8 @@ def test_bad_command_latches_at_once(rig: Rig, fault: str) -> None:
     st = rig.period()
     assert st["Faults"] == 0 and st["State"] == 1 and st["ZeroVoltage"] == 0
     summary, log = rig.finish()
-    assert summary["exit"] == 0 and summary["resets"] == 1
+    # completed, and the fault was reset: still the status of a run whose safety policy fired
+    assert summary["exit"] == EXIT_SAFETY and summary["resets"] == 1
     assert summary[fault] == 1 and summary["fault_events"] == 1
     assert not applied(log, 3).any() and not applied(log, 7).any()
     np.testing.assert_allclose(applied(log, 8), U)
@@ -168,7 +173,7 @@ def test_reset_with_a_counter_gap_does_not_clear(rig: Rig) -> None:
         st = rig.period(rig.cmd(counter=(rig.k + 1) & 15))
     assert st["Faults"] == F["crc"] | F["counter"] and st["ZeroVoltage"] == 1
     summary, _ = rig.finish(stop_counter=(rig.k + 1) & 15)
-    assert summary["exit"] == 0 and summary["resets"] == 0 and summary["counter"] == 1
+    assert summary["exit"] == EXIT_SAFETY and summary["resets"] == 0 and summary["counter"] == 1
 
 
 def test_unauthenticated_stop_is_ignored(rig: Rig) -> None:
@@ -191,6 +196,7 @@ def test_unknown_ids_and_extended_frames_are_counted_not_faults(rig: Rig) -> Non
     assert st["Faults"] == 0
     summary, _ = rig.finish()
     assert summary["rx_unknown_id"] == 2 and summary["fault_events"] == 0
+    assert summary["exit"] == 0  # counted and ignored: the status of a clean run
 
 
 def test_malformed_socketcand_input_and_disconnect(tmp_path: Path) -> None:

@@ -31,7 +31,7 @@ from rrr_robot.hil.plant import (
     drop_commands_from,
     run_python_plant_bench,
 )
-from rrr_robot.hil.protocol import FAULT_BITS
+from rrr_robot.hil.protocol import EXIT_SAFETY, FAULT_BITS
 from rrr_robot.writing.job import WritingJob, prepare
 
 K0 = 200  # first faulty period
@@ -106,11 +106,13 @@ def test_faults_go_through_the_c_supervisor(ref, case: str, first_zero: int,
     # commands lost: the controller's StopCmd is out of sequence (stale), ignored; the plant
     # then loses the controller (bus fault, exit 3). A corrupted command: the stop is honoured.
     lost = case == "commands stop"
-    assert s["exit"] == (3 if lost else 0) and s["stop_rejected"] == int(lost)
+    assert s["exit"] == (3 if lost else EXIT_SAFETY) and s["stop_rejected"] == int(lost)
     assert s["faults"] == bit | (FAULT_BITS["bus"] if lost else 0) and s[fault] == 1
     assert s["fault_events"] == 1 + int(lost) and s["zero_periods"] == n - 1 - first_zero
-    assert run.controller_summary["exit"] == 0
-    # reported: PlantStatus carried the latched fault to the C controller
+    # reported: PlantStatus carried the latched fault to the C controller, which completed the
+    # run and ends with the status of a run whose safety policy fired
+    assert run.controller_summary["exit"] == EXIT_SAFETY
+    assert run.controller_summary["plant_status_faulty"] > 0
     assert run.controller_summary["plant_faults"] == bit
 
 

@@ -21,6 +21,7 @@ import pytest
 from rrr_robot.cli import main
 from rrr_robot.hil import framelog as fl
 from rrr_robot.hil.bench import quantised_cosim_result
+from rrr_robot.hil.protocol import EXIT_SAFETY
 from rrr_robot.hil.results import unquantised_cosim
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, metrics, prepare
 
@@ -119,11 +120,15 @@ def test_can_log_option_writes_asc(tmp_path: Path) -> None:
 
 def test_realtime_bench_reports_latencies(tmp_path: Path) -> None:
     """Both C nodes in real time for 1 s (SCHED_FIFO, mlockall, affinity where permitted: the
-    numbers are the machine's and are not asserted; a benchmark records them)."""
+    numbers are the machine's and are not asserted; a benchmark records them). On a loaded
+    machine the plant may miss commands long enough to time out: the run then completes with
+    EXIT_SAFETY, and its summary says why."""
     out = tmp_path / "rt"
-    assert main(["hil", "bench", "--realtime", "--duration", "1", "--out", str(out),
-                 "--no-can-log", "-q"]) == 0
+    rc = main(["hil", "bench", "--realtime", "--duration", "1", "--out", str(out),
+               "--no-can-log", "-q"])
     s = json.loads((out / "summary.json").read_text())
+    fired = s["faults"]["fault_events"] > 0 or s["faults"]["zero_periods"] > 0
+    assert rc == (EXIT_SAFETY if fired else 0), (rc, s["faults"])
     # the periods both loops logged: the controller runs the 1001 rows of the reference; the
     # plant ends at its StopCmd and skips the releases a stall made it miss (machine-dependent)
     assert s["mode"] == "realtime" and 0 < s["reference"]["periods"] <= 1001

@@ -32,7 +32,7 @@ from rrr_robot.hil.nodes import (
     start_controller,
     start_plant,
 )
-from rrr_robot.hil.protocol import DBC_PATH
+from rrr_robot.hil.protocol import DBC_PATH, EXIT_SAFETY, FAULT_BITS
 from rrr_robot.sim.fmus import fmu_path
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
 
@@ -366,9 +366,15 @@ def hostile(guest: CanGuest, bench_inputs: dict[str, Any],
         one = c_bench_script(work / name, bench_inputs["plant_args"], bench_inputs["ctrl_args"],
                              ref_csv, inject=inject.replace("@REPLAY@", replay_arg))
         scripts.append(f"( {one} )")
+    # and the real-time mode of both nodes on the same periods, on a clean bus
+    (work / "realtime").mkdir()
+    scripts.append("( " + c_bench_script(
+        work / "realtime", [*bench_inputs["plant_args"], "--realtime", "--duration", "5"],
+        [*bench_inputs["ctrl_args"], "--realtime"], ref_csv) + " )")
     script = work / "hostile.sh"
     script.write_text("\n".join(scripts) + "\n")
-    r = run(guest, f"sh {script}", f"{len(HOSTILE)} hostile runs of {HOSTILE_PERIODS} periods",
+    r = run(guest, f"sh {script}", f"{len(HOSTILE)} hostile runs and one in real time of "
+            f"{HOSTILE_PERIODS} periods",
             timeout=400)
     return {"result": r, "work": work}
 
@@ -378,19 +384,21 @@ def test_hostile_traffic(hostile: dict[str, Any], c_bench: dict[str, Any], case:
     """Frames from cansend/cangen on the bus while the plant runs: a bad CRC, a wrong DLC, a
     replayed command each latch their fault (crc, format, counter) at once and the plant applies
     0 V from then to the end (log column zero = 1, u = 0, PlantStatus reports it), the run goes
-    on to its end (lockstep; exit status 0, as documented today). Frames of other identifiers
-    never reach the nodes (their kernel receive filters): the run equals the clean run bit for
-    bit and costs no counter at all."""
+    on to its end (lockstep) and both nodes end with EXIT_SAFETY (7: completed, but the safety
+    policy fired; the controller read it in PlantStatus). Frames of other identifiers never
+    reach the nodes (their kernel receive filters): the run equals the clean run bit for bit,
+    costs no counter at all and ends with 0."""
     work = hostile["work"] / case
     assert hostile["result"].rc == 0, hostile["result"].stderr
     assert (work / "injected").exists(), "the injection did not run during the run"
     exits = dict(line.split() for line in (work / "exit").read_text().splitlines())
-    assert exits == {"controller": "0", "plant": "0", "candump": "0"}, exits
+    _, bit, _ = HOSTILE[case]
+    status = str(EXIT_SAFETY if bit else 0)
+    assert exits == {"controller": status, "plant": status, "candump": "0"}, exits
     s = summary_lines((work / "plant.out").read_text())
     c = summary_lines((work / "controller.out").read_text())
     log = np.loadtxt(work / "plant.csv", delimiter=",", skiprows=1)
     assert log.shape[0] == HOSTILE_PERIODS
-    _, bit, _ = HOSTILE[case]
     if bit == 0:
         clean = read_csv(c_bench["work"] / "plant.csv")[: HOSTILE_PERIODS]
         assert read_csv(work / "plant.csv")[: HOSTILE_PERIODS] == clean
@@ -405,8 +413,38 @@ def test_hostile_traffic(hostile: dict[str, Any], c_bench: dict[str, Any], case:
     assert 0 < first and np.all(faults[first:] & bit) and np.all(zero[first + 1:] == 1)
     assert np.all(u[first + 1:] == 0.0) and np.any(u[:first] != 0.0)
     assert c["plant_faults"] & bit  # the controller saw it in PlantStatus
+    assert s["exit"] == c["exit"] == EXIT_SAFETY and c["plant_status_faulty"] > 0
+    assert "the safety policy fired" in (work / "plant.err").read_text()
     print(f"  {case}: fault {s['faults']:#04x} from period {first}, "
           f"{s['zero_periods']} periods at 0 V, plant exit {exits['plant']}")
+
+
+def test_realtime_over_vcan(hostile: dict[str, Any]) -> None:
+    """Both C nodes in real time (--realtime, 1 kHz of CLOCK_MONOTONIC) over vcan0 in the guest
+    for HOSTILE_PERIODS periods: the run completes, with status 0, or 7 when the plant's safety
+    policy fired (under emulation a node may miss its periods long enough for the plant's
+    timeout: the summary then says so). Its wake-up latencies are the emulator's: printed, not
+    asserted."""
+    work = hostile["work"] / "realtime"
+    exits = dict(line.split() for line in (work / "exit").read_text().splitlines())
+    s = summary_lines((work / "plant.out").read_text())
+    c = summary_lines((work / "controller.out").read_text())
+    fired = s["fault_events"] > 0 or s["zero_periods"] > 0
+    assert exits["plant"] == str(EXIT_SAFETY if fired else 0), (exits, s)
+    assert exits["controller"] in ("0", str(EXIT_SAFETY)), exits
+    assert c["states"] > 0 and s["periods"] > 0
+    for node in ("plant", "controller"):
+        rt = [ln for ln in (work / f"{node}.out").read_text().splitlines()
+              if ln.startswith("RRR_HIL_RT ")]
+        assert len(rt) == 1, node
+        r = json.loads(rt[0][len("RRR_HIL_RT "):])
+        assert r["rt_periods"] > 0
+        print(f"  real time over vcan0, {node} (the emulator's latencies, TCG): exit "
+              f"{exits[node]}, {r['rt_periods']} periods, wake-up p50 "
+              f"{r['rt_latency_p50_us']:.0f} us, p99 {r['rt_latency_p99_us']:.0f} us, max "
+              f"{r['rt_latency_max_us']:.0f} us, {r['rt_deadline_misses']} deadline misses")
+    print(f"  real time over vcan0: plant faults {s['faults']:#04x}, {s['cmd_missed']} periods "
+          f"without a command, {s['zero_periods']} at 0 V; controller: {c['stale']} stale")
 
 
 # ---- rrr hil bench --interface socketcan and the Python sides over python-can's socketcan ---
@@ -512,6 +550,21 @@ def test_rrr_hil_bench_over_socketcan(python_sides: dict[str, Any],
         {k: hbus[k] for k in ("frames", "tx", "rx", "by_id", "measured_1mbit")}
     assert framelog.compare(framelog.read_node_log(mine / "frames.rrrcan"),
                             framelog.read_can_log(mine / "frames.blf")) is None
+
+
+def test_rrr_hil_bench_safety_status(python_sides: dict[str, Any]) -> None:
+    """``rrr hil bench --interface socketcan`` with one VoltageCmd of a wrong CRC put on the bus
+    mid-run: the run completes, the plant latched ``crc`` and applied 0 V to the end, and
+    ``rrr hil bench`` returns EXIT_SAFETY (7), as do both nodes, so a CI job running it fails;
+    its summary.json and frame log are written all the same."""
+    case = python_sides["cases"]["bench_fault"]
+    assert case["rc"] == EXIT_SAFETY, case
+    assert case.get("injected_after_sync", -1) >= 200, case
+    s = json.loads((python_sides["out"] / "bench_fault" / "summary.json").read_text())
+    assert s["plant_exit"] == EXIT_SAFETY and s["controller"]["exit"] == EXIT_SAFETY
+    assert s["faults"]["crc"] == 1 and s["faults"]["faults"] == FAULT_BITS["crc"]
+    assert s["faults"]["zero_periods"] > 0 and s["controller"]["plant_status_faulty"] > 0
+    assert s["bench"]["tip_error_max"] > 1e-3  # 0 V from period ~200 on: the arm fell
 
 
 @pytest.mark.parametrize("side, node_log", [("controller", "plant.csv"),

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -193,9 +194,22 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
         print(f"{args.side} side against an external node: {run.t.size} periods, max |q - "
               f"q_ref| {np.abs(run.q - ref.q[: run.q.shape[0]]).max():.3e} rad; the other "
               "node keeps its logs (its frame log among them): no summary.json or figures")
-        return side.rc
+        return _status(side.rc)
     _results(args, ref, side.run, ctrl_values, model, rs, can_log, side.nodes)
-    return side.rc
+    return _status(side.rc)
+
+
+def _status(rc: int) -> int:
+    """The exit status of ``rrr hil`` (docs/can.md, "Exit statuses"), said when it is not 0."""
+    from ..hil.protocol import EXIT_SAFETY
+
+    if rc == EXIT_SAFETY:
+        print(f"exit status {rc}: the run completed, but the safety policy fired (a fault "
+              "latched or 0 V forced: see the plant's faults above)", file=sys.stderr)
+    elif rc != 0:
+        print(f"exit status {rc}: a node ended early (docs/can.md, Exit statuses)",
+              file=sys.stderr)
+    return rc
 
 
 def _plant_lines(side: SideRun, ref: Reference, out: Path) -> None:

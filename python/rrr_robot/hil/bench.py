@@ -35,6 +35,7 @@ from .nodes import (
     wait_for_boot_up,
 )
 from .protocol import (
+    EXIT_SAFETY,
     NMT_OPERATIONAL,
     NMT_STOPPED,
     PERIOD,
@@ -142,6 +143,8 @@ class _StateWaiter:
         self.alive = alive  # whether the plant node still runs (None: not known here)
         self.status: dict[str, float] = {}
         self.rejected: dict[str, int] = {}
+        self.status_faulty = 0  # PlantStatus frames with a latched fault
+        self.status_zero = 0  # PlantStatus frames with ZeroVoltage
 
     def wait(self, counter: int) -> tuple[FloatArray, FloatArray]:
         q, qd = np.zeros(3), np.zeros(3)
@@ -165,6 +168,8 @@ class _StateWaiter:
                 continue
             if name == "PlantStatus":
                 self.status = sig
+                self.status_faulty += int(sig["Faults"] != 0)
+                self.status_zero += int(sig["ZeroVoltage"] != 0)
             elif name.startswith("JointState") and sig["AliveCounter"] == counter:
                 j = int(name[-1]) - 1
                 q[j], qd[j] = sig["Q"], sig["Qd"]
@@ -194,7 +199,12 @@ def run_fmu_controller(bus: Any, t: FloatArray, q_ref: FloatArray, qd_ref: Float
         bus.send(encode("StopCmd", {"AliveCounter": n & 15, "Reason": 0}))
         bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
     return BenchRun(t=t, q=q_rec, qd=qd_rec, u=out_rec[:, 0:3], plant_summary=dict(waiter.status),
-                    controller_summary={"rejected": waiter.rejected}, u_n=out_rec[:, 3:6],
+                    controller_summary={"rejected": waiter.rejected,
+                                        "exit": EXIT_SAFETY if waiter.status_faulty
+                                        or waiter.status_zero else 0,
+                                        "plant_status_faulty": waiter.status_faulty,
+                                        "plant_status_zero": waiter.status_zero},
+                    u_n=out_rec[:, 3:6],
                     u_c=out_rec[:, 6:9], wall_time=time.perf_counter() - start)
 
 
@@ -297,7 +307,8 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
     ``controller_values`` (controller FMU names, e.g. a scenario's). The logs go to
     ``workdir``: plant.csv, controller.csv, the controller node's frame log ``frame_log`` (a
     file name; rrr_robot.hil.framelog) and, in real time, latency_controller.csv and
-    latency_plant.csv."""
+    latency_plant.csv. A run that completed while the safety policy fired (a node's exit
+    status EXIT_SAFETY) is a run: the summaries say so; any other non-zero status raises."""
     own = workdir is None
     work = Path(tempfile.mkdtemp(prefix="rrr_hil_")) if workdir is None else Path(workdir)
     n = t.shape[0]
@@ -332,7 +343,7 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                                                *rt_ctrl], socketcan=socketcan)
                 with ctrl:
                     cs = _wait(ctrl, timeout, LogProgress(ctrl_log, n, progress))
-                    if cs["exit"] != 0:  # the plant would wait for a controller that is gone
+                    if cs["exit"] not in (0, EXIT_SAFETY):  # the plant would wait for it
                         # the node that died first is the one to name: a controller whose
                         # plant was killed ends with an error of its own
                         dead = plant if plant.died() else ctrl
@@ -340,7 +351,7 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                         raise dead.failure("the CAN bench failed", failure_folder(work))
                     ps = plant.wait(timeout)
             wall = time.perf_counter() - start
-            if ps["exit"] != 0:
+            if ps["exit"] not in (0, EXIT_SAFETY):
                 raise plant.failure("the CAN bench failed", failure_folder(work))
             if frames is not None and cs.get("frame_log_error"):
                 raise HilError(f"the controller's frame log failed: {cs['frame_log_error']}")

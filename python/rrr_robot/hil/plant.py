@@ -40,6 +40,7 @@ from . import _hil_lib as hl
 from .bench import BenchRun
 from .nodes import export_reference, open_bus, read_node_log, start_listening_controller
 from .protocol import (
+    EXIT_SAFETY,
     NMT_BOOT,
     NMT_OPERATIONAL,
     PERIOD,
@@ -250,8 +251,9 @@ class PythonPlant:
                 self._publish(x)
 
     def run(self, log_csv: Path | None = None) -> PlantRun:
-        """Run until the controller's heartbeat "stopped" (exit 0) or until it is lost (exit 3,
-        bus fault latched); optionally write the log as the C node's --log does."""
+        """Run until the controller's StopCmd (exit 0; 7 when the safety policy fired on the
+        way, 6 for a reason other than the end of the run) or until it is lost (exit 3, bus
+        fault latched); optionally write the log as the C node's --log does."""
         with FmuSlave(self.fmu_path, "plant") as slave:
             slave.initialize(0.0, self.values)
             p_in = slave.real_block(PLANT_IN)
@@ -263,6 +265,9 @@ class PythonPlant:
                 log.error("python plant: period %d: %s", self.k, exc)
                 self.sup.raise_fault(hl.FAULT_BUS)
                 rc = 3
+        c = self.sup.counters()
+        if rc == 0 and (self.sup.faults or c["fault_events"] or c["zero_periods"]):
+            rc = EXIT_SAFETY  # completed, but the safety policy fired (as rrr_hil_plant)
         rows = np.array(self._rows, dtype=float).reshape(-1, len(LOG_HEADER))
         if log_csv is not None:
             with atomic_path(log_csv) as tmp:  # complete or not at all (core.outputs)

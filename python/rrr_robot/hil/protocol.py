@@ -28,6 +28,7 @@ from ..errors import RrrError
 __all__ = [
     "DATA_IDS",
     "DBC_PATH",
+    "EXIT_SAFETY",
     "FAULT_BITS",
     "NMT_BOOT",
     "NMT_OPERATIONAL",
@@ -50,6 +51,10 @@ PERIOD = DEFAULT_SAMPLE_TIME
 #: E2E DataIDs (also in the DBC's comment and c_src/hil/hil_codec.h).
 DATA_IDS = {"VoltageCmd": 0x10, "StopCmd": 0x11, "JointState1": 0x21, "JointState2": 0x22,
             "JointState3": 0x23, "PlantStatus": 0x30}
+#: Exit status of a bench run that completed while the safety policy fired (a fault latched, even
+#: if reset later, or 0 V forced for a period): the C nodes' RRR_HIL_EXIT_SAFETY, also the status
+#: of ``rrr hil bench|controller|plant`` (docs/can.md, "Exit statuses").
+EXIT_SAFETY = 7
 #: Latched fault bits of PlantStatus.Faults.
 FAULT_BITS = {"timeout": 1, "crc": 2, "counter": 4, "range": 8, "format": 16, "sync": 32,
               "bus": 64}

@@ -115,7 +115,15 @@ def run_bench(ref: Reference, controller_values: Mapping[str, float | bool], wor
     run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=work,
                       controller_values=dict(controller_values), frame_log=frame_log,
                       realtime=realtime, progress=progress, socketcan=socketcan)
-    return SideRun(0, run, {"plant": run.plant_summary, "controller": run.controller_summary})
+    return SideRun(_status(run.plant_summary, run.controller_summary), run,
+                   {"plant": run.plant_summary, "controller": run.controller_summary})
+
+
+def _status(plant: Mapping[str, Any], controller: Mapping[str, Any]) -> int:
+    """The exit status of a run from its nodes': the plant's when it is not 0, else the
+    controller's (EXIT_SAFETY when the safety policy fired, docs/can.md "Exit statuses")."""
+    rc = int(plant.get("exit", 0))
+    return rc if rc != 0 else int(controller.get("exit", 0))
 
 
 def run_controller_side(ref: Reference, controller_values: Mapping[str, float | bool],
@@ -148,7 +156,7 @@ def run_controller_side(ref: Reference, controller_values: Mapping[str, float | 
         if plant is not None:
             plant.close()
     write_controller_log(run, work / "controller.csv")
-    return SideRun(int(summary.get("exit", 0)), run,
+    return SideRun(_status(summary, run.controller_summary), run,
                    {"plant": summary, "controller": run.controller_summary})
 
 
@@ -195,5 +203,4 @@ def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool]
     run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, _U], plant_summary=s,
                    controller_summary=cs, u_n=c[:, _U_N], u_c=c[:, _U_C])
     # the exit status reflects every side's: the plant's first, then the controller node's
-    rc = int(s["exit"]) if s["exit"] != 0 else int(cs["exit"])
-    return SideRun(rc, run, {"plant": s, "controller": cs})
+    return SideRun(_status(s, cs), run, {"plant": s, "controller": cs})
