@@ -69,3 +69,17 @@ def test_a_changed_fmu_file_is_instantiated_afresh(tmp_path: Path) -> None:
     assert len(fmu_slave._pool[key]) == 1
     copy.write_bytes(copy.read_bytes() + b"\0")  # another size: another key
     assert fmu_slave._pool_key(copy, "plant") != key
+
+
+def test_reuse_can_be_turned_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    """$RRR_FMU_REUSE=0: every run on fresh instances, none kept; the same results."""
+    fmu_slave.clear_pool()
+    monkeypatch.setenv("RRR_FMU_REUSE", "0")
+    off = run(2)
+    assert idle(2) == []
+    monkeypatch.delenv("RRR_FMU_REUSE")
+    run(2)
+    on = run(2)
+    assert len(idle(2)) == 1
+    for f in FIELDS:
+        assert np.array_equal(getattr(off, f), getattr(on, f)), f

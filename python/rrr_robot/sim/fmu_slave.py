@@ -404,6 +404,7 @@ class FmuSlave:
 # stepping. pooled_slave() keeps the instances of the runs that succeeded, reset (fmi2Reset /
 # fmi3Reset: every variable back at its default), and hands them to the next run of the same
 # FMU file in the process; an instance whose run failed is closed, never reused.
+# $RRR_FMU_REUSE=0 turns the reuse off (every run extracts and instantiates afresh).
 
 #: Idle instances kept per FMU file and instance name.
 POOL_SIZE = 4
@@ -425,8 +426,13 @@ def pooled_slave(path: Path, instance_name: str) -> Iterator[FmuSlave]:
     """An instantiated slave of ``path`` for one run: an idle one of an earlier run in this
     process (reset) or a new one. After a run that succeeded it goes back to the pool, reset;
     after a run that raised it is closed. The results equal those of a fresh instance bit for
-    bit (tests/python/test_fmu_reuse.py)."""
+    bit (tests/python/test_fmu_reuse.py). With ``$RRR_FMU_REUSE=0``: a fresh instance, closed
+    after the run."""
     global _pool_pid
+    if os.environ.get("RRR_FMU_REUSE", "1") == "0":
+        with FmuSlave(path, instance_name) as fresh:
+            yield fresh
+        return
     key = _pool_key(Path(path), instance_name)
     with _pool_lock:
         if _pool_pid != os.getpid():
