@@ -329,6 +329,15 @@ static inline void *fmu_var_ptr(void *data, const fmu_variable *v)
     return (char *)data + v->offset;
 }
 
+/** One row of a model's table: value reference VR, the type, causality and variability, the
+ *  name, description and unit, and the value at member MEMBER of the model data type T. */
+#define FMU_ROW(VR, TYPE, CAUS, VARIAB, NAME, DESC, UNIT, T, MEMBER)                          \
+    {(VR), TYPE, CAUS, VARIAB, NAME, DESC, UNIT, offsetof(T, MEMBER)}
+
+/** A fixed Real parameter (a row of FMU_ROW). */
+#define FMU_PARAM(VR, NAME, DESC, UNIT, T, MEMBER)                                            \
+    FMU_ROW(VR, FMU_REAL, FMU_PARAMETER, FMU_FIXED, NAME, DESC, UNIT, T, MEMBER)
+
 /** The row of the independent variable "time" (value reference VR), last in every table. */
 #define FMU_TIME_ROW(VR)                                                                      \
     {(VR), FMU_REAL, FMU_INDEPENDENT, FMU_CONTINUOUS, "time", "simulation time", "s", 0}

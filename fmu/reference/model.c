@@ -39,10 +39,8 @@ static const char *const columns[REF_COLUMNS] = {
     "qdd_ref[1]", "qdd_ref[2]", "qdd_ref[3]", "x_ref.x", "x_ref.y",  "x_ref.z",  "xd_ref.x",
     "xd_ref.y",  "xd_ref.z",  "xdd_ref.x", "xdd_ref.y", "xdd_ref.z"};
 
-#define FMU_ROW(VR, TYPE, CAUS, VARIAB, NAME, DESC, UNIT, MEMBER)                             \
-    {(VR), TYPE, CAUS, VARIAB, NAME, DESC, UNIT, offsetof(T, MEMBER)}
 #define OUTPUT(VR, NAME, DESC, UNIT, MEMBER)                                                   \
-    FMU_ROW(VR, FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, NAME, DESC, UNIT, MEMBER)
+    FMU_ROW(VR, FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, NAME, DESC, UNIT, T, MEMBER)
 #define JOINT_OUTPUTS(VR, N, WHAT, UNIT, M)                                                    \
     OUTPUT((VR) + 0, N "[1]", WHAT " of joint 1 at t + lookahead", UNIT, M[0]),                \
     OUTPUT((VR) + 1, N "[2]", WHAT " of joint 2 at t + lookahead", UNIT, M[1]),                \
@@ -60,10 +58,10 @@ static const fmu_variable reference_vars[] = {
            x_ref[1]),
     OUTPUT(vr_x_ref + 2, "x_ref.z", "tip reference z in the base frame (z0 up) at t + lookahead",
            "m", x_ref[2]),
-    FMU_ROW(vr_lookahead, FMU_REAL, FMU_PARAMETER, FMU_FIXED, "lookahead",
-            "the outputs are the table at t + lookahead, in [0, 1]: one communication step "
-            "compensates a master that gives the outputs of a step to the plant one step later",
-            "s", lookahead),
+    FMU_PARAM(vr_lookahead, "lookahead",
+              "the outputs are the table at t + lookahead, in [0, 1]: one communication step "
+              "compensates a master that gives the outputs of a step to the plant one step later",
+              "s", T, lookahead),
     FMU_TIME_ROW(vr_time),
 };
 

@@ -15,6 +15,7 @@ applied during period k.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -29,9 +30,9 @@ from rrr_robot.hil.plant import (
     PythonPlant,
     RxFilter,
     drop_commands_from,
-    run_python_plant_bench,
 )
 from rrr_robot.hil.protocol import EXIT_SAFETY, FAULT_BITS
+from rrr_robot.hil.sides import Connection, run_plant_side
 from rrr_robot.writing.job import WritingJob, prepare
 
 K0 = 200  # first faulty period
@@ -54,8 +55,10 @@ def test_supervisor_library_layout() -> None:
 
 
 def test_c_controller_python_plant_equals_quantised_fmpy_loop(ref, tmp_path: Path) -> None:
-    run, plant = run_python_plant_bench(ref.t, ref.q, ref.qd, ref.qdd,
-                                        workdir=tmp_path)
+    # the plant side of `rrr hil plant`: the C controller node started here, default gains
+    side = run_plant_side(ref, {}, tmp_path, Connection())
+    run, plant = side.run, side.plant
+    assert plant is not None and side.rc == 0
     s, cs = plant.summary, run.controller_summary
     assert s["exit"] == 0 and s["periods"] == ref.t.size - 1
     assert s["faults"] == 0 and s["fault_events"] == 0 and s["cmd_missed"] == 0
@@ -86,13 +89,14 @@ def _corrupt_crc_at(k0: int) -> RxFilter:
 @pytest.mark.parametrize(("case", "first_zero", "fault"),
                          [("commands stop", K0 + 2, "timeout"), ("corrupted CRC", K0, "crc")])
 def test_faults_go_through_the_c_supervisor(ref, case: str, first_zero: int,
-                                            fault: str) -> None:
+                                            fault: str, tmp_path: Path) -> None:
     rx_filter = (drop_commands_from(K0) if case == "commands stop"
        else _corrupt_crc_at(K0))
     n = N_FAULT
-    run, plant = run_python_plant_bench(ref.t[:n], ref.q[:n], ref.qd[:n],
-                                        ref.qdd[:n], rx_filter=rx_filter, check=False,
-                                        plant_timeout=0.5)
+    short = replace(ref, t=ref.t[:n], q=ref.q[:n], qd=ref.qd[:n], qdd=ref.qdd[:n])
+    side = run_plant_side(short, {}, tmp_path, Connection(), rx_filter=rx_filter, timeout=0.5)
+    run, plant = side.run, side.plant
+    assert plant is not None
     s, u, log = plant.summary, plant.u, plant.log
     # before the fault: the commands; a missing command is held for 2 periods
     assert np.all(log[1:K0 + 1, 11] == 0) and np.abs(u[1:K0 + 1]).min(axis=1).max() > 0

@@ -4,6 +4,7 @@ intervals with quantisation and noise, the writing task with identified paramete
 from __future__ import annotations
 
 import argparse
+import json
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -12,7 +13,9 @@ import numpy as np
 import pytest
 from rrr_robot.cli.identify import register_cli
 from rrr_robot.core.model import DEFAULT_ROBOT_TOML, Model
+from rrr_robot.core.outputs import strict_json
 from rrr_robot.core.robot import read_robot_file
+from rrr_robot.errors import BadInputError
 from rrr_robot.identify import experiments as ex
 from rrr_robot.identify.base_params import estimate_base_params
 from rrr_robot.identify.excitation import (
@@ -21,6 +24,7 @@ from rrr_robot.identify.excitation import (
     design_excitation,
     stacked_regressor,
 )
+from rrr_robot.identify.jobs import IdentifyJob, run_identify
 from rrr_robot.identify.pipeline import Settings, identify, write_robot
 from rrr_robot.identify.validation import validate_writing
 
@@ -120,6 +124,32 @@ def test_cli_writes_robot_file(tmp_path: Path, noisy_logs) -> None:
     data = tomllib.loads(out.read_text())
     assert {"base_parameters", "friction", "control", "identification"} <= set(data)
     assert len(data["identification"]["p_std"]) == 16
+
+
+def test_library_job_equals_the_cli_and_checks_outputs_first(tmp_path: Path, noisy_logs) -> None:
+    """``rrr identify`` is one library call: run_identify on the same logs writes the same robot
+    file; an output that is an input log is refused before anything is estimated or written."""
+    fric, exc = noisy_logs
+    fric.to_csv(tmp_path / "friction.csv")
+    exc.to_csv(tmp_path / "excitation.csv", "simulated")
+    parser = argparse.ArgumentParser()
+    register_cli(parser.add_subparsers(dest="command"))
+    args = parser.parse_args(["identify", "--log", str(tmp_path / "excitation.csv"),
+                              "--friction-log", str(tmp_path / "friction.csv"),
+                              "--out", str(tmp_path / "cli.toml")])
+    assert args.func(args) == 0
+    phases: list[str] = []
+    job = IdentifyJob(log=tmp_path / "excitation.csv", out=tmp_path / "lib.toml",
+                      friction_log=tmp_path / "friction.csv", report=tmp_path / "lib.json")
+    outcome = run_identify(job, progress=lambda phase, done, total: phases.append(phase))
+    assert (tmp_path / "lib.toml").read_text() == (tmp_path / "cli.toml").read_text()
+    assert json.loads((tmp_path / "lib.json").read_text()) == json.loads(
+        strict_json(outcome.report))
+    assert phases and set(phases) == {"friction fits"}
+    before = (tmp_path / "excitation.csv").read_bytes()
+    with pytest.raises(BadInputError, match="is the input log"):
+        run_identify(replace(job, out=tmp_path / "excitation.csv", report=None))
+    assert (tmp_path / "excitation.csv").read_bytes() == before
 
 
 def test_write_robot_roundtrip(tmp_path: Path, ideal_logs) -> None:

@@ -4,15 +4,11 @@ library is :mod:`rrr_robot.identify`)."""
 from __future__ import annotations
 
 import argparse
-import contextlib
 import logging
-import os
 import shlex
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from ..errors import BadInputError
 from ._args import (
     add_verbosity_arguments,
     command_parser,
@@ -29,104 +25,50 @@ log = logging.getLogger(__name__)
 def _cmd_identify(args: argparse.Namespace) -> int:
     # the library is imported when the command runs: rrr --help loads none of it
     from ..core.model import DEFAULT_ROBOT_TOML
-    from ..core.outputs import atomic_path, strict_json
     from ..core.param_names import group_names
-    from ..core.robot import read_robot_file
-    from ..identify.logs import read_log
-    from ..identify.pipeline import Settings, identify, write_robot
+    from ..identify.jobs import IdentifyJob, run_identify
+    from ..identify.pipeline import Identified, Settings
 
-    prior_robot = read_robot_file(Path(args.robot) if args.robot else DEFAULT_ROBOT_TOML)
-    prior = prior_robot.model
-    if args.validate:
-        prior_robot.require_control()
-    _check_outputs(args)  # fail before the estimation, not after it
-    settings = Settings(derivatives=args.derivatives, cutoff=args.cutoff,
-                        friction_method=args.friction_method, weighting=args.weighting,
-                        v_min=args.v_min)
-    friction = read_log(args.friction_log, friction=True) if args.friction_log else None
-    with Bars(shown(quiet(args)), unit="joint") as bars:
-        result = identify(read_log(args.log), prior, friction, settings, progress=bars)
-    report: dict[str, Any] = result.report()
-    est = result.base.wls if settings.weighting == "wls" else result.base.ls
-    print(f"cond(W) = {result.base.cond:.1f} from {result.base.rows} rows; {est.method}:")
-    for name, p, s in zip(group_names("p"), est.p, est.std, strict=True):
-        print(f"  {name:<5} = {p: .6g} +/- {1.96 * s:.2g} (95 %)")
-    if args.validate:
-        from ..identify.validation import validate_writing
+    job = IdentifyJob(
+        log=Path(args.log), out=args.out,
+        friction_log=Path(args.friction_log) if args.friction_log else None,
+        robot=Path(args.robot) if args.robot else DEFAULT_ROBOT_TOML,
+        settings=Settings(derivatives=args.derivatives, cutoff=args.cutoff,
+                          friction_method=args.friction_method, weighting=args.weighting,
+                          v_min=args.v_min),
+        report=args.report, validate=args.validate)
 
-        with Bars(shown(quiet(args))) as bars:
-            report["writing"] = validate_writing(
-                prior, result.model, prior_robot,
-                progress=lambda name, k, n: bars(name, k + 1, n))
-        ratio = report["writing"]["tip_error_ratio"]
+    with Bars(shown(quiet(args)), unit="joint") as fits, Bars(shown(quiet(args))) as steps:
+        def progress(phase: str, done: int, total: int) -> None:
+            (fits if phase == "friction fits" else steps)(phase, done, total)
+
+        def estimated(result: Identified) -> None:
+            fits.close()  # the estimate's lines below the finished bar, never on it
+            est = result.base.wls if job.settings.weighting == "wls" else result.base.ls
+            print(f"cond(W) = {result.base.cond:.1f} from {result.base.rows} rows; "
+                  f"{est.method}:")
+            for name, p, s in zip(group_names("p"), est.p, est.std, strict=True):
+                print(f"  {name:<5} = {p: .6g} +/- {1.96 * s:.2g} (95 %)")
+
+        outcome = run_identify(job, progress, estimated)
+    if job.validate:
+        ratio = outcome.report["writing"]["tip_error_ratio"]
         print(f"writing task: tip error ratio identified/prior {ratio:.2f}")
-    # the robot file and the report together at the end, each complete or not at all: an
-    # interrupted run (also during --validate) leaves the previous files as they were
-    with contextlib.ExitStack() as outputs:
-        write_robot(result, outputs.enter_context(atomic_path(args.out)), prior_robot)
-        if args.report:
-            outputs.enter_context(atomic_path(args.report)).write_text(
-                strict_json(report) + "\n", encoding="utf-8")
     print(f"identified robot written to {args.out}")
     return 0
 
 
-def _check_outputs(args: argparse.Namespace) -> None:
-    """The files ``rrr identify`` will write, checked before it reads or estimates anything:
-    each in an existing folder, not a folder itself, not one of the input logs, and not the
-    same file twice."""
-    inputs = {Path(f).resolve(): f for f in (args.log, args.friction_log) if f}
-    seen: dict[Path, str] = {}
-    for option, path in (("--out", args.out), ("--report", args.report)):
-        if path is None:
-            continue
-        target = Path(path).resolve()
-        if target.is_dir():
-            raise BadInputError(f"cannot write {path} ({option}): it is a folder")
-        if not target.parent.is_dir():
-            raise BadInputError(f"cannot write {path}: the folder {target.parent} does not exist")
-        if not os.access(target.parent, os.W_OK | os.X_OK):
-            raise BadInputError(f"cannot write {path}: the folder {target.parent} is not "
-                                "writable")
-        if target in inputs:
-            raise BadInputError(f"{option} {path} is the input log {inputs[target]}: it would "
-                                "be overwritten")
-        if target in seen:
-            raise BadInputError(f"{option} {path} is also {seen[target]}: give two files")
-        seen[target] = option
-
-
 def _cmd_experiment(args: argparse.Namespace) -> int:
-    import numpy as np
+    from ..identify.jobs import ExperimentJob, run_experiment
 
-    from ..core.model import Model
-    from ..core.outputs import ResultSet, check_folder
-    from ..core.robot import read_robot_file
-    from ..core.robot_file import DEFAULT_SAMPLE_TIME
-    from ..identify import experiments as ex
-    from ..identify.excitation import design_excitation
-
-    out = check_folder(args.out)  # before anything is read or run
-    robot = read_robot_file(args.robot) if args.robot else None
-    model = robot.model if robot is not None else Model.default()
-    step = robot.sample_time if robot is not None else DEFAULT_SAMPLE_TIME
-    ex.check_experiments(args.periods, step)  # the bounds, before anything runs
-    sensors = ex.IDEAL if args.noise_free else replace(ex.NOISY, seed=args.seed)
-    # the three files appear together when every experiment succeeded (core.outputs)
-    with ResultSet(out, kind="identify-experiment") as rs, Bars(shown(quiet(args))) as bars:
-        traj, cond = design_excitation(model, np.array(ex.SweepDesign().pose), seed=args.seed)
-        traj.to_json(rs.path("excitation.json"))
-        note = f"simulated, sensors: {sensors}"
-        design = ex.SweepDesign(speeds=tuple(np.geomspace(0.002, 4.0, args.speeds)))
-        ex.friction_experiment(model, design, step=step, sensors=sensors,
-                               progress=bars.callback("friction sweep")).to_csv(
-            rs.path("friction.csv"), note)
-        ex.excitation_experiment(model, traj, args.periods, step=step, sensors=sensors,
-                                 progress=bars.callback("excitation")).to_csv(
-            rs.path("excitation.csv"), f"{note}; cond(W) = {cond:.2f}")
-    print(f"cond(W) of the excitation: {cond:.2f}; logs in {out}/ (friction.csv, "
-          "excitation.csv, excitation.json)")
-    print("identify from them with: " + identify_command(out, args.robot))
+    job = ExperimentJob(out=args.out, robot=Path(args.robot) if args.robot else None,
+                        noise_free=args.noise_free, seed=args.seed, speeds=args.speeds,
+                        periods=args.periods)
+    with Bars(shown(quiet(args))) as bars:
+        outcome = run_experiment(job, progress=bars)
+    print(f"cond(W) of the excitation: {outcome.cond:.2f}; logs in {outcome.out}/ "
+          "(friction.csv, excitation.csv, excitation.json)")
+    print("identify from them with: " + identify_command(outcome.out, args.robot))
     return 0
 
 

@@ -21,8 +21,6 @@ exactly one period and the plant publishes the state of k + 1; the controller's 
 from __future__ import annotations
 
 import logging
-import shutil
-import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -37,8 +35,6 @@ from ..sim.cosim import PLANT_IN
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from . import _hil_lib as hl
-from .bench import BenchRun
-from .nodes import export_reference, open_bus, read_node_log, start_listening_controller
 from .protocol import (
     EXIT_SAFETY,
     NMT_BOOT,
@@ -52,8 +48,7 @@ from .protocol import (
 
 log = logging.getLogger(__name__)
 
-__all__ = ["LOG_HEADER", "PlantRun", "PythonPlant", "drop_commands_from",
-           "run_python_plant_bench"]
+__all__ = ["LOG_HEADER", "PlantRun", "PythonPlant", "drop_commands_from"]
 
 VOLTAGE_CMD_ID = 0x100
 STOP_CMD_ID = 0x090
@@ -283,39 +278,3 @@ class PythonPlant:
         s["rx_ignored"] = self.n.rx_ignored
         log.debug("python plant: %s", s)
         return s
-
-
-# ---- with the C controller node ---------------------------------------------------------------
-
-
-def run_python_plant_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
-                           qdd_ref: FloatArray, workdir: Path | None = None, *,
-                           rx_filter: RxFilter | None = None, timeout: float = 120.0,
-                           check: bool = True, plant_timeout: float = 5.0,
-                           ) -> tuple[BenchRun, PlantRun]:
-    """The C controller node (``--listen``) and the Python plant in lockstep over the
-    socketcand transport. The plant starts at (q_ref[0], qd_ref[0]); default robot and gains.
-    Returns the bench run (plant q, qd exact; the controller's u) and the plant run."""
-    own = workdir is None
-    work = Path(tempfile.mkdtemp(prefix="rrr_hilpy_")) if workdir is None else Path(workdir)
-    try:
-        ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, work / "reference.csv")
-        # the C node writes its log itself: to a temporary name, renamed when the run succeeded
-        with atomic_path(work / "controller.csv") as ctrl_log:
-            with start_listening_controller(ref_csv, log_csv=ctrl_log) as ctrl:
-                with open_bus("socketcand", port=ctrl.port or 0) as bus:
-                    plant = PythonPlant(bus, q0=q_ref[0], qd0=qd_ref[0], rx_filter=rx_filter,
-                                        timeout=plant_timeout)
-                    prun = plant.run(work / "plant.csv")
-                cs = ctrl.wait(timeout)
-            if check and (cs["exit"] != 0 or prun.summary["exit"] != 0):
-                raise HilError(f"bench failed: controller exit {cs['exit']}: "
-                               f"{ctrl.stderr.strip()}; python plant exit "
-                               f"{prun.summary['exit']}")
-            c = read_node_log(ctrl_log, 18)
-        run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, [8, 11, 14]],
-                       plant_summary=prun.summary, controller_summary=cs)
-        return run, prun
-    finally:
-        if own:
-            shutil.rmtree(work, ignore_errors=True)

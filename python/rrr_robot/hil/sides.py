@@ -39,7 +39,7 @@ from .nodes import (
     start_listening_controller,
     start_plant,
 )
-from .plant import PythonPlant, drop_commands_from
+from .plant import PlantRun, PythonPlant, RxFilter, drop_commands_from
 from .protocol import HilError
 
 __all__ = ["Connection", "SideRun", "open_checked_bus", "run_bench", "run_controller_side",
@@ -76,11 +76,13 @@ class Connection:
 @dataclass(frozen=True)
 class SideRun:
     """One side's outcome: the exit status (the Python side's first, then the other node's),
-    the run and the nodes' summaries."""
+    the run, the nodes' summaries and, of the plant side, the Python plant's own run (its log,
+    the voltages it applied)."""
 
     rc: int
     run: BenchRun
     nodes: dict[str, Mapping[str, Any]]
+    plant: PlantRun | None = None
 
 
 def open_checked_bus(conn: Connection, host: str, port: int) -> Any:
@@ -161,15 +163,20 @@ def run_controller_side(ref: Reference, controller_values: Mapping[str, float | 
 
 
 def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool], work: Path,
-                   conn: Connection, *, frame_log: str, drop_from: int | None = None,
-                   progress: Progress | None = None,
+                   conn: Connection, *, frame_log: str | None = None,
+                   drop_from: int | None = None, rx_filter: RxFilter | None = None,
+                   timeout: float = 5.0, progress: Progress | None = None,
                    announce: Callable[[str], None] | None = None) -> SideRun:
     """The Python plant against the C controller node: started here (``--listen``, its logs in
     ``work``) unless ``conn`` is external (``rrr_hil_controller --listen HOST:PORT``, or with
     SocketCAN ``rrr_hil_controller --socketcan IF`` started after this plant: ``announce`` is
-    told when). ``drop_from``: fault injection, VoltageCmd frames of periods >= it do not reach
-    the plant."""
-    rx_filter = None if drop_from is None else drop_commands_from(drop_from)
+    told when). Fault injection: ``drop_from``, VoltageCmd frames of periods >= it do not reach
+    the plant; ``rx_filter``, any filter between the bus and the plant (not both).
+    ``timeout``: of the plant waiting for a frame, s (then it latches a bus fault)."""
+    if drop_from is not None:
+        if rx_filter is not None:
+            raise ValueError("give drop_from or rx_filter, not both")
+        rx_filter = drop_commands_from(drop_from)
     ctrl = None
     try:
         if conn.external:
@@ -178,14 +185,15 @@ def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool]
             ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv")
             ctrl = start_listening_controller(ref_csv, log_csv=work / "controller.csv",
                                               extra=controller_node_args(controller_values),
-                                              frame_log=work / frame_log)
+                                              frame_log=None if frame_log is None
+                                              else work / frame_log)
             host, port = "127.0.0.1", int(ctrl.port or 0)
         with open_checked_bus(conn, host, port) as bus:
             if conn.interface == "socketcan" and announce is not None:
                 announce(f"python plant on {conn.channel}: start rrr_hil_controller --socketcan "
                          f"{conn.channel} now")
             plant = PythonPlant(bus, q0=ref.q[0], qd0=ref.qd[0], rx_filter=rx_filter,
-                                start_timeout=120.0, progress=progress,
+                                timeout=timeout, start_timeout=120.0, progress=progress,
                                 periods=ref.t.shape[0])
             prun = plant.run(work / "plant.csv")
         cs: dict[str, Any] = ctrl.wait() if ctrl is not None else {"exit": 0}
@@ -203,4 +211,4 @@ def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool]
     run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, _U], plant_summary=s,
                    controller_summary=cs, u_n=c[:, _U_N], u_c=c[:, _U_C])
     # the exit status reflects every side's: the plant's first, then the controller node's
-    return SideRun(_status(s, cs), run, {"plant": s, "controller": cs})
+    return SideRun(_status(s, cs), run, {"plant": s, "controller": cs}, prun)

@@ -2,7 +2,8 @@
 
 logs (CSV format), signals (zero-phase derivatives), friction, excitation, base_params,
 experiments (simulated logs on the plant FMU), pipeline (end to end), validation (writing
-task). The command line (``rrr identify``) is in :mod:`rrr_robot.cli.identify`.
+task), jobs (what ``rrr identify`` and ``rrr identify-experiment`` run: one call each). The
+command line is in :mod:`rrr_robot.cli.identify`.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ if TYPE_CHECKING:
     from .base_params import BaseParamResult, estimate_base_params
     from .excitation import ExcitationLimits, FourierTrajectory, design_excitation
     from .friction import curve_points, fit_ekf, fit_ls, fit_nls
+    from .jobs import ExperimentJob, IdentifyJob, run_experiment, run_identify
     from .logs import Log, read_log
     from .pipeline import Identified, Settings, identify, write_robot
 
@@ -28,6 +30,10 @@ _LAZY = {
     "fit_ekf": ".friction",
     "fit_ls": ".friction",
     "fit_nls": ".friction",
+    "ExperimentJob": ".jobs",
+    "IdentifyJob": ".jobs",
+    "run_experiment": ".jobs",
+    "run_identify": ".jobs",
     "Log": ".logs",
     "read_log": ".logs",
     "Identified": ".pipeline",
@@ -53,8 +59,10 @@ def __dir__() -> list[str]:
 __all__ = [
     "BaseParamResult",
     "ExcitationLimits",
+    "ExperimentJob",
     "FourierTrajectory",
     "Identified",
+    "IdentifyJob",
     "Log",
     "Settings",
     "curve_points",
@@ -65,5 +73,7 @@ __all__ = [
     "fit_nls",
     "identify",
     "read_log",
+    "run_experiment",
+    "run_identify",
     "write_robot",
 ]

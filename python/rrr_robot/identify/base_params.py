@@ -79,7 +79,7 @@ def build_regression(lg: Log, prior: Model, method: str = "butter", cutoff: floa
                             f"filtering, need well over {NP}")
     q, qd, qdd, u = sig.q[idx], sig.qd[idx], sig.qdd[idx], sig.u[idx]
     reg = prior.regressor(q, qd, qdd)
-    y = prior.kt * (u - prior.friction(qd))
+    y = prior.torque_from_voltage(qd, u)  # eq 8 inverted by the model (u saturated at u_max)
     keep = (np.abs(qd) >= v_min) & (np.abs(lg.u[idx]) < 0.999 * prior.u_max)
     n_sat = int(np.sum(np.abs(lg.u[idx]) >= 0.999 * prior.u_max))
     if n_sat:

@@ -2,7 +2,9 @@
  * @file rrr_model_vars.h
  * @brief Variable-table rows of the rrr_model parameters, shared by the plant and the controller
  *        so both FMUs name, describe and unit them identically: expanded from librrr's one
- *        parameter table (RRR_MODEL_PARAMS in rrr/rrr_params.h).
+ *        parameter table (RRR_MODEL_PARAMS in rrr/rrr_params.h). The robot's rows live here,
+ *        beside the models that use them (fmu/plant, fmu/controller); fmu/common is the FMI glue
+ *        and knows no robot.
  *
  * RRR_MODEL_VARS(T, M, B) expands to RRR_MV_COUNT rows for the rrr_model at member path M of the
  * model data type T, with value references B, B + 1, ... in the table's order. Rows are fixed
@@ -18,14 +20,6 @@
 
 /** Number of rows (value references B .. B + RRR_MV_COUNT - 1). */
 #define RRR_MV_COUNT RRR_N_PARAMS
-
-/** One row of the table. */
-#define FMU_ROW(VR, TYPE, CAUS, VARIAB, NAME, DESC, UNIT, T, MEMBER)                          \
-    {(VR), TYPE, CAUS, VARIAB, NAME, DESC, UNIT, offsetof(T, MEMBER)}
-
-/** A fixed Real parameter. */
-#define FMU_PARAM(VR, NAME, DESC, UNIT, T, MEMBER)                                            \
-    FMU_ROW(VR, FMU_REAL, FMU_PARAMETER, FMU_FIXED, NAME, DESC, UNIT, T, MEMBER)
 
 /* The valid range as the end of a description. */
 #define RRR_MV_RANGE_RRR_PARAM_ANY ""
