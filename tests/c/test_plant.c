@@ -3,6 +3,7 @@
  * convergence of the fixed-step RK4, determinism and the step-size history in the state, the
  * work per 1 ms step, the friction's tanh against libm, input saturation, and bad input leaving
  * the state untouched. */
+#include <math.h>
 #include <string.h>
 
 #include "rrr/rrr.h"
@@ -561,6 +562,87 @@ static void test_stiffness(void)
     CHECK(strcmp(rrr_status_str(RRR_TOO_STIFF), "RRR_TOO_STIFF") == 0);
 }
 
+/* rrr_plant_rollout: n steps in one call equal n rrr_plant_step calls bit for bit (both methods,
+ * outputs and the final state, in one call or split in two), NULL optional outputs are
+ * skipped, and a bad row stops the rollout with the rows and the state before it intact. */
+static void test_rollout(void)
+{
+    rrr_model m;
+    rrr_model_default(&m);
+    enum { N = 400 };
+    static double u[3 * N], q[3 * N], qd[3 * N], qdd[3 * N];
+    static double q2[3 * N], qd2[3 * N], qdd2[3 * N];
+    for (int k = 0; k < N; ++k) {
+        u[3 * k + 0] = 3.0 * sin(0.01 * k);
+        u[3 * k + 1] = 8.0 * cos(0.013 * k);
+        u[3 * k + 2] = 50.0 * sin(0.02 * k); /* beyond u_max: saturated inside */
+    }
+    const rrr_plant_integrator a = adaptive_default(), f = fixed(2.5e-4);
+    for (int mode = 0; mode < 2; ++mode) {
+        const rrr_plant_integrator *s = mode ? &f : &a;
+        const rrr_plant_state X0 = state(0.2, 0.3, 0.9, 1.0, -0.5, 0.8);
+        rrr_plant_state x = X0, y = X0;
+        rrr_plant_stats total = {0, 0, 0}, st;
+        for (int k = 0; k < N; ++k) {
+            rrr_plant_stats one;
+            CHECK_STATUS(rrr_plant_step(&m, s, &u[3 * k], 1e-3, &x, &qdd[3 * k], &one), RRR_OK);
+            memcpy(&q[3 * k], x.q, sizeof x.q);
+            memcpy(&qd[3 * k], x.qd, sizeof x.qd);
+            total.steps += one.steps;
+            total.rejected += one.rejected;
+            total.evals += one.evals;
+        }
+        size_t done = 0;
+        CHECK_STATUS(rrr_plant_rollout(&m, s, 150, u, 1e-3, &y, q2, qd2, qdd2, &done, &st),
+                     RRR_OK);
+        CHECK(done == 150);
+        CHECK_STATUS(rrr_plant_rollout(&m, s, N - 150, &u[3 * 150], 1e-3, &y, &q2[3 * 150],
+                                       &qd2[3 * 150], &qdd2[3 * 150], &done, NULL),
+                     RRR_OK);
+        CHECK(done == N - 150);
+        CHECK(memcmp(q, q2, sizeof q) == 0 && memcmp(qd, qd2, sizeof qd) == 0);
+        CHECK(memcmp(qdd, qdd2, sizeof qdd) == 0);
+        CHECK(memcmp(&x, &y, sizeof x) == 0);
+        /* in one call, the stats summed; qd and qdd not asked for */
+        y = X0;
+        CHECK_STATUS(rrr_plant_rollout(&m, s, N, u, 1e-3, &y, q2, NULL, NULL, &done, &st),
+                     RRR_OK);
+        CHECK(done == N && memcmp(q, q2, sizeof q) == 0 && memcmp(&x, &y, sizeof x) == 0);
+        CHECK(st.steps == total.steps && st.rejected == total.rejected &&
+              st.evals == total.evals);
+        /* a NaN in row 200: rows 0..199 and the state after step 199 kept, done = 200 */
+        static double ubad[3 * N];
+        memcpy(ubad, u, sizeof u);
+        ubad[3 * 200 + 1] = (double)NAN;
+        memset(q2, 0, sizeof q2);
+        y = X0;
+        CHECK_STATUS(rrr_plant_rollout(&m, s, N, ubad, 1e-3, &y, q2, qd2, NULL, &done, &st),
+                     RRR_BAD_INPUT);
+        CHECK(done == 200 && memcmp(q, q2, 200 * 3 * sizeof(double)) == 0);
+        CHECK(memcmp(y.q, &q[3 * 199], sizeof y.q) == 0 &&
+              memcmp(y.qd, &qd[3 * 199], sizeof y.qd) == 0);
+        CHECK(q2[3 * 200] == 0.0 && st.steps > 0);
+        /* bad arguments: nothing done; n = 0 is a no-op */
+        y = X0;
+        CHECK_STATUS(rrr_plant_rollout(&m, s, N, u, 0.0, &y, q2, NULL, NULL, &done, NULL),
+                     RRR_BAD_INPUT);
+        CHECK(done == 0 && memcmp(&y, &X0, sizeof y) == 0);
+        CHECK_STATUS(rrr_plant_rollout(NULL, s, N, u, 1e-3, &y, q2, NULL, NULL, &done, NULL),
+                     RRR_BAD_INPUT);
+        CHECK_STATUS(rrr_plant_rollout(&m, s, N, NULL, 1e-3, &y, q2, NULL, NULL, &done, NULL),
+                     RRR_BAD_INPUT);
+        CHECK_STATUS(rrr_plant_rollout(&m, s, N, u, 1e-3, &y, NULL, NULL, NULL, &done, NULL),
+                     RRR_BAD_INPUT);
+        CHECK_STATUS(rrr_plant_rollout(&m, s, N, u, 1e-3, NULL, q2, NULL, NULL, &done, NULL),
+                     RRR_BAD_INPUT);
+        CHECK_STATUS(rrr_plant_rollout(&m, NULL, N, u, 1e-3, &y, q2, NULL, NULL, &done, NULL),
+                     RRR_BAD_INPUT);
+        CHECK_STATUS(rrr_plant_rollout(&m, s, 0, NULL, 1e-3, &y, NULL, NULL, NULL, &done, NULL),
+                     RRR_OK);
+        CHECK(done == 0 && memcmp(&y, &X0, sizeof y) == 0);
+    }
+}
+
 int main(void)
 {
     test_stiffness();
@@ -573,5 +655,6 @@ int main(void)
     test_determinism();
     test_equilibrium_and_friction();
     test_bad_input();
+    test_rollout();
     return rrr_test_report("test_plant");
 }

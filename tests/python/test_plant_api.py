@@ -138,3 +138,50 @@ def test_bad_construction_and_restore_are_refused(model) -> None:
     with pytest.raises(rr.RrrError, match="rrr_plant_step"):
         tight.step(U, 0.5)
     assert tight.snapshot() == before
+
+
+@pytest.mark.parametrize("adaptive", [True, False])
+def test_rollout_equals_a_loop_of_steps_and_keeps_the_state_on_a_bad_row(model,
+                                                                         adaptive: bool) -> None:
+    """Plant.rollout (rrr_plant_rollout, in parts of ROLLOUT_PART rows) gives the numbers of a
+    loop of Plant.step bit for bit, across the parts; a non-finite row raises naming it and
+    leaves the plant after the row before it; bad tables and steps are refused before any
+    step."""
+    from rrr_robot.core.plant import ROLLOUT_PART
+
+    integ = rr.PlantIntegrator(adaptive=adaptive, h_int=2.5e-4)
+    n = ROLLOUT_PART + 300  # two C calls
+    k = np.arange(n)[:, None]
+    u = U * np.cos(0.003 * k * np.array([1.0, 1.7, 2.3]))
+    a, b = rr.Plant(model, q0=Q0, integrator=integ), rr.Plant(model, q0=Q0, integrator=integ)
+    rows = []
+    for i in range(n):
+        qdd = a.step(u[i], H)
+        rows.append((a.t, a.q, a.qd, qdd))
+    r = b.rollout(u, H)
+    assert np.array_equal(r.t, [x[0] for x in rows])
+    for j, field in ((1, r.q), (2, r.qd), (3, r.qdd)):
+        assert np.array_equal(field, np.array([x[j] for x in rows]))
+    assert a.snapshot() == b.snapshot() and r.stats.steps >= n and r.stats.evals > n
+    # both continue the same way
+    assert np.array_equal(a.step(U, H), b.rollout(U[None, :], H).qdd[0])
+    # a NaN in row 700: rows before it applied, the plant after row 699, the row named
+    bad = u.copy()
+    bad[700, 2] = np.nan
+    c = rr.Plant(model, q0=Q0, integrator=integ)
+    with pytest.raises(rr.BadInputError, match="at row 700"):
+        c.rollout(bad, H)
+    assert np.array_equal(c.q, rows[699][1]) and c.t == rows[699][0]
+    assert np.array_equal(c.qdd, rows[699][3])
+    # refused before any step: the plant unchanged
+    d = rr.Plant(model, q0=Q0, integrator=integ)
+    before = d.snapshot()
+    for table, h, what in ((U, H, "table of shape"), (np.ones((5, 2)), H, "shape"),
+                           (u[:5], 0.0, "BAD_INPUT"), (u[:5], float("nan"), "BAD_INPUT"),
+                           (u[:5], "1e-3", "h must be a number"),
+                           ([["a", 1, 2]], H, "array of numbers")):
+        with pytest.raises(rr.BadInputError, match=what):
+            d.rollout(table, h)  # type: ignore[arg-type]
+        assert d.snapshot() == before
+    empty = d.rollout(np.empty((0, 3)), H)
+    assert empty.q.shape == (0, 3) and d.snapshot() == before

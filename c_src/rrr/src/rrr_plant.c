@@ -518,6 +518,56 @@ rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s, con
     return rrr_plant_step_prepared(m, s, u, h, x, qdd, stats, &none);
 }
 
+rrr_status rrr_plant_rollout(const rrr_model *m, const rrr_plant_integrator *s, size_t n,
+                             const double u[], double h, rrr_plant_state *x, double q[],
+                             double qd[], double qdd[], size_t *done, rrr_plant_stats *stats)
+{
+    if (done != NULL) {
+        *done = 0;
+    }
+    if (stats != NULL) {
+        memset(stats, 0, sizeof *stats);
+    }
+    if (m == NULL || x == NULL || (n > 0 && (u == NULL || q == NULL))) {
+        return RRR_BAD_INPUT;
+    }
+    rrr_plant_prep prep;
+    memset(&prep, 0, sizeof prep);
+    prep.q[0] = (double)NAN; /* belongs to no state: the first step computes x's */
+    rrr_plant_stats total = {0, 0, 0};
+    for (size_t k = 0; k < n; ++k) {
+        double a[3];
+        rrr_plant_stats one;
+        const rrr_status st = rrr_plant_step_prepared(m, s, &u[3 * k], h, x, a, &one, &prep);
+        if (st != RRR_OK) { /* x is the state after step k - 1; rows < k are written */
+            if (done != NULL) {
+                *done = k;
+            }
+            if (stats != NULL) {
+                *stats = total;
+            }
+            return st;
+        }
+        memcpy(&q[3 * k], x->q, sizeof x->q);
+        if (qd != NULL) {
+            memcpy(&qd[3 * k], x->qd, sizeof x->qd);
+        }
+        if (qdd != NULL) {
+            memcpy(&qdd[3 * k], a, sizeof a);
+        }
+        total.steps += one.steps;
+        total.rejected += one.rejected;
+        total.evals += one.evals;
+    }
+    if (done != NULL) {
+        *done = n;
+    }
+    if (stats != NULL) {
+        *stats = total;
+    }
+    return RRR_OK;
+}
+
 /* ---- stiffness ------------------------------------------------------------------------------ */
 
 /* Grid of (q2, q3) over which the stiffness estimate is maximised. */

@@ -181,6 +181,8 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_ctc_jacobian": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcDerivatives)],
     "rrr_plant_step": [_M, _P(RawPlantIntegrator), _D, ct.c_double, _P(RawPlantState), _D,
                        _P(RawPlantStats)],
+    "rrr_plant_rollout": [_M, _P(RawPlantIntegrator), ct.c_size_t, _D, ct.c_double,
+                          _P(RawPlantState), _D, _D, _D, _P(ct.c_size_t), _P(RawPlantStats)],
     "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
                             ct.c_size_t, ct.c_double, _D, _D, _D, _P(ct.c_size_t)],
     "rrr_sim_closed_loop_part": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),

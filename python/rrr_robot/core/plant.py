@@ -18,9 +18,11 @@ from ._arrays import FloatArray, as_rows, ptr
 from .integrator import PlantIntegrator
 from .model import Model
 
-__all__ = ["Plant", "PlantSnapshot", "PlantStats"]
+__all__ = ["Plant", "PlantSnapshot", "PlantStats", "Rollout"]
 
 _ZERO = (0.0, 0.0, 0.0)
+#: Steps of one C call of :meth:`Plant.rollout` (a few ms): Ctrl-C is handled between two calls.
+ROLLOUT_PART = 4096
 
 
 @dataclass(frozen=True)
@@ -31,6 +33,18 @@ class PlantStats:
     steps: int
     rejected: int
     evals: int
+
+
+@dataclass(frozen=True)
+class Rollout:
+    """The plant's motion along an input table (:meth:`Plant.rollout`): row k is the state
+    after step k, at time ``t[k]``."""
+
+    t: FloatArray          # (n,) s
+    q: FloatArray          # (n, 3) rad
+    qd: FloatArray         # (n, 3) rad/s
+    qdd: FloatArray        # (n, 3) rad/s^2, at the end of each step under its input
+    stats: PlantStats      # the work of the n steps, summed
 
 
 @dataclass(frozen=True)
@@ -88,6 +102,51 @@ class Plant:
         self._t += h
         return qdd
 
+    def rollout(self, u: ArrayLike, h: float) -> Rollout:
+        """Open loop in one call: step k of ``h`` seconds under the input row ``u[k]`` (an
+        (n, 3) table of voltages, V), for every row, in C (``rrr_plant_rollout``): the same
+        numbers as n calls of :meth:`step`, bit for bit, without a Python call per step. The
+        plant ends after the last row. A row the integrator refuses (non-finite, a state it
+        cannot continue) raises, naming the row; the plant is then left after the row before
+        it, as that many :meth:`step` calls would have left it."""
+        rows, batch = as_rows(u, "u")
+        if not batch:
+            raise BadInputError(f"u must be a table of shape (n, 3), got shape {np.shape(u)}")
+        if not isinstance(h, (int, float)) or isinstance(h, bool):
+            raise BadInputError(f"h must be a number, got {type(h).__name__}")
+        h = float(h)
+        n = rows.shape[0]
+        q, qd, qdd = (np.empty((n, 3)) for _ in range(3))
+        times = np.cumsum(np.concatenate(([self._t], np.full(n, h))))[1:]  # as t += h does
+        integ = _lib.RawPlantIntegrator.from_buffer_copy(self._packed)
+        model = ct.byref(self._model.raw)
+        fn = _lib.FUNCS["rrr_plant_rollout"]
+        done, part, total = ct.c_size_t(0), _lib.RawPlantStats(), [0, 0, 0]
+        state = _lib.RawPlantState.from_buffer_copy(self._state)  # self's until a part is done
+        k = 0
+        while k < n:
+            m = min(ROLLOUT_PART, n - k)
+            status = fn(model, ct.byref(integ), m, ptr(rows[k:]), h, ct.byref(state),
+                        ptr(q[k:]), ptr(qd[k:]), ptr(qdd[k:]), ct.byref(done), ct.byref(part))
+            total = [total[0] + part.steps, total[1] + part.rejected, total[2] + part.evals]
+            k += int(done.value)
+            self._commit(state, qdd, times, k, total)
+            if status != 0:
+                _lib.raise_for("rrr_plant_rollout", status,
+                               f"at row {k} (t = {self._t:.6f} s to {self._t + h:.6f} s), "
+                               f"u = {rows[k].tolist()}, h = {h!r}, q = {self.q.tolist()}, "
+                               f"qd = {self.qd.tolist()}")
+        return Rollout(times, q, qd, qdd, self.stats)
+
+    def _commit(self, state: _lib.RawPlantState, qdd: FloatArray, times: FloatArray, k: int,
+                total: list[int]) -> None:
+        """The plant after the first k rows of a rollout."""
+        self._state = _lib.RawPlantState.from_buffer_copy(state)
+        self._stats = _lib.RawPlantStats(*total)
+        if k > 0:
+            self._qdd = qdd[k - 1].copy()
+            self._t = float(times[k - 1])
+
     def accel(self, u: ArrayLike) -> FloatArray:
         """qdd of the present state under the input voltage ``u`` (``rrr_plant_accel``)."""
         return self._k.plant_accel(self._state, u)
@@ -119,7 +178,8 @@ class Plant:
 
     @property
     def stats(self) -> PlantStats:
-        """The work of the last step (zeros before the first)."""
+        """The work of the last step, or of the last rollout's steps summed (zeros before the
+        first)."""
         s = self._stats
         return PlantStats(int(s.steps), int(s.rejected), int(s.evals))
 

@@ -44,6 +44,8 @@
 extern "C" {
 #endif
 
+#include <stddef.h>
+
 #include "rrr_model.h"
 
 /** Default fixed-step substep upper bound, s (used when adaptive is 0). */
@@ -167,6 +169,33 @@ RRR_API rrr_status rrr_plant_stiffness(const rrr_model *m, double *lambda, const
 RRR_API rrr_status rrr_plant_step(const rrr_model *m, const rrr_plant_integrator *s,
                                   const double u[3], double h, rrr_plant_state *x, double qdd[3],
                                   rrr_plant_stats *stats);
+
+/**
+ * @brief Open loop in one call: n consecutive rrr_plant_step calls of h seconds each, step k
+ *        under the input voltage row u[3k .. 3k+2], the state after each step written to row k
+ *        of the outputs. The results are those of the n rrr_plant_step calls, bit for bit (the
+ *        first half of each step's right-hand side is reused from the previous step's end, as
+ *        the plant FMU does); a caller may split a long input table into several calls on the
+ *        same state (a Python caller does, to handle Ctrl-C between them) with the same results.
+ * @param[in]     n     number of steps (0: nothing happens, RRR_OK)
+ * @param[in]     u     n rows of 3 input voltages, V (each saturated to +/- u_max inside)
+ * @param[in]     h     every step's interval, s, > 0 and finite
+ * @param[in,out] x     the state: on return the state after the last step that succeeded
+ * @param[out]    q     n rows of 3: joint positions after each step, rad
+ * @param[out]    qd    if not NULL, n rows of 3: joint velocities after each step, rad/s
+ * @param[out]    qdd   if not NULL, n rows of 3: accelerations at the end of each step under its
+ *                      input (rrr_plant_step's qdd), rad/s^2
+ * @param[out]    done  if not NULL, the number of steps done and rows written (n on RRR_OK,
+ *                      the step that failed otherwise)
+ * @param[out]    stats if not NULL, the work of the steps done, summed
+ * @return RRR_OK; RRR_BAD_INPUT (NULL m, x, or u or q with n > 0); otherwise rrr_plant_step's
+ *         status at step *done, with x, the rows before it and stats as they were after the
+ *         last step that succeeded (nothing is lost).
+ */
+RRR_API rrr_status rrr_plant_rollout(const rrr_model *m, const rrr_plant_integrator *s, size_t n,
+                                     const double u[], double h, rrr_plant_state *x, double q[],
+                                     double qd[], double qdd[], size_t *done,
+                                     rrr_plant_stats *stats);
 
 #ifdef __cplusplus
 }
