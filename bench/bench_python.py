@@ -7,8 +7,11 @@ Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk``
 ``Model.forward_dynamics`` against ``accel``; a batch of 1e5 states of ``Model.inverse_dynamics``
 against the Robotics Toolbox's batch ``rne`` and against librrr's ``rrr_inverse_dynamics`` in a
 plain C loop (bench/batch_floor.c, built with the system C compiler against the package's
-librrr.so: the floor of the batch); and, for the record, one state of ``inverse_dynamics``
-through the ctypes binding the extension replaced.
+librrr.so: the floor of the batch); one state of ``Model.inverse_dynamics`` against MuJoCo's
+``mj_inverse`` and Drake's ``CalcInverseDynamics`` (both on the robot read from our URDF, with the
+rotor inertias as MuJoCo's armature and added as J_m qdd to Drake's result, gravity ours); and,
+for the record, one state of ``inverse_dynamics`` through the ctypes binding the extension
+replaced.
 
 Interleaved: each repeat times a block of ours and a block of the reference on the same inputs
 back to back (the order alternating between repeats), so both see the same machine load; each
@@ -242,6 +245,7 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
             "Model.inverse_dynamics", lambda k: model.inverse_dynamics(bq, bqd, bqdd),
             "librrr in a C loop (bench/batch_floor.c)", c_floor, 1,
             per=nb, agreement=f"bit-identical: {out.tobytes() == batch_ours.tobytes()}"))
+    pairs += engine_pairs(robot_file, rows, tau, per_call, workdir)
     pairs += [
         Pair("tau = R p, one state: the binding before", "Model.inverse_dynamics",
              lambda k: model.inverse_dynamics(*rows[k % n]), "ctypes (_ctypes_kernels)",
@@ -253,9 +257,80 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
         "binding": f"{model_module.BINDING} (numpy in place: {_ext.NUMPY_IN_PLACE}, "
                    f"numpy C API: {_ext.NUMPY_C_API}, GIL released from {_ext.NOGIL_ROWS} rows)",
         "versions": f"Python {platform.python_version()}, numpy {np.__version__}, pin "
-                    f"{pin.__version__}, roboticstoolbox-python {rtb.__version__}",
+                    f"{pin.__version__}, roboticstoolbox-python {rtb.__version__}, mujoco "
+                    f"{mujoco_version()}, drake {drake_version()}",
     }
     return pairs, info
+
+
+def mujoco_version() -> str:
+    import mujoco
+
+    return str(mujoco.__version__)
+
+
+def drake_version() -> str:
+    from importlib.metadata import version
+
+    return version("drake")
+
+
+def engine_pairs(robot_file: Any, rows: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+                 tau: np.ndarray, calls: int, workdir: Path) -> list[Pair]:
+    """One state of inverse dynamics against MuJoCo's mj_inverse and Drake's
+    CalcInverseDynamics, on the robot of our URDF; their agreement with ours first."""
+    import mujoco
+    import rrr_robot as rr
+    from pydrake.multibody.parsing import Parser
+    from pydrake.multibody.plant import MultibodyPlant
+    from pydrake.multibody.tree import MultibodyForces
+
+    model = robot_file.model
+    n = len(rows)
+    urdf = rr.write_urdf(workdir / "robot.urdf", robot_file, continuous=True)
+    rotor = np.asarray(robot_file.rotor_inertia, dtype=float)
+    mj = mujoco.MjModel.from_xml_path(str(urdf))
+    mj.dof_armature[:] = rotor
+    mj.opt.gravity[:] = (0.0, 0.0, -model.g)
+    md = mujoco.MjData(mj)
+
+    def mj_inverse(k: int) -> np.ndarray:
+        q, qd, qdd = rows[k % n]
+        md.qpos[:], md.qvel[:], md.qacc[:] = q, qd, qdd
+        mujoco.mj_inverse(mj, md)
+        return md.qfrc_inverse.copy()
+
+    plant = MultibodyPlant(0.0)
+    Parser(plant).AddModels(str(urdf))
+    plant.WeldFrames(plant.world_frame(), plant.GetFrameByName("base_link"))
+    plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, -model.g])
+    plant.Finalize()
+    ctx = plant.CreateDefaultContext()
+    forces = MultibodyForces(plant)
+
+    def drake_inverse(k: int) -> np.ndarray:
+        q, qd, qdd = rows[k % n]
+        plant.SetPositions(ctx, q)
+        plant.SetVelocities(ctx, qd)
+        forces.SetZero()
+        plant.CalcForceElementsContribution(ctx, forces)  # gravity
+        return plant.CalcInverseDynamics(ctx, qdd, forces) + rotor * qdd
+
+    mj_tau = np.array([mj_inverse(k) for k in range(n)])
+    drake_tau = np.array([drake_inverse(k) for k in range(n)])
+    for name, ref in (("MuJoCo", mj_tau), ("Drake", drake_tau)):
+        err = float(np.abs(ref - tau).max())
+        if not err <= 1e-9 * max(1.0, float(np.abs(tau).max())):
+            sys.exit(f"bench_python: {name}'s inverse dynamics differ from ours by {err:.3g} N m")
+    return [
+        Pair("tau = R p, one state", "Model.inverse_dynamics",
+             lambda k: model.inverse_dynamics(*rows[k % n]), "MuJoCo mj_inverse", mj_inverse,
+             calls, agreement=f"{np.abs(tau - mj_tau).max():.1e}"),
+        Pair("tau = R p, one state", "Model.inverse_dynamics",
+             lambda k: model.inverse_dynamics(*rows[k % n]), "Drake CalcInverseDynamics",
+             drake_inverse, max(calls // 10, 10),
+             agreement=f"{np.abs(tau - drake_tau).max():.1e}"),
+    ]
 
 
 def cpu_model() -> str:
