@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..hil.channel import DEFAULT_CHANNEL
 from ._args import (
     add_verbosity_arguments,
     command_parser,
@@ -331,8 +332,8 @@ def add_bus_arguments(p: argparse.ArgumentParser) -> None:
                    help="socketcand server of a node started elsewhere (default: start the "
                    "other node here; with --connect it keeps its own logs and no summary.json "
                    "is written)")
-    g.add_argument("--channel", default="bench0",
-                   help="socketcand bus name, or the SocketCAN interface (default bench0)")
+    g.add_argument("--channel", default=DEFAULT_CHANNEL,
+                   help="socketcand bus name, or the SocketCAN interface (default %(default)s)")
 
 
 def add_node_bus_arguments(p: argparse.ArgumentParser) -> None:

@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import BadInputError
+from . import fmu_vars as fv
 from ._arrays import FloatArray, as_rows
 from .control import CtcGains
 from .model import Model
@@ -27,12 +28,12 @@ if TYPE_CHECKING:
 __all__ = ["LinearSystem", "linearize"]
 
 
-def _joint_names(base: str) -> tuple[str, str, str]:
-    return (f"{base}[1]", f"{base}[2]", f"{base}[3]")
+def _joint_names(base: str) -> tuple[str, ...]:
+    return tuple(fv.joint_names(base))
 
 
-STATES = (*_joint_names("q"), *_joint_names("qd"))
-TIP = ("tip.x", "tip.y", "tip.z")
+STATES = (*fv.names("plant", "q"), *fv.names("plant", "qd"))
+TIP = tuple(fv.names("plant", "tip"))
 
 
 @dataclass(frozen=True)

@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import BadInputError
+from . import fmu_vars
 from ._arrays import FloatArray
 from .inertial import dh_links, dh_transform
 from .mcap_bulk import Block, Stream, write_container
@@ -261,11 +262,11 @@ def _groups(columns: Mapping[str, ArrayLike], n: int) -> dict[str, FloatArray]:
     for key in columns:
         if key.endswith("[1]"):
             name = key[:-3]
-            parts = [f"{name}[{i}]" for i in (1, 2, 3)]
+            parts = [f"{name}[{i}]" for i in fmu_vars.JOINTS]
             if all(p in columns for p in parts):
                 out[name] = np.stack([_column(columns, p, n) for p in parts], axis=1)
     for name in ("x_ref", "tip"):
-        parts = [f"{name}.{axis}" for axis in "xyz"]
+        parts = fmu_vars.axis_names(name)
         if all(p in columns for p in parts):
             out[name] = np.stack([_column(columns, p, n) for p in parts], axis=1)
     return out

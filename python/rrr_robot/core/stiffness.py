@@ -52,7 +52,7 @@ def _message(raw: _lib.RawModel, name: str, value: float,
 
     if name.startswith("w["):
         i, k = (int(x) - 1 for x in name[2:-1].split(","))
-        what = (f"{show(f'f[{i + 1},{k + 1}]', raw.f[i][k])} and "
+        what = (f"{show('f' + name[1:], raw.f[i][k])} and "  # w[i,k]'s f[i,k]
                 f"{show(name, raw.w[i][k])} make")
     else:
         what = f"{show(name, raw.b[int(name[2:-1]) - 1])} makes"

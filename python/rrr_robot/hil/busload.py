@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import BadInputError
+from .protocol import PERIOD
 
 __all__ = [
     "MAX_DATA_BITRATE",
@@ -245,7 +246,7 @@ def schedule_load(db: Any, bitrate: int = MAX_NOMINAL_BITRATE, data_bitrate: int
 
 
 def measured_load(frames: Sequence[tuple[int, bytes, bool]], periods: int,
-                  bitrate: int = MAX_NOMINAL_BITRATE, period_s: float = 1e-3,
+                  bitrate: int = MAX_NOMINAL_BITRATE, period_s: float = PERIOD,
                   ) -> dict[str, float]:
     """What a frame log puts on a classical bus: (identifier, data, extended) of every frame
     once; ``periods`` control periods of ``period_s``. Returns frames and exactly stuffed bits per

@@ -24,11 +24,13 @@ from typing import Any
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
 from ..core.outputs import STAGING_PREFIX, atomic_open, atomic_write_text
 from ..core.param_names import param_index
 from ..sim.fmus import fmu_path
+from .channel import DEFAULT_CHANNEL
 from .protocol import NMT_BOOT, PERIOD, HilError
 
 log = logging.getLogger(__name__)
@@ -50,7 +52,7 @@ __all__ = [
 
 #: HeartbeatPlant's identifier (0x700 + node id 2, rrr_bench.dbc).
 _HEARTBEAT_PLANT = 0x702
-_REF_HEADER = ["t"] + [f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref") for i in (1, 2, 3)]
+_REF_HEADER = ["t"] + [f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref") for i in fv.JOINTS]
 
 
 def node_executable(which: str) -> Path:
@@ -324,7 +326,7 @@ def controller_node_args(values: Mapping[str, float | bool]) -> list[str]:
     parameter table) -> --set; any other name raises HilError."""
     args: list[str] = []
     for gain in ("kp", "kd"):
-        names = [f"{gain}[{i}]" for i in (1, 2, 3)]
+        names = fv.names("controller", gain)
         given = [n for n in names if n in values]
         if given and len(given) != 3:
             raise ValueError(f"{gain}: give all three of {names} or none")
@@ -337,7 +339,7 @@ def controller_node_args(values: Mapping[str, float | bool]) -> list[str]:
 
 
 def open_bus(interface: str = "socketcand", *, host: str = "127.0.0.1", port: int = 29536,
-             channel: str = "bench0") -> Any:
+             channel: str = DEFAULT_CHANNEL) -> Any:
     """A python-can bus: ``socketcand`` (TCP, to the C node) or ``socketcan`` (channel = vcan0)."""
     import can
 

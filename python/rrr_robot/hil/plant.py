@@ -29,9 +29,10 @@ from typing import Any
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.outputs import atomic_path
-from ..sim.cosim import PLANT_IN
+from ..sim.cosim import PLANT_IN, initial_state_values
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from . import _hil_lib as hl
@@ -55,10 +56,11 @@ STOP_CMD_ID = 0x090
 HEARTBEAT_PERIODS = 100
 #: Columns of the plant log (the C plant node's --log): row 0 is the initial state, row k + 1
 #: the state after period k with the voltage applied during period k.
-LOG_HEADER = ["k", "t", "q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]", "u[1]", "u[2]",
-              "u[3]", "zero", "faults", "qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"]
+#: The plant FMU's state outputs (q, qd) sent in the JointState frames.
+STATE_OUTPUTS = fv.names("plant", "q") + fv.names("plant", "qd")
 #: The FMU outputs logged beside the state (the last six columns).
-LOGGED_OUTPUTS = ["qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"]
+LOGGED_OUTPUTS = fv.names("plant", "qdd") + fv.names("plant", "tip")
+LOG_HEADER = ["k", "t", *STATE_OUTPUTS, *PLANT_IN, "zero", "faults", *LOGGED_OUTPUTS]
 
 #: Fault injection between the bus and the plant: (period k, frame) -> the frame to deliver
 #: (possibly modified), or None to drop it.
@@ -118,8 +120,7 @@ class PythonPlant:
                  fmu: Path | None = None, progress: Callable[[int, int], None] | None = None,
                  periods: int = 0) -> None:
         self.bus = bus
-        self.values = {f"q0[{i + 1}]": float(q0[i]) for i in range(3)}
-        self.values |= {f"qd0[{i + 1}]": float(qd0[i]) for i in range(3)} | dict(values)
+        self.values = initial_state_values(q0, qd0) | dict(values)
         self.sup = hl.Supervisor(max_missed, max_delta_counter)
         self.timeout, self.start_timeout = timeout, start_timeout
         self.rx_filter = rx_filter
@@ -252,7 +253,7 @@ class PythonPlant:
         with FmuSlave(self.fmu_path, "plant") as slave:
             slave.initialize(0.0, self.values)
             p_in = slave.real_block(PLANT_IN)
-            p_out = slave.real_block([f"{s}[{i}]" for s in ("q", "qd") for i in (1, 2, 3)])
+            p_out = slave.real_block(STATE_OUTPUTS)
             y_out = slave.real_block(LOGGED_OUTPUTS)
             try:
                 rc = self._lockstep(slave, p_in, p_out, y_out)

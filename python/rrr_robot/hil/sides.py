@@ -30,6 +30,7 @@ from .bench import (
     run_fmu_controller,
     write_controller_log,
 )
+from .channel import DEFAULT_CHANNEL
 from .nodes import (
     controller_node_args,
     export_reference,
@@ -60,7 +61,7 @@ class Connection:
 
     interface: str = "socketcand"
     connect: str | None = None
-    channel: str = "bench0"
+    channel: str = DEFAULT_CHANNEL
 
     @property
     def external(self) -> bool:

@@ -23,11 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.param_names import model_fmu_values
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
+from ..sim.cosim import initial_state_values
 from ..sim.fmu_slave import pooled_slave
 from ..sim.fmus import fmu_path
 from .excitation import FourierTrajectory
@@ -35,7 +37,7 @@ from .logs import Log
 
 log = logging.getLogger(__name__)
 
-J = (1, 2, 3)
+J = fv.JOINTS
 #: Samples of one simulated experiment: 1,000,000 (1000 s at 1 ms; the default friction sweep has
 #: about 330,000, one 10 s excitation period 10,000). The loop steps the FMU from Python.
 MAX_EXPERIMENT_SAMPLES = 1_000_000
@@ -87,14 +89,13 @@ def simulate(model: Model, t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     noise_u = sensors.sigma_u * rng.standard_normal((n, 3))
     quantum = 2 * np.pi / sensors.counts_per_rev if sensors.counts_per_rev else 0.0
     kp, kd = np.asarray(gains.kp), np.asarray(gains.kd)
-    values = model_fmu_values(model) | {f"q0[{i}]": float(q_ref[0, i - 1]) for i in J}
-    values |= {f"qd0[{i}]": float(qd_ref[0, i - 1]) for i in J}
+    values = model_fmu_values(model) | initial_state_values(q_ref[0], qd_ref[0])
     rec = np.empty((n, 12))
     with pooled_slave(fmu_path("plant"), "identification plant") as plant:
         plant.initialize(float(t[0]), values)
-        state = plant.real_block([f"{s}[{i}]" for s in ("q", "qd") for i in J])
-        acc = plant.real_block([f"qdd[{i}]" for i in J])
-        inp = plant.real_block([f"u[{i}]" for i in J])
+        state = plant.real_block(fv.names("plant", "q") + fv.names("plant", "qd"))
+        acc = plant.real_block(fv.names("plant", "qdd"))
+        inp = plant.real_block(fv.names("plant", "u"))
         for k in range(n):
             plant.get_block(state)
             q_true, qd_true = state.values[:3], state.values[3:]

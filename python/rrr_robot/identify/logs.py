@@ -34,15 +34,16 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.tables import write_csv
 from ..errors import BadInputError
 
 log = logging.getLogger(__name__)
 
-J = (1, 2, 3)
-REQUIRED = ("t", *(f"q[{i}]" for i in J), *(f"u[{i}]" for i in J))
-OPTIONAL = (*(f"qd[{i}]" for i in J), *(f"qdd[{i}]" for i in J), "joint")
+J = fv.JOINTS
+REQUIRED = ("t", *fv.names("plant", "q"), *fv.names("plant", "u"))
+OPTIONAL = (*fv.names("plant", "qd"), *fv.names("plant", "qdd"), "joint")
 MIN_SAMPLES = 200
 #: Most data rows of a log, bytes of a log file, and characters of one line.
 MAX_LOG_ROWS = 1_000_000
@@ -85,7 +86,7 @@ class Log:
         for name in ("q", "u", "qd", "qdd"):
             arr = getattr(self, name)
             if arr is not None:
-                cols |= {f"{name}[{i}]": arr[:, i - 1] for i in J}
+                cols |= {n: arr[:, k] for k, n in enumerate(fv.names("plant", name))}
         if self.joint is not None:
             cols["joint"] = self.joint.astype(float)
         write_csv(path, cols, comment)  # complete or not at all; every value exact
@@ -196,10 +197,10 @@ def read_log(path: str | Path, *, friction: bool = False) -> Log:
     col = {n: data[:, k] for k, n in enumerate(keep)}
 
     def stack(s: str) -> FloatArray:
-        return np.column_stack([col[f"{s}[{i}]"] for i in J])
+        return np.column_stack([col[n] for n in fv.names("plant", s)])
 
     def optional(s: str) -> FloatArray | None:
-        return stack(s) if all(f"{s}[{i}]" in col for i in J) else None
+        return stack(s) if all(n in col for n in fv.names("plant", s)) else None
 
     joint = col["joint"].astype(int) if "joint" in col else None
     return validate(Log(col["t"], stack("q"), stack("u"), optional("qd"), optional("qdd"), joint,

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core.model import Model
 from ..core.outputs import atomic_path
 from ..core.param_names import group_names
@@ -56,7 +57,8 @@ def check_voltages(lg: Log, u_max: float) -> None:
     bad = np.argwhere(np.abs(lg.u) > u_max * (1.0 + 1e-9))
     if bad.size:
         row, col = (int(v) for v in bad[0])
-        raise BadInputError(f"{lg.source}: row {row + 1}: u[{col + 1}] = {lg.u[row, col]:.6g} V "
+        raise BadInputError(f"{lg.source}: row {row + 1}: {fv.names('plant', 'u')[col]} = "
+                            f"{lg.u[row, col]:.6g} V "
                             f"is outside the voltage range +/- {u_max:g} V of the robot "
                             f"({bad.shape[0]} such value(s))")
 
@@ -99,7 +101,7 @@ def identify_friction(lg: Log, prior: Model, settings: Settings = Settings(),
     """One fit per joint (eq 9) from a sweep log; ``progress(joints done, 3)``."""
     method = "log" if settings.derivatives == "log" else "butter"
     fits = []
-    for j in (1, 2, 3):
+    for j in fv.JOINTS:
         pts = curve_points(lg, j, prior, settings.friction_cutoff, method)
         fit = fit_nls(pts) if settings.friction_method == "nls" else fit_ls(pts, prior.w[j - 1])
         log.info("friction joint %d (%s): f %s, w %s, b %.5g; residual rms %.2e V", j,

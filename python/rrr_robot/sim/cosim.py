@@ -10,7 +10,7 @@ from __future__ import annotations
 import ctypes as ct
 import logging
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from fmpy.fmi1 import FMICallException
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.robot_file import DEFAULT_SAMPLE_TIME
 from ..core.tables import write_table
@@ -29,11 +30,15 @@ log = logging.getLogger(__name__)
 
 __all__ = ["CosimOptions", "CosimResult", "run_cosim"]
 
-J = (1, 2, 3)
-CTRL_IN = [f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref", "q", "qd") for i in J]
-CTRL_OUT = [f"{s}[{i}]" for s in ("u", "u_n", "u_c") for i in J]
-PLANT_IN = [f"u[{i}]" for i in J]
-PLANT_OUT = [f"{s}[{i}]" for s in ("q", "qd", "qdd") for i in J] + ["tip.x", "tip.y", "tip.z"]
+#: The controller's inputs the master sets, its outputs, the plant's input and outputs it reads.
+CTRL_IN = [n for s in ("q_ref", "qd_ref", "qdd_ref", "q", "qd") for n in fv.names("controller", s)]
+CTRL_OUT = [n for s in ("u", "u_n", "u_c") for n in fv.names("controller", s)]
+PLANT_IN = fv.names("plant", "u")
+PLANT_OUT = [n for s in ("q", "qd", "qdd", "tip") for n in fv.names("plant", s)]
+#: Which FMU's variables name each recorded signal (CosimResult.columns).
+_COLUMN_FMU = {"q_ref": "controller", "qd_ref": "controller", "q": "plant", "qd": "plant",
+               "qdd": "plant", "u": "controller", "u_n": "controller", "u_c": "controller",
+               "x_ref": "reference", "tip": "plant"}
 
 
 @dataclass(frozen=True)
@@ -82,14 +87,9 @@ class CosimResult:
         ``q_ref[i]``, ``qd_ref[i]``, ``q[i]``, ``qd[i]``, ``qdd[i]``, ``u[i]``, ``u_n[i]``,
         ``u_c[i]`` (i = 1..3), ``x_ref.x`` ... ``tip.z`` (the FMU variables' names)."""
         cols: dict[str, FloatArray] = {"t": self.t}
-        for name in ("q_ref", "qd_ref", "q", "qd", "qdd", "u", "u_n", "u_c"):
+        for name, fmu in _COLUMN_FMU.items():
             arr = getattr(self, name)
-            for i in range(3):
-                cols[f"{name}[{i + 1}]"] = arr[:, i]
-        for name in ("x_ref", "tip"):
-            arr = getattr(self, name)
-            for i, axis in enumerate("xyz"):
-                cols[f"{name}.{axis}"] = arr[:, i]
+            cols |= {col: arr[:, i] for i, col in enumerate(fv.names(fmu, name))}
         return cols
 
     def write(self, path: Path, fmt: str = "csv") -> None:
@@ -100,6 +100,13 @@ class CosimResult:
     def to_csv(self, path: Path) -> None:
         """Write every signal as CSV (:meth:`write`)."""
         self.write(path, "csv")
+
+
+def initial_state_values(q0: Sequence[float] | FloatArray, qd0: Sequence[float] | FloatArray,
+                         ) -> dict[str, float | bool]:
+    """The plant FMU's start values of the initial state: q0[i] and qd0[i] from (3,) arrays."""
+    return {**{n: float(v) for n, v in zip(fv.names("plant", "q0"), q0, strict=True)},
+            **{n: float(v) for n, v in zip(fv.names("plant", "qd0"), qd0, strict=True)}}
 
 
 def _check_reference(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
@@ -138,8 +145,7 @@ def run_cosim(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Flo
     """
     _check_reference(t, q_ref, qd_ref, qdd_ref, options.step)
     n = t.shape[0]
-    plant_values = {f"q0[{i}]": float(q_ref[0, i - 1]) for i in J}
-    plant_values |= {f"qd0[{i}]": float(qd_ref[0, i - 1]) for i in J}
+    plant_values = initial_state_values(q_ref[0], qd_ref[0])
     plant_values |= dict(options.plant_values)
     ctrl_fmu = options.controller_fmu or fmu_path("controller", options.fmi_version)
     plant_fmu = options.plant_fmu or fmu_path("plant", options.fmi_version)

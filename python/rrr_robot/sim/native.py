@@ -19,17 +19,17 @@ from typing import Any
 import numpy as np
 
 from ..core import _lib
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray, ptr
 from ..core.control import CtcGains
 from ..core.integrator import PlantIntegrator
 from ..core.param_names import param_index, set_values
 from ..core.stiffness import stiffness
 from ..errors import BadInputError
-from .cosim import CosimOptions, CosimResult, _check_reference
+from .cosim import CosimOptions, CosimResult, _check_reference, initial_state_values
 
 __all__ = ["simulate"]
 
-J = (1, 2, 3)
 _INTEGRATOR = ("adaptive", "rtol", "atol", "h_int")
 
 
@@ -56,12 +56,12 @@ def _model(changes: Mapping[str, float]) -> _lib.RawModel:
 
 
 def _vector(other: Mapping[str, float | bool], name: str, default: float = 0.0) -> FloatArray:
-    return np.array([float(other.get(f"{name}[{i}]", default)) for i in J])
+    return np.array([float(other.get(n, default)) for n in fv.names("plant", name)])
 
 
 def _plant(values: Mapping[str, float | bool],
            ) -> tuple[_lib.RawModel, _lib.RawPlantIntegrator, FloatArray, FloatArray]:
-    extra = {f"{v}[{i}]" for v in ("q0", "qd0") for i in J} | set(_INTEGRATOR)
+    extra = {n for v in ("q0", "qd0") for n in fv.names("plant", v)} | set(_INTEGRATOR)
     model, other = _split(values, extra, "plant")
     settings: dict[str, float | bool] = {
         name: other[name] for name in ("rtol", "atol", "h_int") if name in other}
@@ -73,11 +73,13 @@ def _plant(values: Mapping[str, float | bool],
 
 
 def _controller(values: Mapping[str, float | bool]) -> tuple[_lib.RawModel, _lib.RawCtcGains]:
-    extra = {f"{g}[{i}]" for g in ("kp", "kd") for i in J} | {"feedforward"}
+    extra = {n for g in ("kp", "kd") for n in fv.names("controller", g)} | {"feedforward"}
     model, other = _split(values, extra, "controller")
     default = CtcGains.default()
-    kp = [float(other.get(f"kp[{i}]", default.kp[i - 1])) for i in J]
-    kd = [float(other.get(f"kd[{i}]", default.kd[i - 1])) for i in J]
+    kp = [float(other.get(n, d)) for n, d in zip(fv.names("controller", "kp"), default.kp,
+                                                 strict=True)]
+    kd = [float(other.get(n, d)) for n, d in zip(fv.names("controller", "kd"), default.kd,
+                                                 strict=True)]
     gains = CtcGains(kp=(kp[0], kp[1], kp[2]), kd=(kd[0], kd[1], kd[2]),
                      feedforward=bool(other.get("feedforward", default.feedforward)))
     return _model(model), _lib.RawCtcGains.from_buffer_copy(gains.packed)
@@ -132,8 +134,7 @@ def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Floa
         raise BadInputError("the native engine runs librrr, not FMU files: leave plant_fmu and "
                             "controller_fmu unset, or run the FMUs (run_cosim)")
     n = t.shape[0]
-    plant_values: dict[str, float | bool] = {f"q0[{i}]": float(q_ref[0, i - 1]) for i in J}
-    plant_values |= {f"qd0[{i}]": float(qd_ref[0, i - 1]) for i in J}
+    plant_values = initial_state_values(q_ref[0], qd_ref[0])
     plant_values |= dict(options.plant_values)
     plant, integ, q0, qd0 = _plant(plant_values)
     ctrl, gains = _controller(options.controller_values)

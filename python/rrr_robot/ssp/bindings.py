@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from ..core import fmu_vars as fv
 from ..core.checked import Field, Flag, Invalid, Number, show
 from ..core.integrator import PlantIntegrator
 from ..core.model import Model
@@ -32,16 +33,16 @@ from ..errors import BadInputError, ModelError
 
 __all__ = ["MAX_LEAD", "check_bindings"]
 
-_J = (1, 2, 3)
 #: The controller's ``lead`` and the reference FMU's ``lookahead``: at most 1 s (the FMUs' bound).
 MAX_LEAD = 1.0
 _LEAD = Number(lo=0.0, hi=MAX_LEAD)
 _STATE = Number(lo=-MAX_MAGNITUDE, hi=MAX_MAGNITUDE)
 #: The checks of the components' parameters that are not model parameters.
 FIELDS: dict[str, dict[str, Field]] = {
-    "plant": {**{f"{s}[{i}]": _STATE for s in ("q0", "qd0") for i in _J},
+    "plant": {**dict.fromkeys(fv.names("plant", "q0") + fv.names("plant", "qd0"), _STATE),
               "adaptive": Flag(), "rtol": Number(), "atol": Number(), "h_int": Number()},
-    "controller": {**{f"{g}[{i}]": GAIN for g in ("kp", "kd") for i in _J},
+    "controller": {**dict.fromkeys(fv.names("controller", "kp") + fv.names("controller", "kd"),
+                                   GAIN),
                    "feedforward": Flag(), "lead": _LEAD},
     "reference": {"lookahead": _LEAD},
 }

@@ -37,11 +37,13 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
+from ..core import fmu_vars as fv
 from ..core.archives import CheckedZip
 from ..core.model import DEFAULT_ROBOT_TOML
 from ..core.outputs import atomic_path, check_folder
 from ..core.param_names import model_fmu_values
 from ..errors import BadInputError
+from ..sim.cosim import initial_state_values
 from ..sim.fmus import fmu_path
 from ..writing.job import WritingJob, controller_fmu_values, prepare
 from .ssd import Component, Connection, System, write_ssd
@@ -51,21 +53,21 @@ log = logging.getLogger(__name__)
 
 __all__ = ["COMPONENTS", "SspJob", "export_ssp"]
 
-_J = (1, 2, 3)
+
+def _ports(fmu: str, causality: str) -> dict[str, str]:
+    """The ``causality`` variables of ``fmu`` and their units, in model-description order."""
+    return {v.name: v.unit for v in fv.variables(fmu) if v.causality == causality}
+
+
 #: Component name -> FMU file in the archive's resources/.
 COMPONENTS = {"reference": "rrr_reference.fmu", "controller": "rrr_controller.fmu",
               "plant": "rrr_plant.fmu"}
-REF_OUT = {**{f"{s}[{i}]": u for s, u in (("q_ref", "rad"), ("qd_ref", "rad/s"),
-                                          ("qdd_ref", "rad/s2")) for i in _J},
-           **{f"x_ref.{a}": "m" for a in "xyz"}}
-CTRL_IN = {**{f"{s}[{i}]": u for s, u in (("q_ref", "rad"), ("qd_ref", "rad/s"),
-                                          ("qdd_ref", "rad/s2"), ("q", "rad"),
-                                          ("qd", "rad/s"), ("qdd", "rad/s2")) for i in _J}}
-CTRL_OUT = {f"{s}[{i}]": "V" for s in ("u", "u_n", "u_c") for i in _J}
-PLANT_IN = {f"u[{i}]": "V" for i in _J}
-PLANT_OUT = {**{f"{s}[{i}]": u for s, u in (("q", "rad"), ("qd", "rad/s"), ("qdd", "rad/s2"))
-                for i in _J},
-             **{f"tip.{a}": "m" for a in "xyz"}}
+#: The components' connectors: name -> unit (the FMUs' inputs and outputs).
+REF_OUT = _ports("reference", "output")
+CTRL_IN = _ports("controller", "input")
+CTRL_OUT = _ports("controller", "output")
+PLANT_IN = _ports("plant", "input")
+PLANT_OUT = _ports("plant", "output")
 #: Most steps of look-ahead (the reference FMU allows up to 1 s).
 MAX_LOOKAHEAD_STEPS = 10
 
@@ -89,9 +91,9 @@ def connections() -> list[Connection]:
     controller u -> plant u."""
     out = [Connection("reference", n, "controller", n)
            for n in REF_OUT if not n.startswith("x_ref")]
-    out += [Connection("plant", f"{s}[{i}]", "controller", f"{s}[{i}]")
-            for s in ("q", "qd", "qdd") for i in _J]
-    out += [Connection("controller", f"u[{i}]", "plant", f"u[{i}]") for i in _J]
+    out += [Connection("plant", n, "controller", n)
+            for s in ("q", "qd", "qdd") for n in fv.names("plant", s)]
+    out += [Connection("controller", n, "plant", n) for n in fv.names("plant", "u")]
     return out
 
 
@@ -171,8 +173,7 @@ def export_ssp(job: SspJob) -> dict[str, Any]:
     model, robot, (scn,), ref = prepared
     fmus = {name: fmu_path(name, 2) for name in ("controller", "plant", "reference")}
     step = float(ref.t[1] - ref.t[0])
-    plant_values: dict[str, float | bool] = {f"q0[{i}]": float(ref.q[0, i - 1]) for i in _J}
-    plant_values |= {f"qd0[{i}]": float(ref.qd[0, i - 1]) for i in _J}
+    plant_values = initial_state_values(ref.q[0], ref.qd[0])
     plant_values |= model_fmu_values(model)
     lookahead = job.lookahead_steps * step
     ctrl_values = controller_fmu_values(scn, model, robot.require_control())

@@ -47,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.archives import scratch_folder
 from ..core.outputs import ResultSet, check_folder, strict_json, to_strict_json_value
@@ -103,7 +104,8 @@ def _figures(job: SspRun, arch: SspArchive, res: CosimResult, folder: Path) -> N
                                                    figures=True))
     table = arch.table
     if (ref.t.size != table["t"].size or
-            not np.allclose(ref.q, np.column_stack([table[f"q_ref[{i}]"] for i in (1, 2, 3)]),
+            not np.allclose(ref.q, np.column_stack([table[n]
+                                                    for n in fv.names("reference", "q_ref")]),
                             rtol=0.0, atol=1e-9)):
         raise BadInputError(f"the writing reference rebuilt from {robot} is not the table of "
                             f"{arch.path}: give the robot file it was written from with --robot "
@@ -243,19 +245,17 @@ def _result(arch: SspArchive, sig: Signals) -> CosimResult:
     ref = reference_rows(arch.table, sig.t, arch.step, str(arch.path))
     p, c = sig.values["plant"], sig.values["controller"]
 
-    def stack(d: dict[str, FloatArray], names: list[str]) -> FloatArray:
-        return np.column_stack([d[n] for n in names])
+    def stack(d: dict[str, FloatArray], fmu: str, vector: str) -> FloatArray:
+        return np.column_stack([d[n] for n in fv.names(fmu, vector)])
 
-    j = (1, 2, 3)
     return CosimResult(
         t=sig.t,
-        q_ref=stack(ref, [f"q_ref[{i}]" for i in j]),
-        qd_ref=stack(ref, [f"qd_ref[{i}]" for i in j]),
-        x_ref=stack(ref, ["x_ref.x", "x_ref.y", "x_ref.z"]),
-        q=stack(p, [f"q[{i}]" for i in j]), qd=stack(p, [f"qd[{i}]" for i in j]),
-        qdd=stack(p, [f"qdd[{i}]" for i in j]), tip=stack(p, ["tip.x", "tip.y", "tip.z"]),
-        u=stack(c, [f"u[{i}]" for i in j]), u_n=stack(c, [f"u_n[{i}]" for i in j]),
-        u_c=stack(c, [f"u_c[{i}]" for i in j]), wall_time=sig.wall_time,
+        q_ref=stack(ref, "reference", "q_ref"), qd_ref=stack(ref, "reference", "qd_ref"),
+        x_ref=stack(ref, "reference", "x_ref"),
+        q=stack(p, "plant", "q"), qd=stack(p, "plant", "qd"), qdd=stack(p, "plant", "qdd"),
+        tip=stack(p, "plant", "tip"),
+        u=stack(c, "controller", "u"), u_n=stack(c, "controller", "u_n"),
+        u_c=stack(c, "controller", "u_c"), wall_time=sig.wall_time,
     )
 
 

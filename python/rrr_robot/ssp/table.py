@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.tables import write_csv
 from ..writing.trajectory import Reference
@@ -30,13 +31,12 @@ __all__ = [
 #: The table's file name in the FMU's resources/ folder (REF_TABLE_FILE in fmu/reference).
 TABLE_FILE = "reference.csv"
 
-_J = (1, 2, 3)
-_AXES = ("x", "y", "z")
-#: The header of the table, in its order (the FMU checks it: fmu/reference/model.c).
+#: The header of the table, in its order (the FMU checks it: fmu/reference/model.c): t, the
+#: reference FMU's joint outputs, its tip output x_ref and the tip's velocity and acceleration.
 TABLE_COLUMNS = (
     "t",
-    *(f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref") for i in _J),
-    *(f"{s}.{a}" for s in ("x_ref", "xd_ref", "xdd_ref") for a in _AXES),
+    *(n for s in ("q_ref", "qd_ref", "qdd_ref") for n in fv.names("reference", s)),
+    *fv.names("reference", "x_ref"), *fv.axis_names("xd_ref"), *fv.axis_names("xdd_ref"),
 )
 
 

@@ -40,6 +40,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core.robot import RobotFile, robot_file_from_dict
 from ..writing.job import metrics, run_engine, scenario_options, scenario_summary, writing_spec
 from ..writing.scenarios import scenario_from_dict
@@ -51,13 +52,12 @@ log = logging.getLogger(__name__)
 __all__ = ["METRICS", "STATUSES", "SweepPlan", "run_batch", "run_one"]
 
 STATUSES = ("ok", "saturated", "diverged", "invalid", "failed")
-J = (1, 2, 3)
 #: The result columns of a run, after its varied keys (all float64, null when not finite or
 #: when the run did not run).
 METRICS = (
     "tip_error_max", "tip_error_rms",
-    *(f"rms_u_n[{i}]" for i in J), *(f"rms_u_c[{i}]" for i in J),
-    *(f"u_peak[{i}]" for i in J), *(f"saturated_fraction[{i}]" for i in J),
+    *fv.joint_names("rms_u_n"), *fv.joint_names("rms_u_c"),
+    *fv.joint_names("u_peak"), *fv.joint_names("saturated_fraction"),
     "saturated_fraction", "wall_time",
 )
 _MAX_ERROR = 1000  # characters of an error message kept in a row
@@ -154,15 +154,17 @@ def _outcome(res: Any, limits: tuple[float, float],
         "tip_error_max": _finite(m["tip_error_max"]), "tip_error_rms": _finite(m["tip_error_rms"]),
     }
     for name in ("rms_u_n", "rms_u_c"):
-        row |= {f"{name}[{i}]": _finite(float(m[name][i - 1])) for i in J}
-    row |= {f"u_peak[{i}]": _finite(float(u[:, i - 1].max())) for i in J}
-    row |= {f"saturated_fraction[{i}]": float(saturated[:, i - 1].mean()) for i in J}
+        row |= {n: _finite(float(m[name][k])) for k, n in enumerate(fv.joint_names(name))}
+    row |= {n: _finite(float(u[:, k].max())) for k, n in enumerate(fv.joint_names("u_peak"))}
+    row |= {n: float(saturated[:, k].mean())
+            for k, n in enumerate(fv.joint_names("saturated_fraction"))}
     fraction = float(saturated.any(axis=1).mean())
     row["saturated_fraction"] = fraction
     if summary["status"] == "diverged":
         return "diverged", f"not finite: {', '.join(summary['non_finite'])}", row
     if saturated.any():
-        joints = ", ".join(f"u[{i}]" for i in J if saturated[:, i - 1].any())
+        joints = ", ".join(n for k, n in enumerate(fv.names("controller", "u"))
+                           if saturated[:, k].any())
         return "saturated", (f"{joints} reached {_limit_text(*limits)} on "
                              f"{100 * fraction:.3g} % of the samples"), row
     return "ok", None, row

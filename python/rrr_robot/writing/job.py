@@ -21,6 +21,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core.model import DEFAULT_ROBOT_TOML, Model
 from ..core.outputs import ResultSet, check_folder, check_name, strict_json, to_strict_json_value
 from ..core.param_names import model_fmu_values
@@ -100,8 +101,8 @@ def controller_fmu_values(scenario: Scenario, true_model: Model,
     values: dict[str, float | bool] = dict(model_fmu_values(scenario.controller_model(true_model)))
     kp = scenario.kp or control.kp
     kd = scenario.kd or control.kd
-    values |= {f"kp[{i + 1}]": float(kp[i]) for i in range(3)}
-    values |= {f"kd[{i + 1}]": float(kd[i]) for i in range(3)}
+    values |= {n: float(kp[i]) for i, n in enumerate(fv.names("controller", "kp"))}
+    values |= {n: float(kd[i]) for i, n in enumerate(fv.names("controller", "kd"))}
     values["feedforward"] = scenario.feedforward
     return values
 

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.fmu_vars import JOINTS
 from ..core.outputs import atomic_write_text
 from ..core.robot import RobotFile
 from ..core.tables import read_table
@@ -115,7 +116,7 @@ def _rounded(a: FloatArray, digits: int = 7) -> list[Any]:
 
 
 def _column3(columns: Mapping[str, FloatArray], name: str, sep: str) -> FloatArray | None:
-    keys = [f"{name}[{i}]" for i in (1, 2, 3)] if sep == "[" else \
+    keys = [f"{name}[{i}]" for i in JOINTS] if sep == "[" else \
         [f"{name}.{a}" for a in "xyz"]
     if not all(k in columns for k in keys):
         return None
