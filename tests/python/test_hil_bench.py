@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from rrr_robot.core.param_names import model_fmu_values
 from rrr_robot.hil.bench import BenchRun, quantised_cosim, run_c_bench, run_fmu_controller
+from rrr_robot.hil.logspec import PLANT_LOG, read_log
 from rrr_robot.hil.nodes import controller_node_args, open_bus, start_plant
 from rrr_robot.hil.protocol import HilError
 from rrr_robot.sim.cosim import CosimOptions, run_cosim
@@ -80,9 +81,9 @@ def test_python_can_controller_fmu_against_c_plant(writing, tmp_path: Path) -> N
     assert summary["exit"] == 0 and summary["faults"] == 0 and summary["periods"] == n - 1
     assert summary["rx_bad_crc"] == 0 and summary["rx_malformed"] == 0
     assert run.controller_summary["rejected"] == {}
-    log = np.loadtxt(tmp_path / "plant.csv", delimiter=",", skiprows=1)
+    log = read_log(tmp_path / "plant.csv", PLANT_LOG)
     qc = quantised_cosim(t, q, qd, qdd)
-    assert np.abs(log[:, 2:5] - qc.q).max() < 1e-9
+    assert np.abs(log.group("q") - qc.q).max() < 1e-9
     # what the controller received is the plant state quantised by the DBC
     assert np.abs(run.q - qc.q).max() <= 0.5e-6 + 1e-12
 

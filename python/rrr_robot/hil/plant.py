@@ -38,7 +38,8 @@ from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from . import _hil_lib as hl
 from .bench import BenchRun
-from .nodes import export_reference, open_bus, read_node_log, start_listening_controller
+from .logspec import CONTROLLER_LOG, PLANT_LOG, NodeLog, read_log, write_log
+from .nodes import export_reference, open_bus, start_listening_controller
 from .protocol import (
     EXIT_SAFETY,
     NMT_BOOT,
@@ -58,12 +59,11 @@ __all__ = ["LOG_HEADER", "PlantRun", "PythonPlant", "drop_commands_from",
 VOLTAGE_CMD_ID = 0x100
 STOP_CMD_ID = 0x090
 HEARTBEAT_PERIODS = 100
-#: Columns of the plant log (the C plant node's --log): row 0 is the initial state, row k + 1
-#: the state after period k with the voltage applied during period k.
-LOG_HEADER = ["k", "t", "q[1]", "q[2]", "q[3]", "qd[1]", "qd[2]", "qd[3]", "u[1]", "u[2]",
-              "u[3]", "zero", "faults", "qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"]
+#: Columns of the plant log (logspec.PLANT_LOG, the C plant node's --log): row 0 is the initial
+#: state, row k + 1 the state after period k with the voltage applied during period k.
+LOG_HEADER = list(PLANT_LOG.names)
 #: The FMU outputs logged beside the state (the last six columns).
-LOGGED_OUTPUTS = ["qdd[1]", "qdd[2]", "qdd[3]", "tip.x", "tip.y", "tip.z"]
+LOGGED_OUTPUTS = list(PLANT_LOG.names[PLANT_LOG.index("qdd[1]"):])
 
 #: Fault injection between the bus and the plant: (period k, frame) -> the frame to deliver
 #: (possibly modified), or None to drop it.
@@ -90,16 +90,16 @@ class PlantRun:
 
     @property
     def q(self) -> FloatArray:
-        return self.log[:, 2:5]
+        return NodeLog(PLANT_LOG, self.log).group("q")
 
     @property
     def qd(self) -> FloatArray:
-        return self.log[:, 5:8]
+        return NodeLog(PLANT_LOG, self.log).group("qd")
 
     @property
     def u(self) -> FloatArray:
         """Row k + 1: the voltage applied during period k."""
-        return self.log[:, 8:11]
+        return NodeLog(PLANT_LOG, self.log).group("u")
 
 
 class _BusLost(HilError):
@@ -270,9 +270,7 @@ class PythonPlant:
             rc = EXIT_SAFETY  # completed, but the safety policy fired (as rrr_hil_plant)
         rows = np.array(self._rows, dtype=float).reshape(-1, len(LOG_HEADER))
         if log_csv is not None:
-            with atomic_path(log_csv) as tmp:  # complete or not at all (core.outputs)
-                np.savetxt(tmp, rows, delimiter=",", header=",".join(LOG_HEADER), comments="",
-                           fmt="%.17g")
+            write_log(log_csv, PLANT_LOG, rows)  # complete or not at all (core.outputs)
         return PlantRun(log=rows, summary=self._summary(rc))
 
     def _summary(self, rc: int) -> dict[str, Any]:
@@ -312,8 +310,8 @@ def run_python_plant_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                 raise HilError(f"bench failed: controller exit {cs['exit']}: "
                                f"{ctrl.stderr.strip()}; python plant exit "
                                f"{prun.summary['exit']}")
-            c = read_node_log(ctrl_log, 18)
-        run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, [8, 11, 14]],
+            c = read_log(ctrl_log, CONTROLLER_LOG)
+        run = BenchRun(t=prun.log[:, PLANT_LOG.index("t")], q=prun.q, qd=prun.qd, u=c.group("u"),
                        plant_summary=prun.summary, controller_summary=cs)
         return run, prun
     finally:
