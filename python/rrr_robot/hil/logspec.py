@@ -61,6 +61,7 @@ class LogSpec:
 
     @property
     def names(self) -> tuple[str, ...]:
+        """The column names, in order."""
         return tuple(c.name for c in self.columns)
 
     @property
@@ -76,6 +77,7 @@ class LogSpec:
             raise ValueError(f"the {self.name} log has no column {name!r}") from None
 
     def indices(self, names: Iterable[str]) -> list[int]:
+        """The positions of the columns ``names``."""
         return [self.index(n) for n in names]
 
 
