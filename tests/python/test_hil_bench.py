@@ -113,3 +113,24 @@ def test_controller_node_rejects_bad_model_values(writing, tmp_path: Path) -> No
                     controller_values={"kt[2]": -1.0})
     with pytest.raises(ValueError, match="give all three"):
         controller_node_args({"kp[1]": 1.0})
+
+
+def test_controller_node_reads_the_reference_fmu_table_by_column_name(tmp_path: Path) -> None:
+    """The C controller reads the reference FMU's table format: the packaged table (1 s steps)
+    is refused only for its step, a table without a column it needs names the column."""
+    import subprocess
+
+    from rrr_robot.hil.nodes import node_executable
+
+    root = Path(__file__).resolve().parents[2]
+    packaged = root / "fmu" / "reference" / "resources" / "reference.csv"
+    header = packaged.read_text().splitlines()[0].split(",")
+    short = tmp_path / "short.csv"
+    short.write_text(",".join(header[:9]) + "\n" + ",".join(["0"] * 9) + "\n")
+    for table, message in ((packaged, "reference.csv:3: t steps by 1 s; the bench needs 0.001 s"),
+                           (short, "short.csv:1: the reference table has no column "
+                                   "'qdd_ref[3]'")):
+        proc = subprocess.run([str(node_executable("controller")), "--reference", str(table),
+                               "--connect", "127.0.0.1:1"], capture_output=True, text=True,
+                              timeout=30)
+        assert proc.returncode == 2 and message in proc.stderr, proc.stderr
