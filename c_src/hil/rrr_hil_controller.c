@@ -1,7 +1,8 @@
 /*
  * rrr_hil_controller: the controller node of the CAN bench. Runs the core's computed-torque law
- * (rrr_ctc, eq 15) at 1 kHz along a reference table (CSV: t, q_ref, qd_ref, qdd_ref, one row per
- * period; `rrr hil export-reference` writes it) on the joint states it receives, and sends
+ * (rrr_ctc, eq 15) at 1 kHz along a reference table (the reference FMU's CSV, its columns t,
+ * q_ref, qd_ref, qdd_ref found by name, one row per period; `rrr hil export-reference` writes
+ * it) on the joint states it receives, and sends
  * VoltageCmd (+ Sync in lockstep) every period. By default it connects to the plant node as a socketcand
  * client.
  *
@@ -36,6 +37,7 @@
 
 #include "hil_codec.h"
 #include "hil_node.h"
+#include "rrr_hil_logs.h"
 #include "rrr/rrr.h"
 
 #define PROG "rrr_hil_controller"
@@ -273,6 +275,9 @@ static void command(ctrl *c, const opts *o, size_t k, int enable, rrr_hil_voltag
     cmd->enable = (uint8_t)enable;
     cmd->reset_fault = 0;
     memcpy(cmd->u_V, out.u, sizeof cmd->u_V);
+    /* k, t, q[3], qd[3], (u, u_n, u_c) per joint, enable (rrr_hil_logs.h) */
+    _Static_assert(RRR_HIL_CONTROLLER_LOG_COLUMNS == 2 + 3 + 3 + 3 * 3 + 1,
+                   "the controller log's row (rrr_robot.hil.logspec)");
     if (c->log != NULL) {
         fprintf(c->log, "%zu,%.17g", k, c->ref.t[k]);
         for (int i = 0; i < 3; ++i) {
@@ -527,8 +532,7 @@ int main(int argc, char **argv)
             return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
                                        o.log_path);
         }
-        fprintf(c.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u_n[1],u_c[1],u[2],u_n[2],"
-                       "u_c[2],u[3],u_n[3],u_c[3],enable\n");
+        fputs(RRR_HIL_CONTROLLER_LOG_HEADER, c.log); /* gen/rrr_hil_logs.h */
     }
     int log_failed = 0;
     FILE *latency_log = rrr_hil_rt_open_log(&o.rt, o.realtime, PROG, &log_failed);

@@ -37,6 +37,7 @@
 #include "hil_fmu.h"
 #include "hil_node.h"
 #include "hil_supervisor.h"
+#include "rrr_hil_logs.h"
 
 #define PROG "rrr_hil_plant"
 #define MAX_SETS 64
@@ -322,6 +323,10 @@ static int setup_fmu(plant *p, const opts *o)
     return 0;
 }
 
+/* The row below: k, t, q[3], qd[3], u[3], zero, faults, qdd[3], tip[3] (rrr_hil_logs.h). */
+_Static_assert(RRR_HIL_PLANT_LOG_COLUMNS == 2 + 6 + 3 + 2 + 6,
+               "log_row writes the plant log's columns (rrr_robot.hil.logspec)");
+
 static void log_row(plant *p)
 {
     if (p->log == NULL) {
@@ -575,8 +580,7 @@ int main(int argc, char **argv)
             return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "cannot write %s",
                                        o.log_path);
         }
-        fprintf(p.log, "k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u[2],u[3],zero,faults,"
-                       "qdd[1],qdd[2],qdd[3],tip.x,tip.y,tip.z\n");
+        fputs(RRR_HIL_PLANT_LOG_HEADER, p.log); /* gen/rrr_hil_logs.h */
         log_row(&p);
     }
     int log_failed = 0;

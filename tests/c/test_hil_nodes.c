@@ -428,10 +428,13 @@ static void write_reference(const char *path, int n, int jump)
     if (fp == NULL) {
         return;
     }
+    /* the reference FMU's table (19 columns; the controller reads the first 10 by name) */
     fprintf(fp, "t,q_ref[1],q_ref[2],q_ref[3],qd_ref[1],qd_ref[2],qd_ref[3],qdd_ref[1],"
-                "qdd_ref[2],qdd_ref[3]\n");
+                "qdd_ref[2],qdd_ref[3],x_ref.x,x_ref.y,x_ref.z,xd_ref.x,xd_ref.y,xd_ref.z,"
+                "xdd_ref.x,xdd_ref.y,xdd_ref.z\n");
     for (int k = 0; k < n; ++k) {
-        fprintf(fp, "%.17g,%s,0,0,0,0,0,0\n", k * 1e-3, k < jump ? "0.2,0.8,-1.2" : "2.5,2.5,2.5");
+        fprintf(fp, "%.17g,%s,0,0,0,0,0,0,0.4,0,0.3,0,0,0,0,0,0\n", k * 1e-3,
+                k < jump ? "0.2,0.8,-1.2" : "2.5,2.5,2.5");
     }
     fclose(fp);
 }

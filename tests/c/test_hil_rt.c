@@ -1,7 +1,8 @@
 /* The pieces of the bench nodes' real-time mode and frame log that need no peer: percentiles
  * (nearest rank), the real-time options (ranges), a short sleep-then-spin loop (latencies
  * recorded, none negative: not a timing test), its per-period latency log, and the frame log's
- * record layout and file (hil_framelog.h), which rrr_robot.hil.framelog reads. */
+ * record layout and file (hil_framelog.h), which rrr_robot.hil.framelog reads; the reference
+ * table reader (the reference FMU's 19-column table, its columns found by name). */
 #define _GNU_SOURCE /* CPU_SETSIZE */
 
 #include <sched.h>
@@ -176,6 +177,75 @@ static void test_framelog(const char *dir)
     CHECK(strstr(err, "cannot write the frame log") != NULL && l.fp == NULL);
 }
 
+/* Write text to dir/name; the path in path. */
+static void write_text(const char *dir, const char *name, const char *text, char *path, size_t n)
+{
+    snprintf(path, n, "%s/%s", dir, name);
+    FILE *fp = fopen(path, "w");
+    CHECK(fp != NULL);
+    if (fp != NULL) {
+        fputs(text, fp);
+        fclose(fp);
+    }
+}
+
+#define REF19                                                                                  \
+    "t,q_ref[1],q_ref[2],q_ref[3],qd_ref[1],qd_ref[2],qd_ref[3],qdd_ref[1],qdd_ref[2],"          \
+    "qdd_ref[3],x_ref.x,x_ref.y,x_ref.z,xd_ref.x,xd_ref.y,xd_ref.z,xdd_ref.x,xdd_ref.y,"        \
+    "xdd_ref.z\n"
+
+/* The reference table: the reference FMU's 19 columns, or any order of them (by name); a
+ * missing column, a short row or a bad number is an error naming it. */
+static void test_reference(const char *dir)
+{
+    char path[512], err[512];
+    rrr_hil_reference r;
+    write_text(dir, "ref19.csv",
+               REF19 "0,0.1,0.2,0.3,1,2,3,10,20,30,0.4,0.5,0.6,0,0,0,0,0,0\n"
+                     "0.001,0.11,0.21,0.31,1.1,2.1,3.1,11,21,31,0.4,0.5,0.6,0,0,0,0,0,0\r\n",
+               path, sizeof path);
+    CHECK(rrr_hil_reference_load(path, &r, err, sizeof err) == 0);
+    CHECK(r.n == 2u && r.t[1] == 0.001 && r.q[0][2] == 0.3 && r.qd[1][0] == 1.1 &&
+          r.qdd[1][2] == 31.0);
+    rrr_hil_reference_free(&r);
+    /* the columns in another order, a tip column first */
+    write_text(dir, "ref_order.csv",
+               "x_ref.x,qdd_ref[3],qdd_ref[2],qdd_ref[1],qd_ref[3],qd_ref[2],qd_ref[1],q_ref[3],"
+               "q_ref[2],q_ref[1],t\n"
+               "9,30,20,10,3,2,1,0.3,0.2,0.1,0\n9,30,20,10,3,2,1,0.3,0.2,0.1,0.001\n",
+               path, sizeof path);
+    CHECK(rrr_hil_reference_load(path, &r, err, sizeof err) == 0);
+    CHECK(r.n == 2u && r.t[1] == 0.001 && r.q[0][0] == 0.1 && r.qd[0][2] == 3.0 &&
+          r.qdd[1][1] == 20.0);
+    rrr_hil_reference_free(&r);
+    static const struct {
+        const char *text, *message;
+    } bad[] = {
+        {"t,q_ref[1],q_ref[2],q_ref[3],qd_ref[1],qd_ref[2],qd_ref[3],qdd_ref[1],qdd_ref[2]\n0,0,0,"
+         "0,0,0,0,0,0\n",
+         "no column 'qdd_ref[3]'"},
+        {REF19 "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n", ":2: 18 values, the header has 19"},
+        {REF19 "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,1\n", ":2: more values than"},
+        {REF19 "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,nan\n", "column 19 (xdd_ref.z) is not a"},
+        {REF19 "0,0,x,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n", "column 3 (q_ref[2]) is not a"},
+        {"t,t,q_ref[1]\n", "the column 't' appears twice"},
+        {"", "empty"},
+        {REF19 "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n0.5,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n",
+         "t steps by 0.5 s"},
+        {REF19 "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n", "at least two samples"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        write_text(dir, "ref_bad.csv", bad[i].text, path, sizeof path);
+        err[0] = '\0';
+        CHECK(rrr_hil_reference_load(path, &r, err, sizeof err) == -1);
+        if (strstr(err, bad[i].message) == NULL) {
+            fprintf(stderr, "case %zu: '%s' does not say '%s'\n", i, err, bad[i].message);
+            CHECK(0);
+        }
+        CHECK(r.n == 0u && r.t == NULL);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const char *dir = argc > 1 ? argv[1] : ".";
@@ -184,6 +254,7 @@ int main(int argc, char **argv)
     test_loop(dir);
     test_fallbacks();
     test_framelog(dir);
+    test_reference(dir);
     if (rrr_test_failures) {
         fprintf(stderr, "%d checks failed\n", rrr_test_failures);
         return 1;

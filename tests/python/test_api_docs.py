@@ -42,6 +42,9 @@ PUBLIC_MODULES = [
     "rrr_robot.hil.protocol",
     "rrr_robot.hil.bench",
     "rrr_robot.hil.results",
+    "rrr_robot.hil.logspec",
+    "rrr_robot.writing.reference_table",
+    "rrr_robot.core.summary",
     "rrr_robot.cli",
 ]
 DIRECTIVE = re.compile(r"^\.\. auto(class|function|data|exception|method|attribute):: (\S+)$",

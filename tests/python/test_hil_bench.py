@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 from rrr_robot.core.param_names import model_fmu_values
 from rrr_robot.hil.bench import BenchRun, quantised_cosim, run_c_bench, run_fmu_controller
+from rrr_robot.hil.logspec import PLANT_LOG, read_log
 from rrr_robot.hil.nodes import controller_node_args, open_bus, start_plant
 from rrr_robot.hil.protocol import HilError
 from rrr_robot.sim.cosim import CosimOptions, run_cosim
@@ -80,9 +81,9 @@ def test_python_can_controller_fmu_against_c_plant(writing, tmp_path: Path) -> N
     assert summary["exit"] == 0 and summary["faults"] == 0 and summary["periods"] == n - 1
     assert summary["rx_bad_crc"] == 0 and summary["rx_malformed"] == 0
     assert run.controller_summary["rejected"] == {}
-    log = np.loadtxt(tmp_path / "plant.csv", delimiter=",", skiprows=1)
+    log = read_log(tmp_path / "plant.csv", PLANT_LOG)
     qc = quantised_cosim(t, q, qd, qdd)
-    assert np.abs(log[:, 2:5] - qc.q).max() < 1e-9
+    assert np.abs(log.group("q") - qc.q).max() < 1e-9
     # what the controller received is the plant state quantised by the DBC
     assert np.abs(run.q - qc.q).max() <= 0.5e-6 + 1e-12
 
@@ -112,3 +113,24 @@ def test_controller_node_rejects_bad_model_values(writing, tmp_path: Path) -> No
                     controller_values={"kt[2]": -1.0})
     with pytest.raises(ValueError, match="give all three"):
         controller_node_args({"kp[1]": 1.0})
+
+
+def test_controller_node_reads_the_reference_fmu_table_by_column_name(tmp_path: Path) -> None:
+    """The C controller reads the reference FMU's table format: the packaged table (1 s steps)
+    is refused only for its step, a table without a column it needs names the column."""
+    import subprocess
+
+    from rrr_robot.hil.nodes import node_executable
+
+    root = Path(__file__).resolve().parents[2]
+    packaged = root / "fmu" / "reference" / "resources" / "reference.csv"
+    header = packaged.read_text().splitlines()[0].split(",")
+    short = tmp_path / "short.csv"
+    short.write_text(",".join(header[:9]) + "\n" + ",".join(["0"] * 9) + "\n")
+    for table, message in ((packaged, "reference.csv:3: t steps by 1 s; the bench needs 0.001 s"),
+                           (short, "short.csv:1: the reference table has no column "
+                                   "'qdd_ref[3]'")):
+        proc = subprocess.run([str(node_executable("controller")), "--reference", str(table),
+                               "--connect", "127.0.0.1:1"], capture_output=True, text=True,
+                              timeout=30)
+        assert proc.returncode == 2 and message in proc.stderr, proc.stderr

@@ -18,6 +18,7 @@ from typing import Any
 import can
 import numpy as np
 import pytest
+from rrr_robot.hil.logspec import PLANT_LOG, read_log
 from rrr_robot.hil.nodes import open_bus, start_plant
 from rrr_robot.hil.protocol import (
     DATA_IDS,
@@ -76,7 +77,7 @@ class Rig:
         self.bus.send(encode("HeartbeatCtrl", {"NmtState": NMT_STOPPED, "Counter": 1}))
         self.bus.shutdown()
         summary = self.plant.wait(30)
-        return summary, np.loadtxt(self.log_path, delimiter=",", skiprows=1, ndmin=2)
+        return summary, read_log(self.log_path, PLANT_LOG).rows
 
 
 @pytest.fixture
@@ -88,7 +89,7 @@ def rig(tmp_path: Path):
 
 
 def applied(log: np.ndarray, k: int) -> np.ndarray:
-    return log[k + 1, 8:11]
+    return log[k + 1, PLANT_LOG.indices(["u[1]", "u[2]", "u[3]"])]
 
 
 def test_normal_run_and_one_dropped_frame(rig: Rig) -> None:

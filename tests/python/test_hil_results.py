@@ -21,6 +21,7 @@ import pytest
 from rrr_robot.cli import main
 from rrr_robot.hil import framelog as fl
 from rrr_robot.hil.bench import quantised_cosim_result
+from rrr_robot.hil.logspec import CONTROLLER_LOG, PLANT_LOG, read_log
 from rrr_robot.hil.protocol import EXIT_SAFETY
 from rrr_robot.hil.results import unquantised_cosim
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, metrics, prepare
@@ -53,13 +54,13 @@ def test_lockstep_metrics_equal_the_quantised_cosim(bench_out: Path) -> None:
     quantised = quantised_cosim_result(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
                                        controller_values=values)
     # the signals the metrics come from are the quantised co-simulation's, bit for bit
-    plant = np.loadtxt(bench_out / "plant.csv", delimiter=",", skiprows=1)
-    ctrl = np.loadtxt(bench_out / "controller.csv", delimiter=",", skiprows=1)
-    assert np.array_equal(plant[:, 2:5], quantised.q)
-    assert np.array_equal(plant[:, 16:19], quantised.tip)
-    for cols, signal in (([8, 11, 14], quantised.u), ([9, 12, 15], quantised.u_n),
-                         ([10, 13, 16], quantised.u_c)):
-        assert np.array_equal(ctrl[:, cols], signal)
+    # (the logs the C nodes wrote, read through the one spec of their columns)
+    plant = read_log(bench_out / "plant.csv", PLANT_LOG)
+    ctrl = read_log(bench_out / "controller.csv", CONTROLLER_LOG)
+    assert np.array_equal(plant.group("q"), quantised.q)
+    assert np.array_equal(plant.group("tip"), quantised.tip)
+    for group, signal in (("u", quantised.u), ("u_n", quantised.u_n), ("u_c", quantised.u_c)):
+        assert np.array_equal(ctrl.group(group), signal)
     # and so the metrics: maxima exactly, RMS values to the rounding of numpy's summation,
     # whose order depends on the arrays' memory layout (the FMU master's u_n is a strided view)
     want = metrics(quantised)

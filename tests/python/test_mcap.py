@@ -292,15 +292,15 @@ def bench_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_the_bench_mcap_holds_its_frames_decoded_signals_and_faults(bench_run) -> None:
     from rrr_robot.hil.framelog import read_node_log
+    from rrr_robot.hil.logspec import PLANT_LOG, read_log
     from rrr_robot.hil.protocol import database
 
     got, _ = rosbags_messages(bench_run / "bench.mcap")
     records = read_node_log(bench_run / "frames.rrrcan")
-    plant = np.loadtxt(bench_run / "plant.csv", delimiter=",", skiprows=1, ndmin=2)
-    n = plant.shape[0]
-    t_ns = np.rint(plant[:, 1] * 1e9).astype(np.int64)
-    assert same(np.array([m[1].position for m in got["/joint_states"]]), plant[:n, 2:5])
-    assert same(np.array([m[1].data for m in got["/bench/faults"]]), plant[:, 12])
+    log = read_log(bench_run / "plant.csv", PLANT_LOG)
+    t_ns = np.rint(log.col("t") * 1e9).astype(np.int64)
+    assert same(np.array([m[1].position for m in got["/joint_states"]]), log.group("q"))
+    assert same(np.array([m[1].data for m in got["/bench/faults"]]), log.col("faults"))
     frames = [m[1] for m in got["/can/frames"]]
     assert len(frames) == records.size
     assert [f.id for f in frames] == (records["id"] & 0x1FFFFFFF).tolist()

@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 from can_guest import CanGuest, GuestError, GuestUnavailable, Result
 from rrr_robot.hil import framelog
+from rrr_robot.hil.logspec import CONTROLLER_LOG, PLANT_LOG, read_log
 from rrr_robot.hil.nodes import (
     controller_node_args,
     export_reference,
@@ -221,13 +222,16 @@ def read_csv(path: Path) -> list[str]:
 def log_metrics(controller_csv: Path, ref: Any) -> dict[str, float]:
     """The summary metrics of a run from the controller's log: RMS tracking error and RMS
     voltages per joint, the largest |u|."""
-    c = np.loadtxt(controller_csv, delimiter=",", skiprows=1)
+    log = read_log(controller_csv, CONTROLLER_LOG)
+    c = log.rows
     n = min(c.shape[0], ref.q.shape[0])
     out = {}
     for j in range(3):
-        out[f"rms_e[{j + 1}]"] = float(np.sqrt(np.mean((c[:n, 2 + j] - ref.q[:n, j]) ** 2)))
-        for name, col in (("u", 8), ("u_n", 9), ("u_c", 10)):
-            out[f"rms_{name}[{j + 1}]"] = float(np.sqrt(np.mean(c[:n, col + 3 * j] ** 2)))
+        q = log.col(f"q[{j + 1}]")
+        out[f"rms_e[{j + 1}]"] = float(np.sqrt(np.mean((q[:n] - ref.q[:n, j]) ** 2)))
+        for name in ("u", "u_n", "u_c"):
+            v = log.col(f"{name}[{j + 1}]")
+            out[f"rms_{name}[{j + 1}]"] = float(np.sqrt(np.mean(v[:n] ** 2)))
     out["max_abs_u"] = float(np.abs(c[:n, [8, 11, 14]]).max())
     return out
 
@@ -397,7 +401,8 @@ def test_hostile_traffic(hostile: dict[str, Any], c_bench: dict[str, Any], case:
     assert exits == {"controller": status, "plant": status, "candump": "0"}, exits
     s = summary_lines((work / "plant.out").read_text())
     c = summary_lines((work / "controller.out").read_text())
-    log = np.loadtxt(work / "plant.csv", delimiter=",", skiprows=1)
+    plant = read_log(work / "plant.csv", PLANT_LOG)
+    log = plant.rows
     assert log.shape[0] == HOSTILE_PERIODS
     if bit == 0:
         clean = read_csv(c_bench["work"] / "plant.csv")[: HOSTILE_PERIODS]
@@ -408,7 +413,7 @@ def test_hostile_traffic(hostile: dict[str, Any], c_bench: dict[str, Any], case:
         assert sum(m.arbitration_id == 0x555 for m in bus) == 3000
         return
     assert s["faults"] & bit and s["fault_events"] >= 1 and s["zero_periods"] > 0
-    zero, faults, u = log[:, 11], log[:, 12].astype(int), log[:, 8:11]
+    zero, faults, u = plant.col("zero"), plant.col("faults").astype(int), plant.group("u")
     first = int(np.argmax(faults != 0))
     assert 0 < first and np.all(faults[first:] & bit) and np.all(zero[first + 1:] == 1)
     assert np.all(u[first + 1:] == 0.0) and np.any(u[:first] != 0.0)
@@ -582,11 +587,12 @@ def test_python_side_over_socketcan(python_sides: dict[str, Any], side: str,
     mine = python_sides["out"] / side
     python_log = "controller.csv" if side == "controller" else "plant.csv"
     for log in ("plant.csv", "controller.csv"):
-        a = np.loadtxt((mine if log == python_log else mine / "node") / log, delimiter=",",
-                       skiprows=1)
-        cols = slice(2, 11) if log == "plant.csv" else slice(2, 17)
+        spec = PLANT_LOG if log == "plant.csv" else CONTROLLER_LOG
+        a = read_log((mine if log == python_log else mine / "node") / log, spec).rows
+        # q, qd and u (plant), q, qd, u, u_n and u_c (controller)
+        cols = slice(spec.index("q[1]"), spec.index("zero" if spec is PLANT_LOG else "enable"))
         for other in (python_sides["out"] / "bench", python_sides["host"] / side):
-            b = np.loadtxt(other / log, delimiter=",", skiprows=1)
+            b = read_log(other / log, spec).rows
             assert a.shape == b.shape and np.abs(a[:, cols] - b[:, cols]).max() < 1e-9, \
                 (log, other)
 

@@ -162,7 +162,8 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
 
     work = rs.staging
     if args.side == "export-reference":
-        export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv")
+        export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv",
+                         (ref.x, ref.xd, ref.xdd))
         print(f"reference: {out / 'reference.csv'} ({ref.t.size} periods)")
         return 0
     conn = (sides.Connection() if args.side == "bench"

@@ -25,11 +25,11 @@ from ..core.outputs import atomic_path
 from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, CosimResult, run_cosim
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
+from .logspec import CONTROLLER_LOG, PLANT_LOG, read_log, write_log
 from .nodes import (
     controller_node_args,
     export_reference,
     failure_folder,
-    read_node_log,
     start_controller,
     start_plant,
     wait_for_boot_up,
@@ -50,9 +50,6 @@ from .protocol import (
 __all__ = ["BenchRun", "LogProgress", "RealTime", "quantised_cosim", "quantised_cosim_result",
            "run_c_bench", "run_fmu_controller", "write_controller_log"]
 
-#: Columns of the controller log (the C controller node's --log; run_fmu_controller's too).
-CONTROLLER_LOG_HEADER = ("k,t,q[1],q[2],q[3],qd[1],qd[2],qd[3],u[1],u_n[1],u_c[1],u[2],u_n[2],"
-                         "u_c[2],u[3],u_n[3],u_c[3],enable")
 #: Progress of a run: progress(periods done, periods in all).
 Progress = Callable[[int, int], None]
 
@@ -251,17 +248,18 @@ def _drive(bus: Any, ctrl: FmuSlave, c_in: Any, c_out: Any, ref: FloatArray,
 
 
 def write_controller_log(run: BenchRun, path: Path) -> Path:
-    """The controller log of a run (the C controller node's --log columns), atomically."""
-    from ..core.outputs import atomic_open
-
+    """The controller log of a run (logspec.CONTROLLER_LOG: the C controller node's --log),
+    atomically."""
     assert run.u_n is not None and run.u_c is not None
-    k = np.arange(run.t.shape[0], dtype=float)
-    u = np.stack([run.u, run.u_n, run.u_c], axis=2).reshape(-1, 9)  # u[i], u_n[i], u_c[i]
-    rows = np.column_stack([k, run.t, run.q, run.qd, u, np.ones_like(k)])
-    with atomic_open(path) as fh:
-        fh.write(CONTROLLER_LOG_HEADER + "\n")
-        np.savetxt(fh, rows, delimiter=",", fmt="%.17g")
-    return Path(path)
+    spec = CONTROLLER_LOG
+    rows = np.zeros((run.t.shape[0], len(spec.columns)))
+    rows[:, spec.index("k")] = np.arange(run.t.shape[0])
+    rows[:, spec.index("t")] = run.t
+    rows[:, spec.index("enable")] = 1.0
+    for group, values in (("q", run.q), ("qd", run.qd), ("u", run.u), ("u_n", run.u_n),
+                          ("u_c", run.u_c)):
+        rows[:, spec.indices(f"{group}[{i}]" for i in (1, 2, 3))] = values
+    return write_log(path, spec, rows)
 
 
 @contextlib.contextmanager
@@ -355,11 +353,11 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                 raise plant.failure("the CAN bench failed", failure_folder(work))
             if frames is not None and cs.get("frame_log_error"):
                 raise HilError(f"the controller's frame log failed: {cs['frame_log_error']}")
-            p, c = read_node_log(plant_log, 19), read_node_log(ctrl_log, 18)
-        m = min(p.shape[0], c.shape[0])  # real time: the two loops need not end together
-        return BenchRun(t=p[:m, 1], q=p[:m, 2:5], qd=p[:m, 5:8], u=c[:m, [8, 11, 14]],
-                        plant_summary=ps, controller_summary=cs, u_n=c[:m, [9, 12, 15]],
-                        u_c=c[:m, [10, 13, 16]], wall_time=wall)
+            p, c = read_log(plant_log, PLANT_LOG), read_log(ctrl_log, CONTROLLER_LOG)
+        m = min(p.rows.shape[0], c.rows.shape[0])  # real time: the loops need not end together
+        return BenchRun(t=p.col("t")[:m], q=p.group("q")[:m], qd=p.group("qd")[:m],
+                        u=c.group("u")[:m], plant_summary=ps, controller_summary=cs,
+                        u_n=c.group("u_n")[:m], u_c=c.group("u_c")[:m], wall_time=wall)
     finally:
         if own:
             shutil.rmtree(work, ignore_errors=True)

@@ -27,9 +27,10 @@ import numpy as np
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
-from ..core.outputs import STAGING_PREFIX, atomic_open, atomic_write_text
+from ..core.outputs import STAGING_PREFIX, atomic_write_text
 from ..core.param_names import param_index
 from ..sim.fmus import fmu_path
+from ..writing.reference_table import write_reference_table
 from .channel import DEFAULT_CHANNEL
 from .protocol import NMT_BOOT, PERIOD, HilError
 
@@ -42,7 +43,6 @@ __all__ = [
     "failure_folder",
     "node_executable",
     "open_bus",
-    "read_node_log",
     "set_args",
     "start_controller",
     "start_listening_controller",
@@ -52,7 +52,6 @@ __all__ = [
 
 #: HeartbeatPlant's identifier (0x700 + node id 2, rrr_bench.dbc).
 _HEARTBEAT_PLANT = 0x702
-_REF_HEADER = ["t"] + [f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref") for i in fv.JOINTS]
 
 
 def node_executable(which: str) -> Path:
@@ -69,42 +68,17 @@ def node_executable(which: str) -> Path:
 
 
 def export_reference(t: FloatArray, q: FloatArray, qd: FloatArray, qdd: FloatArray,
-                     path: Path) -> Path:
-    """Write the reference table the C controller reads (every double exactly, %.17g); it must
-    be sampled at the bench's period PERIOD (HilError otherwise)."""
+                     path: Path, tip: tuple[FloatArray, FloatArray, FloatArray] | None = None,
+                     ) -> Path:
+    """Write the reference table the C controller reads, in the reference FMU's format
+    (writing.reference_table: 19 columns, every double exactly); the tip's columns are ``tip``
+    (x, xd, xdd of the writing reference) or the default robot's forward kinematics. It must be
+    sampled at the bench's period PERIOD (HilError otherwise)."""
     steps = np.diff(np.asarray(t, dtype=float))
     if steps.size and not np.allclose(steps, PERIOD, rtol=1e-9, atol=1e-12):
         raise HilError(f"the CAN bench's nodes run at {PERIOD:g} s: the reference is sampled at "
                        f"{float(steps[0]):g} s (the robot file's [control] sample_time)")
-    rows = np.column_stack([t, q, qd, qdd])
-    with atomic_open(path) as fh:  # complete or not at all (core.outputs)
-        fh.write(",".join(_REF_HEADER) + "\n")
-        for row in rows:
-            fh.write(",".join(f"{v:.17g}" for v in row) + "\n")
-    return Path(path)
-
-
-def read_node_log(path: Path, columns: int | None = None) -> FloatArray:
-    """The rows of a node's CSV log (a header row, then rows of numbers; ``columns`` of them
-    when given); HilError naming the file when it is missing, not numeric or cut short (a node
-    that died while writing it)."""
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeError) as exc:
-        raise HilError(f"cannot read the node log {path}: {exc}") from exc
-    lines = text.splitlines()[1:]
-    if lines and not text.endswith("\n"):
-        raise HilError(f"the node log {path} is cut short (its last line is incomplete: the "
-                       "node ended while writing it)")
-    try:
-        rows = np.loadtxt(lines, delimiter=",", ndmin=2, dtype=np.float64) if lines else \
-            np.zeros((0, columns or 0))
-    except ValueError as exc:
-        raise HilError(f"the node log {path} is not a table of numbers: "
-                       f"{' '.join(str(exc).split())}") from exc
-    if columns is not None and rows.size and rows.shape[1] != columns:
-        raise HilError(f"the node log {path} has {rows.shape[1]} columns, expected {columns}")
-    return rows
+    return write_reference_table(path, t, q, qd, qdd, tip)  # atomically (core.outputs)
 
 
 def failure_folder(work: Path) -> Path:

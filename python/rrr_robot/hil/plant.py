@@ -36,6 +36,7 @@ from ..sim.cosim import PLANT_IN, initial_state_values
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
 from . import _hil_lib as hl
+from .logspec import PLANT_LOG, NodeLog, write_log
 from .protocol import (
     EXIT_SAFETY,
     NMT_BOOT,
@@ -54,13 +55,13 @@ __all__ = ["LOG_HEADER", "PlantRun", "PythonPlant", "drop_commands_from"]
 VOLTAGE_CMD_ID = 0x100
 STOP_CMD_ID = 0x090
 HEARTBEAT_PERIODS = 100
-#: Columns of the plant log (the C plant node's --log): row 0 is the initial state, row k + 1
-#: the state after period k with the voltage applied during period k.
 #: The plant FMU's state outputs (q, qd) sent in the JointState frames.
 STATE_OUTPUTS = fv.names("plant", "q") + fv.names("plant", "qd")
+#: Columns of the plant log (logspec.PLANT_LOG, the C plant node's --log): row 0 is the initial
+#: state, row k + 1 the state after period k with the voltage applied during period k.
+LOG_HEADER = list(PLANT_LOG.names)
 #: The FMU outputs logged beside the state (the last six columns).
-LOGGED_OUTPUTS = fv.names("plant", "qdd") + fv.names("plant", "tip")
-LOG_HEADER = ["k", "t", *STATE_OUTPUTS, *PLANT_IN, "zero", "faults", *LOGGED_OUTPUTS]
+LOGGED_OUTPUTS = list(PLANT_LOG.names[PLANT_LOG.index("qdd[1]"):])
 
 #: Fault injection between the bus and the plant: (period k, frame) -> the frame to deliver
 #: (possibly modified), or None to drop it.
@@ -87,16 +88,16 @@ class PlantRun:
 
     @property
     def q(self) -> FloatArray:
-        return self.log[:, 2:5]
+        return NodeLog(PLANT_LOG, self.log).group("q")
 
     @property
     def qd(self) -> FloatArray:
-        return self.log[:, 5:8]
+        return NodeLog(PLANT_LOG, self.log).group("qd")
 
     @property
     def u(self) -> FloatArray:
         """Row k + 1: the voltage applied during period k."""
-        return self.log[:, 8:11]
+        return NodeLog(PLANT_LOG, self.log).group("u")
 
 
 class _BusLost(HilError):
@@ -266,9 +267,7 @@ class PythonPlant:
             rc = EXIT_SAFETY  # completed, but the safety policy fired (as rrr_hil_plant)
         rows = np.array(self._rows, dtype=float).reshape(-1, len(LOG_HEADER))
         if log_csv is not None:
-            with atomic_path(log_csv) as tmp:  # complete or not at all (core.outputs)
-                np.savetxt(tmp, rows, delimiter=",", header=",".join(LOG_HEADER), comments="",
-                           fmt="%.17g")
+            write_log(log_csv, PLANT_LOG, rows)  # complete or not at all (core.outputs)
         return PlantRun(log=rows, summary=self._summary(rc))
 
     def _summary(self, rc: int) -> dict[str, Any]:

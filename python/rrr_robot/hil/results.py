@@ -21,29 +21,38 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
-from ..core.outputs import ResultSet, strict_json, to_strict_json_value
+from ..core.outputs import ResultSet
 from ..core.param_names import model_fmu_values
+from ..core.summary import reference_section, write_summary
 from ..sim.cosim import CosimOptions, CosimResult
 from ..sim.native import simulate
 from ..writing.job import metrics, scenario_summary
 from ..writing.trajectory import Reference
 from .bench import BenchRun
-from .nodes import read_node_log
+from .logspec import LATENCY_LOG, PLANT_LOG, read_log
 from .protocol import PERIOD, HilError
 
 __all__ = ["PLANT_LOG_COLUMNS", "RunInfo", "bench_result", "bench_summary", "comparison",
            "extend_reference", "latency_stats", "read_latency_log", "read_plant_log",
            "unquantised_cosim", "write_results"]
 
-#: Columns of the plant log (the C plant node's --log and the Python plant's), by name.
+
+def _span(first: str, n: int = 1) -> slice:
+    i = PLANT_LOG.index(first)
+    return slice(i, i + n)
+
+
+#: Columns of the plant log (logspec.PLANT_LOG: the C plant node's --log and the Python
+#: plant's), by name.
 PLANT_LOG_COLUMNS: dict[str, slice] = {
-    "t": slice(1, 2), "q": slice(2, 5), "qd": slice(5, 8), "u": slice(8, 11), "zero": slice(11, 12),
-    "faults": slice(12, 13), "qdd": slice(13, 16), "tip": slice(16, 19)}
+    "t": _span("t"), "q": _span("q[1]", 3), "qd": _span("qd[1]", 3), "u": _span("u[1]", 3),
+    "zero": _span("zero"), "faults": _span("faults"), "qdd": _span("qdd[1]", 3),
+    "tip": _span("tip.x", 3)}
 
 
 def read_plant_log(path: Path) -> FloatArray:
-    """The rows of a plant log (HilError when it has not the 19 columns of the nodes' log)."""
-    return read_node_log(path, 19)
+    """The rows of a plant log (HilError when it is not logspec.PLANT_LOG)."""
+    return read_log(path, PLANT_LOG).rows
 
 
 def extend_reference(ref: Reference, duration: float) -> Reference:
@@ -115,9 +124,8 @@ def comparison(bench: CosimResult, other: CosimResult) -> dict[str, Any]:
 
 
 def read_latency_log(path: Path) -> FloatArray:
-    """The (latency_ns, work_ns) rows of a node's --latency-log."""
-    rows = read_node_log(path)
-    return rows[:, 1:3] if rows.size else np.zeros((0, 2))
+    """The (latency_ns, work_ns) rows of a node's --latency-log (logspec.LATENCY_LOG)."""
+    return read_log(path, LATENCY_LOG).cols(["latency_ns", "work_ns"])
 
 
 @dataclass(frozen=True)
@@ -158,8 +166,8 @@ def bench_summary(*, side: str, mode: str, scenario: str, ref: Reference, bench:
     commands, the controller's counters, the bus traffic and, in real time, the latencies."""
     s: dict[str, Any] = {
         "side": side, "mode": mode, "scenario": scenario,
-        "reference": {"text": ref.spec.text, "duration": float(ref.t[-1] - ref.t[0]),
-                      "periods": int(ref.t.shape[0]), "step": PERIOD},
+        "reference": reference_section(ref.spec.text, ref.t[-1] - ref.t[0], PERIOD,
+                                       periods=int(ref.t.shape[0])),
         "bench": tracking(bench),
         "unquantised_cosim": tracking(unquantised),
         "difference_to_unquantised": comparison(bench, unquantised),
@@ -241,7 +249,4 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
 
         write_bench_figures(work, ref_run, bench, unq, latencies or None, stats,
                             scenario=info.scenario)
-    summary["files"] = sorted([*rs.names(), "summary.json"])
-    strict: dict[str, Any] = to_strict_json_value(summary)
-    rs.write_text("summary.json", strict_json(strict) + "\n")
-    return strict
+    return write_summary(rs, summary)

@@ -31,12 +31,12 @@ from .bench import (
     write_controller_log,
 )
 from .channel import DEFAULT_CHANNEL
+from .logspec import CONTROLLER_LOG, PLANT_LOG, NodeLog, read_log
 from .nodes import (
     controller_node_args,
     export_reference,
     failure_folder,
     open_bus,
-    read_node_log,
     start_listening_controller,
     start_plant,
 )
@@ -48,9 +48,6 @@ __all__ = ["Connection", "SideRun", "open_checked_bus", "run_bench", "run_contro
 
 Progress = Callable[[int, int], None]
 
-#: The columns of u, u_n and u_c in the C controller node's log (controller.csv).
-_U, _U_N, _U_C = [8, 11, 14], [9, 12, 15], [10, 13, 16]
-_CONTROLLER_COLUMNS = 18
 
 
 @dataclass(frozen=True)
@@ -183,7 +180,8 @@ def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool]
         if conn.external:
             host, port = conn.address()
         else:
-            ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv")
+            ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv",
+                                       (ref.x, ref.xd, ref.xdd))
             ctrl = start_listening_controller(ref_csv, log_csv=work / "controller.csv",
                                               extra=controller_node_args(controller_values),
                                               frame_log=None if frame_log is None
@@ -206,10 +204,11 @@ def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool]
             ctrl.close()
     s = prun.summary
     if ctrl is not None:
-        c = read_node_log(work / "controller.csv", _CONTROLLER_COLUMNS)
+        c = read_log(work / "controller.csv", CONTROLLER_LOG)
     else:  # the controller's log stays with it
-        c = np.zeros((prun.log.shape[0], _CONTROLLER_COLUMNS))
-    run = BenchRun(t=prun.log[:, 1], q=prun.q, qd=prun.qd, u=c[:, _U], plant_summary=s,
-                   controller_summary=cs, u_n=c[:, _U_N], u_c=c[:, _U_C])
+        c = NodeLog(CONTROLLER_LOG, np.zeros((prun.log.shape[0], len(CONTROLLER_LOG.columns))))
+    run = BenchRun(t=prun.log[:, PLANT_LOG.index("t")], q=prun.q, qd=prun.qd, u=c.group("u"),
+                   plant_summary=s, controller_summary=cs, u_n=c.group("u_n"),
+                   u_c=c.group("u_c"))
     # the exit status reflects every side's: the plant's first, then the controller node's
     return SideRun(_status(s, cs), run, {"plant": s, "controller": cs}, prun)

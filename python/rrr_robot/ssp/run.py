@@ -50,7 +50,8 @@ import numpy as np
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.archives import scratch_folder
-from ..core.outputs import ResultSet, check_folder, strict_json, to_strict_json_value
+from ..core.outputs import ResultSet, check_folder
+from ..core.summary import reference_section, write_summary
 from ..errors import BadInputError, RrrError
 from ..sim.cosim import CosimResult
 from ..writing.job import PAPER_RMS_U_C, PAPER_RMS_U_N, metrics, scenario_summary
@@ -295,8 +296,8 @@ def _run(job: SspRun, arch: SspArchive, work: Path, progress: Progress) -> dict[
         simulated = float(sig.t[-1] - arch.start_time)
         summary: dict[str, Any] = {
             "scenarios": {name: s},
-            "reference": {"text": arch.info.get("text"), "duration": arch.stop_time -
-                          arch.start_time, "step": arch.step},
+            "reference": reference_section(arch.info.get("text"),
+                                           arch.stop_time - arch.start_time, arch.step),
             "engine": f"ssp:{job.tool}",
             "fmi_version": "2.0",
             "ssp": {"file": str(job.ssp), "tool": job.tool, "rows": int(sig.t.size),
@@ -311,9 +312,7 @@ def _run(job: SspRun, arch: SspArchive, work: Path, progress: Progress) -> dict[
         log.info("%s in %s: tip error max %.3f mm, %.1fx real time", name, job.tool,
                  1e3 * _tip_error_max(res),
                  simulated / sig.wall_time if sig.wall_time > 0 else np.inf)
-        summary["files"] = sorted([*rs.names(), "summary.json"])
-        summary = to_strict_json_value(summary)
-        rs.write_text("summary.json", strict_json(summary) + "\n")
+        summary = write_summary(rs, summary)
     return summary
 
 

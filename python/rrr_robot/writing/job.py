@@ -23,10 +23,11 @@ import numpy as np
 
 from ..core import fmu_vars as fv
 from ..core.model import DEFAULT_ROBOT_TOML, Model
-from ..core.outputs import ResultSet, check_folder, check_name, strict_json, to_strict_json_value
+from ..core.outputs import ResultSet, check_folder, check_name, to_strict_json_value
 from ..core.param_names import model_fmu_values
 from ..core.robot import RobotFile, read_robot_file
 from ..core.robot_file import ControlGains
+from ..core.summary import reference_section, write_summary
 from ..core.tables import check_table_format
 from ..errors import BadInputError
 from ..sim.cosim import CosimOptions, CosimResult, run_cosim
@@ -282,13 +283,11 @@ def run_writing(job: WritingJob,
             s = summary["scenarios"][scn.name] = scenario_summary(metrics(res))
             log.info("%s: %s", scn.name, _describe(s))
         log.info("%s tables: %.2f s", fmt, table_time)
-        summary["reference"] = {
-            "text": ref.spec.text, "letter_height": ref.spec.letter_height,
-            "duration": float(ref.t[-1] - ref.t[0]),
-            "step": float(ref.t[1] - ref.t[0]),
-            "min_workspace_margin_m": ref.min_margin_m, "min_elbow_margin": ref.min_elbow_margin,
-            "min_shoulder_margin_m": ref.min_shoulder_margin_m,
-        }
+        summary["reference"] = reference_section(
+            ref.spec.text, ref.t[-1] - ref.t[0], ref.t[1] - ref.t[0],
+            letter_height=ref.spec.letter_height, min_workspace_margin_m=ref.min_margin_m,
+            min_elbow_margin=ref.min_elbow_margin,
+            min_shoulder_margin_m=ref.min_shoulder_margin_m)
         summary["engine"] = job.engine
         summary["fmi_version"] = f"{job.fmi_version}.0" if job.engine == "fmpy" else None
         summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
@@ -322,7 +321,5 @@ def run_writing(job: WritingJob,
                 {name: res.columns() for name, res in results.items()}, robot,
                 f"rrr writing: {ref.spec.text!r}"))
             log.info("view.html: %.2f s", time.perf_counter() - start)
-        summary["files"] = sorted([*rs.names(), "summary.json"])
-        summary = to_strict_json_value(summary)
-        rs.write_text("summary.json", strict_json(summary) + "\n")
+        summary = write_summary(rs, summary)
     return summary
