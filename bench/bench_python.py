@@ -185,7 +185,7 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
                          joint_limits=False)
 
     log("agreement checks")
-    tau = model.inverse_dynamics(q, qd, qdd)
+    tau = model.inverse_dynamics(q, qd, qdd, simd="scalar")  # the one-state calls' numbers
     rnea = np.array([pin.rnea(pm, pdata, *rows[k]) for k in range(n)])
     fk_eval = np.array([ets.eval(q[k])[:3, 3] for k in range(n)])
     batch_ours = model.inverse_dynamics(bq, bqd, bqdd)

@@ -68,3 +68,17 @@ def test_a_bad_row_raises_the_one_state_error_and_bad_paths_are_refused(model, s
             model.inverse_dynamics(q[0], qd[0], qdd[0], simd=bad)
     with pytest.raises(rr.BadInputError, match="rows"):
         model.inverse_dynamics(q[:5], qd[:4], qdd[:5])
+
+
+def test_both_bindings_call_the_same_batch_kernels(model, states) -> None:
+    """The extension (the Model's binding) and the ctypes binding run the same librrr call:
+    bit for bit the same batch, broadcast rows included."""
+    from rrr_robot.core import _ctypes_kernels
+
+    slow = _ctypes_kernels.Kernels(model.raw)
+    auto = batch.PATHS_HERE["auto"]
+    assert model.inverse_dynamics(*states).tobytes() == slow.inverse_dynamics(
+        *states, auto).tobytes()
+    q, qd, qdd = states
+    assert model.inverse_dynamics(q, qd[0], qdd).tobytes() == slow.inverse_dynamics(
+        q, qd[0], qdd, auto).tobytes()

@@ -7,17 +7,12 @@ tests/python/test_batch.py); they exist in librrr built with GCC for x86-64 Linu
 
 from __future__ import annotations
 
-import ctypes as ct
-from typing import Any
-
-import numpy as np
-from numpy.typing import ArrayLike
+from typing import NoReturn
 
 from ..errors import BadInputError
 from . import _lib
-from ._arrays import FloatArray, broadcast_rows, ptr
 
-__all__ = ["SIMD_PATHS", "inverse_dynamics_batch", "simd_available", "simd_best"]
+__all__ = ["PATHS_HERE", "SIMD_PATHS", "refuse", "simd_available", "simd_best"]
 
 #: The paths by name, with their ``rrr_simd`` values.
 SIMD_PATHS = {"auto": 0, "scalar": 1, "avx2": 2, "avx512": 3}
@@ -26,7 +21,7 @@ _NAMES = {v: k for k, v in SIMD_PATHS.items()}
 
 def simd_available() -> tuple[str, ...]:
     """The paths this librrr and this CPU can run ("auto" and "scalar" always)."""
-    return tuple(name for name, v in SIMD_PATHS.items() if _lib.LIB.rrr_simd_available(v))
+    return tuple(PATHS_HERE)
 
 
 def simd_best() -> str:
@@ -34,26 +29,13 @@ def simd_best() -> str:
     return _NAMES[int(_lib.LIB.rrr_simd_best())]
 
 
-def _path(simd: str) -> int:
-    if simd not in SIMD_PATHS:
-        raise BadInputError(f"simd must be one of {', '.join(SIMD_PATHS)}, got {simd!r}")
-    if not _lib.LIB.rrr_simd_available(SIMD_PATHS[simd]):
+#: The paths this librrr and CPU run, by name (what ``simd=`` takes), computed once.
+PATHS_HERE = {name: v for name, v in SIMD_PATHS.items() if _lib.LIB.rrr_simd_available(v)}
+
+
+def refuse(simd: object) -> NoReturn:
+    """The BadInputError of a ``simd`` argument that is not a path name here."""
+    if isinstance(simd, str) and simd in SIMD_PATHS:
         raise BadInputError(f"simd={simd!r} is not available here (this librrr and CPU run: "
-                            f"{', '.join(simd_available())})")
-    return SIMD_PATHS[simd]
-
-
-def inverse_dynamics_batch(raw: Any, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
-                           simd: str = "auto") -> FloatArray | None:
-    """tau rows of ``rrr_inverse_dynamics_batch`` for (n, 3) inputs (rows broadcast as the
-    one-state calls do) on the model ``raw`` (a :class:`_lib.RawModel`); None when a row fails
-    (the caller's one-state path then raises its error for that row)."""
-    path = _path(simd)
-    (qs, qds, qdds), _ = broadcast_rows((q, "q"), (qd, "qd"), (qdd, "qdd"))
-    n = qs.shape[0]
-    tau = np.empty((n, 3))
-    done = ct.c_size_t(0)
-    status = _lib.FUNCS["rrr_inverse_dynamics_batch"](ct.byref(raw), n, ptr(qs), ptr(qds),
-                                                      ptr(qdds), ptr(tau), path,
-                                                      ct.byref(done))
-    return tau if status == 0 else None
+                            f"{', '.join(PATHS_HERE)})")
+    raise BadInputError(f"simd must be one of {', '.join(SIMD_PATHS)}, got {simd!r}")

@@ -298,14 +298,11 @@ class Model:
         else scalar), within 1e-13 N m of the scalar path; ``"scalar"`` bit for bit the
         one-state call on every row; ``"avx2"``, ``"avx512"`` those kernels (refused where they
         are not available). One state is always the scalar call."""
-        if simd != "scalar" and (np.ndim(q) == 2 or np.ndim(qd) == 2 or np.ndim(qdd) == 2):
-            tau = batch.inverse_dynamics_batch(self._raw, q, qd, qdd, simd)
-            if tau is not None:
-                return tau
-        elif simd not in batch.SIMD_PATHS:
-            raise BadInputError(f"simd must be one of {', '.join(batch.SIMD_PATHS)}, got "
-                                f"{simd!r}")
-        return self._k.inverse_dynamics(q, qd, qdd)  # one state, or a row that fails: its error
+        try:
+            path = batch.PATHS_HERE[simd]
+        except (KeyError, TypeError):
+            batch.refuse(simd)
+        return self._k.inverse_dynamics(q, qd, qdd, path)
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """D(q) of eq 7 (rotor inertias included), (3, 3) or (n, 3, 3)."""
