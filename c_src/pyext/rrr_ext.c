@@ -1071,7 +1071,91 @@ MAP_METHOD(tip_motion, S_TIP_MOTION)
 MAP_METHOD(joint_motion, S_JOINT_MOTION)
 MAP_METHOD(workspace_margin, S_WORKSPACE_MARGIN)
 MAP_METHOD(regressor, S_REGRESSOR)
-MAP_METHOD(inverse_dynamics, S_INVERSE_DYNAMICS)
+/* inverse_dynamics(q, qd, qdd[, path]) -> tau: one state, or a batch through librrr's batch
+ * kernels (rrr_inverse_dynamics_batch) on `path`, an rrr_simd value (without it, or with
+ * RRR_SIMD_SCALAR: the row loop, bit for bit the one-state call). Broadcast rows are expanded
+ * into a buffer of this call's; a failing row raises as the row loop does. */
+static PyObject *K_inverse_dynamics(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    const map_spec *s = &S_INVERSE_DYNAMICS;
+    if (nargs != 3 && nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "inverse_dynamics() takes 3 or 4 arguments (%zd given)",
+                     nargs);
+        return NULL;
+    }
+    long path = RRR_SIMD_SCALAR;
+    if (nargs == 4) {
+        path = PyLong_AsLong(args[3]);
+        if (path == -1 && PyErr_Occurred()) {
+            return NULL;
+        }
+        if (path < RRR_SIMD_AUTO || path > RRR_SIMD_AVX512 ||
+            !rrr_simd_available((rrr_simd)path)) {
+            PyErr_Format(PyExc_ValueError, "inverse_dynamics: batch path %ld is not available "
+                         "here (rrr_simd_available)", path);
+            return NULL;
+        }
+    }
+    vec_arg a[MAX_IN];
+    if (parse_args(args, s->n_in, s->in_names, a) != 0) {
+        return NULL;
+    }
+    Py_ssize_t n;
+    int batch;
+    PyObject *result = NULL;
+    if (broadcast(a, s->n_in, s->in_names, &n, &batch) == 0) {
+        if (!batch || path == RRR_SIMD_SCALAR) {
+            result = map_parsed(MODEL(self), s, NULL, a, n, batch);
+        } else {
+            /* every input as n contiguous rows: broadcast ones copied into one buffer */
+            const double *rows[3];
+            int expand = 0;
+            for (int i = 0; i < 3; ++i) {
+                expand += a[i].step == 0 && n > 1;
+            }
+            double *buf = NULL;
+            if (expand > 0) {
+                buf = PyMem_Malloc((size_t)expand * (size_t)n * NJ * sizeof *buf);
+                if (buf == NULL) {
+                    args_release(a, s->n_in);
+                    return PyErr_NoMemory();
+                }
+            }
+            double *next = buf;
+            for (int i = 0; i < 3; ++i) {
+                if (a[i].step == 0 && n > 1) {
+                    for (Py_ssize_t k = 0; k < n; ++k) {
+                        memcpy(&next[k * NJ], a[i].data, NJ * sizeof *next);
+                    }
+                    rows[i] = next;
+                    next += n * NJ;
+                } else {
+                    rows[i] = a[i].data;
+                }
+            }
+            const Py_ssize_t dims[1] = {NJ};
+            double *out;
+            PyObject *arr = new_array(1, n, 1, dims, &out);
+            if (arr != NULL) {
+                size_t done = 0;
+                rrr_status st;
+                Py_BEGIN_ALLOW_THREADS
+                st = rrr_inverse_dynamics_batch(MODEL(self), (size_t)n, rows[0], rows[1],
+                                                rows[2], out, (rrr_simd)path, &done);
+                Py_END_ALLOW_THREADS
+                if (st == RRR_OK) {
+                    result = arr;
+                } else {
+                    Py_DECREF(arr);
+                    raise_failed_row(s, a, (Py_ssize_t)done, st);
+                }
+            }
+            PyMem_Free(buf);
+        }
+    }
+    args_release(a, s->n_in);
+    return result;
+}
 MAP_METHOD(mass_matrix, S_MASS_MATRIX)
 MAP_METHOD(coriolis, S_CORIOLIS)
 MAP_METHOD(gravity, S_GRAVITY)

@@ -19,7 +19,8 @@ import rrr_robot as rr
 #: The modules of the fast subset: the model, its files and tables, the CLI's argument checks,
 #: the API and version checks (each a few seconds at most).
 FAST = frozenset({
-    "test_api_docs", "test_cli_help", "test_default_robot", "test_docs_map", "test_ext_binding",
+    "test_api_docs", "test_batch", "test_cli_help", "test_default_robot", "test_docs_map",
+    "test_ext_binding",
     "test_fk_frames", "test_hil_codec", "test_identify_errors", "test_kinematics",
     "test_linearize", "test_model_api", "test_plant_api", "test_robot_file",
     "test_scenario_file", "test_startup_imports", "test_sweep_spec", "test_tables",

@@ -151,7 +151,11 @@ def test_broadcast_rows_are_bit_identical(name: str) -> None:
 
 def test_model_methods_use_the_extension() -> None:
     q, qd, qdd = (draw(k, 40) for k in ("q", "v", "v"))
-    same_bits(MODEL.inverse_dynamics(q, qd, qdd), REF.inverse_dynamics(q, qd, qdd))
+    # a batch's scalar path is the extension's row loop (the default: librrr's vector kernels,
+    # within 1e-13 N m: tests/python/test_batch.py)
+    same_bits(MODEL.inverse_dynamics(q, qd, qdd, simd="scalar"), REF.inverse_dynamics(q, qd, qdd))
+    assert np.abs(MODEL.inverse_dynamics(q, qd, qdd) - REF.inverse_dynamics(q, qd, qdd)).max() <= (
+        1e-13)
     same_bits(MODEL.nominal_voltage(q[3], qd[3], qdd[3]), REF.nominal_voltage(q[3], qd[3], qdd[3]))
     x = draw("x", None)
     same_bits(MODEL.ik(x), REF.ik(x))
@@ -375,13 +379,14 @@ def test_contiguous_float64_input_is_not_copied() -> None:
                                                  (400_000, True)])
 def test_large_batches_release_the_gil(rows: int, released: bool) -> None:
     """With a switch interval of 100 s, the main thread runs while the worker is inside the
-    batch only if the batch released the GIL."""
+    batch only if the batch released the GIL (the extension's row loop: simd="scalar"; the
+    batch kernels' ctypes call always releases it)."""
     q = RNG.uniform(-1.0, 1.0, (rows, 3))
     started, state = threading.Event(), {"done": False, "seen_running": None}
 
     def worker() -> None:
         started.set()
-        MODEL.inverse_dynamics(q, q, q)
+        MODEL.inverse_dynamics(q, q, q, simd="scalar")
         state["done"] = True
 
     old = sys.getswitchinterval()
@@ -402,19 +407,25 @@ def test_batches_from_threads_are_correct() -> None:
     want = REF.inverse_dynamics(q[:2000], qd[:2000], qdd[:2000])
     results: list[np.ndarray] = []
 
+    vector: list[np.ndarray] = []
+
     def worker() -> None:
         for _ in range(5):
-            results.append(MODEL.inverse_dynamics(q, qd, qdd))
+            results.append(MODEL.inverse_dynamics(q, qd, qdd, simd="scalar"))  # the extension
+            vector.append(MODEL.inverse_dynamics(q, qd, qdd))  # librrr's batch call (ctypes)
 
     threads = [threading.Thread(target=worker) for _ in range(4)]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
-    assert len(results) == 20
+    assert len(results) == 20 and len(vector) == 20
     for r in results:
         same_bits(r[:2000], want)
         assert r.tobytes() == results[0].tobytes()
+    for v in vector:
+        assert v.tobytes() == vector[0].tobytes()
+    assert np.abs(vector[0] - results[0]).max() <= 1e-13
 
 
 def test_the_model_struct_is_read_in_place() -> None:

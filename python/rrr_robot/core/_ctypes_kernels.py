@@ -132,7 +132,20 @@ class Kernels:
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, /) -> FloatArray:
         return self._map3("rrr_regressor", q, qd, qdd, (3, _lib.NP))
 
-    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, /) -> FloatArray:
+    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, path: int = 1, /
+                         ) -> FloatArray:
+        """Rows of rrr_inverse_dynamics; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR)
+        through rrr_inverse_dynamics_batch (its failing row raised by the row loop)."""
+        if path != 1:
+            (qs, qds, qdds), batch = broadcast_rows((q, "q"), (qd, "qd"), (qdd, "qdd"))
+            if batch:
+                n = qs.shape[0]
+                tau = np.empty((n, 3))
+                done = ct.c_size_t(0)
+                status = _lib.FUNCS["rrr_inverse_dynamics_batch"](
+                    self._ref, n, ptr(qs), ptr(qds), ptr(qdds), ptr(tau), path, ct.byref(done))
+                if status == 0:
+                    return tau
         return self._map3("rrr_inverse_dynamics", q, qd, qdd, (3,))
 
     def mass_matrix(self, q: ArrayLike, /) -> FloatArray:

@@ -181,6 +181,8 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_ctc_jacobian": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcDerivatives)],
     "rrr_plant_step": [_M, _P(RawPlantIntegrator), _D, ct.c_double, _P(RawPlantState), _D,
                        _P(RawPlantStats)],
+    "rrr_inverse_dynamics_batch": [_M, ct.c_size_t, _D, _D, _D, _D, ct.c_int,
+                                   _P(ct.c_size_t)],
     "rrr_plant_rollout": [_M, _P(RawPlantIntegrator), ct.c_size_t, _D, ct.c_double,
                           _P(RawPlantState), _D, _D, _D, _P(ct.c_size_t), _P(RawPlantStats)],
     "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
@@ -199,6 +201,8 @@ _TABLE_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
     "rrr_param_in_range": ([ct.c_size_t, ct.c_double], ct.c_int),
     "rrr_sample_time_default": ([], ct.c_double),
     "rrr_version": ([], ct.c_char_p),
+    "rrr_simd_available": ([ct.c_int], ct.c_int),
+    "rrr_simd_best": ([], ct.c_int),
 }
 
 def library_path() -> Path:

@@ -14,5 +14,6 @@
 #include "rrr_plant.h"
 #include "rrr_sim.h"
 #include "rrr_derivatives.h"
+#include "rrr_batch.h"
 #include "rrr_version.h"
 #endif /* RRR_H */

@@ -1,0 +1,63 @@
+/**
+ * @file rrr_batch.h
+ * @brief Calls over many states at once (n rows of 3), with kernels vectorised over the states
+ *        (AVX2, AVX-512) chosen at run time from the CPU's features, and the portable scalar
+ *        path kept and selectable for bit-exact comparisons.
+ *
+ * The vector kernels compute the same closed form as the scalar calls (the same generated code,
+ * compiled for 4 or 8 states per instruction, with glibc's vector sin and cos from libmvec), so
+ * their results are not bit-identical to the scalar path: they differ by rounding, within 1e-13
+ * (absolute, N m, for the default robot's torques of up to about 50 N m; tests/c/test_batch.c
+ * checks it over random states, multi-turn angles included). A row the scalar call would refuse
+ * (non-finite input, an invalid model) is handed to the scalar call, so statuses are the scalar
+ * path's. The vector kernels exist in librrr built with GCC for x86-64 Linux (glibc); elsewhere
+ * only RRR_SIMD_SCALAR is available and RRR_SIMD_AUTO means it.
+ */
+#ifndef RRR_BATCH_H
+#define RRR_BATCH_H
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#include <stddef.h>
+
+#include "rrr_model.h"
+
+/** @brief Which kernels a batch call uses. */
+typedef enum rrr_simd {
+    RRR_SIMD_AUTO = 0,   ///< the widest available here (rrr_simd_best)
+    RRR_SIMD_SCALAR = 1, ///< the scalar calls row by row: bit for bit the one-state calls
+    RRR_SIMD_AVX2 = 2,   ///< 4 states per vector (AVX2 and FMA)
+    RRR_SIMD_AVX512 = 3  ///< 8 states per vector (AVX-512 F and DQ)
+} rrr_simd;
+
+/** @brief 1 when this librrr has the kernels of `path` and this CPU can run them (AUTO and
+ *         SCALAR: always 1), else 0. */
+RRR_API int rrr_simd_available(rrr_simd path);
+
+/** @brief The widest path available here: RRR_SIMD_AVX512, RRR_SIMD_AVX2 or RRR_SIMD_SCALAR. */
+RRR_API rrr_simd rrr_simd_best(void);
+
+/** @brief A static name of a path: "auto", "scalar", "avx2", "avx512"; "?" for other values. */
+RRR_API const char *rrr_simd_name(rrr_simd path);
+
+/**
+ * @brief rrr_inverse_dynamics of n states: row k of tau = R(q_k, qd_k, qdd_k) p.
+ * @param[in]  n    number of states (0: nothing happens, RRR_OK)
+ * @param[in]  q, qd, qdd  n rows of 3 each
+ * @param[out] tau  n rows of 3
+ * @param[in]  path the kernels (RRR_SIMD_AUTO: the best available)
+ * @param[out] done if not NULL, the rows written (n on RRR_OK; the first row whose scalar call
+ *                  fails otherwise: the rows before it are valid, the others unspecified)
+ * @return RRR_OK; RRR_BAD_INPUT (NULL with n > 0, a path that is not available here: see
+ *         rrr_simd_available); otherwise the status rrr_inverse_dynamics gives row *done.
+ */
+RRR_API rrr_status rrr_inverse_dynamics_batch(const rrr_model *m, size_t n, const double q[],
+                                              const double qd[], const double qdd[],
+                                              double tau[], rrr_simd path, size_t *done);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* RRR_BATCH_H */

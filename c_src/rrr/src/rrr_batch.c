@@ -1,0 +1,123 @@
+/* Batch calls (rrr_batch.h): the path chosen from the CPU's features, the vector kernels of
+ * c_src/rrr/simd/ where this librrr has them (RRR_HAVE_SIMD_X86, set by CMake for GCC on x86-64
+ * Linux), and every row the vector kernels cannot vouch for handed to the scalar call. */
+#include <math.h>
+#include <stddef.h>
+
+#include "rrr/rrr_batch.h"
+#include "rrr/rrr_dynamics.h"
+#include "rrr_internal.h"
+
+#ifdef RRR_HAVE_SIMD_X86
+#include "rrr_simd.h"
+#endif
+
+int rrr_simd_available(rrr_simd path)
+{
+    switch (path) {
+    case RRR_SIMD_AUTO:
+    case RRR_SIMD_SCALAR:
+        return 1;
+#ifdef RRR_HAVE_SIMD_X86
+    case RRR_SIMD_AVX2:
+        return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    case RRR_SIMD_AVX512:
+        return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+               __builtin_cpu_supports("fma");
+#else
+    case RRR_SIMD_AVX2:
+    case RRR_SIMD_AVX512:
+        return 0;
+#endif
+    }
+    return 0;
+}
+
+rrr_simd rrr_simd_best(void)
+{
+    if (rrr_simd_available(RRR_SIMD_AVX512)) {
+        return RRR_SIMD_AVX512;
+    }
+    if (rrr_simd_available(RRR_SIMD_AVX2)) {
+        return RRR_SIMD_AVX2;
+    }
+    return RRR_SIMD_SCALAR;
+}
+
+const char *rrr_simd_name(rrr_simd path)
+{
+    switch (path) {
+    case RRR_SIMD_AUTO:
+        return "auto";
+    case RRR_SIMD_SCALAR:
+        return "scalar";
+    case RRR_SIMD_AVX2:
+        return "avx2";
+    case RRR_SIMD_AVX512:
+        return "avx512";
+    }
+    return "?";
+}
+
+/* The rows from `from` on, one scalar call each; RRR_OK or the first failure (at *done). */
+static rrr_status scalar_rows(const rrr_model *m, size_t from, size_t n, const double q[],
+                              const double qd[], const double qdd[], double tau[],
+                              size_t *done)
+{
+    for (size_t k = from; k < n; ++k) {
+        const rrr_status st =
+            rrr_inverse_dynamics(m, &q[3 * k], &qd[3 * k], &qdd[3 * k], &tau[3 * k]);
+        if (st != RRR_OK) {
+            *done = k;
+            return st;
+        }
+    }
+    *done = n;
+    return RRR_OK;
+}
+
+rrr_status rrr_inverse_dynamics_batch(const rrr_model *m, size_t n, const double q[],
+                                      const double qd[], const double qdd[], double tau[],
+                                      rrr_simd path, size_t *done)
+{
+    size_t ok = 0;
+    if (done != NULL) {
+        *done = 0;
+    }
+    if (m == NULL || (n > 0 && (q == NULL || qd == NULL || qdd == NULL || tau == NULL)) ||
+        !rrr_simd_available(path)) {
+        return RRR_BAD_INPUT;
+    }
+    if (path == RRR_SIMD_AUTO) {
+        path = rrr_simd_best();
+    }
+    rrr_status st = RRR_OK;
+    if (path == RRR_SIMD_SCALAR) {
+        st = scalar_rows(m, 0, n, q, qd, qdd, tau, &ok);
+    } else {
+#ifdef RRR_HAVE_SIMD_X86
+        if (path == RRR_SIMD_AVX512) {
+            rrr_simd_inverse_dynamics_avx512(m, n, q, qd, qdd, tau);
+        } else {
+            rrr_simd_inverse_dynamics_avx2(m, n, q, qd, qdd, tau);
+        }
+#endif
+        /* a row with a non-finite input or result is the scalar call's to judge (it gives the
+         * status, or recomputes a row that is fine after all) */
+        ok = n;
+        for (size_t k = 0; k < n; ++k) {
+            if (!rrr_finite_n(&q[3 * k], 3) || !rrr_finite_n(&qd[3 * k], 3) ||
+                !rrr_finite_n(&qdd[3 * k], 3) || !rrr_finite_n(&tau[3 * k], 3)) {
+                st = rrr_inverse_dynamics(m, &q[3 * k], &qd[3 * k], &qdd[3 * k], &tau[3 * k]);
+                if (st != RRR_OK) {
+                    ok = k;
+                    break;
+                }
+            }
+        }
+    }
+    if (done != NULL) {
+        *done = ok;
+    }
+    return st;
+}
