@@ -93,7 +93,8 @@ def test_faults_go_through_the_c_supervisor(ref, case: str, first_zero: int,
     rx_filter = (drop_commands_from(K0) if case == "commands stop"
        else _corrupt_crc_at(K0))
     n = N_FAULT
-    short = replace(ref, t=ref.t[:n], q=ref.q[:n], qd=ref.qd[:n], qdd=ref.qdd[:n])
+    short = replace(ref, t=ref.t[:n], q=ref.q[:n], qd=ref.qd[:n], qdd=ref.qdd[:n], x=ref.x[:n],
+                    xd=ref.xd[:n], xdd=ref.xdd[:n])
     side = run_plant_side(short, {}, tmp_path, Connection(), rx_filter=rx_filter, timeout=0.5)
     run, plant = side.run, side.plant
     assert plant is not None

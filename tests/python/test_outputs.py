@@ -383,7 +383,9 @@ def test_an_interrupted_writing_run_leaves_the_previous_results(
         def fail_json(*args: Any, **kwargs: Any) -> str:
             raise KeyboardInterrupt
 
-        monkeypatch.setattr(job_module, "strict_json", fail_json)
+        from rrr_robot.core import summary as summary_module  # the one summary.json builder
+
+        monkeypatch.setattr(summary_module, "strict_json", fail_json)
     with pytest.raises(KeyboardInterrupt):
         run_writing(writing_job(out, figures=True))
     assert snapshot(out) == before

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.outputs import atomic_path
 from ..sim.cosim import CTRL_IN, CTRL_OUT, CosimOptions, CosimResult, run_cosim
@@ -258,7 +259,7 @@ def write_controller_log(run: BenchRun, path: Path) -> Path:
     rows[:, spec.index("enable")] = 1.0
     for group, values in (("q", run.q), ("qd", run.qd), ("u", run.u), ("u_n", run.u_n),
                           ("u_c", run.u_c)):
-        rows[:, spec.indices(f"{group}[{i}]" for i in (1, 2, 3))] = values
+        rows[:, spec.indices(fv.joint_names(group))] = values
     return write_log(path, spec, rows)
 
 

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.outputs import atomic_open
 from .protocol import HilError
@@ -39,7 +40,7 @@ __all__ = [
     "write_log",
 ]
 
-_J = (1, 2, 3)
+_J = fv.JOINTS
 
 
 @dataclass(frozen=True)
@@ -82,7 +83,8 @@ class LogSpec:
 
 
 def _joints(group: str, unit: str, meaning: str) -> list[Column]:
-    return [Column(f"{group}[{i}]", unit, f"{meaning}, joint {i}") for i in _J]
+    return [Column(name, unit, f"{meaning}, joint {i}")
+            for i, name in zip(_J, fv.joint_names(group), strict=True)]
 
 
 _K = Column("k", "", "control period, from 0")
@@ -92,10 +94,11 @@ CONTROLLER_LOG = LogSpec("controller", "rrr_hil_controller --log; hil.bench.writ
     Column("t", "s", "reference time of the period"),
     *_joints("q", "rad", "measured joint angle (JointState)"),
     *_joints("qd", "rad/s", "measured joint velocity (JointState)"),
-    *(c for i in _J for c in (
-        Column(f"u[{i}]", "V", f"commanded voltage (saturated), joint {i}"),
-        Column(f"u_n[{i}]", "V", f"feedforward of eq 15, joint {i}"),
-        Column(f"u_c[{i}]", "V", f"PD part of eq 15, joint {i}"))),
+    *(c for i, u, u_n, u_c in zip(_J, fv.joint_names("u"), fv.joint_names("u_n"),
+                                  fv.joint_names("u_c"), strict=True) for c in (
+        Column(u, "V", f"commanded voltage (saturated), joint {i}"),
+        Column(u_n, "V", f"feedforward of eq 15, joint {i}"),
+        Column(u_c, "V", f"PD part of eq 15, joint {i}"))),
     Column("enable", "", "1 when the command enabled the drives"),
 ))
 #: rrr_hil_plant --log (and PythonPlant): row 0 is the initial state, row k + 1 the state after
@@ -109,7 +112,8 @@ PLANT_LOG = LogSpec("plant", "rrr_hil_plant --log; hil.plant.PythonPlant", (
     Column("zero", "", "1 when the supervisor applied zero voltage"),
     Column("faults", "", "the supervisor's fault count so far"),
     *_joints("qdd", "rad/s2", "joint acceleration (plant FMU output)"),
-    *(Column(f"tip.{a}", "m", f"tip position {a} (plant FMU output)") for a in "xyz"),
+    *(Column(name, "m", f"tip position {a} (plant FMU output)")
+      for a, name in zip(fv.AXES, fv.axis_names("tip"), strict=True)),
 ))
 #: --latency-log of both nodes (real time): one row per period.
 LATENCY_LOG = LogSpec("latency", "rrr_hil_controller / rrr_hil_plant --latency-log", (

@@ -31,7 +31,6 @@ import numpy as np
 
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
-from ..core.outputs import atomic_path
 from ..sim.cosim import PLANT_IN, initial_state_values
 from ..sim.fmu_slave import FmuSlave
 from ..sim.fmus import fmu_path
@@ -61,7 +60,7 @@ STATE_OUTPUTS = fv.names("plant", "q") + fv.names("plant", "qd")
 #: state, row k + 1 the state after period k with the voltage applied during period k.
 LOG_HEADER = list(PLANT_LOG.names)
 #: The FMU outputs logged beside the state (the last six columns).
-LOGGED_OUTPUTS = list(PLANT_LOG.names[PLANT_LOG.index("qdd[1]"):])
+LOGGED_OUTPUTS = list(PLANT_LOG.names[PLANT_LOG.index(fv.names("plant", "qdd")[0]):])
 
 #: Fault injection between the bus and the plant: (period k, frame) -> the frame to deliver
 #: (possibly modified), or None to drop it.

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.outputs import ResultSet
@@ -45,9 +46,8 @@ def _span(first: str, n: int = 1) -> slice:
 #: Columns of the plant log (logspec.PLANT_LOG: the C plant node's --log and the Python
 #: plant's), by name.
 PLANT_LOG_COLUMNS: dict[str, slice] = {
-    "t": _span("t"), "q": _span("q[1]", 3), "qd": _span("qd[1]", 3), "u": _span("u[1]", 3),
-    "zero": _span("zero"), "faults": _span("faults"), "qdd": _span("qdd[1]", 3),
-    "tip": _span("tip.x", 3)}
+    "t": _span("t"), **{g: _span(fv.names("plant", g)[0], 3) for g in ("q", "qd", "u", "qdd")},
+    "zero": _span("zero"), "faults": _span("faults"), "tip": _span(fv.names("plant", "tip")[0], 3)}
 
 
 def read_plant_log(path: Path) -> FloatArray:

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.tables import write_csv
+from ..writing.reference_table import REFERENCE_COLUMNS
 from ..writing.trajectory import Reference
 
 __all__ = [
@@ -33,11 +33,7 @@ TABLE_FILE = "reference.csv"
 
 #: The header of the table, in its order (the FMU checks it: fmu/reference/model.c): t, the
 #: reference FMU's joint outputs, its tip output x_ref and the tip's velocity and acceleration.
-TABLE_COLUMNS = (
-    "t",
-    *(n for s in ("q_ref", "qd_ref", "qdd_ref") for n in fv.names("reference", s)),
-    *fv.names("reference", "x_ref"), *fv.axis_names("xd_ref"), *fv.axis_names("xdd_ref"),
-)
+TABLE_COLUMNS = REFERENCE_COLUMNS  # one format: rrr_robot.writing.reference_table
 
 
 def reference_columns(ref: Reference) -> dict[str, FloatArray]:

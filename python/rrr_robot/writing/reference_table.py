@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.tables import write_csv
@@ -33,14 +34,13 @@ __all__ = [
     "write_reference_table",
 ]
 
-_J = (1, 2, 3)
-_AXES = ("x", "y", "z")
-#: t and the joint columns: what the bench's controller node reads.
+#: t and the joint columns: what the bench's controller node reads (the reference FMU's
+#: outputs' names).
 JOINT_COLUMNS: tuple[str, ...] = (
-    "t", *(f"{s}[{i}]" for s in ("q_ref", "qd_ref", "qdd_ref") for i in _J))
+    "t", *(n for s in ("q_ref", "qd_ref", "qdd_ref") for n in fv.names("reference", s)))
 #: The tip's columns (the reference FMU's x_ref output and its derivatives).
-TIP_COLUMNS: tuple[str, ...] = tuple(f"{s}.{a}" for s in ("x_ref", "xd_ref", "xdd_ref")
-                                     for a in _AXES)
+TIP_COLUMNS: tuple[str, ...] = (*fv.names("reference", "x_ref"), *fv.axis_names("xd_ref"),
+                                 *fv.axis_names("xdd_ref"))
 #: The header of the table, in its order (the reference FMU checks it).
 REFERENCE_COLUMNS: tuple[str, ...] = JOINT_COLUMNS + TIP_COLUMNS
 #: The unit of each column's group.
