@@ -5,6 +5,7 @@
 
 #include "fmu_harness_common.h"
 
+#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -121,6 +122,29 @@ void fh_vrs3(const fh_ops *ops, const void *api, const char *base, unsigned int 
     }
 }
 
+const char *const fh_ctrl_inputs[5] = {"q_ref", "qd_ref", "qdd_ref", "q", "qd"};
+
+void fh_vrs(const fh_ops *ops, const void *api, const char *const *bases, size_t n,
+            unsigned int *vr)
+{
+    for (size_t k = 0; k < n; ++k) {
+        fh_vrs3(ops, api, bases[k], vr + 3 * k);
+    }
+}
+
+int fh_names_word(const char *msg, const char *word)
+{
+    const size_t n = strlen(word);
+    for (const char *p = strstr(msg, word); p != NULL; p = strstr(p + 1, word)) {
+        const int before = p == msg || !isalnum((unsigned char)p[-1]);
+        const int after = !isalnum((unsigned char)p[n]);
+        if (before && after) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
 double fh_get1(const fh_ops *ops, void *x, const char *name)
 {
     const unsigned int vr = fh_md_vr(ops->md(ops->api(x)), name);
@@ -149,6 +173,40 @@ void fh_expect_error(const fh_ops *ops, void *x, int st, const char *what, const
         rrr_test_failures++;
     }
     memset(log, 0, sizeof *log);
+}
+
+void fh_expect_refused(const fh_ops *ops, void *x, const char *name, double v, const char *needle)
+{
+    fh_log_sink *log = ops->log(x);
+    const double before = fh_get1(ops, x, name);
+    memset(log, 0, sizeof *log);
+    const int s = fh_set1(ops, x, name, v);
+    const double after = fh_get1(ops, x, name);
+    if (s != FH_ERROR || log->count[FH_ERROR] != 1 || !strstr(log->last_error, needle) ||
+        !fh_names_word(log->last_error, ops->set_real_name) ||
+        memcmp(&before, &after, sizeof before) != 0) {
+        fprintf(stderr, "%s (%s): set %s = %g returned %d, message \"%s\", value %.17g -> %.17g\n",
+                ops->id(ops->api(x)), ops->where(x), name, v, s, log->last_error, before, after);
+        rrr_test_failures++;
+    }
+}
+
+void fh_expect_refused_out(const fh_ops *ops, void *x, int st, const char *what,
+                           const char *needle, const double *out, size_t n)
+{
+    const fh_log_sink *log = ops->log(x);
+    int untouched = 1;
+    for (size_t i = 0; i < n; ++i) {
+        untouched &= out[i] == FH_UNTOUCHED;
+    }
+    if (!(st == FH_ERROR && log->count[FH_ERROR] == 1 && strstr(log->last_error, needle) &&
+          untouched)) {
+        fprintf(stderr, "%s (%s): refused %s: status %d, %d error message(s), last \"%s\" "
+                        "(want \"%s\"), output %s\n",
+                ops->id(ops->api(x)), ops->where(x), what, st, log->count[FH_ERROR],
+                log->last_error, needle, untouched ? "untouched" : "written");
+        rrr_test_failures++;
+    }
 }
 
 unsigned char *fh_state_bytes(const fh_ops *ops, void *x, size_t *n)
@@ -346,6 +404,76 @@ void fh_loop_again(fh_loop *L, double (*rec)[9], double (*rec_again)[9])
     }
 }
 
+void fh_loop_twice(fh_loop *L, double (*rec)[9], double (*rec_again)[9], const char *label,
+                   void (*after_first)(fh_loop *L), void (*after_reset)(fh_loop *L))
+{
+    const fh_ops *o = L->ops;
+    const fh_log_sink *lp = o->log(L->p), *lc = o->log(L->c);
+    if (fh_loop_first(L, rec, label) == 0 && after_first != NULL) {
+        after_first(L);
+    }
+    CHECK(o->terminate(L->p) == FH_OK);
+    CHECK(o->terminate(L->c) == FH_OK);
+    CHECK(lp->count[FH_ERROR] == 0 && lc->count[FH_ERROR] == 0);
+    CHECK(lp->count[FH_WARNING] == 0 && lc->count[FH_WARNING] == 0);
+    /* reset and run again: the same trajectory, bit for bit */
+    CHECK(o->reset(L->p) == FH_OK);
+    CHECK(o->reset(L->c) == FH_OK);
+    if (after_reset != NULL) {
+        after_reset(L);
+    }
+    fh_loop_again(L, rec, rec_again);
+    CHECK(lp->count[FH_ERROR] == 0 && lc->count[FH_ERROR] == 0);
+    CHECK(o->terminate(L->p) == FH_OK);
+    CHECK(o->terminate(L->c) == FH_OK);
+}
+
+/* ---- refused values -------------------------------------------------------------------------- */
+
+void fh_refused_in_init(const fh_ops *ops, void *p, void *c)
+{
+    fh_expect_refused(ops, p, "u[1]", (double)NAN, "u[1]");
+    fh_expect_refused(ops, p, "u[3]", -(double)INFINITY, "u[3]");
+    fh_expect_refused(ops, p, "d1", (double)INFINITY, "d1");
+    fh_expect_refused(ops, p, "p[7]", -(double)INFINITY, "p[7]");
+    fh_expect_refused(ops, p, "h_int", (double)NAN, "h_int");
+    fh_expect_refused(ops, p, "rtol", (double)INFINITY, "rtol");
+    fh_expect_refused(ops, p, "atol", (double)NAN, "atol");
+    fh_expect_refused(ops, p, "q0[2]", (double)INFINITY, "q0[2]");
+    fh_expect_refused(ops, p, "q[2]", 1.0, "q[2]"); /* an output */
+    fh_expect_refused(ops, c, "q_ref[3]", (double)NAN, "q_ref[3]");
+    fh_expect_refused(ops, c, "kp[2]", (double)INFINITY, "kp[2]");
+    fh_expect_refused(ops, c, "f[2,3]", (double)NAN, "f[2,3]");
+    fh_expect_refused(ops, c, "u_n[1]", 0.5, "u_n[1]"); /* an output */
+}
+
+void fh_refused_multi(const fh_ops *ops, void *p)
+{
+    unsigned int vr[3];
+    fh_vrs3(ops, ops->api(p), "u", vr);
+    const double v[3] = {1.0, (double)NAN, 2.0};
+    double got[3] = {-1.0, -1.0, -1.0};
+    CHECK(ops->set_real(p, vr, 3, v) == FH_ERROR);
+    CHECK(ops->get_real(p, vr, 3, got) == FH_OK);
+    CHECK(got[0] == 0.0 && got[1] == 0.0 && got[2] == 0.0);
+}
+
+void fh_refused_stepping(const fh_ops *ops, void *p, void *c, const char *fixed_needle)
+{
+    fh_expect_refused(ops, p, "u[2]", (double)INFINITY, "u[2]");
+    fh_expect_refused(ops, p, "a3", 0.3, fixed_needle); /* fixed parameter after initialization */
+    fh_expect_refused(ops, p, "q0[1]", 0.3, "q0[1]");
+    fh_expect_refused(ops, c, "qd[1]", (double)NAN, "qd[1]");
+    fh_expect_refused(ops, c, "kd[3]", 1.0, "kd[3]");
+}
+
+void fh_still_stepping(const fh_ops *ops, void *p, void *c)
+{
+    CHECK(ops->do_step(p, 0.0, FH_H, NULL) == FH_OK);
+    CHECK(ops->do_step(c, 0.0, FH_H, NULL) == FH_OK);
+    CHECK(isfinite(fh_get1(ops, p, "q[1]")) && isfinite(fh_get1(ops, c, "u[1]")));
+}
+
 /* ---- FMU state ------------------------------------------------------------------------------- */
 
 int fh_state_replay(fh_loop *L, fh_saved *S, void (*after_set)(fh_loop *L, double t1))
@@ -460,6 +588,59 @@ void fh_saved_free(fh_loop *L, fh_saved *S)
     free(S->bc);
     S->bp = NULL;
     S->bc = NULL;
+}
+
+int fh_state_begin(const fh_ops *ops, const void *plant, const void *ctrl, fh_loop *L,
+                   fh_saved *S, void (*after_set)(fh_loop *L, double t1))
+{
+    void *p = ops->new_cs(plant, "state_plant");
+    void *c = ops->new_cs(ctrl, "state_ctrl");
+    CHECK(p != NULL && c != NULL);
+    memset(S, 0, sizeof *S);
+    if (p == NULL || c == NULL) {
+        ops->del(p);
+        ops->del(c);
+        return 1;
+    }
+    fh_loop_new(L, ops, p, c);
+    if (fh_state_replay(L, S, after_set) != 0) {
+        fh_state_end(L, S);
+        return 1;
+    }
+    /* corrupted, truncated or foreign bytes are refused and change nothing */
+    fh_state_refusals(L, S);
+    return 0;
+}
+
+void fh_state_end(fh_loop *L, fh_saved *S)
+{
+    void *none = NULL;
+    CHECK(L->ops->free_state(L->p, &none) == FH_OK);
+    fh_saved_free(L, S);
+    CHECK(S->sp == NULL && S->sc == NULL);
+    L->ops->del(L->p);
+    L->ops->del(L->c);
+    L->p = L->c = NULL;
+}
+
+void fh_state_undoes_discard(const fh_ops *ops, const void *plant)
+{
+    void *f = ops->new_cs(plant, "state_discard");
+    CHECK(f != NULL);
+    if (f == NULL) {
+        return;
+    }
+    void *sf = NULL;
+    CHECK(ops->set_bool(f, fh_md_vr(ops->md(plant), "adaptive"), 0) == FH_OK);
+    CHECK(ops->drive_step(f) == 0);
+    CHECK(ops->get_state(f, &sf) == FH_OK);
+    CHECK(ops->do_step(f, FH_H, 1e4, NULL) == FH_DISCARD);
+    ops->check_stepping(f, 1, "after a discarded step");
+    CHECK(ops->set_state(f, sf) == FH_OK);
+    ops->check_stepping(f, 0, "after setFMUState");
+    CHECK(ops->do_step(f, FH_H, FH_H, NULL) == FH_OK);
+    CHECK(ops->free_state(f, &sf) == FH_OK && sf == NULL);
+    ops->del(f);
 }
 
 void fh_forged_states(const fh_ops *ops, void *x, const forge_case *cases, size_t n_cases,

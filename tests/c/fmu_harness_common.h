@@ -55,6 +55,7 @@ void fh_log_record(fh_log_sink *s, int status, const char *category);
 
 typedef struct fh_ops {
     const char *fmi;         /* "fmi2" or "fmi3": the prefix of the version's functions */
+    const char *set_real_name; /* "fmi2SetReal", "fmi3SetFloat64": named by its refusals */
     int step_reports_time;   /* do_step returns lastSuccessfulTime (FMI 3) */
     const void *(*api)(const void *x);            /* the FMU of instance x */
     const char *(*id)(const void *api);           /* its modelIdentifier */
@@ -65,14 +66,20 @@ typedef struct fh_ops {
     void *(*new_cs)(const void *api, const char *name);
     void (*del)(void *x);
     int (*drive_init)(void *x); /* a fresh instance into initialization mode: 0 when done */
+    int (*drive_step)(void *x); /* a fresh instance stepping (one step taken): 0 when done */
+    /* checks that x is stepping (discarded: after a discarded step), by the harness's means */
+    void (*check_stepping)(void *x, int discarded, const char *where);
     /* the calls; each returns the status */
     int (*get_real)(void *x, const unsigned int *vr, size_t n, double *v);
     int (*set_real)(void *x, const unsigned int *vr, size_t n, const double *v);
     int (*get_bool)(void *x, unsigned int vr, int *v);
+    int (*set_bool)(void *x, unsigned int vr, int v);
     int (*setup)(void *x); /* fmi2SetupExperiment; NULL for FMI 3 */
     int (*enter_init)(void *x);
     int (*exit_init)(void *x);
     int (*do_step)(void *x, double t, double h, double *last_time);
+    int (*terminate)(void *x);
+    int (*reset)(void *x);
     int (*get_state)(void *x, void **s);
     int (*set_state)(void *x, void *s);
     int (*free_state)(void *x, void **s);
@@ -83,12 +90,39 @@ typedef struct fh_ops {
 
 /* Value references of three joint variables, e.g. "q" -> q[1], q[2], q[3]. */
 void fh_vrs3(const fh_ops *ops, const void *api, const char *base, unsigned int vr[3]);
+/* The same for n bases in a row: vr[3 * n]. */
+void fh_vrs(const fh_ops *ops, const void *api, const char *const *bases, size_t n,
+            unsigned int *vr);
+/* The controller's 15 inputs in their order: q_ref, qd_ref, qdd_ref, q, qd. */
+extern const char *const fh_ctrl_inputs[5];
 double fh_get1(const fh_ops *ops, void *x, const char *name);
 int fh_set1(const fh_ops *ops, void *x, const char *name, double v);
+
+/* 1 when msg names word as a whole word (e.g. "fmi3GetInt8", "StepMode"). */
+int fh_names_word(const char *msg, const char *word);
 
 /* One refused call: Error, exactly one error message, holding every needle (NULL: none). */
 void fh_expect_error(const fh_ops *ops, void *x, int st, const char *what, const char *n1,
                      const char *n2);
+
+/* A refused set of one real variable: Error, exactly one error message naming the variable's
+ * needle and set_real_name, the old value kept. */
+void fh_expect_refused(const fh_ops *ops, void *x, const char *name, double v, const char *needle);
+
+/* A refused call that writes outputs (out[n], filled with FH_UNTOUCHED before the call): Error,
+ * exactly one error message holding needle, out untouched. */
+#define FH_UNTOUCHED 42.0
+void fh_expect_refused_out(const fh_ops *ops, void *x, int st, const char *what,
+                           const char *needle, const double *out, size_t n);
+
+/* The macro that writes a harness's table of callers: call_NAME(x) calls NAME with valid
+ * arguments on x (status type S, FMU type API). */
+#define FH_CALLER(S, API, NAME, ...)                                                          \
+    static S call_##NAME(inst *x)                                                             \
+    {                                                                                         \
+        const API *a = x->api;                                                                \
+        __VA_ARGS__                                                                           \
+    }
 
 /* The serialized FMU state of x (malloc'd, *n bytes), or NULL; taking it changes nothing. */
 unsigned char *fh_state_bytes(const fh_ops *ops, void *x, size_t *n);
@@ -123,6 +157,22 @@ double fh_loop_run(fh_loop *L, int n, double (*rec)[9]);
 int fh_loop_first(fh_loop *L, double (*rec)[9], const char *label);
 /* Again from initialization: the same trajectory as rec, bit for bit. */
 void fh_loop_again(fh_loop *L, double (*rec)[9], double (*rec_again)[9]);
+/* The closed loop, terminated, reset and run again (fh_loop_first, fh_loop_again), no error or
+ * warning logged; after_first and after_reset (may be NULL) add the harness's checks. */
+void fh_loop_twice(fh_loop *L, double (*rec)[9], double (*rec_again)[9], const char *label,
+                   void (*after_first)(fh_loop *L), void (*after_reset)(fh_loop *L));
+
+/* ---- refused values ------------------------------------------------------------------------- */
+
+/* Plant p and controller c in initialization mode: NaN, Inf and outputs refused. */
+void fh_refused_in_init(const fh_ops *ops, void *p, void *c);
+/* A multi-value set of the plant's u with one NaN changes nothing. */
+void fh_refused_multi(const fh_ops *ops, void *p);
+/* Plant p and controller c stepping: inputs checked, fixed parameters refused (the message
+ * naming fixed_needle). */
+void fh_refused_stepping(const fh_ops *ops, void *p, void *c, const char *fixed_needle);
+/* After refusals both still step from 0 normally. */
+void fh_still_stepping(const fh_ops *ops, void *p, void *c);
 
 /* ---- FMU state ------------------------------------------------------------------------------- */
 
@@ -144,6 +194,14 @@ int fh_state_replay(fh_loop *L, fh_saved *S, void (*after_set)(fh_loop *L, doubl
  * plant unchanged); a buffer too small refused. */
 void fh_state_refusals(fh_loop *L, fh_saved *S);
 void fh_saved_free(fh_loop *L, fh_saved *S);
+/* The FMU state test's common part on new Co-Simulation instances of plant and ctrl:
+ * fh_state_replay, then fh_state_refusals. 0 when done; fh_state_end frees it all. */
+int fh_state_begin(const fh_ops *ops, const void *plant, const void *ctrl, fh_loop *L,
+                   fh_saved *S, void (*after_set)(fh_loop *L, double t1));
+void fh_state_end(fh_loop *L, fh_saved *S);
+/* A state saved while stepping brings a discarded step back (a step that cannot be taken:
+ * 1e8 substeps of the fixed-step RK4). */
+void fh_state_undoes_discard(const fh_ops *ops, const void *plant);
 
 /* Forged FMU states with valid checksums: each refused naming the field, by deserialize and by
  * set, the state of x unchanged; the good bytes accepted, then (step_t >= 0) a step at step_t.

@@ -408,6 +408,8 @@ static const char *const interface_names[2] = {"Co-Simulation", "Model Exchange"
 #define C3(x) (((const inst *)(x))->c)
 
 static int drive_to_init(inst *x);
+static int drive_to_step(inst *x);
+static void check_stepping(void *x, int discarded, const char *where);
 
 static fh_log_sink *a3_log(void *x) { return &((inst *)x)->log; }
 static const char *a3_where(const void *x) { return interface_names[((const inst *)x)->me]; }
@@ -415,6 +417,9 @@ static const rrr_fmi_md *a3_md(const void *api) { return &((const fmu3 *)api)->m
 static const char *a3_id(const void *api) { return ((const fmu3 *)api)->id; }
 static const void *a3_api(const void *x) { return A3(x); }
 static int a3_drive_init(void *x) { return drive_to_init(x); }
+static int a3_drive_step(void *x) { return drive_to_step(x); }
+static int a3_terminate(void *x) { return (int)A3(x)->Terminate(C3(x)); }
+static int a3_reset(void *x) { return (int)A3(x)->Reset(C3(x)); }
 static int a3_enter_init(void *x) { return (int)enter_init(x); }
 static int a3_exit_init(void *x) { return (int)A3(x)->ExitInitializationMode(C3(x)); }
 
@@ -434,6 +439,12 @@ static int a3_get_bool(void *x, unsigned int vr, int *v)
     const fmi3Status s = A3(x)->GetBoolean(C3(x), &vr, 1, &b, 1);
     *v = b;
     return (int)s;
+}
+
+static int a3_set_bool(void *x, unsigned int vr, int v)
+{
+    const fmi3Boolean b = v != 0;
+    return (int)A3(x)->SetBoolean(C3(x), &vr, 1, &b, 1);
 }
 
 static int a3_do_step(void *x, double t, double h, double *last_time)
@@ -480,7 +491,9 @@ static int a3_deserialize(void *x, const unsigned char *buf, size_t n, void **s)
 }
 
 static const fh_ops ops3 = {
-    .fmi = "fmi3", .step_reports_time = 1, .setup = NULL, .api = a3_api, .id = a3_id,
+    .fmi = "fmi3", .set_real_name = "fmi3SetFloat64", .step_reports_time = 1, .setup = NULL,
+    .drive_step = a3_drive_step, .check_stepping = check_stepping, .set_bool = a3_set_bool,
+    .terminate = a3_terminate, .reset = a3_reset, .api = a3_api, .id = a3_id,
     .md = a3_md, .where = a3_where, .log = a3_log, .new_cs = a3_new_cs, .del = a3_del,
     .drive_init = a3_drive_init, .get_real = a3_get_real, .set_real = a3_set_real,
     .get_bool = a3_get_bool, .enter_init = a3_enter_init, .exit_init = a3_exit_init,
@@ -492,20 +505,6 @@ static const fh_ops ops3 = {
 static void vrs3(const fmu3 *api, const char *base, fmi3ValueReference vr[3])
 {
     fh_vrs3(&ops3, api, base, vr);
-}
-
-/* 1 when msg names word as a whole word (e.g. "fmi3GetInt8", "StepMode"). */
-static int names(const char *msg, const char *word)
-{
-    const size_t n = strlen(word);
-    for (const char *p = strstr(msg, word); p != NULL; p = strstr(p + 1, word)) {
-        const int before = p == msg || !isalnum((unsigned char)p[-1]);
-        const int after = !isalnum((unsigned char)p[n]);
-        if (before && after) {
-            return 1;
-        }
-    }
-    return 0;
 }
 
 /* ---- the XML --------------------------------------------------------------------------------- */
@@ -671,7 +670,7 @@ static void drive(inst *x, int st)
     }
 }
 
-/* drive(x, ST_INIT): 1 when one of its checks failed */
+/* drive(x, ST_INIT), drive(x, ST_STEP): 1 when one of its checks failed */
 static int drive_to_init(inst *x)
 {
     const int failures = rrr_test_failures;
@@ -679,14 +678,16 @@ static int drive_to_init(inst *x)
     return rrr_test_failures != failures;
 }
 
+static int drive_to_step(inst *x)
+{
+    const int failures = rrr_test_failures;
+    drive(x, ST_STEP);
+    return rrr_test_failures != failures;
+}
+
 typedef fmi3Status (*caller)(inst *x);
 
-#define CALLER(NAME, ...)                                                                     \
-    static fmi3Status call_##NAME(inst *x)                                                    \
-    {                                                                                         \
-        const fmu3 *a = x->api;                                                               \
-        __VA_ARGS__                                                                           \
-    }
+#define CALLER(NAME, ...) FH_CALLER(fmi3Status, fmu3, NAME, __VA_ARGS__)
 
 /* The arguments are valid: only the state (or a missing capability) makes a call fail. */
 CALLER(SetDebugLogging, return a->SetDebugLogging(x->c, false, 0, NULL);)
@@ -935,6 +936,11 @@ static void check_state(inst *x, int st, const char *where)
     }
 }
 
+static void check_stepping(void *x, int discarded, const char *where)
+{
+    check_state(x, discarded ? ST_DISCARDED : ST_STEP, where);
+}
+
 /* ---- instantiation --------------------------------------------------------------------------- */
 
 static void expect_no_instance(fmi3Instance c, const fmu3 *api, log_sink *sink, const char *needle,
@@ -1095,6 +1101,18 @@ static void loop_run_fmi2(const fmu2 *p2, const fmu2 *c2, double (*rec)[9])
     c2->FreeInstance(c);
 }
 
+/* the independent variable at the end of the loop */
+static void check_loop_time(fh_loop *L)
+{
+    CHECK(get1(L->p, "time") == L->t && get1(L->c, "time") == L->t);
+}
+
+static void check_reset(fh_loop *L)
+{
+    check_state(L->p, ST_INST, "after fmi3Reset");
+    log_clear(L->p);
+}
+
 static void test_closed_loop(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2, const fmu2 *c2)
 {
     inst p, c;
@@ -1104,22 +1122,7 @@ static void test_closed_loop(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2
     fh_loop L;
     fh_loop_new(&L, &ops3, &p, &c);
     static double rec1[N_LOOP][9], rec2[N_LOOP][9], rec3[N_LOOP][9];
-    if (fh_loop_first(&L, rec1, "FMI 3 closed loop") == 0) {
-        CHECK(get1(&p, "time") == L.t && get1(&c, "time") == L.t);
-    }
-    CHECK(plant->Terminate(p.c) == fmi3OK);
-    CHECK(ctrl->Terminate(c.c) == fmi3OK);
-    /* reset and run again: the same trajectory, bit for bit */
-    CHECK(p.log.count[fmi3Error] == 0 && c.log.count[fmi3Error] == 0);
-    CHECK(p.log.count[fmi3Warning] == 0 && c.log.count[fmi3Warning] == 0);
-    CHECK(plant->Reset(p.c) == fmi3OK);
-    CHECK(ctrl->Reset(c.c) == fmi3OK);
-    check_state(&p, ST_INST, "after fmi3Reset");
-    log_clear(&p);
-    fh_loop_again(&L, rec1, rec2);
-    CHECK(p.log.count[fmi3Error] == 0 && c.log.count[fmi3Error] == 0);
-    CHECK(plant->Terminate(p.c) == fmi3OK);
-    CHECK(ctrl->Terminate(c.c) == fmi3OK);
+    fh_loop_twice(&L, rec1, rec2, "FMI 3 closed loop", check_loop_time, check_reset);
     inst_free(&p);
     inst_free(&c);
     if (p2 != NULL && c2 != NULL) {
@@ -1154,8 +1157,8 @@ static void test_illegal_sequences(const fmu3 *api, int me)
             const fmi3Status s = functions[f].call(&x);
             const int ok = s == fmi3Error && x.log.count[fmi3Error] == 1 &&
                            x.log.count[fmi3Warning] == 0 && x.log.count[fmi3OK] == 0 &&
-                           x.log.illegal == 1 && names(x.log.last_error, functions[f].name) &&
-                           names(x.log.last_error, state_names[st]);
+                           x.log.illegal == 1 && fh_names_word(x.log.last_error, functions[f].name) &&
+                           fh_names_word(x.log.last_error, state_names[st]);
             if (!ok) {
                 fprintf(stderr,
                         "%s (%s): %s in state %s returned %d, %d error message(s), last \"%s\"\n",
@@ -1203,7 +1206,7 @@ static void test_not_provided(const fmu3 *api)
         log_clear(&x);
         const fmi3Status s = find_fn(cases[k].name)->call(&x);
         if (!(s == fmi3Error && x.log.count[fmi3Error] == 1 && x.log.not_provided == 1 &&
-              names(x.log.last_error, cases[k].name))) {
+              fh_names_word(x.log.last_error, cases[k].name))) {
             fprintf(stderr, "%s (%s): %s in %s returned %d, message \"%s\" (want \"not "
                             "provided\")\n",
                     api->id, interface_names[cases[k].me], cases[k].name,
@@ -1217,6 +1220,9 @@ static void test_not_provided(const fmu3 *api)
     printf("%s: %d calls of functions that are not provided refused\n", api->id, tried);
 }
 
+/* the plant's knowns in the order of its Jacobian: u, q, qd */
+static const char *const plant_knowns[3] = {"u", "q", "qd"};
+
 /* ---- partial derivatives ----------------------------------------------------------------------- */
 
 /* One refused derivative call: fmi3Error, one error message containing needle, the state
@@ -1228,26 +1234,14 @@ static void expect_refused_derivative(inst *x, int st, int adjoint, const fmi3Va
 {
     double sens[16];
     for (size_t i = 0; i < 16; ++i) {
-        sens[i] = 42.0;
+        sens[i] = FH_UNTOUCHED;
     }
     log_clear(x);
     const fmi3Status s = adjoint ? x->api->GetAdjointDerivative(x->c, u, nu, k, nk, seed, n_seed,
                                                                  sens, n_sens)
                                  : x->api->GetDirectionalDerivative(x->c, u, nu, k, nk, seed,
                                                                     n_seed, sens, n_sens);
-    int untouched = 1;
-    for (size_t i = 0; i < 16; ++i) {
-        untouched &= sens[i] == 42.0;
-    }
-    if (!(s == fmi3Error && x->log.count[fmi3Error] == 1 && strstr(x->log.last_error, needle) &&
-          untouched)) {
-        fprintf(stderr, "%s (%s): refused %s: status %d, %d error message(s), last \"%s\" "
-                        "(want \"%s\"), sensitivity %s\n",
-                x->api->id, interface_names[x->me], adjoint ? "adjoint" : "directional", (int)s,
-                x->log.count[fmi3Error], x->log.last_error, needle,
-                untouched ? "untouched" : "written");
-        rrr_test_failures++;
-    }
+    fh_expect_refused_out(&ops3, x, (int)s, adjoint ? "adjoint" : "directional", needle, sens, 16);
     check_state(x, st, "after a refused derivative");
 }
 
@@ -1303,9 +1297,7 @@ static void test_derivatives(const fmu3 *plant, const fmu3 *ctrl)
             vrs3(plant, "qd0", vqd0);
             vrs3(plant, "u", vu);
             vrs3(plant, "qdd", uk);
-            vrs3(plant, "u", kn);
-            vrs3(plant, "q", kn + 3);
-            vrs3(plant, "qd", kn + 6);
+            fh_vrs(&ops3, plant, plant_knowns, 3, kn);
             CHECK(plant->SetFloat64(x.c, vq0, 3, q0, 3) == fmi3OK);
             CHECK(plant->SetFloat64(x.c, vqd0, 3, qd0, 3) == fmi3OK);
             drive(&x, st);
@@ -1426,17 +1418,7 @@ static void test_derivatives(const fmu3 *plant, const fmu3 *ctrl)
 
 static void expect_refused(inst *x, const char *name, double v, const char *needle)
 {
-    const double before = get1(x, name);
-    log_clear(x);
-    const fmi3Status s = set1(x, name, v);
-    const double after = get1(x, name);
-    if (s != fmi3Error || x->log.count[fmi3Error] != 1 || !strstr(x->log.last_error, needle) ||
-        !names(x->log.last_error, "fmi3SetFloat64") || memcmp(&before, &after, sizeof before)) {
-        fprintf(stderr, "%s (%s): set %s = %g returned %d, message \"%s\", value %.17g -> %.17g\n",
-                x->api->id, interface_names[x->me], name, v, (int)s, x->log.last_error, before,
-                after);
-        rrr_test_failures++;
-    }
+    fh_expect_refused(&ops3, x, name, v, needle);
 }
 
 /* One refused call: fmi3Error and exactly one error message holding every needle. */
@@ -1516,30 +1498,15 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     /* initialization mode: parameters and inputs */
     CHECK(enter_init(&p) == fmi3OK);
     CHECK(enter_init(&c) == fmi3OK);
-    expect_refused(&p, "u[1]", (double)NAN, "u[1]");
-    expect_refused(&p, "u[3]", -(double)INFINITY, "u[3]");
-    expect_refused(&p, "d1", (double)INFINITY, "d1");
-    expect_refused(&p, "p[7]", -(double)INFINITY, "p[7]");
-    expect_refused(&p, "h_int", (double)NAN, "h_int");
-    expect_refused(&p, "rtol", (double)INFINITY, "rtol");
-    expect_refused(&p, "atol", (double)NAN, "atol");
-    expect_refused(&p, "q0[2]", (double)INFINITY, "q0[2]");
-    expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
-    expect_refused(&p, "time", 1.0, "time");       /* the independent variable */
-    expect_refused(&c, "q_ref[3]", (double)NAN, "q_ref[3]");
-    expect_refused(&c, "kp[2]", (double)INFINITY, "kp[2]");
-    expect_refused(&c, "f[2,3]", (double)NAN, "f[2,3]");
-    expect_refused(&c, "u_n[1]", 0.5, "u_n[1]");   /* an output */
+    fh_refused_in_init(&ops3, &p, &c);
+    expect_refused(&p, "time", 1.0, "time"); /* the independent variable */
 
-    /* a multi-value set with one bad value changes nothing */
+    /* a multi-value set with one bad value changes nothing, nor one with an output */
+    fh_refused_multi(&ops3, &p);
     {
         fmi3ValueReference vr[3];
         vrs3(plant, "u", vr);
-        const double v[3] = {1.0, (double)NAN, 2.0};
         double got[3] = {-1.0, -1.0, -1.0};
-        CHECK(plant->SetFloat64(p.c, vr, 3, v, 3) == fmi3Error);
-        CHECK(plant->GetFloat64(p.c, vr, 3, got, 3) == fmi3OK);
-        CHECK(got[0] == 0.0 && got[1] == 0.0 && got[2] == 0.0);
         const double w[3] = {1.0, 2.0, 3.0};
         fmi3ValueReference mixed[3] = {vr[0], vr[1], vr_of(plant, "q[1]")};
         CHECK(plant->SetFloat64(p.c, mixed, 3, w, 3) == fmi3Error); /* one output among inputs */
@@ -1592,11 +1559,7 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     /* step mode: parameters are fixed, inputs are checked */
     CHECK(plant->ExitInitializationMode(p.c) == fmi3OK);
     CHECK(ctrl->ExitInitializationMode(c.c) == fmi3OK);
-    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
-    expect_refused(&p, "a3", 0.3, "StepMode"); /* fixed parameter after initialization */
-    expect_refused(&p, "q0[1]", 0.3, "q0[1]");
-    expect_refused(&c, "qd[1]", (double)NAN, "qd[1]");
-    expect_refused(&c, "kd[3]", 1.0, "kd[3]");
+    fh_refused_stepping(&ops3, &p, &c, "StepMode");
     {
         const fmi3ValueReference ff = vr_of(ctrl, "feedforward");
         const fmi3Boolean off = false;
@@ -1608,9 +1571,7 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     }
     test_other_types(&p);
     /* still stepping normally: nothing was corrupted */
-    CHECK(do_step(&p, 0.0, H, NULL) == fmi3OK);
-    CHECK(do_step(&c, 0.0, H, NULL) == fmi3OK);
-    CHECK(isfinite(get1(&p, "q[1]")) && isfinite(get1(&c, "u[1]")));
+    fh_still_stepping(&ops3, &p, &c);
 
     /* doStep arguments: refused, state unchanged */
     {
@@ -1736,7 +1697,7 @@ static void test_discard(const fmu3 *plant)
     log_clear(&p);
     CHECK(do_step(&p, H, 1e4, &last) == fmi3Discard);
     CHECK(p.log.count[fmi3Discard] == 1 && strstr(p.log.last, "substeps of h_int") != NULL);
-    CHECK(names(p.log.last, "fmi3DoStep"));
+    CHECK(fh_names_word(p.log.last, "fmi3DoStep"));
     CHECK(last == H);
     CHECK(get1(&p, "time") == H);
     const double q_after = get1(&p, "q[2]");
@@ -1759,24 +1720,16 @@ static void check_time_t1(fh_loop *L, double t1)
 
 static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
 {
-    inst p, c;
-    if (inst_new(&p, plant, "state_plant", 0) || inst_new(&c, ctrl, "state_ctrl", 0)) {
-        return;
-    }
     fh_loop L;
-    fh_loop_new(&L, &ops3, &p, &c);
     fh_saved S;
-    if (fh_state_replay(&L, &S, check_time_t1) != 0) {
-        inst_free(&p);
-        inst_free(&c);
+    if (fh_state_begin(&ops3, plant, ctrl, &L, &S, check_time_t1) != 0) {
         return;
     }
-    /* corrupted, truncated or foreign bytes are refused and change nothing */
-    const double t_now = get1(&p, "time");
-    fh_state_refusals(&L, &S);
-    fmi3FMUState sp = S.sp, junk = NULL;
-    log_clear(&p);
-    expect_error(&p, plant->DeserializeFMUState(p.c, NULL, S.np, &junk), "deserialize NULL",
+    inst *p = L.p;
+    fmi3FMUState junk = NULL;
+    const double t_now = get1(p, "time");
+    log_clear(p);
+    expect_error(p, plant->DeserializeFMUState(p->c, NULL, S.np, &junk), "deserialize NULL",
                  "NULL", NULL);
     if (p2 != NULL) {
         /* the FMI 2 plant's state bytes are foreign to the FMI 3 plant */
@@ -1788,7 +1741,7 @@ static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
             fmi2Byte *b2 = malloc(n2);
             CHECK(b2 != NULL && p2->SerializeFMUstate(c2, s2, b2, n2) == fmi2OK);
             if (b2 != NULL) {
-                expect_error(&p, plant->DeserializeFMUState(p.c, (const fmi3Byte *)b2, n2, &junk),
+                expect_error(p, plant->DeserializeFMUState(p->c, (const fmi3Byte *)b2, n2, &junk),
                              "FMI 2 bytes", "FMI version", NULL);
             }
             free(b2);
@@ -1801,40 +1754,18 @@ static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
         }
     }
     CHECK(junk == NULL);
-    CHECK(get1(&p, "time") == t_now);
-    check_state(&p, ST_STEP, "after refused FMU states");
+    CHECK(get1(p, "time") == t_now);
+    check_state(p, ST_STEP, "after refused FMU states");
 
     /* getFMUState into an existing state overwrites it */
-    CHECK(plant->GetFMUState(p.c, &sp) == fmi3OK);
-    CHECK(plant->SetFMUState(p.c, sp) == fmi3OK);
-    CHECK(get1(&p, "time") == L.t);
+    CHECK(plant->GetFMUState(p->c, &S.sp) == fmi3OK);
+    CHECK(plant->SetFMUState(p->c, S.sp) == fmi3OK);
+    CHECK(get1(p, "time") == L.t);
 
-    CHECK(do_step(&p, L.t, H, NULL) == fmi3OK);
+    CHECK(do_step(p, L.t, H, NULL) == fmi3OK);
 
-    /* a state saved in StepMode brings a discarded step back to StepMode (a step that cannot be
-     * taken: 1e8 substeps of the fixed-step RK4) */
-    inst f;
-    if (inst_new(&f, plant, "state_discard", 0) == 0) {
-        fmi3FMUState sf = NULL;
-        CHECK(set_bool(&f, "adaptive", false) == fmi3OK);
-        drive(&f, ST_STEP);
-        CHECK(plant->GetFMUState(f.c, &sf) == fmi3OK);
-        CHECK(do_step(&f, H, 1e4, NULL) == fmi3Discard);
-        check_state(&f, ST_DISCARDED, "after a discarded step");
-        CHECK(plant->SetFMUState(f.c, sf) == fmi3OK);
-        check_state(&f, ST_STEP, "after setFMUState");
-        CHECK(do_step(&f, H, H, NULL) == fmi3OK);
-        CHECK(plant->FreeFMUState(f.c, &sf) == fmi3OK && sf == NULL);
-        inst_free(&f);
-    }
-
-    fmi3FMUState none = NULL;
-    CHECK(plant->FreeFMUState(p.c, &none) == fmi3OK);
-    S.sp = sp;
-    fh_saved_free(&L, &S);
-    CHECK(S.sp == NULL && S.sc == NULL);
-    inst_free(&p);
-    inst_free(&c);
+    fh_state_end(&L, &S);
+    fh_state_undoes_discard(&ops3, plant);
 }
 
 /* ---- Model Exchange -------------------------------------------------------------------------- */
@@ -2033,11 +1964,7 @@ static void test_model_exchange(const fmu3 *plant, const fmu3 *ctrl)
     CHECK(ctrl->GetNumberOfEventIndicators(c.c, &ni) == fmi3OK && ni == 0);
     drive(&c, ST_CONT);
     fmi3ValueReference in[15], vu_c[3];
-    vrs3(ctrl, "q_ref", in);
-    vrs3(ctrl, "qd_ref", in + 3);
-    vrs3(ctrl, "qdd_ref", in + 6);
-    vrs3(ctrl, "q", in + 9);
-    vrs3(ctrl, "qd", in + 12);
+    fh_vrs(&ops3, ctrl, fh_ctrl_inputs, 5, in);
     vrs3(ctrl, "u", vu_c);
     for (int trial = 0; trial < 10; ++trial) {
         double v[15], u[3];

@@ -284,6 +284,8 @@ static double get1(inst *x, const char *name)
 /* ---- the adapter of fmu_harness_common.c: the FMI 2.0 calls on an inst ------------------------ */
 
 static int drive_to_init(inst *x);
+static int drive_to_step(inst *x);
+static void check_stepping(void *x, int discarded, const char *where);
 
 static const void *a2_api(const void *x)
 {
@@ -382,6 +384,30 @@ static int a2_drive_init(void *x)
     return drive_to_init(x);
 }
 
+static int a2_drive_step(void *x)
+{
+    return drive_to_step(x);
+}
+
+static int a2_set_bool(void *x, unsigned int vr, int v)
+{
+    inst *i = x;
+    const fmi2Boolean b = v;
+    return (int)i->api->SetBoolean(i->c, &vr, 1, &b);
+}
+
+static int a2_terminate(void *x)
+{
+    inst *i = x;
+    return (int)i->api->Terminate(i->c);
+}
+
+static int a2_reset(void *x)
+{
+    inst *i = x;
+    return (int)i->api->Reset(i->c);
+}
+
 static int a2_get_state(void *x, void **s)
 {
     inst *i = x;
@@ -419,7 +445,9 @@ static int a2_deserialize(void *x, const unsigned char *buf, size_t n, void **s)
 }
 
 static const fh_ops ops2 = {
-    .fmi = "fmi2", .step_reports_time = 0, .api = a2_api, .id = a2_id, .md = a2_md,
+    .fmi = "fmi2", .set_real_name = "fmi2SetReal", .step_reports_time = 0,
+    .drive_step = a2_drive_step, .check_stepping = check_stepping, .set_bool = a2_set_bool,
+    .terminate = a2_terminate, .reset = a2_reset, .api = a2_api, .id = a2_id, .md = a2_md,
     .where = a2_where, .log = a2_log, .new_cs = a2_new_cs, .del = a2_del,
     .drive_init = a2_drive_init, .get_real = a2_get_real, .set_real = a2_set_real,
     .get_bool = a2_get_bool, .setup = a2_setup, .enter_init = a2_enter_init,
@@ -485,6 +513,15 @@ static void test_instantiate(const fmu_api *api)
 
 /* ---- closed loop: controller -> plant, Gauss-Seidel, 1 kHz ------------------------------------ */
 
+/* FMI 2.0's lastSuccessfulTime after the loop's second */
+static void check_last_time(fh_loop *L)
+{
+    const inst *p = L->p;
+    fmi2Real last_t = -1.0;
+    CHECK(p->api->GetRealStatus(p->c, fmi2LastSuccessfulTime, &last_t) == fmi2OK);
+    CHECK(fabs(last_t - 1.0) < 1e-12);
+}
+
 static void test_closed_loop(const fmu_api *plant, const fmu_api *ctrl)
 {
     inst p, c;
@@ -494,19 +531,7 @@ static void test_closed_loop(const fmu_api *plant, const fmu_api *ctrl)
     fh_loop L;
     fh_loop_new(&L, &ops2, &p, &c);
     static double rec1[1000][9], rec2[1000][9];
-    (void)fh_loop_first(&L, rec1, "closed loop");
-    fmi2Real last_t = -1.0;
-    CHECK(plant->GetRealStatus(p.c, fmi2LastSuccessfulTime, &last_t) == fmi2OK);
-    CHECK(fabs(last_t - 1.0) < 1e-12);
-    CHECK(plant->Terminate(p.c) == fmi2OK);
-    CHECK(ctrl->Terminate(c.c) == fmi2OK);
-    /* reset and run again: the same trajectory, bit for bit */
-    CHECK(plant->Reset(p.c) == fmi2OK);
-    CHECK(ctrl->Reset(c.c) == fmi2OK);
-    fh_loop_again(&L, rec1, rec2);
-    CHECK(p.log.count[fmi2Error] == 0 && c.log.count[fmi2Error] == 0);
-    CHECK(plant->Terminate(p.c) == fmi2OK);
-    CHECK(ctrl->Terminate(c.c) == fmi2OK);
+    fh_loop_twice(&L, rec1, rec2, "closed loop", check_last_time, NULL);
     inst_free(&p);
     inst_free(&c);
 }
@@ -517,13 +542,11 @@ enum { ST_INST, ST_INIT, ST_DONE, ST_FAILED, ST_TERM, ST_ERR, ST_COUNT };
 static const char *const state_names[ST_COUNT] = {"Instantiated", "InitializationMode",
                                                   "StepComplete", "StepFailed", "Terminated",
                                                   "Error"};
-#define S_I (1u << ST_INST)
-#define S_IN (1u << ST_INIT)
-#define S_SC (1u << ST_DONE)
-#define S_SF (1u << ST_FAILED)
-#define S_T (1u << ST_TERM)
-#define S_E (1u << ST_ERR)
-#define S_ALL (S_I | S_IN | S_SC | S_SF | S_T | S_E)
+/* the states as bits of a mask */
+enum {
+    S_I = 1 << ST_INST, S_IN = 1 << ST_INIT, S_SC = 1 << ST_DONE, S_SF = 1 << ST_FAILED,
+    S_T = 1 << ST_TERM, S_E = 1 << ST_ERR, S_ALL = (1 << ST_COUNT) - 1
+};
 
 /* A parameter of the FMU whose value -1 exitInitializationMode refuses. */
 static const char *bad_param(const fmu_api *a)
@@ -579,6 +602,11 @@ static int drive_to_init(inst *x)
     return drive(x, ST_INIT);
 }
 
+static int drive_to_step(inst *x)
+{
+    return drive(x, ST_DONE);
+}
+
 /* Which of three side-effect-free probes are accepted: identifies the state. */
 static unsigned fingerprint(inst *x)
 {
@@ -593,14 +621,20 @@ static unsigned fingerprint(inst *x)
 
 static const unsigned expected_fingerprint[ST_COUNT] = {2u, 3u, 7u, 5u, 5u, 1u};
 
+/* StepComplete or (discarded) StepFailed, by the fingerprint */
+static void check_stepping(void *x, int discarded, const char *where)
+{
+    const unsigned fp = fingerprint(x), want = expected_fingerprint[discarded ? ST_FAILED : ST_DONE];
+    if (fp != want) {
+        fprintf(stderr, "%s %s: fingerprint %u, expected %u\n", ((inst *)x)->api->id, where, fp,
+                want);
+    }
+    CHECK(fp == want);
+}
+
 typedef fmi2Status (*caller)(inst *x);
 
-#define CALLER(NAME, ...)                                                                     \
-    static fmi2Status call_##NAME(inst *x)                                                    \
-    {                                                                                         \
-        const fmu_api *a = x->api;                                                            \
-        __VA_ARGS__                                                                           \
-    }
+#define CALLER(NAME, ...) FH_CALLER(fmi2Status, fmu_api, NAME, __VA_ARGS__)
 
 CALLER(SetDebugLogging, return a->SetDebugLogging(x->c, fmi2False, 0, NULL);)
 CALLER(SetupExperiment, return a->SetupExperiment(x->c, fmi2False, 0.0, 0.0, fmi2False, 0.0);)
@@ -673,13 +707,10 @@ enum { MS_INST, MS_INIT, MS_EVENT, MS_CONT, MS_TERM, MS_ERR, MS_COUNT };
 static const char *const me_state_names[MS_COUNT] = {"Instantiated", "InitializationMode",
                                                      "EventMode",    "ContinuousTimeMode",
                                                      "Terminated",   "Error"};
-#define M_I (1u << MS_INST)
-#define M_IN (1u << MS_INIT)
-#define M_EV (1u << MS_EVENT)
-#define M_CT (1u << MS_CONT)
-#define M_T (1u << MS_TERM)
-#define M_E (1u << MS_ERR)
-#define M_ALL (M_I | M_IN | M_EV | M_CT | M_T | M_E)
+enum {
+    M_I = 1 << MS_INST, M_IN = 1 << MS_INIT, M_EV = 1 << MS_EVENT, M_CT = 1 << MS_CONT,
+    M_T = 1 << MS_TERM, M_E = 1 << MS_ERR, M_ALL = (1 << MS_COUNT) - 1
+};
 
 /* Put a fresh Model Exchange instance into a state (all six are reachable for both FMUs). */
 static int drive_me(inst *x, int state)
@@ -937,21 +968,13 @@ static void expect_refused_dd(inst *x, const fmi2ValueReference *u, size_t nu,
                               const fmi2ValueReference *k, size_t nk, const double *seed,
                               const char *needle)
 {
-    double out[8] = {42.0, 42.0, 42.0, 42.0, 42.0, 42.0, 42.0, 42.0};
+    double out[8];
+    for (size_t i = 0; i < 8; ++i) {
+        out[i] = FH_UNTOUCHED;
+    }
     log_clear(x);
     const fmi2Status s = x->api->GetDirectionalDerivative(x->c, u, nu, k, nk, seed, out);
-    int untouched = 1;
-    for (int i = 0; i < 8; ++i) {
-        untouched &= out[i] == 42.0;
-    }
-    if (!(s == fmi2Error && x->log.count[fmi2Error] == 1 && strstr(x->log.last_error, needle) &&
-          untouched)) {
-        fprintf(stderr, "%s: refused fmi2GetDirectionalDerivative: status %d, %d error "
-                        "message(s), last \"%s\" (want \"%s\"), dvUnknown %s\n",
-                x->api->id, (int)s, x->log.count[fmi2Error], x->log.last_error, needle,
-                untouched ? "untouched" : "written");
-        rrr_test_failures++;
-    }
+    fh_expect_refused_out(&ops2, x, (int)s, "fmi2GetDirectionalDerivative", needle, out, 8);
 }
 
 /* The plant (Co-Simulation and Model Exchange) and the controller: the directional derivatives
@@ -1062,16 +1085,7 @@ static void test_directional_derivatives(const fmu_api *plant, const fmu_api *ct
 
 static void expect_refused(inst *x, const char *name, double v, const char *needle)
 {
-    const double before = get1(x, name);
-    log_clear(x);
-    const fmi2Status s = set1(x, name, v);
-    const double after = get1(x, name);
-    if (s != fmi2Error || x->log.count[fmi2Error] != 1 || strstr(x->log.last_error, needle) == NULL ||
-        memcmp(&before, &after, sizeof before) != 0) {
-        fprintf(stderr, "%s: set %s = %g returned %d, message \"%s\", value %.17g -> %.17g\n",
-                x->api->id, name, v, (int)s, x->log.last_error, before, after);
-        rrr_test_failures++;
-    }
+    fh_expect_refused(&ops2, x, name, v, needle);
 }
 
 static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
@@ -1083,28 +1097,8 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     /* initialization mode: parameters and inputs */
     CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
     CHECK(ctrl->EnterInitializationMode(c.c) == fmi2OK);
-    expect_refused(&p, "u[1]", (double)NAN, "u[1]");
-    expect_refused(&p, "d1", (double)INFINITY, "d1");
-    expect_refused(&p, "p[7]", -(double)INFINITY, "p[7]");
-    expect_refused(&p, "h_int", (double)NAN, "h_int");
-    expect_refused(&p, "rtol", (double)INFINITY, "rtol");
-    expect_refused(&p, "atol", (double)NAN, "atol");
-    expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
-    expect_refused(&c, "q_ref[3]", (double)NAN, "q_ref[3]");
-    expect_refused(&c, "kp[2]", (double)INFINITY, "kp[2]");
-    expect_refused(&c, "f[2,3]", (double)NAN, "f[2,3]");
-    expect_refused(&c, "u_n[1]", 0.5, "u_n[1]");   /* an output */
-
-    /* a multi-value set with one bad value changes nothing */
-    {
-        fmi2ValueReference vr[3];
-        vrs3(plant, "u", vr);
-        const double v[3] = {1.0, (double)NAN, 2.0};
-        double got[3] = {-1.0, -1.0, -1.0};
-        CHECK(plant->SetReal(p.c, vr, 3, v) == fmi2Error);
-        CHECK(plant->GetReal(p.c, vr, 3, got) == fmi2OK);
-        CHECK(got[0] == 0.0 && got[1] == 0.0 && got[2] == 0.0);
-    }
+    fh_refused_in_init(&ops2, &p, &c);
+    fh_refused_multi(&ops2, &p);
     /* unknown value reference, wrong type, NULL arrays */
     {
         const fmi2ValueReference bad = 100000;
@@ -1129,19 +1123,14 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     /* step complete: parameters are fixed, inputs are checked */
     CHECK(plant->ExitInitializationMode(p.c) == fmi2OK);
     CHECK(ctrl->ExitInitializationMode(c.c) == fmi2OK);
-    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
-    expect_refused(&p, "a3", 0.3, "InitializationMode"); /* fixed parameter after init */
-    expect_refused(&c, "qd[1]", (double)NAN, "qd[1]");
-    expect_refused(&c, "kd[3]", 1.0, "kd[3]");
+    fh_refused_stepping(&ops2, &p, &c, "InitializationMode");
     {
         const fmi2ValueReference ff = vr_of(ctrl, "feedforward");
         const fmi2Boolean off = fmi2False;
         CHECK(ctrl->SetBoolean(c.c, &ff, 1, &off) == fmi2Error);
     }
     /* still stepping normally: nothing was corrupted */
-    CHECK(plant->DoStep(p.c, 0.0, H, fmi2True) == fmi2OK);
-    CHECK(ctrl->DoStep(c.c, 0.0, H, fmi2True) == fmi2OK);
-    CHECK(isfinite(get1(&p, "q[1]")) && isfinite(get1(&c, "u[1]")));
+    fh_still_stepping(&ops2, &p, &c);
 
     /* doStep arguments: refused, state unchanged */
     log_clear(&p);
@@ -1260,57 +1249,24 @@ static void test_discard(const fmu_api *plant)
 
 static void test_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
 {
-    inst p, c;
-    if (inst_new(&p, plant, "state_plant") || inst_new(&c, ctrl, "state_ctrl")) {
-        return;
-    }
     fh_loop L;
-    fh_loop_new(&L, &ops2, &p, &c);
     fh_saved S;
-    if (fh_state_replay(&L, &S, NULL) != 0) {
-        inst_free(&p);
-        inst_free(&c);
+    if (fh_state_begin(&ops2, plant, ctrl, &L, &S, NULL) != 0) {
         return;
     }
-    /* corrupted, truncated or foreign bytes are refused and change nothing */
-    fh_state_refusals(&L, &S);
-    CHECK(fingerprint(&p) == expected_fingerprint[ST_DONE]);
-    fmi2FMUstate sp = S.sp;
+    inst *p = L.p;
+    CHECK(fingerprint(p) == expected_fingerprint[ST_DONE]);
 
     /* getFMUstate into an existing state overwrites it */
-    CHECK(plant->GetFMUstate(p.c, &sp) == fmi2OK);
-    CHECK(plant->SetFMUstate(p.c, sp) == fmi2OK);
+    CHECK(plant->GetFMUstate(p->c, &S.sp) == fmi2OK);
+    CHECK(plant->SetFMUstate(p->c, S.sp) == fmi2OK);
     double t_now = 0.0;
-    CHECK(plant->GetRealStatus(p.c, fmi2LastSuccessfulTime, &t_now) == fmi2OK);
+    CHECK(plant->GetRealStatus(p->c, fmi2LastSuccessfulTime, &t_now) == fmi2OK);
     CHECK(fabs(t_now - L.t) < 1e-12);
-
-    CHECK(plant->SetFMUstate(p.c, sp) == fmi2OK);
-    CHECK(plant->DoStep(p.c, L.t, H, fmi2True) == fmi2OK);
-
-    /* a state saved in StepComplete brings a failed step back to StepComplete (a step that
-     * cannot be taken: 1e8 substeps of the fixed-step RK4) */
-    inst f;
-    if (inst_new(&f, plant, "state_discard") == 0) {
-        fmi2FMUstate sf = NULL;
-        CHECK(set_bool(&f, "adaptive", fmi2False) == fmi2OK);
-        CHECK(drive(&f, ST_DONE) == 0);
-        CHECK(plant->GetFMUstate(f.c, &sf) == fmi2OK);
-        CHECK(plant->DoStep(f.c, H, 1e4, fmi2True) == fmi2Discard);
-        CHECK(fingerprint(&f) == expected_fingerprint[ST_FAILED]);
-        CHECK(plant->SetFMUstate(f.c, sf) == fmi2OK);
-        CHECK(fingerprint(&f) == expected_fingerprint[ST_DONE]);
-        CHECK(plant->DoStep(f.c, H, H, fmi2True) == fmi2OK);
-        CHECK(plant->FreeFMUstate(f.c, &sf) == fmi2OK && sf == NULL);
-        inst_free(&f);
-    }
-
-    fmi2FMUstate none = NULL;
-    CHECK(plant->FreeFMUstate(p.c, &none) == fmi2OK);
-    S.sp = sp;
-    fh_saved_free(&L, &S);
-    CHECK(S.sp == NULL && S.sc == NULL);
-    inst_free(&p);
-    inst_free(&c);
+    CHECK(plant->SetFMUstate(p->c, S.sp) == fmi2OK);
+    CHECK(plant->DoStep(p->c, L.t, H, fmi2True) == fmi2OK);
+    fh_state_end(&L, &S);
+    fh_state_undoes_discard(&ops2, plant);
 }
 
 /* ---- logging ----------------------------------------------------------------------------------- */
@@ -1720,11 +1676,7 @@ static void test_me_controller(const fmu_api *api)
 {
     enum { N = 400 };
     fmi2ValueReference in[15], out[9];
-    vrs3(api, "q_ref", in);
-    vrs3(api, "qd_ref", in + 3);
-    vrs3(api, "qdd_ref", in + 6);
-    vrs3(api, "q", in + 9);
-    vrs3(api, "qd", in + 12);
+    fh_vrs(&ops2, api, fh_ctrl_inputs, 5, in);
     vrs3(api, "u", out);
     vrs3(api, "u_n", out + 3);
     vrs3(api, "u_c", out + 6);
