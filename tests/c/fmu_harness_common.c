@@ -460,6 +460,11 @@ void fh_refused_multi(const fh_ops *ops, void *p)
 
 void fh_refused_stepping(const fh_ops *ops, void *p, void *c, const char *fixed_needle)
 {
+    /* a good set still works after the refusals */
+    CHECK(fh_set1(ops, p, "u[1]", 0.25) == FH_OK);
+    CHECK(fh_get1(ops, p, "u[1]") == 0.25);
+    CHECK(ops->exit_init(p) == FH_OK);
+    CHECK(ops->exit_init(c) == FH_OK);
     fh_expect_refused(ops, p, "u[2]", (double)INFINITY, "u[2]");
     fh_expect_refused(ops, p, "a3", 0.3, fixed_needle); /* fixed parameter after initialization */
     fh_expect_refused(ops, p, "q0[1]", 0.3, "q0[1]");

@@ -168,8 +168,8 @@ void fh_loop_twice(fh_loop *L, double (*rec)[9], double (*rec_again)[9], const c
 void fh_refused_in_init(const fh_ops *ops, void *p, void *c);
 /* A multi-value set of the plant's u with one NaN changes nothing. */
 void fh_refused_multi(const fh_ops *ops, void *p);
-/* Plant p and controller c stepping: inputs checked, fixed parameters refused (the message
- * naming fixed_needle). */
+/* Plant p and controller c, in initialization mode after refusals: a good set accepted; then
+ * stepping: inputs checked, fixed parameters refused (the message naming fixed_needle). */
 void fh_refused_stepping(const fh_ops *ops, void *p, void *c, const char *fixed_needle);
 /* After refusals both still step from 0 normally. */
 void fh_still_stepping(const fh_ops *ops, void *p, void *c);
