@@ -24,6 +24,9 @@
  * FMU state get/set/serialize/deserialize (bit-identical reruns, corrupted, truncated and
  * foreign bytes refused, interface types kept apart); two instances in one process; log
  * categories; no FMI 3 message that names an FMI 2 function.
+ *
+ * The checks the FMI 2.0 harness makes as well are in fmu_harness_common.c, run through this
+ * harness's adapter of the FMI 3.0 calls (ops3); what is here is FMI 3.0's own.
  */
 #define _POSIX_C_SOURCE 200809L
 

@@ -26,6 +26,9 @@
  * unchanged) and accepted where it does; refused arguments (NaN/Inf states and time, wrong nx/ni,
  * NULL arrays, outputs, fixed parameters after initialization); FMU state set/serialize with a
  * bit-identical continuation; Co-Simulation and Model Exchange snapshots refused by each other.
+ *
+ * The checks the FMI 3.0 harness makes as well are in fmu_harness_common.c, run through this
+ * harness's adapter of the FMI 2.0 calls (ops2); what is here is FMI 2.0's own.
  */
 #define _POSIX_C_SOURCE 200809L
 
