@@ -6,10 +6,23 @@
 #include <stdint.h>
 #include <stdio.h>
 
+/* The counters: one per program; a test of several translation units (the FMU harnesses with
+ * fmu_harness_common.c) defines RRR_TEST_SHARED_COUNTERS in each and RRR_TEST_DEFINE_COUNTERS
+ * in the one that holds them. */
+#if defined(RRR_TEST_SHARED_COUNTERS) && !defined(RRR_TEST_DEFINE_COUNTERS)
+extern int rrr_test_failures;
+extern long rrr_test_checks;
+#elif defined(RRR_TEST_SHARED_COUNTERS)
+int rrr_test_failures = 0;
+long rrr_test_checks = 0; /* checks evaluated (CHECK, CHECK_CLOSE, CHECK_STATUS) */
+#else
 static int rrr_test_failures = 0;
+static long rrr_test_checks = 0; /* checks evaluated (CHECK, CHECK_CLOSE, CHECK_STATUS) */
+#endif
 
 #define CHECK(cond)                                                                          \
     do {                                                                                     \
+        rrr_test_checks++;                                                                   \
         if (!(cond)) {                                                                       \
             fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond);         \
             rrr_test_failures++;                                                             \
@@ -19,6 +32,7 @@ static int rrr_test_failures = 0;
 #define CHECK_CLOSE(a, b, tol)                                                               \
     do {                                                                                     \
         const double ca_ = (a), cb_ = (b);                                                   \
+        rrr_test_checks++;                                                                   \
         if (!(fabs(ca_ - cb_) <= (tol))) {                                                   \
             fprintf(stderr, "%s:%d: CHECK_CLOSE failed: %s = %.17g, %s = %.17g, tol %g\n",  \
                     __FILE__, __LINE__, #a, ca_, #b, cb_, (double)(tol));                    \
@@ -29,6 +43,7 @@ static int rrr_test_failures = 0;
 #define CHECK_STATUS(expr, expected)                                                         \
     do {                                                                                     \
         const rrr_status cs_ = (expr);                                                       \
+        rrr_test_checks++;                                                                   \
         if (cs_ != (expected)) {                                                             \
             fprintf(stderr, "%s:%d: %s returned %s, expected %s\n", __FILE__, __LINE__,      \
                     #expr, rrr_status_str(cs_), rrr_status_str(expected));                   \
@@ -53,10 +68,10 @@ static inline double rrr_rng_uniform(rrr_rng *r, double lo, double hi)
 static inline int rrr_test_report(const char *name)
 {
     if (rrr_test_failures == 0) {
-        printf("%s: all checks passed\n", name);
+        printf("%s: all checks passed (%ld checks)\n", name, rrr_test_checks);
         return 0;
     }
-    printf("%s: %d check(s) failed\n", name, rrr_test_failures);
+    printf("%s: %d check(s) failed (of %ld checks)\n", name, rrr_test_failures, rrr_test_checks);
     return 1;
 }
 

@@ -24,6 +24,9 @@
  * FMU state get/set/serialize/deserialize (bit-identical reruns, corrupted, truncated and
  * foreign bytes refused, interface types kept apart); two instances in one process; log
  * categories; no FMI 3 message that names an FMI 2 function.
+ *
+ * The checks the FMI 2.0 harness makes as well are in fmu_harness_common.c, run through this
+ * harness's adapter of the FMI 3.0 calls (ops3); what is here is FMI 3.0's own.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -42,6 +45,7 @@
 #include "rrr_fmi_funcs.h"
 #include "rrr_fmi_import.h"
 #include "fmu_harness_common.h"
+#include "fmu_test_reference.h"
 #include "rrr_test.h"
 
 #define H 1e-3          /* communication step, s */
@@ -192,31 +196,20 @@ static int parse_states(fmu3 *api)
 
 static int fmu3_load(fmu3 *api, const char *dir)
 {
-    char path[1024];
-    char err[512];
     memset(api, 0, sizeof *api);
     api->input_vr = (fmi3ValueReference)-1;
     api->time_vr = (fmi3ValueReference)-1;
-    if (rrr_fmi_md_load(&api->md, dir, err, sizeof err) != 0) {
-        fprintf(stderr, "%s: %s\n", dir, err);
+    if (fh_open(&api->md, &api->lib, dir, 3, api->id, api->token) != 0) {
         return 1;
     }
-    if (api->md.fmi != 3 || strcmp(api->md.me_id, api->md.id) != 0 ||
-        parse_vars(api) != 0 || parse_states(api) != 0 ||
+    if (strcmp(api->md.me_id, api->md.id) != 0 || parse_vars(api) != 0 || parse_states(api) != 0 ||
         api->input_vr == (fmi3ValueReference)-1 || api->time_vr == (fmi3ValueReference)-1) {
         fprintf(stderr, "%s: not an FMI 3.0 modelDescription.xml with Model Exchange and "
                         "Co-Simulation of one modelIdentifier, inputs and a time variable\n",
                 dir);
         return 1;
     }
-    snprintf(api->id, sizeof api->id, "%s", api->md.id);
-    snprintf(api->token, sizeof api->token, "%s", api->md.token);
     api->is_plant = strcmp(api->id, "rrr_plant") == 0;
-    if (rrr_fmi_binary_path(path, sizeof path, dir, 3, api->id) != 0 ||
-        rrr_fmi_lib_open(&api->lib, path, err, sizeof err) != 0) {
-        fprintf(stderr, "%s\n", err);
-        return 1;
-    }
 #define LOAD(F) load_sym(&api->lib, api->id, "fmi3" #F, &api->F, sizeof api->F);
     FMI3_FUNCTIONS(LOAD)
 #undef LOAD
@@ -225,8 +218,7 @@ static int fmu3_load(fmu3 *api, const char *dir)
 
 static void fmu3_unload(fmu3 *api)
 {
-    rrr_fmi_lib_close(&api->lib);
-    rrr_fmi_md_free(&api->md);
+    fh_close(&api->md, &api->lib);
     memset(api, 0, sizeof *api);
 }
 
@@ -254,18 +246,8 @@ typedef struct fmu2 {
 
 static int fmu2_load(fmu2 *api, const char *dir)
 {
-    char path[1024];
-    char err[512];
     memset(api, 0, sizeof *api);
-    if (rrr_fmi_md_load(&api->md, dir, err, sizeof err) != 0 || api->md.fmi != 2) {
-        fprintf(stderr, "%s: %s\n", dir, api->md.xml == NULL ? err : "not FMI 2.0");
-        return 1;
-    }
-    snprintf(api->id, sizeof api->id, "%s", api->md.id);
-    snprintf(api->guid, sizeof api->guid, "%s", api->md.token);
-    if (rrr_fmi_binary_path(path, sizeof path, dir, 2, api->id) != 0 ||
-        rrr_fmi_lib_open(&api->lib, path, err, sizeof err) != 0) {
-        fprintf(stderr, "%s\n", err);
+    if (fh_open(&api->md, &api->lib, dir, 2, api->id, api->guid) != 0) {
         return 1;
     }
 #define LOAD2(F) load_sym(&api->lib, api->id, "fmi2" #F, &api->F, sizeof api->F);
@@ -278,20 +260,13 @@ static int fmu2_load(fmu2 *api, const char *dir)
 
 static void fmu2_unload(fmu2 *api)
 {
-    rrr_fmi_lib_close(&api->lib);
-    rrr_fmi_md_free(&api->md);
+    fh_close(&api->md, &api->lib);
     memset(api, 0, sizeof *api);
 }
 
 static fmi2ValueReference vr2_of(const fmu2 *api, const char *name)
 {
-    char err[256];
-    unsigned long vr = 0;
-    if (rrr_fmi_md_vr(&api->md, name, NULL, &vr, err, sizeof err) != 0) {
-        fprintf(stderr, "(FMI 2) %s\n", err);
-        exit(2);
-    }
-    return (fmi2ValueReference)vr;
+    return fh_md_vr(&api->md, name);
 }
 
 static int fmi2_errors = 0;
@@ -323,14 +298,7 @@ static fmi2Component inst2_new(const fmu2 *api, const char *name)
 
 /* ---- FMI 3 instances with their own log sink ------------------------------------------------- */
 
-typedef struct log_sink {
-    int count[5];          /* messages per fmi3Status */
-    int illegal;           /* messages that report an illegal call sequence */
-    int not_provided;      /* messages that report a function that is not provided */
-    int calls;             /* messages of category logCalls */
-    char last[1024];       /* the last message */
-    char last_error[1024]; /* the last message with status >= fmi3Error */
-} log_sink;
+typedef fh_log_sink log_sink;
 
 static int n_fmi2_mentions = 0;      /* FMI 3 messages that name an FMI 2 function */
 static char first_fmi2_mention[1024];
@@ -345,21 +313,7 @@ static void logger(fmi3InstanceEnvironment env, fmi3Status status, fmi3String ca
         return;
     }
     snprintf(s->last, sizeof s->last, "%s", message != NULL ? message : "(null)");
-    if ((unsigned)status < 5u) {
-        s->count[status]++;
-    }
-    if (status >= fmi3Error) {
-        memcpy(s->last_error, s->last, sizeof s->last_error);
-    }
-    if (strstr(s->last, "illegal call sequence") != NULL) {
-        s->illegal++;
-    }
-    if (strstr(s->last, "not provided") != NULL) {
-        s->not_provided++;
-    }
-    if (category != NULL && strcmp(category, "logCalls") == 0) {
-        s->calls++;
-    }
+    fh_log_record(s, (int)status, category);
     if (strstr(s->last, "fmi2") != NULL && n_fmi2_mentions++ == 0) {
         memcpy(first_fmi2_mention, s->last, sizeof first_fmi2_mention);
     }
@@ -448,28 +402,112 @@ static fmi3Status do_step(inst *x, double t, double h, double *last)
     return s;
 }
 
-/* Three joint variables, e.g. "q" -> q[1], q[2], q[3]. */
-static void vrs3(const fmu3 *api, const char *base, fmi3ValueReference vr[3])
+/* ---- the adapter of fmu_harness_common.c: the FMI 3.0 calls on an inst ----------------------- */
+
+static const char *const interface_names[2] = {"Co-Simulation", "Model Exchange"};
+
+
+#define A3(x) (((const inst *)(x))->api)
+#define C3(x) (((const inst *)(x))->c)
+
+static int drive_to_init(inst *x);
+static int drive_to_step(inst *x);
+static void check_stepping(void *x, int discarded, const char *where);
+
+static fh_log_sink *a3_log(void *x) { return &((inst *)x)->log; }
+static const char *a3_where(const void *x) { return interface_names[((const inst *)x)->me]; }
+static const rrr_fmi_md *a3_md(const void *api) { return &((const fmu3 *)api)->md; }
+static const char *a3_id(const void *api) { return ((const fmu3 *)api)->id; }
+static const void *a3_api(const void *x) { return A3(x); }
+static int a3_drive_init(void *x) { return drive_to_init(x); }
+static int a3_drive_step(void *x) { return drive_to_step(x); }
+static int a3_terminate(void *x) { return (int)A3(x)->Terminate(C3(x)); }
+static int a3_reset(void *x) { return (int)A3(x)->Reset(C3(x)); }
+static int a3_enter_init(void *x) { return (int)enter_init(x); }
+static int a3_exit_init(void *x) { return (int)A3(x)->ExitInitializationMode(C3(x)); }
+
+static int a3_get_real(void *x, const unsigned int *vr, size_t n, double *v)
 {
-    for (int i = 0; i < 3; ++i) {
-        char name[32];
-        snprintf(name, sizeof name, "%s[%d]", base, i + 1);
-        vr[i] = vr_of(api, name);
-    }
+    return (int)A3(x)->GetFloat64(C3(x), vr, n, v, n);
 }
 
-/* 1 when msg names word as a whole word (e.g. "fmi3GetInt8", "StepMode"). */
-static int names(const char *msg, const char *word)
+static int a3_set_real(void *x, const unsigned int *vr, size_t n, const double *v)
 {
-    const size_t n = strlen(word);
-    for (const char *p = strstr(msg, word); p != NULL; p = strstr(p + 1, word)) {
-        const int before = p == msg || !isalnum((unsigned char)p[-1]);
-        const int after = !isalnum((unsigned char)p[n]);
-        if (before && after) {
-            return 1;
-        }
+    return (int)A3(x)->SetFloat64(C3(x), vr, n, v, n);
+}
+
+static int a3_get_bool(void *x, unsigned int vr, int *v)
+{
+    fmi3Boolean b = *v != 0;
+    const fmi3Status s = A3(x)->GetBoolean(C3(x), &vr, 1, &b, 1);
+    *v = b;
+    return (int)s;
+}
+
+static int a3_set_bool(void *x, unsigned int vr, int v)
+{
+    const fmi3Boolean b = v != 0;
+    return (int)A3(x)->SetBoolean(C3(x), &vr, 1, &b, 1);
+}
+
+static int a3_do_step(void *x, double t, double h, double *last_time)
+{
+    return (int)do_step(x, t, h, last_time);
+}
+
+static void *a3_new_cs(const void *api, const char *name)
+{
+    inst *x = malloc(sizeof *x);
+    if (x != NULL && inst_new(x, api, name, 0) != 0) {
+        free(x);
+        return NULL;
     }
-    return 0;
+    return x;
+}
+
+static void a3_del(void *x)
+{
+    if (x == NULL) {
+        return;
+    }
+    inst_free(x);
+    free(x);
+}
+
+static int a3_get_state(void *x, void **s) { return (int)A3(x)->GetFMUState(C3(x), s); }
+static int a3_set_state(void *x, void *s) { return (int)A3(x)->SetFMUState(C3(x), s); }
+static int a3_free_state(void *x, void **s) { return (int)A3(x)->FreeFMUState(C3(x), s); }
+
+static int a3_state_size(void *x, void *s, size_t *n)
+{
+    return (int)A3(x)->SerializedFMUStateSize(C3(x), s, n);
+}
+
+static int a3_serialize(void *x, void *s, unsigned char *buf, size_t n)
+{
+    return (int)A3(x)->SerializeFMUState(C3(x), s, buf, n);
+}
+
+static int a3_deserialize(void *x, const unsigned char *buf, size_t n, void **s)
+{
+    return (int)A3(x)->DeserializeFMUState(C3(x), buf, n, s);
+}
+
+static const fh_ops ops3 = {
+    .fmi = "fmi3", .set_real_name = "fmi3SetFloat64", .step_reports_time = 1, .setup = NULL,
+    .drive_step = a3_drive_step, .check_stepping = check_stepping, .set_bool = a3_set_bool,
+    .terminate = a3_terminate, .reset = a3_reset, .api = a3_api, .id = a3_id,
+    .md = a3_md, .where = a3_where, .log = a3_log, .new_cs = a3_new_cs, .del = a3_del,
+    .drive_init = a3_drive_init, .get_real = a3_get_real, .set_real = a3_set_real,
+    .get_bool = a3_get_bool, .enter_init = a3_enter_init, .exit_init = a3_exit_init,
+    .do_step = a3_do_step, .get_state = a3_get_state, .set_state = a3_set_state,
+    .free_state = a3_free_state, .state_size = a3_state_size, .serialize = a3_serialize,
+    .deserialize = a3_deserialize,
+};
+
+static void vrs3(const fmu3 *api, const char *base, fmi3ValueReference vr[3])
+{
+    fh_vrs3(&ops3, api, base, vr);
 }
 
 /* ---- the XML --------------------------------------------------------------------------------- */
@@ -576,7 +614,6 @@ static const char *const state_names[ST_COUNT] = {
 #define S_ALL (S_I | S_IN | S_EM | S_CT | S_SM | S_SD | S_T | S_E)
 #define S_ME_EVAL (S_IN | S_EM | S_CT | S_T | S_E) /* derivatives, states, nominals, indicators */
 
-static const char *const interface_names[2] = {"Co-Simulation", "Model Exchange"};
 
 /* 1 when an instance of this FMU and interface type can be brought into state st. */
 static int reachable(const fmu3 *api, int me, int st)
@@ -636,14 +673,24 @@ static void drive(inst *x, int st)
     }
 }
 
+/* drive(x, ST_INIT), drive(x, ST_STEP): 1 when one of its checks failed */
+static int drive_to_init(inst *x)
+{
+    const int failures = rrr_test_failures;
+    drive(x, ST_INIT);
+    return rrr_test_failures != failures;
+}
+
+static int drive_to_step(inst *x)
+{
+    const int failures = rrr_test_failures;
+    drive(x, ST_STEP);
+    return rrr_test_failures != failures;
+}
+
 typedef fmi3Status (*caller)(inst *x);
 
-#define CALLER(NAME, ...)                                                                     \
-    static fmi3Status call_##NAME(inst *x)                                                    \
-    {                                                                                         \
-        const fmu3 *a = x->api;                                                               \
-        __VA_ARGS__                                                                           \
-    }
+#define CALLER(NAME, ...) FH_CALLER(fmi3Status, fmu3, NAME, __VA_ARGS__)
 
 /* The arguments are valid: only the state (or a missing capability) makes a call fail. */
 CALLER(SetDebugLogging, return a->SetDebugLogging(x->c, false, 0, NULL);)
@@ -892,6 +939,11 @@ static void check_state(inst *x, int st, const char *where)
     }
 }
 
+static void check_stepping(void *x, int discarded, const char *where)
+{
+    check_state(x, discarded ? ST_DISCARDED : ST_STEP, where);
+}
+
 /* ---- instantiation --------------------------------------------------------------------------- */
 
 static void expect_no_instance(fmi3Instance c, const fmu3 *api, log_sink *sink, const char *needle,
@@ -969,30 +1021,8 @@ static void test_null_instance(const fmu3 *api)
 
 /* ---- start values --------------------------------------------------------------------------- */
 
-/* Value after instantiation (read in initialization mode) = XML start = expected. */
-static void check_default(inst *x, const char *name, double expected)
-{
-    char start[64] = "";
-    const xml_var *v = find_var(x->api, name);
-    const int has_start = v != NULL && var_attr(v, "start", start, sizeof start) == 0;
-    const double got = get1(x, name);
-    if (!(got == expected) || !has_start || !(strtod(start, NULL) == expected)) {
-        fprintf(stderr, "%s (%s): %s = %.17g, XML start \"%s\", librrr default %.17g\n",
-                x->api->id, interface_names[x->me], name, got, start, expected);
-        rrr_test_failures++;
-    }
-}
-
 static void test_defaults(const fmu3 *plant, const fmu3 *ctrl)
 {
-    rrr_model m;
-    rrr_ctc_gains g;
-    CHECK(rrr_model_default(&m) == RRR_OK);
-    CHECK(rrr_ctc_gains_default(&g) == RRR_OK);
-    char pnames[N_MODEL_PARAMS][16];
-    double values[N_MODEL_PARAMS];
-    model_params(&m, pnames, values);
-
     for (int me = 0; me < 2; ++me) {
         inst p, c;
         if (inst_new(&p, plant, "defaults_plant", me) || inst_new(&c, ctrl, "defaults_ctrl", me)) {
@@ -1000,47 +1030,13 @@ static void test_defaults(const fmu3 *plant, const fmu3 *ctrl)
         }
         CHECK(enter_init(&p) == fmi3OK);
         CHECK(enter_init(&c) == fmi3OK);
-        for (int k = 0; k < N_MODEL_PARAMS; ++k) {
-            check_default(&p, pnames[k], values[k]);
-            check_default(&c, pnames[k], values[k]);
-        }
-        check_default(&p, "h_int", RRR_PLANT_H_INT_DEFAULT);
-        check_default(&p, "rtol", RRR_PLANT_RTOL_DEFAULT);
-        check_default(&p, "atol", RRR_PLANT_ATOL_DEFAULT);
-        {
-            /* the plant integrates adaptively unless told otherwise */
-            const xml_var *ad = find_var(plant, "adaptive");
-            char start_ad[16] = "";
-            fmi3Boolean on = false;
-            CHECK(ad != NULL && ad->is_bool &&
-                  var_attr(ad, "start", start_ad, sizeof start_ad) == 0);
-            CHECK(ad != NULL && plant->GetBoolean(p.c, &ad->vr, 1, &on, 1) == fmi3OK && on);
-            CHECK(strcmp(start_ad, "true") == 0);
-        }
-        for (int i = 0; i < 3; ++i) {
-            char name[32];
-            const char *zero_plant[] = {"u", "q0", "qd0"};
-            const char *zero_ctrl[] = {"q_ref", "qd_ref", "qdd_ref", "q", "qd"};
-            for (size_t k = 0; k < 3; ++k) {
-                snprintf(name, sizeof name, "%s[%d]", zero_plant[k], i + 1);
-                check_default(&p, name, 0.0);
-            }
-            for (size_t k = 0; k < 5; ++k) {
-                snprintf(name, sizeof name, "%s[%d]", zero_ctrl[k], i + 1);
-                check_default(&c, name, 0.0);
-            }
-            snprintf(name, sizeof name, "kp[%d]", i + 1);
-            check_default(&c, name, g.kp[i]);
-            snprintf(name, sizeof name, "kd[%d]", i + 1);
-            check_default(&c, name, g.kd[i]);
-        }
+        fh_check_defaults(&ops3, &p, &c);
+        /* the Booleans are <Boolean> elements with a start value */
+        const xml_var *ad = find_var(plant, "adaptive");
         const xml_var *ff = find_var(ctrl, "feedforward");
         char start[16] = "";
-        fmi3Boolean b = !g.feedforward;
+        CHECK(ad != NULL && ad->is_bool && var_attr(ad, "start", start, sizeof start) == 0);
         CHECK(ff != NULL && ff->is_bool && var_attr(ff, "start", start, sizeof start) == 0);
-        CHECK(ctrl->GetBoolean(c.c, &ff->vr, 1, &b, 1) == fmi3OK);
-        CHECK(b == (g.feedforward != 0));
-        CHECK(strcmp(start, g.feedforward ? "true" : "false") == 0);
         /* the independent variable has no start value; it is the startTime */
         CHECK(var_attr(find_var(plant, "time"), "start", start, sizeof start) != 0);
         CHECK(get1(&p, "time") == 0.0 && get1(&c, "time") == 0.0);
@@ -1052,91 +1048,6 @@ static void test_defaults(const fmu3 *plant, const fmu3 *ctrl)
 /* ---- closed loop: controller -> plant, Gauss-Seidel, 1 kHz ----------------------------------- */
 
 #define N_LOOP 1000
-
-typedef struct loop {
-    inst *p, *c;
-    fmi3ValueReference p_u[3], p_q[3], p_qd[3], c_ref[9], c_q[3], c_qd[3], c_u[3];
-    double t;
-} loop;
-
-static void loop_vrs(loop *L)
-{
-    vrs3(L->p->api, "u", L->p_u);
-    vrs3(L->p->api, "q", L->p_q);
-    vrs3(L->p->api, "qd", L->p_qd);
-    vrs3(L->c->api, "q_ref", L->c_ref);
-    vrs3(L->c->api, "qd_ref", L->c_ref + 3);
-    vrs3(L->c->api, "qdd_ref", L->c_ref + 6);
-    vrs3(L->c->api, "q", L->c_q);
-    vrs3(L->c->api, "qd", L->c_qd);
-    vrs3(L->c->api, "u", L->c_u);
-}
-
-/* Instantiated to StepMode for both, plant started on the reference. */
-static int loop_init(loop *L)
-{
-    double r[9];
-    reference(0.0, r);
-    fmi3ValueReference q0[3], qd0[3];
-    vrs3(L->p->api, "q0", q0);
-    vrs3(L->p->api, "qd0", qd0);
-    int bad = 0;
-    bad |= L->p->api->SetFloat64(L->p->c, q0, 3, r, 3) != fmi3OK;
-    bad |= L->p->api->SetFloat64(L->p->c, qd0, 3, r + 3, 3) != fmi3OK;
-    bad |= enter_init(L->p) != fmi3OK;
-    bad |= enter_init(L->c) != fmi3OK;
-    bad |= L->p->api->ExitInitializationMode(L->p->c) != fmi3OK;
-    bad |= L->c->api->ExitInitializationMode(L->c->c) != fmi3OK;
-    L->t = 0.0;
-    CHECK(!bad);
-    return bad;
-}
-
-/* One macro step; rec (9 values: q, qd, u) may be NULL. */
-static int loop_step(loop *L, double rec[9])
-{
-    double r[9], q[3], qd[3], u[3], last_p = -1.0, last_c = -1.0;
-    reference(L->t, r);
-    int bad = 0;
-    bad |= L->p->api->GetFloat64(L->p->c, L->p_q, 3, q, 3) != fmi3OK;
-    bad |= L->p->api->GetFloat64(L->p->c, L->p_qd, 3, qd, 3) != fmi3OK;
-    bad |= L->c->api->SetFloat64(L->c->c, L->c_ref, 9, r, 9) != fmi3OK;
-    bad |= L->c->api->SetFloat64(L->c->c, L->c_q, 3, q, 3) != fmi3OK;
-    bad |= L->c->api->SetFloat64(L->c->c, L->c_qd, 3, qd, 3) != fmi3OK;
-    bad |= L->c->api->GetFloat64(L->c->c, L->c_u, 3, u, 3) != fmi3OK;
-    bad |= L->p->api->SetFloat64(L->p->c, L->p_u, 3, u, 3) != fmi3OK;
-    bad |= do_step(L->p, L->t, H, &last_p) != fmi3OK;
-    bad |= do_step(L->c, L->t, H, &last_c) != fmi3OK;
-    /* lastSuccessfulTime: the end of the step, computed as the master computes it */
-    bad |= !(last_p == L->t + H && last_c == L->t + H);
-    L->t += H;
-    if (rec != NULL) {
-        memcpy(rec, q, sizeof q);
-        memcpy(rec + 3, qd, sizeof qd);
-        memcpy(rec + 6, u, sizeof u);
-    }
-    return bad;
-}
-
-static double loop_run(loop *L, int n, double (*rec)[9])
-{
-    double err = 0.0;
-    for (int k = 0; k < n; ++k) {
-        double row[9], r[9];
-        if (loop_step(L, row)) {
-            CHECK(0 && "loop_step failed");
-            return (double)INFINITY;
-        }
-        reference(L->t - H, r);
-        for (int i = 0; i < 3; ++i) {
-            err = fmax(err, fabs(row[i] - r[i]));
-        }
-        if (rec != NULL) {
-            memcpy(rec[k], row, sizeof row);
-        }
-    }
-    return err;
-}
 
 /* The same loop through the FMI 2.0 binaries. */
 static void loop_run_fmi2(const fmu2 *p2, const fmu2 *c2, double (*rec)[9])
@@ -1193,39 +1104,28 @@ static void loop_run_fmi2(const fmu2 *p2, const fmu2 *c2, double (*rec)[9])
     c2->FreeInstance(c);
 }
 
+/* the independent variable at the end of the loop */
+static void check_loop_time(fh_loop *L)
+{
+    CHECK(get1(L->p, "time") == L->t && get1(L->c, "time") == L->t);
+}
+
+static void check_reset(fh_loop *L)
+{
+    check_state(L->p, ST_INST, "after fmi3Reset");
+    log_clear(L->p);
+}
+
 static void test_closed_loop(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2, const fmu2 *c2)
 {
     inst p, c;
     if (inst_new(&p, plant, "plant", 0) || inst_new(&c, ctrl, "controller", 0)) {
         return;
     }
-    loop L = {&p, &c, {0}, {0}, {0}, {0}, {0}, {0}, {0}, 0.0};
-    loop_vrs(&L);
+    fh_loop L;
+    fh_loop_new(&L, &ops3, &p, &c);
     static double rec1[N_LOOP][9], rec2[N_LOOP][9], rec3[N_LOOP][9];
-    if (!loop_init(&L)) {
-        const double err = loop_run(&L, N_LOOP, rec1);
-        printf("FMI 3 closed loop (PD + feedforward), 1 s at 1 kHz: max |q - q_ref| = %.3g rad\n",
-               err);
-        CHECK(err < 1e-3);
-        CHECK(fabs(L.t - 1.0) < 1e-12);
-        CHECK(get1(&p, "time") == L.t && get1(&c, "time") == L.t);
-    }
-    CHECK(plant->Terminate(p.c) == fmi3OK);
-    CHECK(ctrl->Terminate(c.c) == fmi3OK);
-    /* reset and run again: the same trajectory, bit for bit */
-    CHECK(p.log.count[fmi3Error] == 0 && c.log.count[fmi3Error] == 0);
-    CHECK(p.log.count[fmi3Warning] == 0 && c.log.count[fmi3Warning] == 0);
-    CHECK(plant->Reset(p.c) == fmi3OK);
-    CHECK(ctrl->Reset(c.c) == fmi3OK);
-    check_state(&p, ST_INST, "after fmi3Reset");
-    log_clear(&p);
-    if (!loop_init(&L)) {
-        loop_run(&L, N_LOOP, rec2);
-        CHECK(memcmp(rec1, rec2, sizeof rec1) == 0);
-    }
-    CHECK(p.log.count[fmi3Error] == 0 && c.log.count[fmi3Error] == 0);
-    CHECK(plant->Terminate(p.c) == fmi3OK);
-    CHECK(ctrl->Terminate(c.c) == fmi3OK);
+    fh_loop_twice(&L, rec1, rec2, "FMI 3 closed loop", check_loop_time, check_reset);
     inst_free(&p);
     inst_free(&c);
     if (p2 != NULL && c2 != NULL) {
@@ -1260,8 +1160,8 @@ static void test_illegal_sequences(const fmu3 *api, int me)
             const fmi3Status s = functions[f].call(&x);
             const int ok = s == fmi3Error && x.log.count[fmi3Error] == 1 &&
                            x.log.count[fmi3Warning] == 0 && x.log.count[fmi3OK] == 0 &&
-                           x.log.illegal == 1 && names(x.log.last_error, functions[f].name) &&
-                           names(x.log.last_error, state_names[st]);
+                           x.log.illegal == 1 && fh_names_word(x.log.last_error, functions[f].name) &&
+                           fh_names_word(x.log.last_error, state_names[st]);
             if (!ok) {
                 fprintf(stderr,
                         "%s (%s): %s in state %s returned %d, %d error message(s), last \"%s\"\n",
@@ -1285,18 +1185,19 @@ static void test_illegal_sequences(const fmu3 *api, int me)
 /* Functions allowed by the state machine whose capability the XML does not declare. */
 static void test_not_provided(const fmu3 *api)
 {
+    enum { CS = 0, ME = 1 }; /* the interface type: interface_names[me] */
     static const struct {
         const char *name;
         int me;
         int st;
     } cases[] = {
-        {"fmi3GetNumberOfVariableDependencies", 0, ST_INST},
-        {"fmi3GetVariableDependencies", 1, ST_INIT},
-        {"fmi3EnterConfigurationMode", 0, ST_INST},
-        {"fmi3EnterConfigurationMode", 1, ST_EVENT},
-        {"fmi3GetOutputDerivatives", 0, ST_STEP},
-        {"fmi3EvaluateDiscreteStates", 0, ST_STEP},
-        {"fmi3EvaluateDiscreteStates", 1, ST_EVENT},
+        {"fmi3GetNumberOfVariableDependencies", CS, ST_INST},
+        {"fmi3GetVariableDependencies", ME, ST_INIT},
+        {"fmi3EnterConfigurationMode", CS, ST_INST},
+        {"fmi3EnterConfigurationMode", ME, ST_EVENT},
+        {"fmi3GetOutputDerivatives", CS, ST_STEP},
+        {"fmi3EvaluateDiscreteStates", CS, ST_STEP},
+        {"fmi3EvaluateDiscreteStates", ME, ST_EVENT},
     };
     int tried = 0;
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
@@ -1309,7 +1210,7 @@ static void test_not_provided(const fmu3 *api)
         log_clear(&x);
         const fmi3Status s = find_fn(cases[k].name)->call(&x);
         if (!(s == fmi3Error && x.log.count[fmi3Error] == 1 && x.log.not_provided == 1 &&
-              names(x.log.last_error, cases[k].name))) {
+              fh_names_word(x.log.last_error, cases[k].name))) {
             fprintf(stderr, "%s (%s): %s in %s returned %d, message \"%s\" (want \"not "
                             "provided\")\n",
                     api->id, interface_names[cases[k].me], cases[k].name,
@@ -1323,6 +1224,9 @@ static void test_not_provided(const fmu3 *api)
     printf("%s: %d calls of functions that are not provided refused\n", api->id, tried);
 }
 
+/* the plant's knowns in the order of its Jacobian: u, q, qd */
+static const char *const plant_knowns[3] = {"u", "q", "qd"};
+
 /* ---- partial derivatives ----------------------------------------------------------------------- */
 
 /* One refused derivative call: fmi3Error, one error message containing needle, the state
@@ -1334,26 +1238,14 @@ static void expect_refused_derivative(inst *x, int st, int adjoint, const fmi3Va
 {
     double sens[16];
     for (size_t i = 0; i < 16; ++i) {
-        sens[i] = 42.0;
+        sens[i] = FH_UNTOUCHED;
     }
     log_clear(x);
     const fmi3Status s = adjoint ? x->api->GetAdjointDerivative(x->c, u, nu, k, nk, seed, n_seed,
                                                                  sens, n_sens)
                                  : x->api->GetDirectionalDerivative(x->c, u, nu, k, nk, seed,
                                                                     n_seed, sens, n_sens);
-    int untouched = 1;
-    for (size_t i = 0; i < 16; ++i) {
-        untouched &= sens[i] == 42.0;
-    }
-    if (!(s == fmi3Error && x->log.count[fmi3Error] == 1 && strstr(x->log.last_error, needle) &&
-          untouched)) {
-        fprintf(stderr, "%s (%s): refused %s: status %d, %d error message(s), last \"%s\" "
-                        "(want \"%s\"), sensitivity %s\n",
-                x->api->id, interface_names[x->me], adjoint ? "adjoint" : "directional", (int)s,
-                x->log.count[fmi3Error], x->log.last_error, needle,
-                untouched ? "untouched" : "written");
-        rrr_test_failures++;
-    }
+    fh_expect_refused_out(&ops3, x, (int)s, adjoint ? "adjoint" : "directional", needle, sens, 16);
     check_state(x, st, "after a refused derivative");
 }
 
@@ -1409,9 +1301,7 @@ static void test_derivatives(const fmu3 *plant, const fmu3 *ctrl)
             vrs3(plant, "qd0", vqd0);
             vrs3(plant, "u", vu);
             vrs3(plant, "qdd", uk);
-            vrs3(plant, "u", kn);
-            vrs3(plant, "q", kn + 3);
-            vrs3(plant, "qd", kn + 6);
+            fh_vrs(&ops3, plant, plant_knowns, 3, kn);
             CHECK(plant->SetFloat64(x.c, vq0, 3, q0, 3) == fmi3OK);
             CHECK(plant->SetFloat64(x.c, vqd0, 3, qd0, 3) == fmi3OK);
             drive(&x, st);
@@ -1530,33 +1420,10 @@ static void test_derivatives(const fmu3 *plant, const fmu3 *ctrl)
 
 /* ---- refused values -------------------------------------------------------------------------- */
 
-static void expect_refused(inst *x, const char *name, double v, const char *needle)
-{
-    const double before = get1(x, name);
-    log_clear(x);
-    const fmi3Status s = set1(x, name, v);
-    const double after = get1(x, name);
-    if (s != fmi3Error || x->log.count[fmi3Error] != 1 || !strstr(x->log.last_error, needle) ||
-        !names(x->log.last_error, "fmi3SetFloat64") || memcmp(&before, &after, sizeof before)) {
-        fprintf(stderr, "%s (%s): set %s = %g returned %d, message \"%s\", value %.17g -> %.17g\n",
-                x->api->id, interface_names[x->me], name, v, (int)s, x->log.last_error, before,
-                after);
-        rrr_test_failures++;
-    }
-}
-
 /* One refused call: fmi3Error and exactly one error message holding every needle. */
 static void expect_error(inst *x, fmi3Status s, const char *what, const char *n1, const char *n2)
 {
-    const int ok = s == fmi3Error && x->log.count[fmi3Error] == 1 &&
-                   (n1 == NULL || strstr(x->log.last_error, n1)) &&
-                   (n2 == NULL || strstr(x->log.last_error, n2));
-    if (!ok) {
-        fprintf(stderr, "%s (%s): %s returned %d, %d error message(s), last \"%s\"\n", x->api->id,
-                interface_names[x->me], what, (int)s, x->log.count[fmi3Error], x->log.last_error);
-        rrr_test_failures++;
-    }
-    log_clear(x);
+    fh_expect_error(&ops3, x, (int)s, what, n1, n2);
 }
 
 /* The typed getters and setters of the types the FMUs have no variables of: refused for a
@@ -1630,30 +1497,15 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     /* initialization mode: parameters and inputs */
     CHECK(enter_init(&p) == fmi3OK);
     CHECK(enter_init(&c) == fmi3OK);
-    expect_refused(&p, "u[1]", (double)NAN, "u[1]");
-    expect_refused(&p, "u[3]", -(double)INFINITY, "u[3]");
-    expect_refused(&p, "d1", (double)INFINITY, "d1");
-    expect_refused(&p, "p[7]", -(double)INFINITY, "p[7]");
-    expect_refused(&p, "h_int", (double)NAN, "h_int");
-    expect_refused(&p, "rtol", (double)INFINITY, "rtol");
-    expect_refused(&p, "atol", (double)NAN, "atol");
-    expect_refused(&p, "q0[2]", (double)INFINITY, "q0[2]");
-    expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
-    expect_refused(&p, "time", 1.0, "time");       /* the independent variable */
-    expect_refused(&c, "q_ref[3]", (double)NAN, "q_ref[3]");
-    expect_refused(&c, "kp[2]", (double)INFINITY, "kp[2]");
-    expect_refused(&c, "f[2,3]", (double)NAN, "f[2,3]");
-    expect_refused(&c, "u_n[1]", 0.5, "u_n[1]");   /* an output */
+    fh_refused_in_init(&ops3, &p, &c);
+    fh_expect_refused(&ops3, &p, "time", 1.0, "time"); /* the independent variable */
 
-    /* a multi-value set with one bad value changes nothing */
+    /* a multi-value set with one bad value changes nothing, nor one with an output */
+    fh_refused_multi(&ops3, &p);
     {
         fmi3ValueReference vr[3];
         vrs3(plant, "u", vr);
-        const double v[3] = {1.0, (double)NAN, 2.0};
         double got[3] = {-1.0, -1.0, -1.0};
-        CHECK(plant->SetFloat64(p.c, vr, 3, v, 3) == fmi3Error);
-        CHECK(plant->GetFloat64(p.c, vr, 3, got, 3) == fmi3OK);
-        CHECK(got[0] == 0.0 && got[1] == 0.0 && got[2] == 0.0);
         const double w[3] = {1.0, 2.0, 3.0};
         fmi3ValueReference mixed[3] = {vr[0], vr[1], vr_of(plant, "q[1]")};
         CHECK(plant->SetFloat64(p.c, mixed, 3, w, 3) == fmi3Error); /* one output among inputs */
@@ -1699,18 +1551,8 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     }
     test_other_types(&p);
     test_other_types(&c);
-    /* a good set still works after the refusals */
-    CHECK(set1(&p, "u[1]", 0.25) == fmi3OK);
-    CHECK(get1(&p, "u[1]") == 0.25);
-
-    /* step mode: parameters are fixed, inputs are checked */
-    CHECK(plant->ExitInitializationMode(p.c) == fmi3OK);
-    CHECK(ctrl->ExitInitializationMode(c.c) == fmi3OK);
-    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
-    expect_refused(&p, "a3", 0.3, "StepMode"); /* fixed parameter after initialization */
-    expect_refused(&p, "q0[1]", 0.3, "q0[1]");
-    expect_refused(&c, "qd[1]", (double)NAN, "qd[1]");
-    expect_refused(&c, "kd[3]", 1.0, "kd[3]");
+    /* a good set still works; step mode: parameters are fixed, inputs are checked */
+    fh_refused_stepping(&ops3, &p, &c, "StepMode");
     {
         const fmi3ValueReference ff = vr_of(ctrl, "feedforward");
         const fmi3Boolean off = false;
@@ -1722,9 +1564,7 @@ static void test_bad_values(const fmu3 *plant, const fmu3 *ctrl)
     }
     test_other_types(&p);
     /* still stepping normally: nothing was corrupted */
-    CHECK(do_step(&p, 0.0, H, NULL) == fmi3OK);
-    CHECK(do_step(&c, 0.0, H, NULL) == fmi3OK);
-    CHECK(isfinite(get1(&p, "q[1]")) && isfinite(get1(&c, "u[1]")));
+    fh_still_stepping(&ops3, &p, &c);
 
     /* doStep arguments: refused, state unchanged */
     {
@@ -1850,7 +1690,7 @@ static void test_discard(const fmu3 *plant)
     log_clear(&p);
     CHECK(do_step(&p, H, 1e4, &last) == fmi3Discard);
     CHECK(p.log.count[fmi3Discard] == 1 && strstr(p.log.last, "substeps of h_int") != NULL);
-    CHECK(names(p.log.last, "fmi3DoStep"));
+    CHECK(fh_names_word(p.log.last, "fmi3DoStep"));
     CHECK(last == H);
     CHECK(get1(&p, "time") == H);
     const double q_after = get1(&p, "q[2]");
@@ -1865,90 +1705,25 @@ static void test_discard(const fmu3 *plant)
 
 /* ---- FMU state ------------------------------------------------------------------------------- */
 
-#define N_REPLAY 300
+
+static void check_time_t1(fh_loop *L, double t1)
+{
+    CHECK(get1(L->p, "time") == t1);
+}
 
 static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
 {
-    inst p, c;
-    if (inst_new(&p, plant, "state_plant", 0) || inst_new(&c, ctrl, "state_ctrl", 0)) {
+    fh_loop L;
+    fh_saved S;
+    if (fh_state_begin(&ops3, plant, ctrl, &L, &S, check_time_t1) != 0) {
         return;
     }
-    loop L = {&p, &c, {0}, {0}, {0}, {0}, {0}, {0}, {0}, 0.0};
-    loop_vrs(&L);
-    static double rec1[N_REPLAY][9], rec2[N_REPLAY][9], rec3[N_REPLAY][9];
-    if (loop_init(&L)) {
-        return;
-    }
-    loop_run(&L, 200, NULL);
-    const double t1 = L.t;
-    fmi3FMUState sp = NULL, sc = NULL;
-    CHECK(plant->GetFMUState(p.c, &sp) == fmi3OK && sp != NULL);
-    CHECK(ctrl->GetFMUState(c.c, &sc) == fmi3OK && sc != NULL);
-    loop_run(&L, N_REPLAY, rec1);
-
-    /* set back and rerun: bit-identical */
-    CHECK(plant->SetFMUState(p.c, sp) == fmi3OK);
-    CHECK(ctrl->SetFMUState(c.c, sc) == fmi3OK);
-    CHECK(get1(&p, "time") == t1);
-    L.t = t1;
-    loop_run(&L, N_REPLAY, rec2);
-    CHECK(memcmp(rec1, rec2, sizeof rec1) == 0);
-
-    /* serialize, free, deserialize, set, rerun: bit-identical */
-    size_t np = 0, nc = 0;
-    CHECK(plant->SerializedFMUStateSize(p.c, sp, &np) == fmi3OK && np > 0);
-    CHECK(ctrl->SerializedFMUStateSize(c.c, sc, &nc) == fmi3OK && nc > 0);
-    fmi3Byte *bp = malloc(np);
-    fmi3Byte *bc = malloc(nc);
-    fmi3Byte *bad = malloc(np + 8);
-    if (bp == NULL || bc == NULL || bad == NULL) {
-        CHECK(0 && "out of memory");
-        free(bp);
-        free(bc);
-        free(bad);
-        return;
-    }
-    CHECK(plant->SerializeFMUState(p.c, sp, bp, np) == fmi3OK);
-    CHECK(ctrl->SerializeFMUState(c.c, sc, bc, nc) == fmi3OK);
-    log_clear(&p);
-    expect_error(&p, plant->SerializeFMUState(p.c, sp, bad, np - 1), "serialize, buffer too small",
-                 "small", NULL);
-    CHECK(plant->FreeFMUState(p.c, &sp) == fmi3OK && sp == NULL);
-    CHECK(ctrl->FreeFMUState(c.c, &sc) == fmi3OK && sc == NULL);
-    CHECK(plant->DeserializeFMUState(p.c, bp, np, &sp) == fmi3OK && sp != NULL);
-    CHECK(ctrl->DeserializeFMUState(c.c, bc, nc, &sc) == fmi3OK && sc != NULL);
-    CHECK(plant->SetFMUState(p.c, sp) == fmi3OK);
-    CHECK(ctrl->SetFMUState(c.c, sc) == fmi3OK);
-    L.t = t1;
-    loop_run(&L, N_REPLAY, rec3);
-    CHECK(memcmp(rec1, rec3, sizeof rec1) == 0);
-
-    /* corrupted, truncated or foreign bytes are refused and change nothing */
+    inst *p = L.p;
     fmi3FMUState junk = NULL;
-    const double t_now = get1(&p, "time");
-    memcpy(bad, bp, np);
-    bad[np / 2] ^= 0x10;
-    log_clear(&p);
-    expect_error(&p, plant->DeserializeFMUState(p.c, bad, np, &junk), "a flipped bit", "checksum",
-                 NULL);
-    expect_error(&p, plant->DeserializeFMUState(p.c, bp, np - 8, &junk), "truncated bytes", NULL,
-                 NULL);
-    memcpy(bad, bp, np);
-    memset(bad + np, 0, 8);
-    expect_error(&p, plant->DeserializeFMUState(p.c, bad, np + 8, &junk), "8 bytes too many", NULL,
-                 NULL);
-    memcpy(bad, bp, np);
-    bad[0] ^= 0x01;
-    expect_error(&p, plant->DeserializeFMUState(p.c, bad, np, &junk), "a wrong magic", "magic",
-                 NULL);
-    expect_error(&p, plant->DeserializeFMUState(p.c, bp, 3, &junk), "3 bytes", NULL, NULL);
-    expect_error(&p, plant->SetFMUState(p.c, NULL), "setFMUState(NULL)", "NULL", NULL);
-    expect_error(&p, plant->DeserializeFMUState(p.c, NULL, np, &junk), "deserialize NULL", "NULL",
-                 NULL);
-    log_clear(&c);
-    expect_error(&c, ctrl->DeserializeFMUState(c.c, bp, np, &junk), "plant bytes to the controller",
-                 NULL, NULL);
-    expect_error(&c, ctrl->SetFMUState(c.c, sp), "a plant state into the controller", NULL, NULL);
+    const double t_now = get1(p, "time");
+    log_clear(p);
+    expect_error(p, plant->DeserializeFMUState(p->c, NULL, S.np, &junk), "deserialize NULL",
+                 "NULL", NULL);
     if (p2 != NULL) {
         /* the FMI 2 plant's state bytes are foreign to the FMI 3 plant */
         fmi2Component c2 = inst2_new(p2, "state_plant2");
@@ -1959,7 +1734,7 @@ static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
             fmi2Byte *b2 = malloc(n2);
             CHECK(b2 != NULL && p2->SerializeFMUstate(c2, s2, b2, n2) == fmi2OK);
             if (b2 != NULL) {
-                expect_error(&p, plant->DeserializeFMUState(p.c, (const fmi3Byte *)b2, n2, &junk),
+                expect_error(p, plant->DeserializeFMUState(p->c, (const fmi3Byte *)b2, n2, &junk),
                              "FMI 2 bytes", "FMI version", NULL);
             }
             free(b2);
@@ -1972,42 +1747,18 @@ static void test_fmu_state(const fmu3 *plant, const fmu3 *ctrl, const fmu2 *p2)
         }
     }
     CHECK(junk == NULL);
-    CHECK(get1(&p, "time") == t_now);
-    check_state(&p, ST_STEP, "after refused FMU states");
+    CHECK(get1(p, "time") == t_now);
+    check_state(p, ST_STEP, "after refused FMU states");
 
     /* getFMUState into an existing state overwrites it */
-    CHECK(plant->GetFMUState(p.c, &sp) == fmi3OK);
-    CHECK(plant->SetFMUState(p.c, sp) == fmi3OK);
-    CHECK(get1(&p, "time") == L.t);
+    CHECK(plant->GetFMUState(p->c, &S.sp) == fmi3OK);
+    CHECK(plant->SetFMUState(p->c, S.sp) == fmi3OK);
+    CHECK(get1(p, "time") == L.t);
 
-    CHECK(do_step(&p, L.t, H, NULL) == fmi3OK);
+    CHECK(do_step(p, L.t, H, NULL) == fmi3OK);
 
-    /* a state saved in StepMode brings a discarded step back to StepMode (a step that cannot be
-     * taken: 1e8 substeps of the fixed-step RK4) */
-    inst f;
-    if (inst_new(&f, plant, "state_discard", 0) == 0) {
-        fmi3FMUState sf = NULL;
-        CHECK(set_bool(&f, "adaptive", false) == fmi3OK);
-        drive(&f, ST_STEP);
-        CHECK(plant->GetFMUState(f.c, &sf) == fmi3OK);
-        CHECK(do_step(&f, H, 1e4, NULL) == fmi3Discard);
-        check_state(&f, ST_DISCARDED, "after a discarded step");
-        CHECK(plant->SetFMUState(f.c, sf) == fmi3OK);
-        check_state(&f, ST_STEP, "after setFMUState");
-        CHECK(do_step(&f, H, H, NULL) == fmi3OK);
-        CHECK(plant->FreeFMUState(f.c, &sf) == fmi3OK && sf == NULL);
-        inst_free(&f);
-    }
-
-    fmi3FMUState none = NULL;
-    CHECK(plant->FreeFMUState(p.c, &none) == fmi3OK);
-    CHECK(plant->FreeFMUState(p.c, &sp) == fmi3OK && sp == NULL);
-    CHECK(ctrl->FreeFMUState(c.c, &sc) == fmi3OK && sc == NULL);
-    free(bp);
-    free(bc);
-    free(bad);
-    inst_free(&p);
-    inst_free(&c);
+    fh_state_end(&L, &S);
+    fh_state_undoes_discard(&ops3, plant);
 }
 
 /* ---- Model Exchange -------------------------------------------------------------------------- */
@@ -2172,9 +1923,9 @@ static void test_model_exchange(const fmu3 *plant, const fmu3 *ctrl)
         CHECK(plant->GetContinuousStates(p.c, after, nx) == fmi3OK);
         CHECK(memcmp(before, after, nx * sizeof before[0]) == 0);
         CHECK(get1(&p, "time") == t_before);
-        expect_refused(&p, "u[1]", (double)NAN, "u[1]");
-        expect_refused(&p, "q0[1]", 1.0, "ContinuousTimeMode"); /* fixed after initialization */
-        expect_refused(&p, "qdd[1]", 1.0, "qdd[1]");             /* an output */
+        fh_expect_refused(&ops3, &p, "u[1]", (double)NAN, "u[1]");
+        fh_expect_refused(&ops3, &p, "q0[1]", 1.0, "ContinuousTimeMode"); /* fixed after initialization */
+        fh_expect_refused(&ops3, &p, "qdd[1]", 1.0, "qdd[1]");             /* an output */
         check_state(&p, ST_CONT, "after the refusals");
     }
     {
@@ -2206,11 +1957,7 @@ static void test_model_exchange(const fmu3 *plant, const fmu3 *ctrl)
     CHECK(ctrl->GetNumberOfEventIndicators(c.c, &ni) == fmi3OK && ni == 0);
     drive(&c, ST_CONT);
     fmi3ValueReference in[15], vu_c[3];
-    vrs3(ctrl, "q_ref", in);
-    vrs3(ctrl, "qd_ref", in + 3);
-    vrs3(ctrl, "qdd_ref", in + 6);
-    vrs3(ctrl, "q", in + 9);
-    vrs3(ctrl, "qd", in + 12);
+    fh_vrs(&ops3, ctrl, fh_ctrl_inputs, 5, in);
     vrs3(ctrl, "u", vu_c);
     for (int trial = 0; trial < 10; ++trial) {
         double v[15], u[3];
@@ -2397,24 +2144,12 @@ static void test_me_fmu_state(const fmu3 *plant)
  * when the importer overwrote a state block it holds, with fmi3Error, a message naming the
  * field, and the instance unchanged; in Model Exchange too (me: ContinuousTimeMode, where
  * the Co-Simulation StepMode case is the foreign one). */
-static unsigned char *state_bytes3(inst *x, size_t *n)
+/* StepMode in a forged Co-Simulation case is the Model Exchange one's state never entered */
+static void forged_for_me(forge_case *fc)
 {
-    const fmu3 *a = x->api;
-    fmi3FMUState s = NULL;
-    unsigned char *buf = NULL;
-    *n = 0;
-    if (a->GetFMUState(x->c, &s) == fmi3OK && a->SerializedFMUStateSize(x->c, s, n) == fmi3OK &&
-        *n > 0) {
-        buf = malloc(*n);
-        if (buf != NULL && a->SerializeFMUState(x->c, s, buf, *n) != fmi3OK) {
-            free(buf);
-            buf = NULL;
-        }
+    if (fc->w[0].at == FORGE_STATE && fc->w[0].bits == (1u << 3)) {
+        fc->w[0].bits = 1u << 5; /* StepMode: never entered by Model Exchange */
     }
-    if (s != NULL) {
-        a->FreeFMUState(x->c, &s);
-    }
-    return buf;
 }
 
 static void test_forged_states(const fmu3 *api, int me, const forge_case *cases,
@@ -2425,108 +2160,9 @@ static void test_forged_states(const fmu3 *api, int me, const forge_case *cases,
         return;
     }
     drive(&x, me ? ST_CONT : ST_STEP);
-    size_t n = 0;
-    unsigned char *good = state_bytes3(&x, &n);
-    unsigned char *buf = malloc(n + 1);
-    CHECK(good != NULL && buf != NULL && forge_layout_ok(n, data_size));
-    if (good == NULL || buf == NULL || !forge_layout_ok(n, data_size)) {
-        fprintf(stderr, "%s: FMU state of %zu bytes, the forger expects %zu\n", api->id, n,
-                (size_t)FORGE_DATA + data_size);
-        free(good);
-        free(buf);
-        inst_free(&x);
-        return;
-    }
-    memcpy(buf, good, n);
-    forge_reseal(buf, n);
-    CHECK(memcmp(buf, good, n) == 0);
-    fmi3FMUState s = NULL;
-    CHECK(api->DeserializeFMUState(x.c, buf, n, &s) == fmi3OK && s != NULL);
-    size_t refused = 0;
-    for (size_t i = 0; i < n_cases; ++i) {
-        forge_case fc = cases[i];
-        if (me && fc.w[0].at == FORGE_STATE && fc.w[0].bits == (1u << 3)) {
-            fc.w[0].bits = 1u << 5; /* StepMode: never entered by Model Exchange */
-        }
-        forge_apply(&fc, good, buf, n);
-        log_clear(&x);
-        fmi3FMUState junk = NULL;
-        const fmi3Status st = api->DeserializeFMUState(x.c, buf, n, &junk);
-        const int named = strstr(x.log.last_error, fc.needle) != NULL;
-        memcpy(s, buf, n);
-        log_clear(&x);
-        const fmi3Status st_set = api->SetFMUState(x.c, s);
-        const int named_set = strstr(x.log.last_error, fc.needle) != NULL;
-        if (st != fmi3Error || junk != NULL || !named || st_set != fmi3Error || !named_set) {
-            fprintf(stderr, "%s %s forged state \"%s\": deserialize %d, set %d, message \"%s\" "
-                    "(expected fmi3Error naming \"%s\")\n",
-                    api->id, interface_names[me], fc.what, (int)st, (int)st_set,
-                    x.log.last_error, fc.needle);
-            rrr_test_failures++;
-        } else {
-            ++refused;
-        }
-        if (junk != NULL) {
-            api->FreeFMUState(x.c, &junk);
-        }
-        size_t m = 0;
-        unsigned char *now = state_bytes3(&x, &m);
-        CHECK(now != NULL && m == n && memcmp(now, good, n) == 0);
-        free(now);
-    }
-    memcpy(s, good, n);
-    CHECK(api->SetFMUState(x.c, s) == fmi3OK);
-    if (!me) {
-        CHECK(do_step(&x, H, H, NULL) == fmi3OK);
-    }
-    CHECK(api->FreeFMUState(x.c, &s) == fmi3OK);
-    free(good);
-    free(buf);
+    fh_forged_states(&ops3, &x, cases, n_cases, data_size, me ? forged_for_me : NULL,
+                     me ? -1.0 : H);
     inst_free(&x);
-    printf("%s %s: %zu of %zu forged FMU states with valid checksums refused, naming the "
-           "field\n", api->id, interface_names[me], refused, n_cases);
-}
-
-static void test_two_instances(const fmu3 *plant)
-{
-    enum { N = 200 };
-    static double q1[N][3], q2[N][3], q3[N][3];
-    inst a, b, solo;
-    if (inst_new(&a, plant, "a", 0) || inst_new(&b, plant, "b", 0)) {
-        return;
-    }
-    fmi3ValueReference u[3], q[3];
-    vrs3(plant, "u", u);
-    vrs3(plant, "q", q);
-    const double ua[3] = {1.0, 0.0, 0.0}, ub[3] = {0.0, -1.5, 0.5};
-    CHECK(set1(&b, "q0[2]", 0.7) == fmi3OK);
-    drive(&a, ST_INIT);
-    drive(&b, ST_INIT);
-    CHECK(plant->ExitInitializationMode(a.c) == fmi3OK);
-    CHECK(plant->ExitInitializationMode(b.c) == fmi3OK);
-    CHECK(plant->SetFloat64(a.c, u, 3, ua, 3) == fmi3OK);
-    CHECK(plant->SetFloat64(b.c, u, 3, ub, 3) == fmi3OK);
-    for (int k = 0; k < N; ++k) {
-        CHECK(do_step(&a, k * H, H, NULL) == fmi3OK);
-        CHECK(do_step(&b, k * H, H, NULL) == fmi3OK);
-        CHECK(plant->GetFloat64(a.c, q, 3, q1[k], 3) == fmi3OK);
-        CHECK(plant->GetFloat64(b.c, q, 3, q2[k], 3) == fmi3OK);
-    }
-    inst_free(&b);
-    if (inst_new(&solo, plant, "solo", 0)) {
-        return;
-    }
-    drive(&solo, ST_INIT);
-    CHECK(plant->ExitInitializationMode(solo.c) == fmi3OK);
-    CHECK(plant->SetFloat64(solo.c, u, 3, ua, 3) == fmi3OK);
-    for (int k = 0; k < N; ++k) {
-        CHECK(do_step(&solo, k * H, H, NULL) == fmi3OK);
-        CHECK(plant->GetFloat64(solo.c, q, 3, q3[k], 3) == fmi3OK);
-    }
-    CHECK(memcmp(q1, q3, sizeof q1) == 0);
-    CHECK(memcmp(q1, q2, sizeof q1) != 0);
-    inst_free(&a);
-    inst_free(&solo);
 }
 
 /* ---- logging --------------------------------------------------------------------------------- */
@@ -2647,7 +2283,7 @@ int main(int argc, char **argv)
                            sizeof forge_controller_cases / sizeof forge_controller_cases[0],
                            sizeof(forge_controller));
     }
-    test_two_instances(&plant);
+    fh_two_instances(&ops3, &plant); /* nothing shared between two instances */
     test_logging(&plant);
     test_logging(&ctrl);
 

@@ -26,6 +26,9 @@
  * unchanged) and accepted where it does; refused arguments (NaN/Inf states and time, wrong nx/ni,
  * NULL arrays, outputs, fixed parameters after initialization); FMU state set/serialize with a
  * bit-identical continuation; Co-Simulation and Model Exchange snapshots refused by each other.
+ *
+ * The checks the FMI 3.0 harness makes as well are in fmu_harness_common.c, run through this
+ * harness's adapter of the FMI 2.0 calls (ops2); what is here is FMI 2.0's own.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -94,19 +97,7 @@ typedef struct fmu_api {
 /* Value reference of a variable from the XML; aborts the test run if it is missing. */
 static fmi2ValueReference vr_of(const fmu_api *api, const char *name)
 {
-    char err[256];
-    unsigned long vr = 0;
-    if (rrr_fmi_md_vr(&api->md, name, NULL, &vr, err, sizeof err) != 0) {
-        fprintf(stderr, "%s\n", err);
-        exit(2);
-    }
-    return (fmi2ValueReference)vr;
-}
-
-/* Start attribute of a variable, "" when it has none. */
-static void start_of(const fmu_api *api, const char *name, char *out, size_t n)
-{
-    (void)rrr_fmi_md_start(&api->md, name, out, n);
+    return fh_md_vr(&api->md, name);
 }
 
 /* The k-th (1-based, the XML's index) variable of <ModelVariables>, or NULL. */
@@ -160,21 +151,12 @@ static int parse_states(fmu_api *api)
 
 static int fmu_load(fmu_api *api, const char *dir)
 {
-    char path[1024];
     char err[512];
     memset(api, 0, sizeof *api);
-    if (rrr_fmi_md_load(&api->md, dir, err, sizeof err) != 0 || api->md.fmi != 2) {
-        fprintf(stderr, "%s: %s\n", dir, api->md.xml == NULL ? err : "not FMI 2.0");
+    if (fh_open(&api->md, &api->lib, dir, 2, api->id, api->guid) != 0) {
         return 1;
     }
-    snprintf(api->id, sizeof api->id, "%s", api->md.id);
-    snprintf(api->guid, sizeof api->guid, "%s", api->md.token);
     snprintf(api->resources, sizeof api->resources, "file://%s/resources", dir);
-    if (rrr_fmi_binary_path(path, sizeof path, dir, 2, api->id) != 0 ||
-        rrr_fmi_lib_open(&api->lib, path, err, sizeof err) != 0) {
-        fprintf(stderr, "%s\n", err);
-        return 1;
-    }
 #define LOAD(F)                                                                                  \
     if (rrr_fmi_lib_sym(&api->lib, "fmi2" #F, &api->F, sizeof api->F, err, sizeof err) != 0) { \
         fprintf(stderr, "%s: %s\n", api->id, err);                                              \
@@ -193,20 +175,13 @@ static int fmu_load(fmu_api *api, const char *dir)
 
 static void fmu_unload(fmu_api *api)
 {
-    rrr_fmi_lib_close(&api->lib);
-    rrr_fmi_md_free(&api->md);
+    fh_close(&api->md, &api->lib);
     memset(api, 0, sizeof *api);
 }
 
 /* ---- instances with their own log sink ---------------------------------------------------------- */
 
-typedef struct log_sink {
-    int count[6];        /* messages per fmi2Status */
-    int illegal;         /* messages that report an illegal call sequence */
-    int calls;           /* messages of category logCalls */
-    char last[1024];     /* the last message */
-    char last_error[1024]; /* the last message with status >= fmi2Error */
-} log_sink;
+typedef fh_log_sink log_sink;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status status,
                    fmi2String category, fmi2String message, ...)
@@ -217,18 +192,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
     va_start(ap, message);
     vsnprintf(s->last, sizeof s->last, message, ap);
     va_end(ap);
-    if ((unsigned)status < 6u) {
-        s->count[status]++;
-    }
-    if (status >= fmi2Error) {
-        memcpy(s->last_error, s->last, sizeof s->last_error);
-    }
-    if (strstr(s->last, "illegal call sequence") != NULL) {
-        s->illegal++;
-    }
-    if (category != NULL && strcmp(category, "logCalls") == 0) {
-        s->calls++;
-    }
+    fh_log_record(s, (int)status, category);
     if (getenv("RRR_HARNESS_VERBOSE") != NULL) {
         fprintf(stderr, "  [%s %d %s] %s\n", instance ? instance : "?", (int)status,
                 category ? category : "?", s->last);
@@ -238,6 +202,7 @@ static void logger(fmi2ComponentEnvironment env, fmi2String instance, fmi2Status
 typedef struct inst {
     const fmu_api *api;
     fmi2Component c;
+    fmi2Type type;
     log_sink log;
     fmi2CallbackFunctions cb;
 } inst;
@@ -257,6 +222,7 @@ static int inst_new_type(inst *x, const fmu_api *api, const char *name, fmi2Type
     x->cb.freeMemory = count_free;
     x->cb.stepFinished = NULL;
     x->cb.componentEnvironment = &x->log;
+    x->type = type;
     x->c = api->Instantiate(name, type, api->guid, api->resources, &x->cb, fmi2False,
                             fmi2False);
     CHECK(x->c != NULL);
@@ -318,87 +284,198 @@ static double get1(inst *x, const char *name)
     return v;
 }
 
-/* Names of three joint variables, e.g. "q" -> q[1], q[2], q[3]. */
+/* ---- the adapter of fmu_harness_common.c: the FMI 2.0 calls on an inst ------------------------ */
+
+static int drive_to_init(inst *x);
+static int drive_to_step(inst *x);
+static void check_stepping(void *x, int discarded, const char *where);
+
+static const void *a2_api(const void *x)
+{
+    return ((const inst *)x)->api;
+}
+
+static int a2_get_real(void *x, const unsigned int *vr, size_t n, double *v)
+{
+    inst *i = x;
+    return (int)i->api->GetReal(i->c, vr, n, v);
+}
+
+static const char *a2_id(const void *api)
+{
+    return ((const fmu_api *)api)->id;
+}
+
+static int a2_set_real(void *x, const unsigned int *vr, size_t n, const double *v)
+{
+    inst *i = x;
+    return (int)i->api->SetReal(i->c, vr, n, v);
+}
+
+static const rrr_fmi_md *a2_md(const void *api)
+{
+    return &((const fmu_api *)api)->md;
+}
+
+static int a2_get_bool(void *x, unsigned int vr, int *v)
+{
+    inst *i = x;
+    fmi2Boolean b = *v;
+    const fmi2Status s = i->api->GetBoolean(i->c, &vr, 1, &b);
+    *v = b;
+    return (int)s;
+}
+
+static const char *a2_where(const void *x)
+{
+    return ((const inst *)x)->type == fmi2ModelExchange ? "Model Exchange" : "Co-Simulation";
+}
+
+static int a2_setup(void *x)
+{
+    inst *i = x;
+    return (int)i->api->SetupExperiment(i->c, fmi2False, 0.0, 0.0, fmi2False, 0.0);
+}
+
+static fh_log_sink *a2_log(void *x)
+{
+    return &((inst *)x)->log;
+}
+
+static int a2_enter_init(void *x)
+{
+    inst *i = x;
+    return (int)i->api->EnterInitializationMode(i->c);
+}
+
+static void *a2_new_cs(const void *api, const char *name)
+{
+    inst *x = malloc(sizeof *x);
+    if (x != NULL && inst_new(x, api, name) != 0) {
+        free(x);
+        x = NULL;
+    }
+    return x;
+}
+
+static int a2_exit_init(void *x)
+{
+    inst *i = x;
+    return (int)i->api->ExitInitializationMode(i->c);
+}
+
+static void a2_del(void *x)
+{
+    if (x != NULL) {
+        inst_free(x);
+        free(x);
+    }
+}
+
+/* FMI 2.0 reports lastSuccessfulTime through fmi2GetRealStatus, not fmi2DoStep */
+static int a2_do_step(void *x, double t, double h, double *last_time)
+{
+    inst *i = x;
+    if (last_time != NULL) {
+        *last_time = (double)NAN;
+    }
+    return (int)i->api->DoStep(i->c, t, h, fmi2True);
+}
+
+static int a2_drive_init(void *x)
+{
+    return drive_to_init(x);
+}
+
+static int a2_drive_step(void *x)
+{
+    return drive_to_step(x);
+}
+
+static int a2_set_bool(void *x, unsigned int vr, int v)
+{
+    inst *i = x;
+    const fmi2Boolean b = v;
+    return (int)i->api->SetBoolean(i->c, &vr, 1, &b);
+}
+
+static int a2_terminate(void *x)
+{
+    inst *i = x;
+    return (int)i->api->Terminate(i->c);
+}
+
+static int a2_reset(void *x)
+{
+    inst *i = x;
+    return (int)i->api->Reset(i->c);
+}
+
+static int a2_get_state(void *x, void **s)
+{
+    inst *i = x;
+    return (int)i->api->GetFMUstate(i->c, s);
+}
+
+static int a2_set_state(void *x, void *s)
+{
+    inst *i = x;
+    return (int)i->api->SetFMUstate(i->c, s);
+}
+
+static int a2_free_state(void *x, void **s)
+{
+    inst *i = x;
+    return (int)i->api->FreeFMUstate(i->c, s);
+}
+
+static int a2_state_size(void *x, void *s, size_t *n)
+{
+    inst *i = x;
+    return (int)i->api->SerializedFMUstateSize(i->c, s, n);
+}
+
+static int a2_serialize(void *x, void *s, unsigned char *buf, size_t n)
+{
+    inst *i = x;
+    return (int)i->api->SerializeFMUstate(i->c, s, (fmi2Byte *)buf, n);
+}
+
+static int a2_deserialize(void *x, const unsigned char *buf, size_t n, void **s)
+{
+    inst *i = x;
+    return (int)i->api->DeSerializeFMUstate(i->c, (const fmi2Byte *)buf, n, s);
+}
+
+static const fh_ops ops2 = {
+    .fmi = "fmi2", .set_real_name = "fmi2SetReal", .step_reports_time = 0,
+    .drive_step = a2_drive_step, .check_stepping = check_stepping, .set_bool = a2_set_bool,
+    .terminate = a2_terminate, .reset = a2_reset, .api = a2_api, .id = a2_id, .md = a2_md,
+    .where = a2_where, .log = a2_log, .new_cs = a2_new_cs, .del = a2_del,
+    .drive_init = a2_drive_init, .get_real = a2_get_real, .set_real = a2_set_real,
+    .get_bool = a2_get_bool, .setup = a2_setup, .enter_init = a2_enter_init,
+    .exit_init = a2_exit_init, .do_step = a2_do_step, .get_state = a2_get_state,
+    .set_state = a2_set_state, .free_state = a2_free_state, .state_size = a2_state_size,
+    .serialize = a2_serialize, .deserialize = a2_deserialize,
+};
+
+/* Value references of three joint variables, e.g. "q" -> q[1], q[2], q[3]. */
 static void vrs3(const fmu_api *api, const char *base, fmi2ValueReference vr[3])
 {
-    for (int i = 0; i < 3; ++i) {
-        char name[32];
-        snprintf(name, sizeof name, "%s[%d]", base, i + 1);
-        vr[i] = vr_of(api, name);
-    }
+    fh_vrs3(&ops2, api, base, vr);
 }
 
-/* ---- the model parameters, named as in both FMUs ------------------------------------------------ */
-
-/* Value after instantiation (read in initialization mode) = XML start = expected. */
-static void check_default(inst *x, const char *name, double expected)
-{
-    char start[64];
-    start_of(x->api, name, start, sizeof start);
-    const double v = get1(x, name);
-    if (!(v == expected) || start[0] == '\0' || !(strtod(start, NULL) == expected)) {
-        fprintf(stderr, "%s: %s = %.17g, XML start \"%s\", librrr default %.17g\n", x->api->id,
-                name, v, start, expected);
-        rrr_test_failures++;
-    }
-}
+/* ---- start values = XML start = librrr defaults ---------------------------------------------- */
 
 static void test_defaults(const fmu_api *plant, const fmu_api *ctrl)
 {
-    rrr_model m;
-    rrr_ctc_gains g;
-    CHECK(rrr_model_default(&m) == RRR_OK);
-    CHECK(rrr_ctc_gains_default(&g) == RRR_OK);
-    char names[N_MODEL_PARAMS][16];
-    double values[N_MODEL_PARAMS];
-    model_params(&m, names, values);
-
     inst p, c;
     if (inst_new(&p, plant, "defaults_plant") || inst_new(&c, ctrl, "defaults_ctrl")) {
         return;
     }
     CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
     CHECK(ctrl->EnterInitializationMode(c.c) == fmi2OK);
-    for (int k = 0; k < N_MODEL_PARAMS; ++k) {
-        check_default(&p, names[k], values[k]);
-        check_default(&c, names[k], values[k]);
-    }
-    check_default(&p, "h_int", RRR_PLANT_H_INT_DEFAULT);
-    check_default(&p, "rtol", RRR_PLANT_RTOL_DEFAULT);
-    check_default(&p, "atol", RRR_PLANT_ATOL_DEFAULT);
-    {
-        /* the plant integrates adaptively unless told otherwise */
-        const fmi2ValueReference ad = vr_of(plant, "adaptive");
-        fmi2Boolean on = fmi2False;
-        char start_ad[16];
-        start_of(plant, "adaptive", start_ad, sizeof start_ad);
-        CHECK(plant->GetBoolean(p.c, &ad, 1, &on) == fmi2OK && on == fmi2True);
-        CHECK(strcmp(start_ad, "true") == 0);
-    }
-    for (int i = 0; i < 3; ++i) {
-        char name[32];
-        const char *zero_plant[] = {"u", "q0", "qd0"};
-        const char *zero_ctrl[] = {"q_ref", "qd_ref", "qdd_ref", "q", "qd"};
-        for (size_t k = 0; k < 3; ++k) {
-            snprintf(name, sizeof name, "%s[%d]", zero_plant[k], i + 1);
-            check_default(&p, name, 0.0);
-        }
-        for (size_t k = 0; k < 5; ++k) {
-            snprintf(name, sizeof name, "%s[%d]", zero_ctrl[k], i + 1);
-            check_default(&c, name, 0.0);
-        }
-        snprintf(name, sizeof name, "kp[%d]", i + 1);
-        check_default(&c, name, g.kp[i]);
-        snprintf(name, sizeof name, "kd[%d]", i + 1);
-        check_default(&c, name, g.kd[i]);
-    }
-    const fmi2ValueReference ff = vr_of(ctrl, "feedforward");
-    fmi2Boolean b = fmi2False;
-    char start[16];
-    start_of(ctrl, "feedforward", start, sizeof start);
-    CHECK(ctrl->GetBoolean(c.c, &ff, 1, &b) == fmi2OK);
-    CHECK((b != fmi2False) == (g.feedforward != 0));
-    CHECK(strcmp(start, g.feedforward ? "true" : "false") == 0);
+    fh_check_defaults(&ops2, &p, &c);
     inst_free(&p);
     inst_free(&c);
 }
@@ -439,89 +516,13 @@ static void test_instantiate(const fmu_api *api)
 
 /* ---- closed loop: controller -> plant, Gauss-Seidel, 1 kHz ------------------------------------ */
 
-typedef struct loop {
-    inst *p, *c;
-    fmi2ValueReference p_u[3], p_q[3], p_qd[3], c_ref[9], c_q[3], c_qd[3], c_u[3];
-    double t;
-} loop;
-
-static void loop_vrs(loop *L)
+/* FMI 2.0's lastSuccessfulTime after the loop's second */
+static void check_last_time(fh_loop *L)
 {
-    vrs3(L->p->api, "u", L->p_u);
-    vrs3(L->p->api, "q", L->p_q);
-    vrs3(L->p->api, "qd", L->p_qd);
-    vrs3(L->c->api, "q_ref", L->c_ref);
-    vrs3(L->c->api, "qd_ref", L->c_ref + 3);
-    vrs3(L->c->api, "qdd_ref", L->c_ref + 6);
-    vrs3(L->c->api, "q", L->c_q);
-    vrs3(L->c->api, "qd", L->c_qd);
-    vrs3(L->c->api, "u", L->c_u);
-}
-
-/* Instantiate-to-StepComplete for both, plant started on the reference. */
-static int loop_init(loop *L)
-{
-    double r[9];
-    reference(0.0, r);
-    fmi2ValueReference q0[3], qd0[3];
-    vrs3(L->p->api, "q0", q0);
-    vrs3(L->p->api, "qd0", qd0);
-    int bad = 0;
-    bad |= L->p->api->SetupExperiment(L->p->c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK;
-    bad |= L->c->api->SetupExperiment(L->c->c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK;
-    bad |= L->p->api->SetReal(L->p->c, q0, 3, r) != fmi2OK;
-    bad |= L->p->api->SetReal(L->p->c, qd0, 3, r + 3) != fmi2OK;
-    bad |= L->p->api->EnterInitializationMode(L->p->c) != fmi2OK;
-    bad |= L->c->api->EnterInitializationMode(L->c->c) != fmi2OK;
-    bad |= L->p->api->ExitInitializationMode(L->p->c) != fmi2OK;
-    bad |= L->c->api->ExitInitializationMode(L->c->c) != fmi2OK;
-    L->t = 0.0;
-    CHECK(!bad);
-    return bad;
-}
-
-/* One macro step; rec (9 values: q, qd, u) may be NULL. */
-static int loop_step(loop *L, double rec[9])
-{
-    double r[9], q[3], qd[3], u[3];
-    reference(L->t, r);
-    int bad = 0;
-    bad |= L->p->api->GetReal(L->p->c, L->p_q, 3, q) != fmi2OK;
-    bad |= L->p->api->GetReal(L->p->c, L->p_qd, 3, qd) != fmi2OK;
-    bad |= L->c->api->SetReal(L->c->c, L->c_ref, 9, r) != fmi2OK;
-    bad |= L->c->api->SetReal(L->c->c, L->c_q, 3, q) != fmi2OK;
-    bad |= L->c->api->SetReal(L->c->c, L->c_qd, 3, qd) != fmi2OK;
-    bad |= L->c->api->GetReal(L->c->c, L->c_u, 3, u) != fmi2OK;
-    bad |= L->p->api->SetReal(L->p->c, L->p_u, 3, u) != fmi2OK;
-    bad |= L->p->api->DoStep(L->p->c, L->t, H, fmi2True) != fmi2OK;
-    bad |= L->c->api->DoStep(L->c->c, L->t, H, fmi2True) != fmi2OK;
-    L->t += H;
-    if (rec != NULL) {
-        memcpy(rec, q, sizeof q);
-        memcpy(rec + 3, qd, sizeof qd);
-        memcpy(rec + 6, u, sizeof u);
-    }
-    return bad;
-}
-
-static double loop_run(loop *L, int n, double (*rec)[9])
-{
-    double err = 0.0;
-    for (int k = 0; k < n; ++k) {
-        double row[9], r[9];
-        if (loop_step(L, row)) {
-            CHECK(0 && "loop_step failed");
-            return (double)INFINITY;
-        }
-        reference(L->t - H, r);
-        for (int i = 0; i < 3; ++i) {
-            err = fmax(err, fabs(row[i] - r[i]));
-        }
-        if (rec != NULL) {
-            memcpy(rec[k], row, sizeof row);
-        }
-    }
-    return err;
+    const inst *p = L->p;
+    fmi2Real last_t = -1.0;
+    CHECK(p->api->GetRealStatus(p->c, fmi2LastSuccessfulTime, &last_t) == fmi2OK);
+    CHECK(fabs(last_t - 1.0) < 1e-12);
 }
 
 static void test_closed_loop(const fmu_api *plant, const fmu_api *ctrl)
@@ -530,30 +531,10 @@ static void test_closed_loop(const fmu_api *plant, const fmu_api *ctrl)
     if (inst_new(&p, plant, "plant") || inst_new(&c, ctrl, "controller")) {
         return;
     }
-    loop L = {&p, &c, {0}, {0}, {0}, {0}, {0}, {0}, {0}, 0.0};
-    loop_vrs(&L);
+    fh_loop L;
+    fh_loop_new(&L, &ops2, &p, &c);
     static double rec1[1000][9], rec2[1000][9];
-    if (!loop_init(&L)) {
-        const double err = loop_run(&L, 1000, rec1);
-        printf("closed loop (PD + feedforward), 1 s at 1 kHz: max |q - q_ref| = %.3g rad\n", err);
-        CHECK(err < 1e-3);
-        CHECK(fabs(L.t - 1.0) < 1e-12);
-    }
-    fmi2Real last_t = -1.0;
-    CHECK(plant->GetRealStatus(p.c, fmi2LastSuccessfulTime, &last_t) == fmi2OK);
-    CHECK(fabs(last_t - 1.0) < 1e-12);
-    CHECK(plant->Terminate(p.c) == fmi2OK);
-    CHECK(ctrl->Terminate(c.c) == fmi2OK);
-    /* reset and run again: the same trajectory, bit for bit */
-    CHECK(plant->Reset(p.c) == fmi2OK);
-    CHECK(ctrl->Reset(c.c) == fmi2OK);
-    if (!loop_init(&L)) {
-        loop_run(&L, 1000, rec2);
-        CHECK(memcmp(rec1, rec2, sizeof rec1) == 0);
-    }
-    CHECK(p.log.count[fmi2Error] == 0 && c.log.count[fmi2Error] == 0);
-    CHECK(plant->Terminate(p.c) == fmi2OK);
-    CHECK(ctrl->Terminate(c.c) == fmi2OK);
+    fh_loop_twice(&L, rec1, rec2, "closed loop", check_last_time, NULL);
     inst_free(&p);
     inst_free(&c);
 }
@@ -564,13 +545,11 @@ enum { ST_INST, ST_INIT, ST_DONE, ST_FAILED, ST_TERM, ST_ERR, ST_COUNT };
 static const char *const state_names[ST_COUNT] = {"Instantiated", "InitializationMode",
                                                   "StepComplete", "StepFailed", "Terminated",
                                                   "Error"};
-#define S_I (1u << ST_INST)
-#define S_IN (1u << ST_INIT)
-#define S_SC (1u << ST_DONE)
-#define S_SF (1u << ST_FAILED)
-#define S_T (1u << ST_TERM)
-#define S_E (1u << ST_ERR)
-#define S_ALL (S_I | S_IN | S_SC | S_SF | S_T | S_E)
+/* the states as bits of a mask */
+enum {
+    S_I = 1 << ST_INST, S_IN = 1 << ST_INIT, S_SC = 1 << ST_DONE, S_SF = 1 << ST_FAILED,
+    S_T = 1 << ST_TERM, S_E = 1 << ST_ERR, S_ALL = (1 << ST_COUNT) - 1
+};
 
 /* A parameter of the FMU whose value -1 exitInitializationMode refuses. */
 static const char *bad_param(const fmu_api *a)
@@ -621,6 +600,16 @@ static int drive(inst *x, int state)
     return 0;
 }
 
+static int drive_to_init(inst *x)
+{
+    return drive(x, ST_INIT);
+}
+
+static int drive_to_step(inst *x)
+{
+    return drive(x, ST_DONE);
+}
+
 /* Which of three side-effect-free probes are accepted: identifies the state. */
 static unsigned fingerprint(inst *x)
 {
@@ -635,14 +624,20 @@ static unsigned fingerprint(inst *x)
 
 static const unsigned expected_fingerprint[ST_COUNT] = {2u, 3u, 7u, 5u, 5u, 1u};
 
+/* StepComplete or (discarded) StepFailed, by the fingerprint */
+static void check_stepping(void *x, int discarded, const char *where)
+{
+    const unsigned fp = fingerprint(x), want = expected_fingerprint[discarded ? ST_FAILED : ST_DONE];
+    if (fp != want) {
+        fprintf(stderr, "%s %s: fingerprint %u, expected %u\n", ((inst *)x)->api->id, where, fp,
+                want);
+    }
+    CHECK(fp == want);
+}
+
 typedef fmi2Status (*caller)(inst *x);
 
-#define CALLER(NAME, ...)                                                                     \
-    static fmi2Status call_##NAME(inst *x)                                                    \
-    {                                                                                         \
-        const fmu_api *a = x->api;                                                            \
-        __VA_ARGS__                                                                           \
-    }
+#define CALLER(NAME, ...) FH_CALLER(fmi2Status, fmu_api, NAME, __VA_ARGS__)
 
 CALLER(SetDebugLogging, return a->SetDebugLogging(x->c, fmi2False, 0, NULL);)
 CALLER(SetupExperiment, return a->SetupExperiment(x->c, fmi2False, 0.0, 0.0, fmi2False, 0.0);)
@@ -715,13 +710,10 @@ enum { MS_INST, MS_INIT, MS_EVENT, MS_CONT, MS_TERM, MS_ERR, MS_COUNT };
 static const char *const me_state_names[MS_COUNT] = {"Instantiated", "InitializationMode",
                                                      "EventMode",    "ContinuousTimeMode",
                                                      "Terminated",   "Error"};
-#define M_I (1u << MS_INST)
-#define M_IN (1u << MS_INIT)
-#define M_EV (1u << MS_EVENT)
-#define M_CT (1u << MS_CONT)
-#define M_T (1u << MS_TERM)
-#define M_E (1u << MS_ERR)
-#define M_ALL (M_I | M_IN | M_EV | M_CT | M_T | M_E)
+enum {
+    M_I = 1 << MS_INST, M_IN = 1 << MS_INIT, M_EV = 1 << MS_EVENT, M_CT = 1 << MS_CONT,
+    M_T = 1 << MS_TERM, M_E = 1 << MS_ERR, M_ALL = (1 << MS_COUNT) - 1
+};
 
 /* Put a fresh Model Exchange instance into a state (all six are reachable for both FMUs). */
 static int drive_me(inst *x, int state)
@@ -780,22 +772,7 @@ static const unsigned expected_fingerprint_me[MS_COUNT] = {6u, 7u, 15u, 3u, 1u, 
  * nothing. Taking it changes nothing either (get, size, serialize, free). */
 static unsigned char *state_bytes(inst *x, size_t *n)
 {
-    const fmu_api *a = x->api;
-    fmi2FMUstate s = NULL;
-    unsigned char *buf = NULL;
-    *n = 0;
-    if (a->GetFMUstate(x->c, &s) == fmi2OK && a->SerializedFMUstateSize(x->c, s, n) == fmi2OK &&
-        *n > 0) {
-        buf = malloc(*n);
-        if (buf != NULL && a->SerializeFMUstate(x->c, s, (fmi2Byte *)buf, *n) != fmi2OK) {
-            free(buf);
-            buf = NULL;
-        }
-    }
-    if (s != NULL) {
-        a->FreeFMUstate(x->c, &s);
-    }
-    return buf;
+    return fh_state_bytes(&ops2, x, n);
 }
 
 static int same_state(inst *x, const unsigned char *before, size_t n)
@@ -994,21 +971,13 @@ static void expect_refused_dd(inst *x, const fmi2ValueReference *u, size_t nu,
                               const fmi2ValueReference *k, size_t nk, const double *seed,
                               const char *needle)
 {
-    double out[8] = {42.0, 42.0, 42.0, 42.0, 42.0, 42.0, 42.0, 42.0};
+    double out[8];
+    for (size_t i = 0; i < 8; ++i) {
+        out[i] = FH_UNTOUCHED;
+    }
     log_clear(x);
     const fmi2Status s = x->api->GetDirectionalDerivative(x->c, u, nu, k, nk, seed, out);
-    int untouched = 1;
-    for (int i = 0; i < 8; ++i) {
-        untouched &= out[i] == 42.0;
-    }
-    if (!(s == fmi2Error && x->log.count[fmi2Error] == 1 && strstr(x->log.last_error, needle) &&
-          untouched)) {
-        fprintf(stderr, "%s: refused fmi2GetDirectionalDerivative: status %d, %d error "
-                        "message(s), last \"%s\" (want \"%s\"), dvUnknown %s\n",
-                x->api->id, (int)s, x->log.count[fmi2Error], x->log.last_error, needle,
-                untouched ? "untouched" : "written");
-        rrr_test_failures++;
-    }
+    fh_expect_refused_out(&ops2, x, (int)s, "fmi2GetDirectionalDerivative", needle, out, 8);
 }
 
 /* The plant (Co-Simulation and Model Exchange) and the controller: the directional derivatives
@@ -1117,20 +1086,6 @@ static void test_directional_derivatives(const fmu_api *plant, const fmu_api *ct
            "controller), %d refused calls\n", refused);
 }
 
-static void expect_refused(inst *x, const char *name, double v, const char *needle)
-{
-    const double before = get1(x, name);
-    log_clear(x);
-    const fmi2Status s = set1(x, name, v);
-    const double after = get1(x, name);
-    if (s != fmi2Error || x->log.count[fmi2Error] != 1 || strstr(x->log.last_error, needle) == NULL ||
-        memcmp(&before, &after, sizeof before) != 0) {
-        fprintf(stderr, "%s: set %s = %g returned %d, message \"%s\", value %.17g -> %.17g\n",
-                x->api->id, name, v, (int)s, x->log.last_error, before, after);
-        rrr_test_failures++;
-    }
-}
-
 static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
 {
     inst p, c;
@@ -1140,28 +1095,8 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     /* initialization mode: parameters and inputs */
     CHECK(plant->EnterInitializationMode(p.c) == fmi2OK);
     CHECK(ctrl->EnterInitializationMode(c.c) == fmi2OK);
-    expect_refused(&p, "u[1]", (double)NAN, "u[1]");
-    expect_refused(&p, "d1", (double)INFINITY, "d1");
-    expect_refused(&p, "p[7]", -(double)INFINITY, "p[7]");
-    expect_refused(&p, "h_int", (double)NAN, "h_int");
-    expect_refused(&p, "rtol", (double)INFINITY, "rtol");
-    expect_refused(&p, "atol", (double)NAN, "atol");
-    expect_refused(&p, "q[2]", 1.0, "q[2]");       /* an output */
-    expect_refused(&c, "q_ref[3]", (double)NAN, "q_ref[3]");
-    expect_refused(&c, "kp[2]", (double)INFINITY, "kp[2]");
-    expect_refused(&c, "f[2,3]", (double)NAN, "f[2,3]");
-    expect_refused(&c, "u_n[1]", 0.5, "u_n[1]");   /* an output */
-
-    /* a multi-value set with one bad value changes nothing */
-    {
-        fmi2ValueReference vr[3];
-        vrs3(plant, "u", vr);
-        const double v[3] = {1.0, (double)NAN, 2.0};
-        double got[3] = {-1.0, -1.0, -1.0};
-        CHECK(plant->SetReal(p.c, vr, 3, v) == fmi2Error);
-        CHECK(plant->GetReal(p.c, vr, 3, got) == fmi2OK);
-        CHECK(got[0] == 0.0 && got[1] == 0.0 && got[2] == 0.0);
-    }
+    fh_refused_in_init(&ops2, &p, &c);
+    fh_refused_multi(&ops2, &p);
     /* unknown value reference, wrong type, NULL arrays */
     {
         const fmi2ValueReference bad = 100000;
@@ -1179,26 +1114,15 @@ static void test_bad_values(const fmu_api *plant, const fmu_api *ctrl)
         CHECK(plant->SetReal(p.c, NULL, 1, &v) == fmi2Error);
         CHECK(strstr(p.log.last_error, "NULL") != NULL);
     }
-    /* a good set still works after the refusals */
-    CHECK(set1(&p, "u[1]", 0.25) == fmi2OK);
-    CHECK(get1(&p, "u[1]") == 0.25);
-
-    /* step complete: parameters are fixed, inputs are checked */
-    CHECK(plant->ExitInitializationMode(p.c) == fmi2OK);
-    CHECK(ctrl->ExitInitializationMode(c.c) == fmi2OK);
-    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
-    expect_refused(&p, "a3", 0.3, "InitializationMode"); /* fixed parameter after init */
-    expect_refused(&c, "qd[1]", (double)NAN, "qd[1]");
-    expect_refused(&c, "kd[3]", 1.0, "kd[3]");
+    /* a good set still works; step complete: parameters are fixed, inputs are checked */
+    fh_refused_stepping(&ops2, &p, &c, "InitializationMode");
     {
         const fmi2ValueReference ff = vr_of(ctrl, "feedforward");
         const fmi2Boolean off = fmi2False;
         CHECK(ctrl->SetBoolean(c.c, &ff, 1, &off) == fmi2Error);
     }
     /* still stepping normally: nothing was corrupted */
-    CHECK(plant->DoStep(p.c, 0.0, H, fmi2True) == fmi2OK);
-    CHECK(ctrl->DoStep(c.c, 0.0, H, fmi2True) == fmi2OK);
-    CHECK(isfinite(get1(&p, "q[1]")) && isfinite(get1(&c, "u[1]")));
+    fh_still_stepping(&ops2, &p, &c);
 
     /* doStep arguments: refused, state unchanged */
     log_clear(&p);
@@ -1314,157 +1238,27 @@ static void test_discard(const fmu_api *plant)
 
 /* ---- FMU state --------------------------------------------------------------------------------- */
 
-#define N_REPLAY 300
 
 static void test_fmu_state(const fmu_api *plant, const fmu_api *ctrl)
 {
-    inst p, c;
-    if (inst_new(&p, plant, "state_plant") || inst_new(&c, ctrl, "state_ctrl")) {
+    fh_loop L;
+    fh_saved S;
+    if (fh_state_begin(&ops2, plant, ctrl, &L, &S, NULL) != 0) {
         return;
     }
-    loop L = {&p, &c, {0}, {0}, {0}, {0}, {0}, {0}, {0}, 0.0};
-    loop_vrs(&L);
-    static double rec1[N_REPLAY][9], rec2[N_REPLAY][9], rec3[N_REPLAY][9];
-    if (loop_init(&L)) {
-        return;
-    }
-    loop_run(&L, 200, NULL);
-    const double t1 = L.t;
-    fmi2FMUstate sp = NULL, sc = NULL;
-    CHECK(plant->GetFMUstate(p.c, &sp) == fmi2OK && sp != NULL);
-    CHECK(ctrl->GetFMUstate(c.c, &sc) == fmi2OK && sc != NULL);
-    loop_run(&L, N_REPLAY, rec1);
-
-    /* set back and rerun: bit-identical */
-    CHECK(plant->SetFMUstate(p.c, sp) == fmi2OK);
-    CHECK(ctrl->SetFMUstate(c.c, sc) == fmi2OK);
-    L.t = t1;
-    loop_run(&L, N_REPLAY, rec2);
-    CHECK(memcmp(rec1, rec2, sizeof rec1) == 0);
-
-    /* serialize, free, deserialize, set, rerun: bit-identical */
-    size_t np = 0, nc = 0;
-    CHECK(plant->SerializedFMUstateSize(p.c, sp, &np) == fmi2OK && np > 0);
-    CHECK(ctrl->SerializedFMUstateSize(c.c, sc, &nc) == fmi2OK && nc > 0);
-    fmi2Byte *bp = malloc(np);
-    fmi2Byte *bc = malloc(nc);
-    fmi2Byte *bad = malloc(np + 8);
-    if (bp == NULL || bc == NULL || bad == NULL) {
-        CHECK(0 && "out of memory");
-        return;
-    }
-    CHECK(plant->SerializeFMUstate(p.c, sp, bp, np) == fmi2OK);
-    CHECK(ctrl->SerializeFMUstate(c.c, sc, bc, nc) == fmi2OK);
-    CHECK(plant->SerializeFMUstate(p.c, sp, bad, np - 1) == fmi2Error); /* buffer too small */
-    CHECK(plant->FreeFMUstate(p.c, &sp) == fmi2OK && sp == NULL);
-    CHECK(ctrl->FreeFMUstate(c.c, &sc) == fmi2OK && sc == NULL);
-    CHECK(plant->DeSerializeFMUstate(p.c, bp, np, &sp) == fmi2OK && sp != NULL);
-    CHECK(ctrl->DeSerializeFMUstate(c.c, bc, nc, &sc) == fmi2OK && sc != NULL);
-    CHECK(plant->SetFMUstate(p.c, sp) == fmi2OK);
-    CHECK(ctrl->SetFMUstate(c.c, sc) == fmi2OK);
-    L.t = t1;
-    loop_run(&L, N_REPLAY, rec3);
-    CHECK(memcmp(rec1, rec3, sizeof rec1) == 0);
-
-    /* corrupted, truncated or foreign bytes are refused and change nothing */
-    fmi2FMUstate junk = NULL;
-    memcpy(bad, bp, np);
-    bad[np / 2] ^= 0x10;
-    log_clear(&p);
-    CHECK(plant->DeSerializeFMUstate(p.c, bad, np, &junk) == fmi2Error && junk == NULL);
-    CHECK(strstr(p.log.last_error, "checksum") != NULL);
-    CHECK(plant->DeSerializeFMUstate(p.c, bp, np - 8, &junk) == fmi2Error && junk == NULL);
-    memcpy(bad, bp, np);
-    memset(bad + np, 0, 8);
-    CHECK(plant->DeSerializeFMUstate(p.c, bad, np + 8, &junk) == fmi2Error && junk == NULL);
-    memcpy(bad, bp, np);
-    bad[0] ^= 0x01;
-    CHECK(plant->DeSerializeFMUstate(p.c, bad, np, &junk) == fmi2Error && junk == NULL);
-    CHECK(strstr(p.log.last_error, "magic") != NULL);
-    CHECK(ctrl->DeSerializeFMUstate(c.c, bp, np, &junk) == fmi2Error && junk == NULL);
-    CHECK(ctrl->SetFMUstate(c.c, sp) == fmi2Error); /* a plant state into the controller */
-    CHECK(plant->DeSerializeFMUstate(p.c, bp, 3, &junk) == fmi2Error && junk == NULL);
-    CHECK(plant->SetFMUstate(p.c, NULL) == fmi2Error);
-    CHECK(fingerprint(&p) == expected_fingerprint[ST_DONE]);
+    inst *p = L.p;
+    CHECK(fingerprint(p) == expected_fingerprint[ST_DONE]);
 
     /* getFMUstate into an existing state overwrites it */
-    CHECK(plant->GetFMUstate(p.c, &sp) == fmi2OK);
-    CHECK(plant->SetFMUstate(p.c, sp) == fmi2OK);
+    CHECK(plant->GetFMUstate(p->c, &S.sp) == fmi2OK);
+    CHECK(plant->SetFMUstate(p->c, S.sp) == fmi2OK);
     double t_now = 0.0;
-    CHECK(plant->GetRealStatus(p.c, fmi2LastSuccessfulTime, &t_now) == fmi2OK);
+    CHECK(plant->GetRealStatus(p->c, fmi2LastSuccessfulTime, &t_now) == fmi2OK);
     CHECK(fabs(t_now - L.t) < 1e-12);
-
-    CHECK(plant->SetFMUstate(p.c, sp) == fmi2OK);
-    CHECK(plant->DoStep(p.c, L.t, H, fmi2True) == fmi2OK);
-
-    /* a state saved in StepComplete brings a failed step back to StepComplete (a step that
-     * cannot be taken: 1e8 substeps of the fixed-step RK4) */
-    inst f;
-    if (inst_new(&f, plant, "state_discard") == 0) {
-        fmi2FMUstate sf = NULL;
-        CHECK(set_bool(&f, "adaptive", fmi2False) == fmi2OK);
-        CHECK(drive(&f, ST_DONE) == 0);
-        CHECK(plant->GetFMUstate(f.c, &sf) == fmi2OK);
-        CHECK(plant->DoStep(f.c, H, 1e4, fmi2True) == fmi2Discard);
-        CHECK(fingerprint(&f) == expected_fingerprint[ST_FAILED]);
-        CHECK(plant->SetFMUstate(f.c, sf) == fmi2OK);
-        CHECK(fingerprint(&f) == expected_fingerprint[ST_DONE]);
-        CHECK(plant->DoStep(f.c, H, H, fmi2True) == fmi2OK);
-        CHECK(plant->FreeFMUstate(f.c, &sf) == fmi2OK && sf == NULL);
-        inst_free(&f);
-    }
-
-    fmi2FMUstate none = NULL;
-    CHECK(plant->FreeFMUstate(p.c, &none) == fmi2OK);
-    CHECK(plant->FreeFMUstate(p.c, &sp) == fmi2OK && sp == NULL);
-    CHECK(ctrl->FreeFMUstate(c.c, &sc) == fmi2OK && sc == NULL);
-    free(bp);
-    free(bc);
-    free(bad);
-    inst_free(&p);
-    inst_free(&c);
-}
-
-/* Two instances of one FMU in one process do not share anything. */
-static void test_two_instances(const fmu_api *plant)
-{
-    enum { N = 200 };
-    static double q1[N][3], q2[N][3], q3[N][3];
-    inst a, b, solo;
-    if (inst_new(&a, plant, "a") || inst_new(&b, plant, "b")) {
-        return;
-    }
-    fmi2ValueReference u[3], q[3];
-    vrs3(plant, "u", u);
-    vrs3(plant, "q", q);
-    const double ua[3] = {1.0, 0.0, 0.0}, ub[3] = {0.0, -1.5, 0.5};
-    CHECK(set1(&b, "q0[2]", 0.7) == fmi2OK);
-    CHECK(drive(&a, ST_INIT) == 0 && drive(&b, ST_INIT) == 0);
-    CHECK(plant->ExitInitializationMode(a.c) == fmi2OK);
-    CHECK(plant->ExitInitializationMode(b.c) == fmi2OK);
-    CHECK(plant->SetReal(a.c, u, 3, ua) == fmi2OK);
-    CHECK(plant->SetReal(b.c, u, 3, ub) == fmi2OK);
-    for (int k = 0; k < N; ++k) {
-        CHECK(plant->DoStep(a.c, k * H, H, fmi2True) == fmi2OK);
-        CHECK(plant->DoStep(b.c, k * H, H, fmi2True) == fmi2OK);
-        CHECK(plant->GetReal(a.c, q, 3, q1[k]) == fmi2OK);
-        CHECK(plant->GetReal(b.c, q, 3, q2[k]) == fmi2OK);
-    }
-    inst_free(&b);
-    if (inst_new(&solo, plant, "solo")) {
-        return;
-    }
-    CHECK(drive(&solo, ST_INIT) == 0);
-    CHECK(plant->ExitInitializationMode(solo.c) == fmi2OK);
-    CHECK(plant->SetReal(solo.c, u, 3, ua) == fmi2OK);
-    for (int k = 0; k < N; ++k) {
-        CHECK(plant->DoStep(solo.c, k * H, H, fmi2True) == fmi2OK);
-        CHECK(plant->GetReal(solo.c, q, 3, q3[k]) == fmi2OK);
-    }
-    CHECK(memcmp(q1, q3, sizeof q1) == 0);
-    CHECK(memcmp(q1, q2, sizeof q1) != 0);
-    inst_free(&a);
-    inst_free(&solo);
+    CHECK(plant->SetFMUstate(p->c, S.sp) == fmi2OK);
+    CHECK(plant->DoStep(p->c, L.t, H, fmi2True) == fmi2OK);
+    fh_state_end(&L, &S);
+    fh_state_undoes_discard(&ops2, plant);
 }
 
 /* ---- logging ----------------------------------------------------------------------------------- */
@@ -1874,11 +1668,7 @@ static void test_me_controller(const fmu_api *api)
 {
     enum { N = 400 };
     fmi2ValueReference in[15], out[9];
-    vrs3(api, "q_ref", in);
-    vrs3(api, "qd_ref", in + 3);
-    vrs3(api, "qdd_ref", in + 6);
-    vrs3(api, "q", in + 9);
-    vrs3(api, "qd", in + 12);
+    fh_vrs(&ops2, api, fh_ctrl_inputs, 5, in);
     vrs3(api, "u", out);
     vrs3(api, "u_n", out + 3);
     vrs3(api, "u_c", out + 6);
@@ -2018,11 +1808,11 @@ static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     CHECK(plant->GetEventIndicators(p.c, NULL, 0) == fmi2OK); /* no indicators, no array */
 
     /* outputs are never set; inputs in continuous-time mode, finite only */
-    expect_refused(&p, "q[1]", 1.0, "q[1]");
-    expect_refused(&p, "qdd[2]", 0.0, "qdd[2]");
-    expect_refused(&p, "tip.x", 0.0, "tip.x");
-    expect_refused(&p, "u[2]", (double)INFINITY, "u[2]");
-    expect_refused(&p, "kt[1]", 0.5, "ContinuousTimeMode"); /* a fixed parameter */
+    fh_expect_refused(&ops2, &p, "q[1]", 1.0, "q[1]");
+    fh_expect_refused(&ops2, &p, "qdd[2]", 0.0, "qdd[2]");
+    fh_expect_refused(&ops2, &p, "tip.x", 0.0, "tip.x");
+    fh_expect_refused(&ops2, &p, "u[2]", (double)INFINITY, "u[2]");
+    fh_expect_refused(&ops2, &p, "kt[1]", 0.5, "ContinuousTimeMode"); /* a fixed parameter */
     CHECK(set1(&p, "u[2]", -2.5) == fmi2OK);
     CHECK(plant->GetDerivatives(p.c, buf, 6) == fmi2OK);
     CHECK(bits_equal(buf, dx0, 3) && !bits_equal(buf + 3, dx0 + 3, 3)); /* qdd follows u */
@@ -2031,11 +1821,11 @@ static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     CHECK(plant->EnterEventMode(p.c) == fmi2OK);
     fmi2EventInfo *no_info = NULL;
     REFUSED(&p, plant->NewDiscreteStates(p.c, no_info), "fmi2NewDiscreteStates", "NULL");
-    expect_refused(&p, "a2", 0.5, "EventMode");
-    expect_refused(&p, "q0[1]", 0.5, "EventMode");
-    expect_refused(&p, "h_int", 1e-3, "EventMode");
-    expect_refused(&p, "p[3]", 1.0, "EventMode");
-    expect_refused(&p, "qd[3]", 0.0, "qd[3]"); /* a state, but an output */
+    fh_expect_refused(&ops2, &p, "a2", 0.5, "EventMode");
+    fh_expect_refused(&ops2, &p, "q0[1]", 0.5, "EventMode");
+    fh_expect_refused(&ops2, &p, "h_int", 1e-3, "EventMode");
+    fh_expect_refused(&ops2, &p, "p[3]", 1.0, "EventMode");
+    fh_expect_refused(&ops2, &p, "qd[3]", 0.0, "qd[3]"); /* a state, but an output */
     CHECK(fingerprint_me_quiet(&p) == expected_fingerprint_me[MS_EVENT]);
     CHECK(plant->GetContinuousStates(p.c, buf, 6) == fmi2OK && bits_equal(buf, x0, 6));
 
@@ -2049,11 +1839,11 @@ static void test_me_bad_values(const fmu_api *plant, const fmu_api *ctrl)
     REFUSED(&c, ctrl->GetDerivatives(c.c, one, 1), "fmi2GetDerivatives", NULL);
     REFUSED(&c, ctrl->GetEventIndicators(c.c, one, 1), "fmi2GetEventIndicators", NULL);
     REFUSED(&c, ctrl->SetTime(c.c, (double)NAN), "fmi2SetTime", NULL);
-    expect_refused(&c, "u_c[3]", 1.0, "u_c[3]");
-    expect_refused(&c, "q_ref[1]", (double)NAN, "q_ref[1]");
+    fh_expect_refused(&ops2, &c, "u_c[3]", 1.0, "u_c[3]");
+    fh_expect_refused(&ops2, &c, "q_ref[1]", (double)NAN, "q_ref[1]");
     CHECK(ctrl->EnterEventMode(c.c) == fmi2OK);
-    expect_refused(&c, "kp[1]", 5.0, "EventMode");
-    expect_refused(&c, "g", 9.0, "EventMode");
+    fh_expect_refused(&ops2, &c, "kp[1]", 5.0, "EventMode");
+    fh_expect_refused(&ops2, &c, "g", 9.0, "EventMode");
     {
         const fmi2ValueReference ff = vr_of(ctrl, "feedforward");
         const fmi2Boolean off = fmi2False;
@@ -2234,60 +2024,8 @@ static void test_forged_states(const fmu_api *api, const forge_case *cases, size
     }
     CHECK(drive(&x, ST_DONE) == 0);
     CHECK(api->DoStep(x.c, H, H, fmi2True) == fmi2OK);
-    size_t n = 0;
-    unsigned char *good = state_bytes(&x, &n);
-    unsigned char *buf = malloc(n + 1);
-    CHECK(good != NULL && buf != NULL && forge_layout_ok(n, data_size));
-    if (good == NULL || buf == NULL || !forge_layout_ok(n, data_size)) {
-        fprintf(stderr, "%s: FMU state of %zu bytes, the forger expects %zu\n", api->id, n,
-                (size_t)FORGE_DATA + data_size);
-        free(good);
-        free(buf);
-        inst_free(&x);
-        return;
-    }
-    /* the good bytes, resealed: accepted (the forger writes the checksum right) */
-    memcpy(buf, good, n);
-    forge_reseal(buf, n);
-    CHECK(memcmp(buf, good, n) == 0);
-    fmi2FMUstate s = NULL;
-    CHECK(api->DeSerializeFMUstate(x.c, (const fmi2Byte *)buf, n, &s) == fmi2OK && s != NULL);
-    size_t refused = 0;
-    for (size_t i = 0; i < n_cases; ++i) {
-        const forge_case *fc = &cases[i];
-        forge_apply(fc, good, buf, n);
-        log_clear(&x);
-        fmi2FMUstate junk = NULL;
-        const fmi2Status st = api->DeSerializeFMUstate(x.c, (const fmi2Byte *)buf, n, &junk);
-        const int named = strstr(x.log.last_error, fc->needle) != NULL;
-        /* the importer overwrites a state block it holds: SetFMUstate checks it again */
-        memcpy(s, buf, n);
-        log_clear(&x);
-        const fmi2Status st_set = api->SetFMUstate(x.c, s);
-        const int named_set = strstr(x.log.last_error, fc->needle) != NULL;
-        if (st != fmi2Error || junk != NULL || !named || st_set != fmi2Error || !named_set) {
-            fprintf(stderr, "%s forged state \"%s\": deserialize %d, set %d, message \"%s\" "
-                    "(expected fmi2Error naming \"%s\")\n",
-                    api->id, fc->what, (int)st, (int)st_set, x.log.last_error, fc->needle);
-            rrr_test_failures++;
-        } else {
-            ++refused;
-        }
-        if (junk != NULL) {
-            api->FreeFMUstate(x.c, &junk);
-        }
-        CHECK(same_state(&x, good, n));
-    }
-    /* the block restored: accepted, and the instance steps on */
-    memcpy(s, good, n);
-    CHECK(api->SetFMUstate(x.c, s) == fmi2OK);
-    CHECK(api->DoStep(x.c, 2 * H, H, fmi2True) == fmi2OK);
-    CHECK(api->FreeFMUstate(x.c, &s) == fmi2OK);
-    free(good);
-    free(buf);
+    fh_forged_states(&ops2, &x, cases, n_cases, data_size, NULL, 2 * H);
     inst_free(&x);
-    printf("%s: %zu of %zu forged FMU states with valid checksums refused, naming the field\n",
-           api->id, refused, n_cases);
 }
 
 /* A state the checks cannot refuse (every field finite and in range) but far from any motion
@@ -2703,7 +2441,7 @@ int main(int argc, char **argv)
                        sizeof forge_controller_cases / sizeof forge_controller_cases[0],
                        sizeof(forge_controller));
     test_forged_fast_state(&plant);
-    test_two_instances(&plant);
+    fh_two_instances(&ops2, &plant); /* nothing shared between two instances */
     test_logging(&plant);
     test_logging(&ctrl);
 
