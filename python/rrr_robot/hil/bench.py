@@ -305,8 +305,8 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
     server), or over the SocketCAN interface ``socketcan`` (e.g. vcan0; the controller starts
     once the plant's boot-up heartbeat is on the bus), with ``can_fd`` as CAN FD frames with
     bit-rate switch (the nodes' --fd; the interface needs MTU 72, e.g. vcan1). The plant starts
-    at (q_ref[0], qd_ref[0]) on the default robot; the controller uses the default robot and gains changed by
-    ``controller_values`` (controller FMU names, e.g. a scenario's). The logs go to
+    at (q_ref[0], qd_ref[0]) on the default robot; the controller uses the default robot and
+    gains changed by ``controller_values`` (controller FMU names, e.g. a scenario's). The logs go to
     ``workdir``: plant.csv, controller.csv, the controller node's frame log ``frame_log`` (a
     file name; rrr_robot.hil.framelog) and, in real time, latency_controller.csv and
     latency_plant.csv. A run that completed while the safety policy fired (a node's exit
