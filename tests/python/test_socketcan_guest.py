@@ -444,6 +444,10 @@ HOSTILE = {
 }
 
 
+#: What the classical_on_fd run injects into a CAN FD bench: classical frames of VoltageCmd.
+CLASSICAL_ON_FD = "cansend vcan1 100#0000000000000000; cansend vcan1 100#1111"
+
+
 @pytest.fixture(scope="module")
 def hostile(guest: CanGuest, bench_inputs: dict[str, Any],
             c_bench: dict[str, Any]) -> dict[str, Any]:
@@ -464,6 +468,12 @@ def hostile(guest: CanGuest, bench_inputs: dict[str, Any],
         one = c_bench_script(work / name, bench_inputs["plant_args"], bench_inputs["ctrl_args"],
                              ref_csv, inject=inject.replace("@REPLAY@", replay_arg))
         scripts.append(f"( {one} )")
+    # classical frames on the CAN FD bench (vcan1, --fd): a VoltageCmd of a wrong CRC and one of
+    # DLC 2, which would latch crc and format on a classical bench
+    (work / "classical_on_fd").mkdir()
+    scripts.append("( " + c_bench_script(
+        work / "classical_on_fd", bench_inputs["plant_args"], bench_inputs["ctrl_args"], ref_csv,
+        channel="vcan1", fd=True, inject=CLASSICAL_ON_FD) + " )")
     # and the real-time mode of both nodes on the same periods, on a clean bus
     (work / "realtime").mkdir()
     scripts.append("( " + c_bench_script(
@@ -515,6 +525,39 @@ def test_hostile_traffic(hostile: dict[str, Any], c_bench: dict[str, Any], case:
     assert "the safety policy fired" in (work / "plant.err").read_text()
     print(f"  {case}: fault {s['faults']:#04x} from period {first}, "
           f"{s['zero_periods']} periods at 0 V, plant exit {exits['plant']}")
+
+
+def test_classical_frames_on_the_fd_bench(hostile: dict[str, Any],
+                                          c_bench: dict[str, Any]) -> None:
+    """Classical frames on the CAN FD bench (cansend on vcan1 while both nodes run with --fd): a
+    VoltageCmd of a wrong CRC and one of DLC 2, each of which latches a fault on a classical
+    bench, are not of the bench's format: the plant drops both before the codec and counts them
+    (rx_malformed 2), latches nothing, and the run equals the clean classical run bit for bit;
+    candump saw them as classical frames among the FD ones."""
+    work = hostile["work"] / "classical_on_fd"
+    assert (work / "injected").exists(), "the injection did not run during the run"
+    exits = dict(line.split() for line in (work / "exit").read_text().splitlines())
+    assert exits == {"controller": "0", "plant": "0", "candump": "0"}, exits
+    s = summary_lines((work / "plant.out").read_text())
+    assert s["transport"] == "socketcan-fd" and s["rx_malformed"] == 2
+    assert s["faults"] == 0 and s["fault_events"] == 0
+    clean = read_csv(c_bench["work"] / "plant.csv")[: HOSTILE_PERIODS]
+    assert read_csv(work / "plant.csv")[: HOSTILE_PERIODS] == clean
+    cmds = [m for m in candump_messages(work / "candump.log") if m.arbitration_id == 0x100]
+    assert [bytes(m.data).hex() for m in cmds if not m.is_fd] == ["0000000000000000", "1111"]
+    assert abs(len([m for m in cmds if m.is_fd]) - HOSTILE_PERIODS) <= 1
+
+
+def test_fd_refused_on_a_classical_interface(guest: CanGuest,
+                                             bench_inputs: dict[str, Any]) -> None:
+    """--fd on vcan0 (MTU 16): each node refuses before the run (exit 2) and says why."""
+    for node, args in (("plant", bench_inputs["plant_args"]),
+                       ("controller", ["--reference", str(bench_inputs["ref_csv"])])):
+        r = run(guest, shlex.join([str(node_executable(node)), *args, "--socketcan", "vcan0",
+                                   "--fd"]), f"{node} --fd on vcan0")
+        assert r.rc == 2, (r.rc, r.stderr)
+        assert ("socketcan: vcan0 is not a CAN FD interface (MTU 16, CAN FD needs 72: ip link "
+                "set vcan0 mtu 72)") in r.stderr
 
 
 def test_realtime_over_vcan(hostile: dict[str, Any]) -> None:
