@@ -11,9 +11,12 @@ from __future__ import annotations
 import json
 import math
 import shlex
+import subprocess
 import sys
+import time
 import zipfile
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -248,12 +251,15 @@ def c_bench(guest: CanGuest, bench_inputs: dict[str, Any]) -> dict[str, Any]:
     script = work / "bench.sh"
     script.write_text(c_bench_script(work, bench_inputs["plant_args"], bench_inputs["ctrl_args"],
                                      bench_inputs["ref_csv"]))
-    r = run(guest, f"sh {script}", "C bench over vcan0 (with candump)", timeout=240)
+    with ThreadPoolExecutor(max_workers=1) as pool:  # the same run here, meanwhile
+        here = pool.submit(host_socketcand_bench, bench_inputs,
+                           bench_inputs["work"] / "socketcand")
+        r = run(guest, f"sh {script}", "C bench over vcan0 (with candump)", timeout=240)
+        host = here.result()
     times = (work / "times").read_text().split() if (work / "times").exists() else []
     if times:
         print(f"  the two nodes: {float(times[2]) - float(times[1]):.1f} s in the guest for "
               f"{bench_inputs['periods']} periods")
-    host = host_socketcand_bench(bench_inputs, bench_inputs["work"] / "socketcand")
     return {"result": r, "work": work, "host": host,
             "host_work": bench_inputs["work"] / "socketcand"}
 
@@ -605,24 +611,34 @@ def _untimed(value: Any) -> Any:
 
 @pytest.fixture(scope="module")
 def python_sides(guest: CanGuest, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    """guest_python_sides.py in one Python process in the guest, and the same three runs here
-    over socketcand (rrr hil bench|controller|plant, the other node started by rrr)."""
-    from rrr_robot.cli.app import main as rrr
-
+    """guest_python_sides.py in one Python process in the guest, and meanwhile the same three
+    runs here over socketcand (rrr hil bench|controller|plant, the other node started by rrr;
+    the emulator runs on one host CPU, these on the other)."""
     out = guest.scratch / "python_sides"
     out.mkdir()
+    host = tmp_path_factory.mktemp("socketcand_sides")
+    common = ["--duration", PY_DURATION, "--scenario", "ctc", "-q", "--no-figures"]
+
+    def host_runs() -> dict[str, int]:
+        t0 = time.monotonic()
+        rc = {side: subprocess.run([sys.executable, "-m", "rrr_robot", "hil", side, "--out",
+                                    str(host / side), *common], capture_output=True,
+                                   timeout=600).returncode
+              for side in ("bench", "controller", "plant")}
+        print(f"the three runs over socketcand here (meanwhile): {time.monotonic() - t0:.1f} s")
+        return rc
+
     driver = Path(__file__).with_name("guest_python_sides.py")
-    r = guest.run(f"{shlex.quote(sys.executable)} {shlex.quote(str(driver))} {out} "
-                  f"{PY_DURATION} vcan0 vcan1 $(cut -d' ' -f1 /proc/uptime)", timeout=600)
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        here = pool.submit(host_runs)
+        r = guest.run(f"{shlex.quote(sys.executable)} {shlex.quote(str(driver))} {out} "
+                      f"{PY_DURATION} vcan0 vcan1 $(cut -d' ' -f1 /proc/uptime)", timeout=600)
+        host_rc = here.result()
     print(f"python sides in the guest: exit {r.rc}, {r.seconds:.1f} s")
     cases = json.loads((out / "cases.json").read_text()) if (out / "cases.json").exists() \
         else {}
     for name, case in cases.items():
         print(f"  {name}: {case}")
-    host = tmp_path_factory.mktemp("socketcand_sides")
-    common = ["--duration", PY_DURATION, "--scenario", "ctc", "-q", "--no-figures"]
-    host_rc = {side: rrr(["hil", side, "--out", str(host / side), *common])
-               for side in ("bench", "controller", "plant")}
     return {"result": r, "out": out, "cases": cases, "host": host, "host_rc": host_rc}
 
 
