@@ -596,8 +596,9 @@ def test_realtime_over_vcan(hostile: dict[str, Any]) -> None:
 
 # ---- rrr hil bench --interface socketcan and the Python sides over python-can's socketcan ---
 
-#: Seconds of the writing task the Python cases run (their time is mostly Python's start-up,
-#: FMPy's and matplotlib's under emulation; the whole task runs in the all-C case above).
+#: Seconds of the writing task the Python cases run (their time is mostly Python's start-up and
+#: FMPy's under emulation; the whole task runs in the all-C case above). No figures are drawn in
+#: the guest (matplotlib took about 30 s there): figures_from_files draws them here.
 PY_DURATION = "1"
 #: Values of summary.json that time the run (wall clock), not what it computed.
 TIMING = {"wall_time", "realtime_factor", "duration_s", "frames_per_second", "per_second"}
