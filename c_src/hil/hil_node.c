@@ -192,6 +192,10 @@ int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const 
     const int is_handshake = strcmp(a, "--handshake-timeout-ms") == 0;
     const int is_idle = strcmp(a, "--idle-timeout-ms") == 0;
     const int is_log = strcmp(a, "--frame-log") == 0;
+    if (strcmp(a, "--fd") == 0) {
+        o->can_fd = 1;
+        return 1;
+    }
     if (!is_listen && !is_connect && !is_sc && !is_channel && !is_handshake && !is_idle &&
         !is_log) {
         return 0;
@@ -257,6 +261,12 @@ int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_
         }
     }
     const char *channel = o->channel[0] ? o->channel : "bench0";
+    if (o->can_fd && o->kind != 3) {
+        fprintf(stderr, "%s: --fd needs --socketcan IF: the socketcand protocol carries "
+                        "classical CAN frames only\n", prog);
+        (void)rrr_hil_framelog_close(log);
+        return -1;
+    }
     const int handshake_ms =
         o->handshake_timeout_ms > 0 ? o->handshake_timeout_ms : RRR_HIL_SCD_HANDSHAKE_TIMEOUT_MS;
     int rc;
@@ -283,6 +293,9 @@ int rrr_hil_link_open(const rrr_hil_link_opts *o, rrr_hil_link *l, const uint32_
         break;
     case 3:
         rc = rrr_hil_socketcan_open(&l->sc, o->ifname, rx_ids, n_rx);
+        if (rc == 0 && o->can_fd) {
+            rc = rrr_hil_socketcan_enable_fd(&l->sc, o->ifname);
+        }
         break;
     default:
         fprintf(stderr, "%s: no transport: give --listen HOST:PORT, --connect HOST:PORT or "

@@ -67,6 +67,7 @@ typedef struct rrr_hil_link_opts {
     int idle_timeout_ms;      ///< --idle-timeout-ms (0: default, 5000): socketcand idle timeout,
                               ///< and the plant's limit on a silent controller
     const char *frame_log;    ///< --frame-log FILE: every frame sent and received (hil_framelog.h)
+    int can_fd;               ///< --fd: CAN FD frames with bit-rate switch (SocketCAN only)
 } rrr_hil_link_opts;
 
 /** Storage for any transport. */
@@ -94,7 +95,7 @@ int rrr_hil_parse_vec3(const char *s, double v[3]);
  *  message in err. */
 int rrr_hil_set_model_param(rrr_model *m, const char *assignment, char *err, size_t err_len);
 /** Handle a transport option (argv[*i] and its value: --listen, --connect, --socketcan,
- *  --channel, --handshake-timeout-ms, --idle-timeout-ms, --frame-log); 1 consumed, 0 not a
+ *  --channel, --handshake-timeout-ms, --idle-timeout-ms, --frame-log, --fd); 1 consumed, 0 not a
  *  transport option, -1 bad value (message printed). */
 int rrr_hil_link_arg(rrr_hil_link_opts *o, int argc, char **argv, int *i, const char *prog);
 /** Open the frame log of --frame-log (before the transport: a path that cannot be written fails
@@ -111,7 +112,9 @@ int rrr_hil_link_idle_ms(const rrr_hil_link_opts *o);
     "       [--channel NAME] [--handshake-timeout-ms N] [--idle-timeout-ms N]\n"                \
     "  socketcand server: one session; a client must finish the handshake within\n"            \
     "  --handshake-timeout-ms (2000) and may stay silent at most --idle-timeout-ms (5000)\n"    \
-    "       [--frame-log FILE]: every frame sent and received, timestamped (hil_framelog.h)\n"
+    "       [--frame-log FILE]: every frame sent and received, timestamped (hil_framelog.h)\n"  \
+    "       [--fd]: with --socketcan, every frame as a CAN FD frame with bit-rate switch (the\n" \
+    "  interface needs MTU 72); classical frames received are dropped and counted\n"
 /** Print the transport's counters, and its frame log's, as JSON members (no braces). */
 void rrr_hil_link_json(FILE *out, const rrr_hil_transport *t);
 

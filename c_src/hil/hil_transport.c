@@ -81,20 +81,67 @@ static void sc_error(rrr_hil_socketcan *t, const char *what, int e)
                                : "");
 }
 
+unsigned rrr_hil_sc_to_wire(const rrr_hil_frame *f, int can_fd, int brs, unsigned char *wire)
+{
+    memset(wire, 0, RRR_HIL_SC_WIRE_MAX);
+    if (f->dlc > 8u) {
+        return 0u;
+    }
+    struct canfd_frame cf; /* its first 16 bytes are a struct can_frame's layout */
+    memset(&cf, 0, sizeof cf);
+    cf.can_id = f->extended ? (f->id & CAN_EFF_MASK) | CAN_EFF_FLAG : f->id & CAN_SFF_MASK;
+    cf.len = f->dlc;
+    if (can_fd) {
+        cf.flags = (uint8_t)(CANFD_FDF | (brs ? CANFD_BRS : 0));
+    }
+    memcpy(cf.data, f->data, f->dlc);
+    memcpy(wire, &cf, sizeof cf);
+    return can_fd ? (unsigned)CANFD_MTU : (unsigned)CAN_MTU;
+}
+
+rrr_hil_sc_wire rrr_hil_sc_from_wire(const unsigned char *wire, long got, int can_fd,
+                                     rrr_hil_frame *f, int *brs)
+{
+    if (got != (long)CAN_MTU && got != (long)CANFD_MTU) {
+        return RRR_HIL_SC_MALFORMED;
+    }
+    struct canfd_frame cf;
+    memset(&cf, 0, sizeof cf);
+    memcpy(&cf, wire, (size_t)got);
+    const int is_fd = got == (long)CANFD_MTU;
+    if (!is_fd && (cf.can_id & CAN_ERR_FLAG)) {
+        return RRR_HIL_SC_ERROR_FRAME;
+    }
+    /* an FD frame is one of CANFD_MTU bytes (kernels before 6.0 do not set CANFD_FDF on
+     * receive) */
+    if ((cf.can_id & (CAN_RTR_FLAG | CAN_ERR_FLAG)) != 0u || cf.len > 8u) {
+        return RRR_HIL_SC_MALFORMED;
+    }
+    if (is_fd != (can_fd != 0)) {
+        return RRR_HIL_SC_WRONG_FORMAT;
+    }
+    memset(f, 0, sizeof *f);
+    f->extended = (cf.can_id & CAN_EFF_FLAG) != 0u;
+    f->id = cf.can_id & (f->extended ? CAN_EFF_MASK : CAN_SFF_MASK);
+    f->dlc = cf.len;
+    memcpy(f->data, cf.data, cf.len);
+    if (brs != NULL) {
+        *brs = is_fd && (cf.flags & CANFD_BRS) != 0u;
+    }
+    return RRR_HIL_SC_FRAME;
+}
+
 static rrr_hil_io sc_send(rrr_hil_transport *base, const rrr_hil_frame *f)
 {
     rrr_hil_socketcan *t = (rrr_hil_socketcan *)base;
-    if (f->dlc > 8u) {
+    unsigned char wire[RRR_HIL_SC_WIRE_MAX];
+    const unsigned n = rrr_hil_sc_to_wire(f, t->can_fd, 1, wire);
+    if (n == 0u) {
         ++t->base.err.tx_failed;
         return RRR_HIL_IO_ERROR;
     }
-    struct can_frame cf;
-    memset(&cf, 0, sizeof cf);
-    cf.can_id = f->extended ? (f->id & CAN_EFF_MASK) | CAN_EFF_FLAG : f->id & CAN_SFF_MASK;
-    cf.can_dlc = f->dlc;
-    memcpy(cf.data, f->data, f->dlc);
-    const ssize_t w = write(t->fd, &cf, sizeof cf);
-    if (w != (ssize_t)sizeof cf) {
+    const ssize_t w = write(t->fd, wire, n);
+    if (w != (ssize_t)n) {
         ++t->base.err.tx_failed;
         sc_error(t, "write", w < 0 ? errno : EIO);
         return (w < 0 && errno == ENETDOWN) ? RRR_HIL_IO_BUS_OFF : RRR_HIL_IO_ERROR;
@@ -119,18 +166,20 @@ static rrr_hil_io sc_recv(rrr_hil_transport *base, rrr_hil_frame *f, int timeout
         if (pr == 0) {
             return RRR_HIL_IO_TIMEOUT;
         }
-        struct can_frame cf;
-        const ssize_t got = read(t->fd, &cf, sizeof cf);
+        unsigned char wire[RRR_HIL_SC_WIRE_MAX];
+        const ssize_t got = read(t->fd, wire, sizeof wire);
         if (got < 0) {
             sc_error(t, "read", errno);
             return errno == ENETDOWN ? RRR_HIL_IO_BUS_OFF : RRR_HIL_IO_ERROR;
         }
-        if (got != (ssize_t)sizeof cf || cf.can_dlc > 8u) {
-            ++t->base.err.rx_malformed;
-            continue;
-        }
-        if (cf.can_id & CAN_ERR_FLAG) {
-            if (cf.can_id & CAN_ERR_BUSOFF) {
+        switch (rrr_hil_sc_from_wire(wire, (long)got, t->can_fd, f, NULL)) {
+        case RRR_HIL_SC_FRAME:
+            ++t->base.err.rx_frames;
+            return RRR_HIL_IO_OK;
+        case RRR_HIL_SC_ERROR_FRAME: {
+            canid_t id;
+            memcpy(&id, wire, sizeof id);
+            if (id & CAN_ERR_BUSOFF) {
                 ++t->base.err.bus_off;
                 snprintf(t->base.last_error, sizeof t->base.last_error, "socketcan: bus-off");
                 return RRR_HIL_IO_BUS_OFF;
@@ -138,17 +187,12 @@ static rrr_hil_io sc_recv(rrr_hil_transport *base, rrr_hil_frame *f, int timeout
             ++t->base.err.bus_errors;
             continue;
         }
-        if (cf.can_id & CAN_RTR_FLAG) {
+        case RRR_HIL_SC_MALFORMED:
+        case RRR_HIL_SC_WRONG_FORMAT:
+        default:
             ++t->base.err.rx_malformed;
             continue;
         }
-        memset(f, 0, sizeof *f);
-        f->extended = (cf.can_id & CAN_EFF_FLAG) != 0u;
-        f->id = cf.can_id & (f->extended ? CAN_EFF_MASK : CAN_SFF_MASK);
-        f->dlc = cf.can_dlc;
-        memcpy(f->data, cf.data, cf.can_dlc);
-        ++t->base.err.rx_frames;
-        return RRR_HIL_IO_OK;
     }
 }
 
@@ -219,5 +263,47 @@ int rrr_hil_socketcan_open(rrr_hil_socketcan *t, const char *ifname, const uint3
         return -1;
     }
     t->base.vt = &sc_vt;
+    return 0;
+}
+
+int rrr_hil_socketcan_enable_fd(rrr_hil_socketcan *t, const char *ifname)
+{
+    if (t->base.vt == NULL || t->fd < 0) {
+        snprintf(t->base.last_error, sizeof t->base.last_error,
+                 "socketcan: CAN FD on a socket that is not open");
+        return -1;
+    }
+    struct ifreq ifr;
+    memset(&ifr, 0, sizeof ifr);
+    if (ifname == NULL || strlen(ifname) == 0u || strlen(ifname) >= IFNAMSIZ) {
+        snprintf(t->base.last_error, sizeof t->base.last_error,
+                 "socketcan: bad interface name (1..%d characters)", IFNAMSIZ - 1);
+        rrr_hil_close(&t->base);
+        return -1;
+    }
+    memcpy(ifr.ifr_name, ifname, strlen(ifname));
+    if (ioctl(t->fd, SIOCGIFMTU, &ifr) != 0) {
+        char what[64];
+        snprintf(what, sizeof what, "SIOCGIFMTU(%s)", ifname);
+        sc_error(t, what, errno);
+        rrr_hil_close(&t->base);
+        return -1;
+    }
+    if (ifr.ifr_mtu != (int)CANFD_MTU) {
+        snprintf(t->base.last_error, sizeof t->base.last_error,
+                 "socketcan: %s is not a CAN FD interface (MTU %d, CAN FD needs %u: ip link set "
+                 "%s mtu %u)", ifname, ifr.ifr_mtu, (unsigned)CANFD_MTU, ifname,
+                 (unsigned)CANFD_MTU);
+        rrr_hil_close(&t->base);
+        return -1;
+    }
+    const int on = 1;
+    if (setsockopt(t->fd, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on) != 0) {
+        sc_error(t, "setsockopt(CAN_RAW_FD_FRAMES)", errno);
+        rrr_hil_close(&t->base);
+        return -1;
+    }
+    t->can_fd = 1;
+    t->base.name = "socketcan-fd";
     return 0;
 }

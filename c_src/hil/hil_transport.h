@@ -4,6 +4,7 @@
  *        close) with two implementations:
  *  - SocketCAN: a raw AF_CAN socket bound to an interface (vcan0, can0), with receive filters and
  *    error frames (bus-off, controller problems) reported as RRR_HIL_IO_BUS_OFF / counted;
+ *    classical CAN, or CAN FD (the same frames as CAN FD frames with bit-rate switch);
  *  - socketcand: the ASCII protocol of linux-can/socketcand over TCP, as the server (a node
  *    that python-can's built-in `socketcand` interface connects to) or as the client (a node
  *    that connects to a socketcand server: the other C node, or a real socketcand daemon).
@@ -59,7 +60,7 @@ typedef struct rrr_hil_transport_vt {
 /** Base of every transport (first member of each implementation's struct). */
 struct rrr_hil_transport {
     const rrr_hil_transport_vt *vt; ///< implementation; NULL once closed
-    const char *name;               ///< "socketcan" or "socketcand"
+    const char *name;               ///< "socketcan", "socketcan-fd" (CAN FD) or "socketcand"
     rrr_hil_transport_err err;      ///< counters
     char last_error[200];           ///< text of the last error, "" if none
     struct rrr_hil_framelog *framelog; ///< every frame sent or received is logged here (NULL:
@@ -83,7 +84,42 @@ const char *rrr_hil_io_str(rrr_hil_io io);
 typedef struct rrr_hil_socketcan {
     rrr_hil_transport base; ///< must be first
     int fd;                 ///< socket, -1 when closed
+    int can_fd;             ///< 1: CAN FD mode (rrr_hil_socketcan_enable_fd), 0: classical
 } rrr_hil_socketcan;
+
+/** Bytes of the largest frame read from or written to a raw CAN socket (struct canfd_frame). */
+#define RRR_HIL_SC_WIRE_MAX 72u
+
+/** What one read() from a raw CAN socket held (rrr_hil_sc_from_wire). */
+typedef enum rrr_hil_sc_wire {
+    RRR_HIL_SC_FRAME = 0,    ///< a data frame of the bus's format: converted
+    RRR_HIL_SC_ERROR_FRAME,  ///< an error frame (CAN_ERR_FLAG, classical length): not converted
+    RRR_HIL_SC_MALFORMED,    ///< a length that is neither 16 nor 72 bytes, a classical DLC > 8,
+                             ///< an FD frame of more than 8 data bytes (no bench frame has them),
+                             ///< a remote frame, an error flag on an FD frame
+    RRR_HIL_SC_WRONG_FORMAT  ///< a classical frame on a CAN FD bench, or an FD frame on a
+                             ///< classical one
+} rrr_hil_sc_wire;
+
+/**
+ * @brief The bytes to write() for frame @p f: a struct can_frame (16 bytes), or in CAN FD mode
+ *        (@p can_fd) a struct canfd_frame (72 bytes) with CANFD_FDF and, with @p brs,
+ *        CANFD_BRS (bit-rate switch). Pure (unit-tested).
+ * @param[out] wire at least RRR_HIL_SC_WIRE_MAX bytes; unused bytes are 0
+ * @return the number of bytes to write, 0 when f->dlc > 8 (nothing to send)
+ */
+unsigned rrr_hil_sc_to_wire(const rrr_hil_frame *f, int can_fd, int brs, unsigned char *wire);
+
+/**
+ * @brief The frame in the @p got bytes a read() returned, for a socket in classical or CAN FD
+ *        mode (@p can_fd). A classical socket never receives FD frames from the kernel (it
+ *        drops them), an FD socket receives both formats: a frame of the other format is
+ *        RRR_HIL_SC_WRONG_FORMAT, so a CAN FD bench acts only on CAN FD frames. Pure.
+ * @param[out] f the frame (only for RRR_HIL_SC_FRAME; bytes beyond its dlc are 0)
+ * @param[out] brs its bit-rate switch flag (may be NULL)
+ */
+rrr_hil_sc_wire rrr_hil_sc_from_wire(const unsigned char *wire, long got, int can_fd,
+                                     rrr_hil_frame *f, int *brs);
 
 /**
  * @brief Open a raw CAN socket on interface @p ifname, receiving only @p ids (n_ids of them, exact
@@ -94,6 +130,17 @@ typedef struct rrr_hil_socketcan {
  */
 int rrr_hil_socketcan_open(rrr_hil_socketcan *t, const char *ifname, const uint32_t *ids,
                            unsigned n_ids);
+
+/**
+ * @brief Switch an open socket to CAN FD (setsockopt CAN_RAW_FD_FRAMES): from then on it sends
+ *        every frame as a CAN FD frame with bit-rate switch (same identifier and data), and drops
+ *        the classical frames it receives, counting them in rx_malformed; its name becomes
+ *        "socketcan-fd".
+ * @param ifname the interface the socket is bound to: its MTU must be CANFD_MTU (72).
+ * @return 0, or -1 with last_error set (e.g. "socketcan: vcan0 is not a CAN FD interface (MTU
+ *         16, CAN FD needs 72: ip link set vcan0 mtu 72)") and the socket closed.
+ */
+int rrr_hil_socketcan_enable_fd(rrr_hil_socketcan *t, const char *ifname);
 
 /* ---- socketcand (TCP, ASCII) --------------------------------------------------------------- */
 

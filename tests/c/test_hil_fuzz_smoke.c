@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "hil_codec.h"
+#include "hil_transport.h"
 #include "rrr_test.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -67,7 +68,7 @@ int main(int argc, char **argv)
     uint8_t buf[96];
     for (long i = 0; i < n; ++i) {
         size_t len;
-        const uint32_t mode = next(&rng) % 5u;
+        const uint32_t mode = next(&rng) % 6u;
         if (mode == 0u) { /* random bytes */
             len = next(&rng) % sizeof buf;
             for (size_t k = 0; k < len; ++k) {
@@ -98,9 +99,26 @@ int main(int argc, char **argv)
                 const uint32_t bit = next(&rng) % 96u;
                 buf[bit / 8u] ^= (uint8_t)(1u << (bit % 8u));
             }
-            buf[0] &= 0xFAu; /* one frame */
+            buf[0] &= 0xF2u; /* one frame */
         } else if (mode == 4u) { /* a fault reset through one supervisor */
             len = reset_sequence(&rng, buf, sizeof buf);
+        } else if (mode == 5u) { /* a socket read: a frame's bytes, classical or CAN FD, bits
+                                  * flipped, and sometimes of another length */
+            rrr_hil_frame f = {(uint32_t)(next(&rng) & 0x7FFu), 0, (uint8_t)(next(&rng) % 9u),
+                               {0}};
+            for (unsigned k = 0; k < 8u; ++k) {
+                f.data[k] = k < f.dlc ? (uint8_t)next(&rng) : 0u;
+            }
+            const int fd = (int)(next(&rng) & 1u);
+            len = 1u + rrr_hil_sc_to_wire(&f, fd, (int)(next(&rng) & 1u), buf + 1);
+            buf[0] = (uint8_t)(8u | ((next(&rng) & 1u) << 1));
+            for (uint32_t k = next(&rng) % 3u; k > 0u; --k) {
+                const uint32_t bit = 8u + next(&rng) % (8u * (uint32_t)(len - 1u));
+                buf[bit / 8u] ^= (uint8_t)(1u << (bit % 8u));
+            }
+            if ((next(&rng) % 8u) == 0u) {
+                len = 1u + next(&rng) % 80u;
+            }
         } else { /* a socketcand line, truncated or with a byte replaced */
             const char *s = lines[next(&rng) % 5u];
             len = 1 + strlen(s);

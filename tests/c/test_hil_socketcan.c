@@ -58,5 +58,36 @@ int main(void)
         rrr_hil_close(&t.base);
     }
     rrr_hil_close(&t.base);
+    if (have_af_can && rc == 0) {
+        /* CAN FD: vcan0 (MTU 16) refuses it; on vcan1 (MTU 72) an FD frame goes round trip and a
+         * classical frame is dropped and counted by the FD socket (the CAN test guest has both) */
+        rrr_hil_socketcan a, b, c;
+        CHECK(rrr_hil_socketcan_open(&a, "vcan0", NULL, 0) == 0);
+        CHECK(rrr_hil_socketcan_enable_fd(&a, "vcan0") == -1);
+        CHECK(strstr(a.base.last_error, "not a CAN FD interface (MTU 16") != NULL);
+        CHECK(a.fd == -1);
+        rrr_hil_close(&a.base);
+        if (rrr_hil_socketcan_open(&a, "vcan1", rx, 2) == 0) {
+            printf("socketcan: CAN FD on vcan1\n");
+            CHECK(rrr_hil_socketcan_enable_fd(&a, "vcan1") == 0);
+            CHECK(strcmp(a.base.name, "socketcan-fd") == 0);
+            CHECK(rrr_hil_socketcan_open(&b, "vcan1", NULL, 0) == 0);
+            CHECK(rrr_hil_socketcan_enable_fd(&b, "vcan1") == 0);
+            CHECK(rrr_hil_socketcan_open(&c, "vcan1", NULL, 0) == 0); /* classical */
+            rrr_hil_frame f = {0x100, 0, 8, {1, 2, 3, 4, 5, 6, 7, 8}}, g;
+            CHECK(rrr_hil_send(&c.base, &f) == RRR_HIL_IO_OK);     /* classical: dropped */
+            CHECK(rrr_hil_recv(&a.base, &g, 100000) == RRR_HIL_IO_TIMEOUT);
+            CHECK(a.base.err.rx_malformed == 1 && a.base.err.rx_frames == 0);
+            f.data[0] = 42;
+            CHECK(rrr_hil_send(&b.base, &f) == RRR_HIL_IO_OK);     /* FD: delivered */
+            CHECK(rrr_hil_recv(&a.base, &g, 1000000) == RRR_HIL_IO_OK);
+            CHECK(g.id == 0x100 && g.dlc == 8 && memcmp(g.data, f.data, 8) == 0);
+            CHECK(rrr_hil_recv(&c.base, &g, 100000) == RRR_HIL_IO_TIMEOUT); /* the kernel keeps
+                                                                  FD frames from classical sockets */
+            rrr_hil_close(&c.base);
+            rrr_hil_close(&b.base);
+            rrr_hil_close(&a.base);
+        }
+    }
     return rrr_test_report("test_hil_socketcan");
 }

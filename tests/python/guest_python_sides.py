@@ -1,12 +1,14 @@
 """The Python cases of test_socketcan_guest.py, run by ONE Python process inside the CAN test
 guest (Python starts slowly under emulation: its imports take many seconds there).
 
-    guest_python_sides.py OUT DURATION CHANNEL [UPTIME_AT_START]
+    guest_python_sides.py OUT DURATION CHANNEL FD_CHANNEL [UPTIME_AT_START]
 
 Runs, one after the other, on the SocketCAN interface CHANNEL, for DURATION seconds of the
 writing task (scenario ctc), each in a folder of OUT:
 
-- ``bench``: ``rrr hil bench --interface socketcan`` (both C nodes; summary, figures, frame log);
+- ``bench``: ``rrr hil bench --interface socketcan --no-figures`` (both C nodes; summary, frame
+  log; the figures of its files are drawn on the host, where Python and matplotlib are fast);
+- ``bench_fd``: the same on FD_CHANNEL (an interface with MTU 72) with ``--fd``: CAN FD frames;
 - ``bench_fault``: the same with a VoltageCmd of a wrong CRC put on the bus at period 200 (the
   safety policy fires: exit status 7);
 - ``controller``: the C plant node on CHANNEL, then ``rrr hil controller --interface socketcan``
@@ -73,17 +75,22 @@ INJECT_AT = 200
 
 
 def main(argv: list[str]) -> int:
-    out, duration, channel = Path(argv[0]), argv[1], argv[2]
+    out, duration, channel, fd_channel = Path(argv[0]), argv[1], argv[2], argv[3]
     t_start = time.monotonic()
     cases: dict[str, Any] = {}
-    if len(argv) > 3:  # the guest's uptime when the process was started: the imports' time
-        cases["imports_s"] = float(Path("/proc/uptime").read_text().split()[0]) - float(argv[3])
+    if len(argv) > 4:  # the guest's uptime when the process was started: the imports' time
+        cases["imports_s"] = float(Path("/proc/uptime").read_text().split()[0]) - float(argv[4])
     common = ["--duration", duration, "--scenario", "ctc", "-q"]
 
     t0 = time.monotonic()
     rc = rrr(["hil", "bench", "--interface", "socketcan", "--channel", channel,
-              "--out", str(out / "bench"), *common])
+              "--out", str(out / "bench"), "--no-figures", *common])
     cases["bench"] = {"rc": rc, "seconds": time.monotonic() - t0}
+
+    t0 = time.monotonic()
+    rc = rrr(["hil", "bench", "--interface", "socketcan", "--channel", fd_channel, "--fd",
+              "--out", str(out / "bench_fd"), "--no-figures", *common])
+    cases["bench_fd"] = {"rc": rc, "seconds": time.monotonic() - t0}
 
     # the same bench with a VoltageCmd of a wrong CRC put on the bus at period 200 (what
     # `cansend CHANNEL 100#0000000000000000` does): the run completes, the safety policy fired

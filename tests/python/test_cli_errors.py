@@ -133,6 +133,8 @@ CASES: dict[str, tuple[list[str], str]] = {
     "hil-figures-on-export": (["hil", "export-reference", "--no-figures"], "--no-figures"),
     "hil-no-fifo-without-realtime": (["hil", "bench", "--no-fifo"], "--no-fifo"),
     "hil-spin-without-realtime": (["hil", "bench", "--spin-us", "50"], "--spin-us"),
+    "hil-fd-on-socketcand": (["hil", "bench", "--fd"], "socketcand protocol carries classical"),
+    "hil-fd-on-controller": (["hil", "controller", "--fd"], "unrecognized arguments"),
     "busload-bitrate-0": (["hil", "busload", "--bitrate", "0"], "--bitrate"),
     "busload-bitrate-negative": (["hil", "busload", "--bitrate", "-5"], "--bitrate"),
     "busload-bitrate-too-high": (["hil", "busload", "--bitrate", "2000000"], "--bitrate"),

@@ -35,6 +35,7 @@ NOT_RUN_HERE = {
     ("docs/can-bench.md", "sudo ip link set can0 up type can bitrate 1000000"),
     # a kernel with AF_CAN and root (the tests run the same in a QEMU guest), an adapter
     ("docs/socketcan.md", "modprobe vcan"),
+    ("docs/socketcan.md", "ip link add dev vcan1 type vcan"),
     ("docs/socketcan.md", "rrr_hil_plant --fmu DIR --socketcan vcan0 --log plant.csv &    "
                           "# DIR: the unzipped plant FMU"),
     ("docs/socketcan.md", "ip link set can0 type can bitrate 1000000 restart-ms 100   "

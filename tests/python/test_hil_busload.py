@@ -98,3 +98,29 @@ def test_busload_command_ends_with_the_worst_case_load() -> None:
                          "5000000"], capture_output=True, text=True, timeout=60)
     assert fd.returncode == 0 and "CAN FD" in fd.stdout
     assert float(fd.stdout.strip().splitlines()[-1].split()[-2]) < 40.0
+
+
+def test_measured_fd_load_counts_frames_bytes_and_bits() -> None:
+    """Frames and data bytes per period of a frame list, and its time on a CAN FD bus from
+    fd_bits: two periods with an 8-byte and a 2-byte standard frame each, and one 8-byte
+    extended frame."""
+    frames = [(0x100, bytes(8), False), (0x080, bytes(2), False)] * 2 + [(0x1234, bytes(8), True)]
+    m = bl.measured_fd_load(frames, 2, 1_000_000, 4_000_000)
+    assert m["frames_per_period"] == 2.5 and m["bytes_per_period"] == (2 * 10 + 8) / 2
+    for key, stuffing in (("load_worst_percent", True), ("load_no_stuffing_percent", False)):
+        s = 0.0
+        for n, ext, count in ((8, False, 2), (2, False, 2), (8, True, 1)):
+            nom, dat = bl.fd_bits(n, extended=ext, stuffing=stuffing)
+            s += count * (nom / 1e6 + dat / 4e6)
+        assert m[key] == pytest.approx(100.0 * s / 2e-3, rel=1e-12)
+    assert m["load_worst_percent"] > m["load_no_stuffing_percent"]
+    # 8 bytes standard at 1/5 Mbit/s: (33 + 114 / 5) us worst, (29 + 97 / 5) us without stuffing
+    one = bl.measured_fd_load([(0x100, bytes(8), False)], 1)
+    assert one["load_worst_percent"] == pytest.approx(100 * (33 + 114 / 5) * 1e-6 / 1e-3)
+    assert one["load_no_stuffing_percent"] == pytest.approx(100 * (29 + 97 / 5) * 1e-6 / 1e-3)
+    with pytest.raises(BadInputError, match="periods"):
+        bl.measured_fd_load(frames, 0)
+    with pytest.raises(BadInputError, match="--fd"):
+        bl.measured_fd_load(frames, 1, 1_000_000, 500_000)
+    with pytest.raises(BadInputError, match="CAN FD frame"):
+        bl.measured_fd_load([(0x100, bytes(9), False)], 1)

@@ -48,3 +48,21 @@ def test_controller_side_writes_results(tmp_path: Path) -> None:
     tx = records[records["dir"] == 1]
     assert set(int(i) for i in tx["id"]) == {0x201, 0x202, 0x203, 0x300, 0x702}
     assert fl.compare(records, fl.read_can_log(tmp_path / "frames.blf")) is None
+
+
+def test_nodes_refuse_fd_without_socketcan(tmp_path: Path) -> None:
+    """--fd on a C node over socketcand (--connect, --listen): exit 2 (setup) before anything
+    connects or listens, with the reason: the socketcand protocol carries classical frames."""
+    import numpy as np
+    from rrr_robot.hil.nodes import export_reference, node_executable
+
+    t = np.arange(3) * 1e-3
+    z = np.zeros((3, 3))
+    ref = export_reference(t, z, z, z, tmp_path / "reference.csv")
+    for link in (["--connect", "127.0.0.1:9"], ["--listen", "127.0.0.1:0"]):
+        r = subprocess.run([str(node_executable("controller")), "--reference", str(ref), *link,
+                            "--fd"], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2, (link, r.stdout, r.stderr)
+        assert ("rrr_hil_controller: --fd needs --socketcan IF: the socketcand protocol carries "
+                "classical CAN frames only") in r.stderr
+        assert "listening" not in r.stdout

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import shlex
 import subprocess
 import sys
+import time
 import zipfile
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,7 @@ import numpy as np
 import pytest
 from can_guest import CanGuest, GuestError, GuestUnavailable, Result
 from rrr_robot.hil import framelog
+from rrr_robot.hil.figures import FIGURES
 from rrr_robot.hil.logspec import CONTROLLER_LOG, PLANT_LOG, read_log
 from rrr_robot.hil.nodes import (
     controller_node_args,
@@ -165,17 +167,20 @@ record_stop() {{  # BUS DEST_FOLDER
 
 
 def c_bench_script(work: Path, plant_args: list[str], ctrl_args: list[str], ref_csv: Path,
-                   channel: str = "vcan0", inject: str = "") -> str:
+                   channel: str = "vcan0", inject: str = "", fd: bool = False) -> str:
     """Both C nodes over SocketCAN with candump recording the bus: candump first, the plant next
     (its boot-up heartbeat on the bus tells that it listens), then the controller. ``inject``:
-    shell commands run while the nodes run, once the plant's log has 200 rows."""
+    shell commands run while the nodes run, once the plant's log has 200 rows. ``fd``: both
+    nodes with --fd (CAN FD frames; candump -L writes them as ID##FLAGS DATA)."""
     q = shlex.quote
-    plant = shlex.join([str(node_executable("plant")), *plant_args, "--socketcan", channel,
+    link = ["--socketcan", channel, *(["--fd"] if fd else [])]
+    plant = shlex.join([str(node_executable("plant")), *plant_args, *link,
                         "--log", str(work / "plant.csv"), "--frame-log",
                         str(work / "plant.rrrcan")])
     ctrl = shlex.join([str(node_executable("controller")), "--reference", str(ref_csv),
-                       *ctrl_args, "--socketcan", channel, "--log", str(work / "controller.csv"),
+                       *ctrl_args, *link, "--log", str(work / "controller.csv"),
                        "--frame-log", str(work / "controller.rrrcan")])
+    boot_up = " 702##[0-9A-F]00" if fd else " 702#00"
     w = q(str(work))
     injection = "" if not inject else (
         f'( n=0; until [ "$(wc -l < {w}/plant.csv)" -gt 200 ] || [ $n -gt 1200 ]; do sleep 0.05;'
@@ -184,7 +189,7 @@ def c_bench_script(work: Path, plant_args: list[str], ctrl_args: list[str], ref_
 record_start {channel}
 {plant} > {w}/plant.out 2> {w}/plant.err &
 P=$!
-wait_for ' 702#00' $L || {{ echo "no boot-up heartbeat of the plant" >&2; exit 91; }}
+wait_for '{boot_up}' $L || {{ echo "no boot-up heartbeat of the plant" >&2; exit 91; }}
 T0=$(cut -d' ' -f1 /proc/uptime)
 {injection}
 {ctrl} > {w}/controller.out 2> {w}/controller.err
@@ -250,12 +255,15 @@ def c_bench(guest: CanGuest, bench_inputs: dict[str, Any]) -> dict[str, Any]:
     script = work / "bench.sh"
     script.write_text(c_bench_script(work, bench_inputs["plant_args"], bench_inputs["ctrl_args"],
                                      bench_inputs["ref_csv"]))
-    r = run(guest, f"sh {script}", "C bench over vcan0 (with candump)", timeout=240)
+    with ThreadPoolExecutor(max_workers=1) as pool:  # the same run here, meanwhile
+        here = pool.submit(host_socketcand_bench, bench_inputs,
+                           bench_inputs["work"] / "socketcand")
+        r = run(guest, f"sh {script}", "C bench over vcan0 (with candump)", timeout=240)
+        host = here.result()
     times = (work / "times").read_text().split() if (work / "times").exists() else []
     if times:
         print(f"  the two nodes: {float(times[2]) - float(times[1]):.1f} s in the guest for "
               f"{bench_inputs['periods']} periods")
-    host = host_socketcand_bench(bench_inputs, bench_inputs["work"] / "socketcand")
     return {"result": r, "work": work, "host": host,
             "host_work": bench_inputs["work"] / "socketcand"}
 
@@ -335,6 +343,102 @@ def test_candump_log_equals_node_frame_logs(c_bench: dict[str, Any]) -> None:
           f"of the plant; equal to the nodes' frame logs")
 
 
+# ---- the same bench as CAN FD frames on vcan1 ------------------------------------------------
+
+#: The data bit rate of the CAN FD figures (1 Mbit/s nominal): rrr hil busload --fd's argument.
+FD_DATA_BITRATE = 5_000_000
+
+
+@pytest.fixture(scope="module")
+def c_bench_fd(guest: CanGuest, bench_inputs: dict[str, Any],
+               c_bench: dict[str, Any]) -> dict[str, Any]:
+    """The all-C lockstep bench of c_bench again, both nodes with --fd on vcan1 (MTU 72)."""
+    work = bench_inputs["work"] / "vcan_fd"
+    work.mkdir()
+    script = work / "bench.sh"
+    script.write_text(c_bench_script(work, bench_inputs["plant_args"], bench_inputs["ctrl_args"],
+                                     bench_inputs["ref_csv"], channel="vcan1", fd=True))
+    r = run(guest, f"sh {script}", "C bench over vcan1, CAN FD (with candump)", timeout=240)
+    return {"result": r, "work": work}
+
+
+def test_c_bench_fd_over_vcan1_equals_classical(c_bench_fd: dict[str, Any],
+                                                c_bench: dict[str, Any],
+                                                bench_inputs: dict[str, Any]) -> None:
+    """rrr_hil_plant and rrr_hil_controller with --socketcan vcan1 --fd: both exit 0; the
+    payloads are the classical frames' (same DBC, same quantisation), so the run is the
+    classical run over vcan0 bit for bit: equal logs, equal metrics, equal summaries but for
+    the transport's name (socketcan-fd); no frame was malformed or of the wrong format."""
+    r, work, classical = c_bench_fd["result"], c_bench_fd["work"], c_bench["work"]
+    assert r.rc == 0, r.stderr + (work / "plant.err").read_text()
+    exits = dict(line.split() for line in (work / "exit").read_text().splitlines())
+    assert exits == {"controller": "0", "plant": "0", "candump": "0"}, exits
+    assert "rrr_hil_plant: exit 0 (completed)" in (work / "plant.err").read_text()
+    for name in ("plant.csv", "controller.csv"):
+        mine, theirs = read_csv(work / name), read_csv(classical / name)
+        assert len(mine) >= bench_inputs["periods"] and mine == theirs, name
+    ref = bench_inputs["ref"]
+    mine_m = log_metrics(work / "controller.csv", ref)
+    assert mine_m == log_metrics(classical / "controller.csv", ref)
+    for node in ("plant", "controller"):
+        fd_sum = summary_lines((work / f"{node}.out").read_text())
+        cl_sum = summary_lines((classical / f"{node}.out").read_text())
+        assert (fd_sum["transport"], cl_sum["transport"]) == ("socketcan-fd", "socketcan")
+        assert fd_sum["rx_malformed"] == 0 and fd_sum["exit"] == 0
+        diff = {k: (cl_sum.get(k), v) for k, v in fd_sum.items()
+                if k != "transport" and cl_sum.get(k) != v}
+        assert not diff, f"{node}: the CAN FD run's summary differs: {diff}"
+    print(f"  CAN FD over vcan1: rms_e {[mine_m[f'rms_e[{j}]'] for j in (1, 2, 3)]} rad, "
+          "equal to the classical run bit for bit")
+
+
+def test_c_bench_fd_frames_and_busload(c_bench_fd: dict[str, Any], c_bench: dict[str, Any],
+                                       bench_inputs: dict[str, Any]) -> None:
+    """candump -L on vcan1 recorded the CAN FD run with no drop; python-can reads every bench
+    frame as CAN FD with bit-rate switch, and each node's frames are the classical run's (id,
+    data, order). Counted per period, the frames and data bytes on the bus agree with rrr hil
+    busload --lockstep --fd's schedule (the DBC's periods and lengths), computed independently,
+    up to the run's documented ends: the plant's boot-up heartbeat, the StopCmd, the
+    controller's "stopped" heartbeat, one joint state and one command more than Syncs, and the
+    heartbeat of period 0 (at most 7 frames and 8 bytes per frame of them). The measured load
+    is printed beside busload's figure."""
+    from rrr_robot.cli.app import main as rrr
+    from rrr_robot.hil.busload import measured_fd_load, schedule_load
+    from rrr_robot.hil.protocol import database
+
+    work = c_bench_fd["work"]
+    assert "" == (work / "candump.err").read_text().strip()
+    bus = candump_messages(work / "candump.log")
+    assert bus and all(m.is_fd and m.bitrate_switch for m in bus)
+    classical = candump_messages(c_bench["work"] / "candump.log")
+    assert not any(m.is_fd for m in classical)
+
+    def split(msgs: list[can.Message]) -> tuple[list[Any], list[Any]]:
+        seen = [(m.arbitration_id, bytes(m.data)) for m in msgs]
+        return ([f for f in seen if f[0] in CONTROLLER_IDS],
+                [f for f in seen if f[0] not in CONTROLLER_IDS])
+
+    assert split(bus) == split(classical)
+    n = bench_inputs["periods"]
+    frames = [(m.arbitration_id, bytes(m.data), m.is_extended_id) for m in bus]
+    measured = measured_fd_load(frames, n, data_bitrate=FD_DATA_BITRATE)
+    schedule = schedule_load(database(), data_bitrate=FD_DATA_BITRATE, lockstep=True)
+    sched_frames = sum(f.rate_hz for f in schedule.frames) * 1e-3
+    sched_bytes = sum(f.rate_hz * f.length for f in schedule.frames) * 1e-3
+    assert abs(measured["frames_per_period"] - sched_frames) * n <= 7
+    assert abs(measured["bytes_per_period"] - sched_bytes) * n <= 7 * 8
+    assert abs(measured["load_worst_percent"] - schedule.worst_percent) < 0.01 * \
+        schedule.worst_percent
+    assert rrr(["hil", "busload", "--lockstep", "--fd", str(FD_DATA_BITRATE)]) == 0
+    print(f"  CAN FD on vcan1 (candump), {n} periods: {measured['frames_per_period']:.4f} "
+          f"frames and {measured['bytes_per_period']:.3f} bytes per period, "
+          f"{measured['load_worst_percent']:.2f} % worst case / "
+          f"{measured['load_no_stuffing_percent']:.2f} % without stuff bits of 1 Mbit/s + "
+          f"{FD_DATA_BITRATE // 1_000_000} Mbit/s; rrr hil busload --lockstep --fd "
+          f"{FD_DATA_BITRATE}: {sched_frames:.4f} frames, {sched_bytes:.3f} bytes per period, "
+          f"{schedule.worst_percent:.2f} % worst case, {schedule.nominal_percent:.2f} % without")
+
+
 # ---- hostile traffic from can-utils while the plant runs --------------------------------------
 
 #: Periods of the hostile runs (the first rows of the writing task).
@@ -348,6 +452,10 @@ HOSTILE = {
                   "cangen vcan0 -g 0 -I 7FD -L 8 -n 500", 0,
                   "a flood of unknown identifiers (standard and extended) at the bus's rate"),
 }
+
+
+#: What the classical_on_fd run injects into a CAN FD bench: classical frames of VoltageCmd.
+CLASSICAL_ON_FD = "cansend vcan1 100#0000000000000000; cansend vcan1 100#1111"
 
 
 @pytest.fixture(scope="module")
@@ -370,6 +478,12 @@ def hostile(guest: CanGuest, bench_inputs: dict[str, Any],
         one = c_bench_script(work / name, bench_inputs["plant_args"], bench_inputs["ctrl_args"],
                              ref_csv, inject=inject.replace("@REPLAY@", replay_arg))
         scripts.append(f"( {one} )")
+    # classical frames on the CAN FD bench (vcan1, --fd): a VoltageCmd of a wrong CRC and one of
+    # DLC 2, which would latch crc and format on a classical bench
+    (work / "classical_on_fd").mkdir()
+    scripts.append("( " + c_bench_script(
+        work / "classical_on_fd", bench_inputs["plant_args"], bench_inputs["ctrl_args"], ref_csv,
+        channel="vcan1", fd=True, inject=CLASSICAL_ON_FD) + " )")
     # and the real-time mode of both nodes on the same periods, on a clean bus
     (work / "realtime").mkdir()
     scripts.append("( " + c_bench_script(
@@ -424,6 +538,39 @@ def test_hostile_traffic(hostile: dict[str, Any], c_bench: dict[str, Any], case:
           f"{s['zero_periods']} periods at 0 V, plant exit {exits['plant']}")
 
 
+def test_classical_frames_on_the_fd_bench(hostile: dict[str, Any],
+                                          c_bench: dict[str, Any]) -> None:
+    """Classical frames on the CAN FD bench (cansend on vcan1 while both nodes run with --fd): a
+    VoltageCmd of a wrong CRC and one of DLC 2, each of which latches a fault on a classical
+    bench, are not of the bench's format: the plant drops both before the codec and counts them
+    (rx_malformed 2), latches nothing, and the run equals the clean classical run bit for bit;
+    candump saw them as classical frames among the FD ones."""
+    work = hostile["work"] / "classical_on_fd"
+    assert (work / "injected").exists(), "the injection did not run during the run"
+    exits = dict(line.split() for line in (work / "exit").read_text().splitlines())
+    assert exits == {"controller": "0", "plant": "0", "candump": "0"}, exits
+    s = summary_lines((work / "plant.out").read_text())
+    assert s["transport"] == "socketcan-fd" and s["rx_malformed"] == 2
+    assert s["faults"] == 0 and s["fault_events"] == 0
+    clean = read_csv(c_bench["work"] / "plant.csv")[: HOSTILE_PERIODS]
+    assert read_csv(work / "plant.csv")[: HOSTILE_PERIODS] == clean
+    cmds = [m for m in candump_messages(work / "candump.log") if m.arbitration_id == 0x100]
+    assert [bytes(m.data).hex() for m in cmds if not m.is_fd] == ["0000000000000000", "1111"]
+    assert abs(len([m for m in cmds if m.is_fd]) - HOSTILE_PERIODS) <= 1
+
+
+def test_fd_refused_on_a_classical_interface(guest: CanGuest,
+                                             bench_inputs: dict[str, Any]) -> None:
+    """--fd on vcan0 (MTU 16): each node refuses before the run (exit 2) and says why."""
+    for node, args in (("plant", bench_inputs["plant_args"]),
+                       ("controller", ["--reference", str(bench_inputs["ref_csv"])])):
+        r = run(guest, shlex.join([str(node_executable(node)), *args, "--socketcan", "vcan0",
+                                   "--fd"]), f"{node} --fd on vcan0")
+        assert r.rc == 2, (r.rc, r.stderr)
+        assert ("socketcan: vcan0 is not a CAN FD interface (MTU 16, CAN FD needs 72: ip link "
+                "set vcan0 mtu 72)") in r.stderr
+
+
 def test_realtime_over_vcan(hostile: dict[str, Any]) -> None:
     """Both C nodes in real time (--realtime, 1 kHz of CLOCK_MONOTONIC) over vcan0 in the guest
     for HOSTILE_PERIODS periods: the run completes, with status 0, or 7 when the plant's safety
@@ -454,8 +601,9 @@ def test_realtime_over_vcan(hostile: dict[str, Any]) -> None:
 
 # ---- rrr hil bench --interface socketcan and the Python sides over python-can's socketcan ---
 
-#: Seconds of the writing task the Python cases run (their time is mostly Python's start-up,
-#: FMPy's and matplotlib's under emulation; the whole task runs in the all-C case above).
+#: Seconds of the writing task the Python cases run (their time is mostly Python's start-up and
+#: FMPy's under emulation; the whole task runs in the all-C case above). No figures are drawn in
+#: the guest (matplotlib took about 30 s there): figures_from_files draws them here.
 PY_DURATION = "1"
 #: Values of summary.json that time the run (wall clock), not what it computed.
 TIMING = {"wall_time", "realtime_factor", "duration_s", "frames_per_second", "per_second"}
@@ -469,29 +617,34 @@ def _untimed(value: Any) -> Any:
 
 @pytest.fixture(scope="module")
 def python_sides(guest: CanGuest, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    """guest_python_sides.py in one Python process in the guest, and the same three runs here
-    over socketcand (rrr hil bench|controller|plant, the other node started by rrr)."""
-    from rrr_robot.cli.app import main as rrr
-
+    """guest_python_sides.py in one Python process in the guest, and meanwhile the same three
+    runs here over socketcand (rrr hil bench|controller|plant, the other node started by rrr;
+    the emulator runs on one host CPU, these on the other)."""
     out = guest.scratch / "python_sides"
     out.mkdir()
-    # matplotlib's font cache made here, where it is fast (the fonts are at the same paths)
-    mpl = guest.scratch / "mpl"
-    env = {"MPLCONFIGDIR": str(mpl)}
-    subprocess.run([sys.executable, "-c", "import matplotlib.font_manager"], check=True,
-                   env={**os.environ, **env})
+    host = tmp_path_factory.mktemp("socketcand_sides")
+    common = ["--duration", PY_DURATION, "--scenario", "ctc", "-q", "--no-figures"]
+
+    def host_runs() -> dict[str, int]:
+        t0 = time.monotonic()
+        rc = {side: subprocess.run([sys.executable, "-m", "rrr_robot", "hil", side, "--out",
+                                    str(host / side), *common], capture_output=True,
+                                   timeout=600).returncode
+              for side in ("bench", "controller", "plant")}
+        print(f"the three runs over socketcand here (meanwhile): {time.monotonic() - t0:.1f} s")
+        return rc
+
     driver = Path(__file__).with_name("guest_python_sides.py")
-    r = guest.run(f"{shlex.quote(sys.executable)} {shlex.quote(str(driver))} {out} "
-                  f"{PY_DURATION} vcan0 $(cut -d' ' -f1 /proc/uptime)", timeout=600, env=env)
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        here = pool.submit(host_runs)
+        r = guest.run(f"{shlex.quote(sys.executable)} {shlex.quote(str(driver))} {out} "
+                      f"{PY_DURATION} vcan0 vcan1 $(cut -d' ' -f1 /proc/uptime)", timeout=600)
+        host_rc = here.result()
     print(f"python sides in the guest: exit {r.rc}, {r.seconds:.1f} s")
     cases = json.loads((out / "cases.json").read_text()) if (out / "cases.json").exists() \
         else {}
     for name, case in cases.items():
         print(f"  {name}: {case}")
-    host = tmp_path_factory.mktemp("socketcand_sides")
-    common = ["--duration", PY_DURATION, "--scenario", "ctc", "-q", "--no-figures"]
-    host_rc = {side: rrr(["hil", side, "--out", str(host / side), *common])
-               for side in ("bench", "controller", "plant")}
     return {"result": r, "out": out, "cases": cases, "host": host, "host_rc": host_rc}
 
 
@@ -529,9 +682,13 @@ def test_rrr_hil_bench_over_socketcan(python_sides: dict[str, Any],
     assert r.rc == 0, r.stderr[-3000:]
     assert python_sides["cases"]["bench"]["rc"] == 0 and python_sides["host_rc"]["bench"] == 0
     mine = out / "bench"
-    for name in ("summary.json", "frames.blf", "frames.rrrcan", "fig_letters_bench.png",
-                 "fig_voltages.png"):
+    for name in ("summary.json", "frames.blf", "frames.rrrcan"):
         assert (mine / name).stat().st_size > 0, name
+    figures = host / "figures_of_the_guest_run"
+    figures.mkdir()
+    drawn = figures_from_files(mine, figures)
+    assert sorted(p.name for p in drawn) == sorted(FIGURES)
+    assert all(p.stat().st_size > 10_000 for p in drawn)
     ref_csv = mine / "reference.csv"
     row0 = read_csv(ref_csv)[1].split(",")
     rerun = host / "bench_on_guest_reference"
@@ -555,6 +712,54 @@ def test_rrr_hil_bench_over_socketcan(python_sides: dict[str, Any],
         {k: hbus[k] for k in ("frames", "tx", "rx", "by_id", "measured_1mbit")}
     assert framelog.compare(framelog.read_node_log(mine / "frames.rrrcan"),
                             framelog.read_can_log(mine / "frames.blf")) is None
+
+
+def figures_from_files(folder: Path, out: Path) -> list[Path]:
+    """The figures of an ``rrr hil bench --duration PY_DURATION`` run (scenario ctc) drawn from
+    the logs it wrote into ``folder`` (plant.csv, controller.csv), as rrr hil bench draws them
+    (rrr_robot.hil.results.write_results, figures.write_bench_figures); into ``out``."""
+    from rrr_robot.hil.bench import BenchRun
+    from rrr_robot.hil.figures import write_bench_figures
+    from rrr_robot.hil.results import bench_result, extend_reference, unquantised_cosim
+
+    model, robot, scenarios, ref = prepare(WritingJob(out=out, scenarios=["ctc"]))
+    values = controller_fmu_values(scenarios[0], model, robot.require_control())
+    ref = extend_reference(ref, float(PY_DURATION))
+    p = read_log(folder / "plant.csv", PLANT_LOG)
+    c = read_log(folder / "controller.csv", CONTROLLER_LOG)
+    m = min(p.rows.shape[0], c.rows.shape[0])
+    run = BenchRun(t=p.col("t")[:m], q=p.group("q")[:m], qd=p.group("qd")[:m],
+                   u=c.group("u")[:m], plant_summary={}, controller_summary={},
+                   u_n=c.group("u_n")[:m], u_c=c.group("u_c")[:m])
+    bench = bench_result(ref, run, p.rows)
+    ref_run = extend_reference(ref, float(bench.t[-1] - bench.t[0]))
+    write_bench_figures(out, ref_run, bench, unquantised_cosim(ref_run, model, values),
+                        scenario="ctc")
+    return sorted(out.glob("*.png"))
+
+
+def test_rrr_hil_bench_fd_over_socketcan(python_sides: dict[str, Any]) -> None:
+    """``rrr hil bench --interface socketcan --channel vcan1 --fd`` in the guest: exit 0, both
+    nodes on CAN FD (transport socketcan-fd), the same logs as the classical run over vcan0 bit
+    for bit and the same metrics; summary.json's bus section has the CAN FD load of what the
+    controller sent and received, its frame count equal to the classical run's."""
+    case, out = python_sides["cases"]["bench_fd"], python_sides["out"]
+    assert case["rc"] == 0, case
+    for name in ("plant.csv", "controller.csv"):
+        assert read_csv(out / "bench_fd" / name) == read_csv(out / "bench" / name), name
+    s, c = (json.loads((out / d / "summary.json").read_text()) for d in ("bench_fd", "bench"))
+    assert s["controller"]["transport"] == "socketcan-fd" and s["plant_exit"] == 0
+    assert _untimed(s["bench"]) == _untimed(c["bench"]) and s["faults"] == c["faults"]
+    fd = s["bus"]["measured_fd"]
+    assert fd["frames_per_period"] == s["bus"]["measured_1mbit"]["frames_per_period"] == \
+        c["bus"]["measured_1mbit"]["frames_per_period"]
+    assert 0 < fd["load_no_stuffing_percent"] < fd["load_worst_percent"] < \
+        s["bus"]["measured_1mbit"]["load_percent"]
+    assert "measured_fd" not in c["bus"]
+    print(f"  rrr hil bench --fd: {fd['frames_per_period']:.3f} frames, "
+          f"{fd['bytes_per_period']:.2f} bytes per period at the controller, "
+          f"{fd['load_worst_percent']:.2f} % worst case (schedule "
+          f"{s['bus']['schedule_fd_worst_percent']:.2f} %)")
 
 
 def test_rrr_hil_bench_safety_status(python_sides: dict[str, Any]) -> None:

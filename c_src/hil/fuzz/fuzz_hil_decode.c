@@ -6,7 +6,12 @@
  *
  * Input layout: byte 0 selects the parser:
  *  - bit 0 set: the rest is the text of one socketcand message;
- *  - bit 0 clear, bit 2 clear: one frame (bytes 1..2 id, 3 dlc, 4.. data; bit 1: extended id);
+ *  - bit 0 clear, bit 2 clear, bit 3 set: the rest is what one read() from a raw CAN socket
+ *    returned (its length is the input's; bit 1: the socket is in CAN FD mode), converted with
+ *    rrr_hil_sc_from_wire; a frame converts back (rrr_hil_sc_to_wire) to bytes of the same
+ *    length that convert to the same frame, and is decoded;
+ *  - bit 0 clear, bit 2 clear, bit 3 clear: one frame (bytes 1..2 id, 3 dlc, 4.. data; bit 1:
+ *    extended id);
  *  - bit 0 clear, bit 2 set: a sequence of 12-byte records fed to one supervisor that starts
  *    with a latched fault: op, id (2 bytes), dlc, data[8]. op & 3: 0 feed the frame, 1 feed it
  *    and close the period, 2 close the period, 3 latch an external fault (op & 4: sync, else
@@ -181,6 +186,30 @@ static void sequence(const uint8_t *data, size_t size)
     }
 }
 
+/* One read() from a raw CAN socket. */
+static void one_read(const uint8_t *data, size_t size)
+{
+    unsigned char wire[RRR_HIL_SC_WIRE_MAX + 8u];
+    memset(wire, 0, sizeof wire);
+    const size_t n = size - 1u > sizeof wire ? sizeof wire : size - 1u;
+    memcpy(wire, data + 1, n);
+    const int can_fd = (data[0] >> 1) & 1u;
+    rrr_hil_frame f, g;
+    int brs = 0, brs2 = 0;
+    if (rrr_hil_sc_from_wire(wire, (long)n, can_fd, &f, &brs) != RRR_HIL_SC_FRAME) {
+        return;
+    }
+    unsigned char back[RRR_HIL_SC_WIRE_MAX];
+    const unsigned m = rrr_hil_sc_to_wire(&f, can_fd, brs, back);
+    if (f.dlc > 8u || m != (unsigned)n ||
+        rrr_hil_sc_from_wire(back, (long)m, can_fd, &g, &brs2) != RRR_HIL_SC_FRAME ||
+        memcmp(&f, &g, sizeof f) != 0 || brs != brs2) {
+        __builtin_trap();
+    }
+    rrr_hil_msg msg;
+    (void)rrr_hil_decode(&f, &msg);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1u) {
@@ -193,6 +222,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         (void)rrr_hil_scd_parse((const char *)data + 1, n, &f, word);
     } else if ((data[0] & 4u) != 0u) {
         sequence(data, size);
+    } else if ((data[0] & 8u) != 0u) {
+        one_read(data, size);
     } else {
         one_frame(data, size);
     }

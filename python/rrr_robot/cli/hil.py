@@ -94,6 +94,10 @@ def _check_options(args: argparse.Namespace) -> None:
                               ("--spin-us", getattr(args, "spin_us", None) is not None)):
             if given:
                 raise BadInputError(f"{option}: an option of 'rrr hil bench --realtime'")
+    if getattr(args, "fd", None) is True and args.interface != "socketcan":
+        raise BadInputError("--fd: CAN FD needs --interface socketcan (an interface with MTU "
+                            "72, e.g. vcan1): the socketcand protocol carries classical CAN "
+                            "frames only")
 
 
 def _can_log_target(args: argparse.Namespace, out: Path) -> Path | None:
@@ -185,7 +189,7 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
             side = sides.run_bench(ref, ctrl_values, work, frame_log=NODE_FRAMES,
                                    realtime=realtime, progress=progress,
                                    socketcan=args.channel if args.interface == "socketcan"
-                                   else None)
+                                   else None, can_fd=args.fd)
         else:  # controller: the controller FMU under FMPy against a plant node
             side = sides.run_controller_side(ref, ctrl_values, work, conn,
                                              frame_log=NODE_FRAMES, progress=progress)
@@ -346,6 +350,10 @@ def add_node_bus_arguments(p: argparse.ArgumentParser) -> None:
                    "socketcan: both nodes on the SocketCAN interface --channel")
     g.add_argument("--channel", default="vcan0",
                    help="with --interface socketcan: the interface (default vcan0)")
+    g.add_argument("--fd", action="store_true",
+                   help="with --interface socketcan: every frame as a CAN FD frame with "
+                   "bit-rate switch, same identifiers and data (the interface needs MTU 72, "
+                   "e.g. vcan1; docs/socketcan.md)")
 
 
 def add_result_arguments(p: argparse.ArgumentParser) -> None:

@@ -273,16 +273,16 @@ def _optional_atomic(path: Path | None) -> Iterator[Path | None]:
 
 
 @contextlib.contextmanager
-def _boot_up_watch(socketcan: str | None) -> Iterator[Any]:
-    """A python-can bus on ``socketcan`` that receives only HeartbeatPlant, opened before the
-    plant starts (None without SocketCAN)."""
+def _boot_up_watch(socketcan: str | None, can_fd: bool = False) -> Iterator[Any]:
+    """A python-can bus on ``socketcan`` that receives only HeartbeatPlant (``can_fd``: CAN FD
+    frames too), opened before the plant starts (None without SocketCAN)."""
     if not socketcan:
         yield None
         return
     import can
 
     try:
-        bus = can.Bus(interface="socketcan", channel=socketcan,
+        bus = can.Bus(interface="socketcan", channel=socketcan, fd=can_fd,
                       can_filters=[{"can_id": 0x702, "can_mask": 0x7FF, "extended": False}])
     except (OSError, can.CanError) as exc:
         hint = (" (this kernel has no AF_CAN: use the socketcand transport; docs/socketcan.md)"
@@ -298,28 +298,33 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                 workdir: Path | None = None, timeout: float = 300.0,
                 controller_values: Mapping[str, float | bool] = {}, *,
                 frame_log: str | None = None, realtime: RealTime | None = None,
-                progress: Progress | None = None, socketcan: str | None = None) -> BenchRun:
+                progress: Progress | None = None, socketcan: str | None = None,
+                can_fd: bool = False) -> BenchRun:
     """Both C nodes in lockstep (or ``realtime``) over the socketcand transport (plant =
     server), or over the SocketCAN interface ``socketcan`` (e.g. vcan0; the controller starts
-    once the plant's boot-up heartbeat is on the bus). The plant starts at (q_ref[0],
-    qd_ref[0]) on the default robot; the controller uses the default robot and gains changed by
-    ``controller_values`` (controller FMU names, e.g. a scenario's). The logs go to
+    once the plant's boot-up heartbeat is on the bus), with ``can_fd`` as CAN FD frames with
+    bit-rate switch (the nodes' --fd; the interface needs MTU 72, e.g. vcan1). The plant starts
+    at (q_ref[0], qd_ref[0]) on the default robot; the controller uses the default robot and
+    gains changed by ``controller_values`` (controller FMU names, e.g. a scenario's). The logs go to
     ``workdir``: plant.csv, controller.csv, the controller node's frame log ``frame_log`` (a
     file name; rrr_robot.hil.framelog) and, in real time, latency_controller.csv and
     latency_plant.csv. A run that completed while the safety policy fired (a node's exit
     status EXIT_SAFETY) is a run: the summaries say so; any other non-zero status raises."""
+    if can_fd and not socketcan:
+        raise HilError("CAN FD needs the SocketCAN transport (--interface socketcan): the "
+                       "socketcand protocol carries classical CAN frames only")
     own = workdir is None
     work = Path(tempfile.mkdtemp(prefix="rrr_hil_")) if workdir is None else Path(workdir)
     n = t.shape[0]
     try:
         ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, work / "reference.csv")
-        rt_plant: list[str] = []
-        rt_ctrl: list[str] = []
+        rt_plant: list[str] = ["--fd"] if can_fd else []
+        rt_ctrl: list[str] = ["--fd"] if can_fd else []
         latency = (work / "latency_controller.csv", work / "latency_plant.csv")
         if realtime is not None:
             cpus = realtime.cpus or (None, None)
-            rt_ctrl = realtime.args(cpus[0])
-            rt_plant = [*realtime.args(cpus[1]), "--duration", f"{realtime.duration:.3f}"]
+            rt_ctrl += realtime.args(cpus[0])
+            rt_plant += [*realtime.args(cpus[1]), "--duration", f"{realtime.duration:.3f}"]
         # the C nodes write their logs themselves: to temporary names, renamed when the run
         # succeeded (core.outputs), so a failed or interrupted run leaves no half log
         with atomic_path(work / "plant.csv") as plant_log, \
@@ -331,7 +336,7 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                 rt_ctrl += ["--latency-log", str(lat_c)]
                 rt_plant += ["--latency-log", str(lat_p)]
             start = time.perf_counter()
-            with _boot_up_watch(socketcan) as watch, \
+            with _boot_up_watch(socketcan, can_fd) as watch, \
                     start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log,
                                 extra=rt_plant, socketcan=socketcan) as plant:
                 if watch is not None:

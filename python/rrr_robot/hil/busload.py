@@ -36,6 +36,7 @@ from ..errors import BadInputError
 from .protocol import PERIOD
 
 __all__ = [
+    "FD_DATA_BITRATE",
     "MAX_DATA_BITRATE",
     "MAX_NOMINAL_BITRATE",
     "BusLoad",
@@ -44,6 +45,7 @@ __all__ = [
     "classical_bits",
     "fd_bits",
     "format_report",
+    "measured_fd_load",
     "measured_load",
     "schedule_load",
     "stuffed_length",
@@ -53,6 +55,8 @@ __all__ = [
 MAX_NOMINAL_BITRATE = 1_000_000
 #: bit/s: the highest CAN FD data bit rate accepted (transceivers reach 5 to 8 Mbit/s)
 MAX_DATA_BITRATE = 20_000_000
+#: bit/s: the data bit rate the bench's CAN FD figures assume (summary.json ``bus``)
+FD_DATA_BITRATE = 5_000_000
 #: CAN FD data lengths (DLC 9..15 stand for 12, 16, 20, 24, 32, 48, 64 bytes)
 FD_LENGTHS = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)
 
@@ -257,6 +261,28 @@ def measured_load(frames: Sequence[tuple[int, bytes, bool]], periods: int,
     per_period = bits / periods
     return {"frames_per_period": len(frames) / periods, "bits_per_period": per_period,
             "load_percent": 100.0 * per_period / (period_s * bitrate)}
+
+
+def measured_fd_load(frames: Sequence[tuple[int, bytes, bool]], periods: int,
+                     bitrate: int = MAX_NOMINAL_BITRATE, data_bitrate: int = FD_DATA_BITRATE,
+                     period_s: float = 1e-3) -> dict[str, float]:
+    """What a frame log puts on a CAN FD bus with bit-rate switch: (identifier, data, extended)
+    of every frame once; ``periods`` control periods of ``period_s``. Returns frames and data
+    bytes per period and the bus time per period as :func:`fd_bits` counts it, with the worst
+    case of dynamic stuffing and without it (the CRC's fixed stuff bits always), as a load
+    of a ``bitrate`` / ``data_bitrate`` bus in percent."""
+    if periods <= 0:
+        raise BadInputError(f"periods must be > 0, not {periods}")
+    check_bitrates(bitrate, data_bitrate)
+    out = {"frames_per_period": len(frames) / periods,
+           "bytes_per_period": sum(len(d) for _, d, _ in frames) / periods}
+    for key, stuffing in (("load_worst_percent", True), ("load_no_stuffing_percent", False)):
+        seconds = 0.0
+        for _, data, ext in frames:
+            nom, dat = fd_bits(len(data), extended=ext, stuffing=stuffing)
+            seconds += nom / bitrate + dat / data_bitrate
+        out[key] = 100.0 * seconds / (periods * period_s)
+    return out
 
 
 def format_report(load: BusLoad) -> str:

@@ -204,7 +204,7 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     figures, with ``mcap`` the run as ``bench.mcap`` (hil.mcap) and summary.json. Returns the
     summary."""
     from . import framelog as fl
-    from .busload import measured_load, schedule_load
+    from .busload import FD_DATA_BITRATE, measured_fd_load, measured_load, schedule_load
     from .protocol import DBC_PATH, database
 
     work = rs.staging
@@ -219,6 +219,12 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     bus["measured_1mbit"] = measured_load(fl.frames(records), bench.t.shape[0])
     bus["schedule_worst_percent_1mbit"] = schedule_load(
         database(), lockstep=info.mode == "lockstep", dbc_name=str(DBC_PATH)).worst_percent
+    if any(n.get("transport") == "socketcan-fd" for n in nodes.values()):
+        # CAN FD frames on the bus (--fd): their load at 1 Mbit/s nominal, 5 Mbit/s data
+        bus["measured_fd"] = measured_fd_load(fl.frames(records), bench.t.shape[0])
+        bus["schedule_fd_worst_percent"] = schedule_load(
+            database(), data_bitrate=FD_DATA_BITRATE, lockstep=info.mode == "lockstep",
+            dbc_name=str(DBC_PATH)).worst_percent
     if can_log is not None:
         inside = can_log.parent.resolve() == rs.folder.resolve()
         fl.write_can_log(records, rs.path(can_log.name) if inside else can_log)

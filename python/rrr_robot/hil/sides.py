@@ -109,12 +109,15 @@ def open_checked_bus(conn: Connection, host: str, port: int) -> Any:
 
 def run_bench(ref: Reference, controller_values: Mapping[str, float | bool], work: Path, *,
               frame_log: str, realtime: RealTime | None = None,
-              progress: Progress | None = None, socketcan: str | None = None) -> SideRun:
-    """Both C nodes over the socketcand transport (or the SocketCAN interface ``socketcan``)
+              progress: Progress | None = None, socketcan: str | None = None,
+              can_fd: bool = False) -> SideRun:
+    """Both C nodes over the socketcand transport (or the SocketCAN interface ``socketcan``,
+    with ``can_fd`` as CAN FD frames)
     along ``ref``; logs in ``work``."""
     run = run_c_bench(ref.t, ref.q, ref.qd, ref.qdd, workdir=work,
                       controller_values=dict(controller_values), frame_log=frame_log,
-                      realtime=realtime, progress=progress, socketcan=socketcan)
+                      realtime=realtime, progress=progress, socketcan=socketcan,
+                      can_fd=can_fd)
     return SideRun(_status(run.plant_summary, run.controller_summary), run,
                    {"plant": run.plant_summary, "controller": run.controller_summary})
 
