@@ -58,7 +58,7 @@ def test_every_help_has_a_description_and_one_example(path: str) -> None:
 HIL = {
     "bench": {"--text", "--scenario", "--duration", "--out", "--realtime", "--no-fifo",
               "--interface", "--channel", "--spin-us", "--can-log", "--no-can-log",
-              "--no-figures", "--mcap", "-q", "--quiet", "-v", "--verbose"},
+              "--no-figures", "--mcap", "--fd", "-q", "--quiet", "-v", "--verbose"},
     "controller": {"--text", "--scenario", "--duration", "--out", "--interface", "--connect",
                    "--channel", "--can-log", "--no-can-log", "--no-figures", "--mcap", "-q",
                    "--quiet", "-v", "--verbose"},
