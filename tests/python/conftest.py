@@ -23,7 +23,7 @@ FAST = frozenset({
     "test_fk_frames", "test_hil_codec", "test_identify_errors", "test_kinematics",
     "test_linearize", "test_model_api", "test_plant_api", "test_robot_file",
     "test_scenario_file", "test_startup_imports", "test_sweep_spec", "test_tables",
-    "test_trajectory", "test_version", "test_habits",
+    "test_trajectory", "test_version", "test_habits", "test_canopen_od",
 })
 #: The modules that start CAN bench nodes or a socketcand server.
 BUS = frozenset({
