@@ -359,6 +359,7 @@ static void reset_comm(rrr_co_node *n, rrr_co_out *out)
     reset_range(n, 0x1000u, 0x1FFFu);
     n->rpdo_pending = 0;
     n->rpdo_seen = 0;
+    n->tx_pending = 0;
     n->sync_count = 0;
     n->seg_active = 0;
     n->hb_seen = 0;
@@ -635,7 +636,17 @@ static void on_sync(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         }
     }
     n->rpdo_seen = 0;
-    /* sample the state at this SYNC */
+    n->tx_pending = 1;
+}
+
+void rrr_co_transmit(rrr_co_node *n, rrr_co_out *out)
+{
+    if (!n->tx_pending || n->nmt != RRR_CO_NMT_OPERATIONAL) {
+        n->tx_pending = 0;
+        return;
+    }
+    n->tx_pending = 0;
+    /* sample the state of this SYNC */
     const uint32_t inc = n->v[RRR_CO_OD_ENCODER_INCREMENTS] /
                          (n->v[RRR_CO_OD_ENCODER_REVOLUTIONS] ? n->v[RRR_CO_OD_ENCODER_REVOLUTIONS] : 1u);
     n->v[RRR_CO_OD_POSITION_ACTUAL] = (uint32_t)rrr_co_rad_to_inc(n->q_rad, inc);

@@ -16,8 +16,9 @@
  *   upload (the device name), the standard abort codes (RRR_CO_ABORT_*); in pre-operational and
  *   operational only;
  * - SYNC consumer (0x1005): on each SYNC in operational, the RPDO received since the last SYNC
- *   is applied (transmission types 0..240; 254/255 apply at once), then the TPDOs whose
- *   transmission type n divides the SYNC count are sent with the state sampled at that SYNC;
+ *   is applied (transmission types 0..240; 254/255 apply at once); then rrr_co_transmit sends
+ *   the TPDOs whose transmission type n divides the SYNC count, with the state sampled then (the
+ *   caller first moves its plant by the period the SYNC closes: see rrr_co_transmit);
  * - PDO mapping readable and writable by SDO, in CiA 301's order (COB-ID bit 31 = 1, sub 0 = 0,
  *   the entries, sub 0 = n, COB-ID bit 31 = 0), checked (mappable, direction, length <= 64 bits);
  * - the CiA 402 state machine on the controlword 0x6040 / statusword 0x6041 (shutdown, switch
@@ -132,6 +133,7 @@ typedef struct rrr_co_node {
     uint8_t rpdo_data[8];           ///< its payload
     unsigned syncs_without_rpdo;    ///< consecutive SYNCs in OPERATION ENABLED without an RPDO
     uint32_t sync_count;            ///< SYNCs seen in operational (TPDO transmission types)
+    uint8_t tx_pending;             ///< a SYNC was applied; rrr_co_transmit sends its TPDOs
     uint32_t hb_prod_us;            ///< time since the last heartbeat sent
     uint8_t hb_seen;                ///< consumer: a heartbeat of the monitored node was seen
     uint32_t hb_cons_us;            ///< consumer: time since it
@@ -152,6 +154,12 @@ void rrr_co_boot(rrr_co_node *n, rrr_co_out *out);
 
 /** One received frame (any id: those not for this node are ignored). */
 void rrr_co_on_frame(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out);
+
+/** After a SYNC was fed to rrr_co_on_frame: sample the feedback (position, velocity, the torque
+ *  applied) and send the TPDOs due at that SYNC. A simulated plant steps between the two calls
+ *  (the period the SYNC closes, with the torque the SYNC applied), so the TPDOs carry the state
+ *  at the end of that period; without a pending SYNC (or outside operational) it sends nothing. */
+void rrr_co_transmit(rrr_co_node *n, rrr_co_out *out);
 
 /** Time passes: heartbeat producer and consumer. */
 void rrr_co_advance(rrr_co_node *n, uint32_t dt_us, rrr_co_out *out);

@@ -123,6 +123,7 @@ static int has_emcy(uint16_t code, uint8_t reg)
 static void sync(rrr_co_node *n)
 {
     feed(n, 0x080, 0, NULL);
+    rrr_co_transmit(n, &out);
 }
 
 static void rpdo(rrr_co_node *n, uint16_t cw, int16_t torque)
@@ -364,6 +365,18 @@ static void test_pdo_on_sync(void)
         CHECK(t2 && (int16_t)le(t2->data + 4, 2) == tq);
     }
     CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && n.err.faults == 0);
+    /* the SYNC applies, rrr_co_transmit samples what the caller set in between, once */
+    rpdo(&n, 0x0F, 250);
+    feed(&n, 0x080, 0, NULL);
+    CHECK(out.n == 0 && n.tx_pending);
+    CHECK_CLOSE(rrr_co_torque_Nm(&n), 250 * (RATED * 1e-6), 1e-9);
+    rrr_co_set_feedback(&n, -3.14159265358979323846 / 2.0, 0.0);
+    rrr_co_transmit(&n, &out);
+    t1 = find_out(0x182);
+    CHECK(out.n == 2 && t1 && (int32_t)le(t1->data + 2, 4) == -(1 << 18));
+    out.n = 0;
+    rrr_co_transmit(&n, &out);
+    CHECK(out.n == 0);
     /* a short RPDO: EMCY 0x8210, not applied (no fault) */
     const uint8_t d3[3] = {0x0F, 0, 0x10};
     feed(&n, 0x202, 3, d3);
@@ -513,6 +526,7 @@ static void test_hostile(void)
         }
         out.n = 0;
         rrr_co_on_frame(&n, &f, &out);
+        rrr_co_transmit(&n, &out);
         rrr_co_advance(&n, (uint32_t)rrr_rng_uniform(&rng, 0, 2000), &out);
         CHECK(out.n <= RRR_CO_MAX_OUT);
         CHECK(n.v[RRR_CO_OD_STATUSWORD] == rrr_co_statusword((rrr_co_402)n.s402));
