@@ -1,8 +1,8 @@
 """The plant as three CiA 402 drives (``rrr_hil_plant --profile canopen``, docs/canopen.md),
 mastered by the unmodified ``canopen`` package over python-can's socketcand interface: boot-up,
-identity by SDO, NMT start, ``BaseNode402`` to OPERATION ENABLED on the three axes, lockstep SYNC
-periods of torque with position and velocity back (checked against the plant's own log), the
-master's heartbeat lost -> FAULT with an EMCY, and ``reset_from_fault()``."""
+identity by SDO, NMT start, ``BaseNode402`` to OPERATION ENABLED on the three axes, 1,000
+lockstep SYNC periods of torque with position and velocity back (checked against the plant's own
+log), the master's heartbeat lost -> FAULT with an EMCY, and ``reset_from_fault()``."""
 
 from __future__ import annotations
 
@@ -127,7 +127,7 @@ def test_three_drives_mastered_by_canopen(rig: Rig) -> None:
     _boot_and_enable(rig)
     for node in rig.nodes:
         node.sdo[0x2001].raw = 3  # from now on an RPDO every period, else a fault
-    n = 150
+    n = 1000
     sent, feedback = [], []
     for k in range(n):
         torques = [round(300 * math.sin(0.05 * k + j)) for j in range(3)]
