@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import queue
+import subprocess
 import time
 from importlib.resources import files
 from pathlib import Path
@@ -16,7 +17,7 @@ from typing import Any
 import canopen
 import numpy as np
 import pytest
-from rrr_robot.hil.nodes import open_bus, start_plant
+from rrr_robot.hil.nodes import node_executable, open_bus, start_plant
 
 EDS = str(files("rrr_robot") / "data" / "rrr_cia402.eds")
 IDS = (1, 2, 3)
@@ -197,3 +198,18 @@ def test_master_heartbeat_lost_then_reset_from_fault(rig: Rig) -> None:
     assert any(e.code == 0x0000 for e in node.emcy.log)  # the error-reset EMCY
     assert not node.emcy.active
     _stop_cycle(rig)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--profile", "cia402"], "--profile: expected 'dbc' or 'canopen', got 'cia402'"),
+    (["--profile", "canopen", "--node-ids", "1,1,2"], "--node-ids: expected three distinct"),
+    (["--profile", "canopen", "--node-ids", "1,2,128"], "--node-ids: expected three distinct"),
+    (["--profile", "canopen", "--node-ids", "1,2.5,3"], "--node-ids: expected three distinct"),
+    (["--profile", "canopen", "--realtime", "--duration", "1"],
+     "--realtime is not supported with it yet"),
+])
+def test_bad_canopen_options_are_refused(args: list[str], message: str) -> None:
+    result = subprocess.run([str(node_executable("plant")), "--fmu", "unused",
+                             "--listen", "127.0.0.1:0", *args],
+                            capture_output=True, text=True, timeout=30)
+    assert result.returncode == 1 and message in result.stderr, result.stderr
