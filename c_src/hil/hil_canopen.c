@@ -362,6 +362,7 @@ static void reset_comm(rrr_co_node *n, rrr_co_out *out)
     n->tx_pending = 0;
     n->sync_count = 0;
     n->seg_active = 0;
+    n->dl_active = 0;
     n->hb_seen = 0;
     n->hb_prod_us = 0;
     n->hb_cons_us = 0;
@@ -400,6 +401,7 @@ static void on_nmt(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         leave_operational(n, out);
         n->nmt = RRR_CO_NMT_STOPPED;
         n->seg_active = 0;
+        n->dl_active = 0;
         break;
     case 0x80:
         leave_operational(n, out);
@@ -422,6 +424,7 @@ static void on_nmt(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
 static void sdo_abort(rrr_co_node *n, uint16_t index, uint8_t sub, uint32_t code, rrr_co_out *out)
 {
     n->seg_active = 0;
+    n->dl_active = 0;
     n->err.sdo_aborts++;
     rrr_hil_frame *f = push(n, out, COB_SDO_TX + n->cfg.node_id, 8);
     if (f) {
@@ -444,6 +447,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
     const unsigned ccs = d[0] >> 5;
     if (ccs == 4) { /* abort from the client */
         n->seg_active = 0;
+        n->dl_active = 0;
         return;
     }
     if (ccs == 3) { /* upload segment */
@@ -472,11 +476,44 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         }
         return;
     }
-    if (ccs != 1 && ccs != 2) { /* download segment without a download, block transfers */
+    if (ccs == 0) { /* download segment */
+        if (!n->dl_active) {
+            sdo_abort(n, index, sub, RRR_CO_ABORT_CS, out);
+            return;
+        }
+        const rrr_co_od_entry *e = &rrr_co_od[n->seg_slot];
+        const unsigned t = (d[0] >> 4) & 1u, k = 7u - ((d[0] >> 1) & 7u), last = d[0] & 1u;
+        if (t != n->seg_toggle) {
+            sdo_abort(n, e->index, e->subindex, RRR_CO_ABORT_TOGGLE, out);
+            return;
+        }
+        if (n->seg_pos + k > e->size || (last && n->seg_pos + k != e->size)) {
+            sdo_abort(n, e->index, e->subindex, RRR_CO_ABORT_LENGTH, out);
+            return;
+        }
+        memcpy(n->dl_buf + n->seg_pos, d + 1, k);
+        n->seg_pos += k;
+        n->seg_toggle ^= 1u;
+        if (last) {
+            n->dl_active = 0;
+            const uint32_t ab = write_entry(n, n->seg_slot, get_le(n->dl_buf, e->size), out);
+            if (ab) {
+                sdo_abort(n, e->index, e->subindex, ab, out);
+                return;
+            }
+        }
+        rrr_hil_frame *r = push(n, out, COB_SDO_TX + n->cfg.node_id, 8);
+        if (r) {
+            r->data[0] = (uint8_t)(0x20u | (t << 4));
+        }
+        return;
+    }
+    if (ccs != 1 && ccs != 2) { /* block transfers, reserved */
         sdo_abort(n, index, sub, RRR_CO_ABORT_CS, out);
         return;
     }
     n->seg_active = 0;
+    n->dl_active = 0;
     const int slot = rrr_co_od_find(index, sub);
     if (slot < 0) {
         sdo_abort(n, index, sub, slot == -1 ? RRR_CO_ABORT_NO_OBJECT : RRR_CO_ABORT_NO_SUB, out);
@@ -527,8 +564,22 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         sdo_abort(n, index, sub, RRR_CO_ABORT_LENGTH, out);
         return;
     }
-    if (!expedited) { /* a segmented download of an object of <= 4 bytes: not supported */
-        sdo_abort(n, index, sub, RRR_CO_ABORT_UNSUPPORTED, out);
+    if (!expedited) { /* segmented: the data follow in segments */
+        if (e->size > sizeof n->dl_buf) {
+            sdo_abort(n, index, sub, RRR_CO_ABORT_UNSUPPORTED, out);
+            return;
+        }
+        rrr_hil_frame *r = push(n, out, COB_SDO_TX + n->cfg.node_id, 8);
+        if (r) {
+            r->data[0] = 0x60;
+            put_le(r->data + 1, index, 2);
+            r->data[3] = sub;
+            n->dl_active = 1;
+            n->seg_toggle = 0;
+            n->seg_slot = (uint16_t)slot;
+            n->seg_pos = 0;
+            memset(n->dl_buf, 0, sizeof n->dl_buf);
+        }
         return;
     }
     const uint32_t ab = write_entry(n, slot, get_le(d + 4, e->size), out);

@@ -12,9 +12,8 @@
  * - heartbeat producer (0x1017, ms; 0: off) and consumer of one node (0x1016 sub 1: node id in
  *   bits 16..23, time in ms in bits 0..15): monitoring starts with the first heartbeat seen and
  *   its loss is a fault (EMCY 0x8130);
- * - SDO server (0x600 + id -> 0x580 + id, DLC 8): expedited upload and download, segmented
- *   upload (the device name), the standard abort codes (RRR_CO_ABORT_*); in pre-operational and
- *   operational only;
+ * - SDO server (0x600 + id -> 0x580 + id, DLC 8): expedited and segmented upload and download,
+ *   the standard abort codes (RRR_CO_ABORT_*); in pre-operational and operational only;
  * - SYNC consumer (0x1005): on each SYNC in operational, the RPDO received since the last SYNC
  *   is applied (transmission types 0..240; 254/255 apply at once); then rrr_co_transmit sends
  *   the TPDOs whose transmission type n divides the SYNC count, with the state sampled then (the
@@ -138,9 +137,11 @@ typedef struct rrr_co_node {
     uint8_t hb_seen;                ///< consumer: a heartbeat of the monitored node was seen
     uint32_t hb_cons_us;            ///< consumer: time since it
     uint8_t seg_active;             ///< segmented upload in progress
-    uint8_t seg_toggle;             ///< its next toggle bit
+    uint8_t dl_active;              ///< segmented download in progress
+    uint8_t seg_toggle;             ///< the transfer's next toggle bit
     uint16_t seg_slot;              ///< its entry
-    uint32_t seg_pos;               ///< bytes sent
+    uint32_t seg_pos;               ///< bytes sent or received
+    uint8_t dl_buf[4];              ///< a segmented download's data (writable entries: <= 4 bytes)
     double q_rad, qd_rad_s;         ///< feedback set by the plant (sampled at SYNC)
     rrr_co_err err;
 } rrr_co_node;

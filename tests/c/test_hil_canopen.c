@@ -223,10 +223,49 @@ static void test_sdo(void)
     const uint8_t nosize[8] = {0x22, 0x17, 0x10, 0, 0xC8, 0, 0xAA, 0xAA};
     feed(&n, 0x602, 8, nosize);
     CHECK(sdo_reply(0x1017, 0, NULL) == 0 && n.v[RRR_CO_OD_HB_PRODUCER] == 200);
-    /* segmented download (size given, right length): not supported; wrong length: length */
+    /* segmented download: size given and right, one segment of 2 bytes (n = 5, c = 1) */
     const uint8_t seg_ok[8] = {0x21, 0x17, 0x10, 0, 2, 0, 0, 0};
     feed(&n, 0x602, 8, seg_ok);
-    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_UNSUPPORTED);
+    CHECK(sdo_reply(0x1017, 0, NULL) == 0 && n.dl_active);
+    const uint8_t seg1[8] = {0x0B, 0x2C, 0x01, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, seg1);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x20 && !n.dl_active);
+    CHECK(n.v[RRR_CO_OD_HB_PRODUCER] == 300);
+    /* size not given, two segments (1 byte, then 1 byte and the end), toggling */
+    const uint8_t seg_ns[8] = {0x20, 0x16, 0x10, 1, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_ns);
+    CHECK(sdo_reply(0x1016, 1, NULL) == 0);
+    const uint8_t s_a[8] = {0x0C, 0x64, 0, 0, 0, 0, 0, 0};  /* t 0, n 6 */
+    const uint8_t s_b[8] = {0x1C, 0x00, 0, 0, 0, 0, 0, 0};  /* t 1, n 6 */
+    const uint8_t s_c[8] = {0x0B, 0x7F, 0x00, 0, 0, 0, 0, 0}; /* t 0, n 5, last */
+    feed(&n, 0x602, 8, s_a);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x20);
+    feed(&n, 0x602, 8, s_b);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x30);
+    feed(&n, 0x602, 8, s_c);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x20 && n.v[RRR_CO_OD_HB_CONSUMER_1] == 0x007F0064u);
+    /* a repeated toggle bit, too many bytes, too few at the end, a value a write refuses */
+    feed(&n, 0x602, 8, seg_ns);
+    feed(&n, 0x602, 8, s_a);
+    feed(&n, 0x602, 8, s_a);
+    CHECK(sdo_reply(0x1016, 1, NULL) == RRR_CO_ABORT_TOGGLE && !n.dl_active);
+    feed(&n, 0x602, 8, seg_ok);
+    const uint8_t s_long[8] = {0x06, 1, 2, 3, 0, 0, 0, 0}; /* 4 bytes into 2 */
+    feed(&n, 0x602, 8, s_long);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH);
+    feed(&n, 0x602, 8, seg_ok);
+    const uint8_t s_short[8] = {0x0D, 1, 0, 0, 0, 0, 0, 0}; /* 1 byte, last */
+    feed(&n, 0x602, 8, s_short);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH && n.v[RRR_CO_OD_HB_PRODUCER] == 300);
+    const uint8_t seg_tq[8] = {0x21, 0x71, 0x60, 0, 2, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_tq);
+    const uint8_t s_tq[8] = {0x0B, 0xD0, 0x07, 0, 0, 0, 0, 0}; /* 2000 per mille */
+    feed(&n, 0x602, 8, s_tq);
+    CHECK(sdo_reply(0x6071, 0, NULL) == RRR_CO_ABORT_TOO_HIGH);
+    /* read-only, wrong size at the start */
+    const uint8_t seg_ro[8] = {0x21, 0x41, 0x60, 0, 2, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_ro);
+    CHECK(sdo_reply(0x6041, 0, NULL) == RRR_CO_ABORT_READ_ONLY);
     const uint8_t seg_bad[8] = {0x21, 0x17, 0x10, 0, 9, 0, 0, 0};
     feed(&n, 0x602, 8, seg_bad);
     CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH);

@@ -90,6 +90,9 @@ def _boot_and_enable(rig: Rig) -> None:
         with pytest.raises(canopen.SdoAbortedError) as err:
             node.sdo[0x6041].raw = 0
         assert err.value.code == 0x06010002
+        node.sdo.download(0x1017, 0, (50).to_bytes(2, "little"), force_segment=True)
+        assert node.sdo[0x1017].raw == 50  # a segmented download
+        node.sdo[0x1017].raw = 100
         node.sdo[0x2001].raw = 0  # no RPDO timeout while BaseNode402 steps through the states
         node.setup_402_state_machine()  # reads the PDO mapping by SDO
     net.nmt.state = "OPERATIONAL"
