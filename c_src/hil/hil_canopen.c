@@ -356,7 +356,9 @@ static void leave_operational(rrr_co_node *n, rrr_co_out *out)
 static void reset_comm(rrr_co_node *n, rrr_co_out *out)
 {
     leave_operational(n, out);
+    const uint32_t reg = n->v[RRR_CO_OD_ERROR_REGISTER]; /* the errors stay until the fault reset */
     reset_range(n, 0x1000u, 0x1FFFu);
+    n->v[RRR_CO_OD_ERROR_REGISTER] = n->s402 == RRR_CO_402_FAULT ? reg : 0u;
     n->rpdo_pending = 0;
     n->rpdo_seen = 0;
     n->tx_pending = 0;

@@ -575,6 +575,99 @@ static void test_hostile(void)
     CHECK(sent > 0 && n.err.out_overflow == 0);
 }
 
+int rrr_hil_canopen_fuzz_one(const uint8_t *data, size_t size);
+
+/* The fuzz target (c_src/hil/fuzz/fuzz_hil_canopen.c: it traps on a broken invariant) with
+ * seeded random inputs shaped like a master's traffic: NMT commands, SDO requests on the
+ * dictionary's entries, controlwords and torques in RPDOs, SYNCs, heartbeats, time steps. */
+static void test_fuzz_smoke(unsigned runs)
+{
+    rrr_rng rng = {0x2545F4914F6CDD1Dull};
+    static const uint8_t sdo_cs[] = {0x40, 0x2F, 0x2B, 0x27, 0x23, 0x22, 0x21, 0x20,
+                                     0x60, 0x70, 0x00, 0x10, 0x0B, 0x80, 0xA0};
+    static const uint8_t nmt_cs[] = {0x01, 0x02, 0x80, 0x81, 0x82, 0x01, 0x01};
+    static const uint16_t cws[] = {0x06, 0x07, 0x0F, 0x02, 0x00, 0x80, 0x0F, 0x80};
+    uint8_t buf[1 + 12 * 48];
+    unsigned reached[4] = {0};
+    for (unsigned k = 0; k < runs; ++k) {
+        const unsigned records = 1u + (unsigned)rrr_rng_uniform(&rng, 0, 48);
+        buf[0] = (uint8_t)rrr_rng_uniform(&rng, 0, 256);
+        for (unsigned i = 0; i < records; ++i) {
+            uint8_t *r = buf + 1 + 12 * i;
+            for (unsigned b = 0; b < 12; ++b) {
+                r[b] = (uint8_t)rrr_rng_uniform(&rng, 0, 256);
+            }
+            if (rrr_rng_uniform(&rng, 0, 1) < 0.2) {
+                continue; /* raw bytes */
+            }
+            r[0] &= 0x87u;
+            if ((r[0] & 6u) == 4u && (r[1] & 1u)) {
+                r[0] = (uint8_t)((r[0] & 0x80u) | 1u); /* half of heartbeats and EMCYs: SYNCs */
+            }
+            r[2] = 8;
+            switch (r[0] & 7u) {
+            case 0:
+                r[2] = 2;
+                r[3] = nmt_cs[(unsigned)rrr_rng_uniform(&rng, 0, sizeof nmt_cs)];
+                r[4] = rrr_rng_uniform(&rng, 0, 1) < 0.5 ? 0 : (uint8_t)(buf[0] % 127u + 1u);
+                break;
+            case 1:
+                r[2] = 0;
+                break;
+            case 2: {
+                const rrr_co_od_entry *e =
+                    &rrr_co_od[(unsigned)rrr_rng_uniform(&rng, 0, RRR_CO_OD_COUNT)];
+                r[3] = sdo_cs[(unsigned)rrr_rng_uniform(&rng, 0, sizeof sdo_cs)];
+                r[4] = (uint8_t)e->index;
+                r[5] = (uint8_t)(e->index >> 8);
+                r[6] = e->subindex;
+                break;
+            }
+            case 3: {
+                const uint16_t cw = cws[(unsigned)rrr_rng_uniform(&rng, 0, 8)];
+                const int16_t t = (int16_t)rrr_rng_uniform(&rng, -1100, 1100);
+                r[2] = 4;
+                r[3] = (uint8_t)cw;
+                r[4] = (uint8_t)(cw >> 8);
+                r[5] = (uint8_t)(uint16_t)t;
+                r[6] = (uint8_t)((uint16_t)t >> 8);
+                break;
+            }
+            default:
+                r[2] = 1;
+                r[3] = 0x05;
+                break;
+            }
+        }
+        if (records >= 8u && rrr_rng_uniform(&rng, 0, 1) < 0.5) {
+            /* half of the longer inputs start as a master does: NMT start, then shutdown,
+             * switch on, enable operation by RPDO, each followed by a SYNC */
+            /* op, id low, dlc, data... */
+            static const uint8_t script[7][4] = {{0, 0, 2, 0x01}, {3, 0, 4, 0x06}, {1, 0, 0, 0},
+                                                 {3, 0, 4, 0x07}, {1, 0, 0, 0},    {3, 0, 4, 0x0F},
+                                                 {1, 0, 0, 0}};
+            for (unsigned i = 0; i < 7u; ++i) {
+                uint8_t *r = buf + 1 + 12 * i;
+                memset(r, 0, 12);
+                memcpy(r, script[i], 4);
+                if (script[i][0] == 3) {
+                    r[5] = (uint8_t)rrr_rng_uniform(&rng, 1, 200); /* a target torque */
+                }
+            }
+        }
+        const int got = rrr_hil_canopen_fuzz_one(buf, 1 + 12 * records);
+        for (unsigned b = 0; b < 4; ++b) {
+            reached[b] += (unsigned)(got >> b) & 1u;
+        }
+    }
+    /* a broken invariant traps the process; the inputs reach the deep states */
+    printf("fuzz smoke: %u runs: torque applied in %u, FAULT in %u, fault reset in %u, "
+           "segmented transfer in %u\n", runs, reached[0], reached[1], reached[2], reached[3]);
+    for (unsigned b = 0; b < 4; ++b) {
+        CHECK(reached[b] > runs / 100u);
+    }
+}
+
 int main(void)
 {
     test_boot_and_nmt();
@@ -586,5 +679,6 @@ int main(void)
     test_heartbeat();
     test_mapping_by_sdo();
     test_hostile();
+    test_fuzz_smoke(20000);
     return rrr_test_report("test_hil_canopen");
 }
