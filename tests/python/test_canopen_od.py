@@ -112,3 +112,37 @@ def test_the_objects_of_the_profile() -> None:
     assert od[0x1800][2].default == 1 and od[0x1801][2].default == 1  # every SYNC
     assert od[0x608F][1].default == 1 << 20 and od[0x608F][2].default == 1
     assert od[0x6071].min == -1000 and od[0x6071].max == 1000
+
+
+def test_the_canopen_schedule_is_read_from_the_eds() -> None:
+    from rrr_robot.hil.cia402 import canopen_schedule
+
+    frames = canopen_schedule()
+    per_ms = [(f.frame_id, f.length) for f in frames if f.cycle_time == 1.0]
+    assert sorted(per_ms) == sorted([(0x080, 0)] + [(0x200 + i, 4) for i in (1, 2, 3)] +
+                                    [(0x180 + i, 6) for i in (1, 2, 3)] +
+                                    [(0x280 + i, 6) for i in (1, 2, 3)])
+    heartbeats = [(f.frame_id, f.length, f.cycle_time) for f in frames if f.cycle_time != 1.0]
+    assert sorted(heartbeats) == [(0x701, 1, 100.0), (0x702, 1, 100.0), (0x703, 1, 100.0),
+                                  (0x77F, 1, 100.0)]
+    assert all(f.cycle_time == 2.0 for f in canopen_schedule(2.0) if f.frame_id < 0x700)
+
+
+def test_canopen_bus_load(capsys: pytest.CaptureFixture[str]) -> None:
+    from rrr_robot.cli import main
+    from rrr_robot.hil.busload import canopen_load, classical_bits
+
+    # worst-case stuffing, classical CAN: per ms a SYNC, three 4-byte RPDOs and six 6-byte
+    # TPDOs, plus four 1-byte heartbeats every 100 ms
+    bits_per_ms = (classical_bits(0) + 3 * classical_bits(4) + 6 * classical_bits(6) +
+                   4 * classical_bits(1) / 100)
+    assert bits_per_ms == 1032.6
+    load = canopen_load(1_000_000)
+    assert load.worst_percent == pytest.approx(bits_per_ms / 10, rel=1e-12)  # over 1 Mbit/s
+    assert canopen_load(1_000_000, 5_000_000).worst_percent < 70  # CAN FD at 5 Mbit/s fits
+    assert main(["hil", "busload", "--profile", "canopen", "--bitrate", "1000000"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("schedule of rrr_cia402.eds, three CiA 402 drives")
+    assert out[-1] == "worst-case bus load: 103.26 %"
+    assert main(["hil", "busload", "--profile", "canopen", "--dbc", "x.dbc"]) == 2
+    assert "--dbc and --lockstep do not apply" in capsys.readouterr().err

@@ -67,7 +67,7 @@ HIL = {
               "--mcap", "-q", "--quiet", "-v", "--verbose"},
     "export-reference": {"--text", "--scenario", "--duration", "--out", "-q", "--quiet", "-v",
                          "--verbose"},
-    "busload": {"--bitrate", "--fd", "--lockstep", "--dbc", "-q", "--quiet", "-v",
+    "busload": {"--bitrate", "--fd", "--lockstep", "--dbc", "--profile", "-q", "--quiet", "-v",
                 "--verbose"},
 }
 

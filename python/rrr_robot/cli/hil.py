@@ -285,6 +285,15 @@ def _cmd_busload(args: argparse.Namespace) -> int:
 
     rate = args.bitrate if args.bitrate is not None else 1_000_000
     check_bitrates(rate, args.fd)  # before the DBC is read
+    if args.profile == "canopen":
+        from ..errors import BadInputError
+        from ..hil.busload import canopen_load
+
+        if args.dbc is not None or args.lockstep:
+            raise BadInputError("--profile canopen: the schedule is the EDS's (SYNC always "
+                                "included): --dbc and --lockstep do not apply")
+        print(format_report(canopen_load(rate, args.fd)))
+        return 0
     if args.dbc is not None:
         try:
             db = cantools.database.load_file(str(args.dbc))
@@ -454,5 +463,8 @@ def register_cli(subparsers: Any) -> None:
                     help="include the lockstep-only frames (Sync)")
     bl.add_argument("--dbc", type=Path, metavar="FILE",
                     help="another DBC (default: the bench's rrr_bench.dbc)")
+    bl.add_argument("--profile", choices=("dbc", "canopen"), default="dbc",
+                    help="canopen: the schedule of three CiA 402 drives of rrr_cia402.eds "
+                         "(SYNC, RPDO, TPDOs every period; heartbeats) instead of the DBC's")
     add_verbosity_arguments(bl, bars=False)
     bl.set_defaults(func=_cmd_busload)
