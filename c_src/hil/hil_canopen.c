@@ -710,7 +710,8 @@ void rrr_co_transmit(rrr_co_node *n, rrr_co_out *out)
     for (unsigned k = 1; k < N_PDOS; ++k) {
         const pdo_desc *p = &PDOS[k];
         const uint32_t cob = n->v[p->cob], type = n->v[p->type];
-        if ((cob & PDO_INVALID) || type == 0u || type > 240u || n->sync_count % type != 0u) {
+        if ((cob & PDO_INVALID) || n->v[p->map_n] == 0u || type == 0u || type > 240u ||
+            n->sync_count % type != 0u) { /* invalid, nothing mapped, or not due */
             continue;
         }
         rrr_hil_frame *r = push(n, out, cob, (uint8_t)mapped_bytes(n, p));

@@ -534,6 +534,11 @@ static void test_mapping_by_sdo(void)
     feed(&n, 0x202, 2, d2);
     sync(&n);
     CHECK_CLOSE(rrr_co_torque_Nm(&n), 500 * (RATED * 1e-6), 1e-9);
+    /* a TPDO with nothing mapped is not sent */
+    CHECK(sdo_write(&n, 0x1801, 1, 0x80000282u, 4) == 0 && sdo_write(&n, 0x1A01, 0, 0, 1) == 0);
+    CHECK(sdo_write(&n, 0x1801, 1, 0x00000282u, 4) == 0);
+    sync(&n);
+    CHECK(find_out(0x282) == NULL);
     /* reset communication restores the mapping */
     nmt(&n, 0x82, 0);
     uint32_t v = 0;

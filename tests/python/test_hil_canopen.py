@@ -216,3 +216,65 @@ def test_bad_canopen_options_are_refused(args: list[str], message: str) -> None:
                              "--listen", "127.0.0.1:0", *args],
                             capture_output=True, text=True, timeout=30)
     assert result.returncode == 1 and message in result.stderr, result.stderr
+
+
+def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
+    """Frames a broken master sends: an SDO request with a wrong DLC, a bad command
+    specifier, unknown objects, an NMT command with a wrong DLC or an unknown code, a SYNC
+    with 2 data bytes, a short RPDO: each gets its abort or EMCY, or is counted; the drives go
+    on answering."""
+    import can
+
+    _boot_and_enable(rig)
+    answers: queue.Queue[bytes] = queue.Queue()
+    rig.network.subscribe(0x581, lambda can_id, data, ts: answers.put(bytes(data)))
+    node = rig.nodes[0]
+    node.emcy.reset()
+
+    def send(can_id: int, data: bytes) -> None:
+        rig.bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
+
+    def abort_code() -> int:
+        data = answers.get(timeout=2)
+        assert data[0] == 0x80, data.hex()
+        return int.from_bytes(data[4:8], "little")
+
+    send(0x601, bytes([0x40, 0x00, 0x10, 0x00, 0x00]))  # DLC 5
+    assert abort_code() == 0x05040001
+    send(0x601, bytes([0xE0, 0x00, 0x10, 0, 0, 0, 0, 0]))  # command specifier 7
+    assert abort_code() == 0x05040001
+    send(0x601, bytes([0x40, 0x34, 0x12, 0, 0, 0, 0, 0]))  # no object 0x1234
+    assert abort_code() == 0x06020000
+    send(0x601, bytes([0x40, 0x18, 0x10, 7, 0, 0, 0, 0]))  # no sub-index 7 of 0x1018
+    assert abort_code() == 0x06090011
+    send(0x601, bytes([0x2B, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 0x1017 as 4 bytes: n says 2
+    assert answers.get(timeout=2)[0] == 0x60  # n = 2: a 2-byte write, accepted
+    send(0x601, bytes([0x23, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 4 bytes into 2
+    assert abort_code() == 0x06070010
+    with pytest.raises(canopen.SdoAbortedError) as err:
+        _ = node.sdo[0x2000].raw  # write-only
+    assert err.value.code == 0x06010001
+    send(0x000, bytes([0x02, 0x00, 0x00]))  # NMT stop with DLC 3: ignored
+    send(0x000, bytes([0x07, 0x00]))  # unknown NMT command: ignored
+    send(0x080, bytes([1, 2]))  # SYNC with 2 bytes: EMCY 0x8240, no fault
+    time.sleep(0.1)
+    assert [e.code for e in node.emcy.log] == [0x8240]
+    rig.network.sync.start(0.005)
+    node.rpdo[1].start(0.005)
+    send(0x201, bytes([0x0F, 0x00, 0x10]))  # RPDO of 3 bytes: EMCY 0x8210, dropped
+    time.sleep(0.1)
+    assert [e.code for e in node.emcy.log] == [0x8240, 0x8210]
+    node.check_statusword()
+    assert node.state == "OPERATION ENABLED"  # none of it is a fault
+    _stop_cycle(rig)
+    for n in rig.nodes:
+        n.sdo[0x6040].raw = 0
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    summary = rig.plant.wait(30)
+    assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
+    drive1 = summary["drives"][0]
+    assert drive1["nmt_ignored"] == 2 and drive1["sync_bad"] == 1 and drive1["rpdo_short"] == 1
+    assert drive1["sdo_aborts"] == 7  # the six above and the write to 0x6041 in the set-up
+    assert all(d["nmt_ignored"] == 2 and d["sync_bad"] == 1 for d in summary["drives"])
