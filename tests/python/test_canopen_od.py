@@ -142,7 +142,15 @@ def test_canopen_bus_load(capsys: pytest.CaptureFixture[str]) -> None:
     assert canopen_load(1_000_000, 5_000_000).worst_percent < 70  # CAN FD at 5 Mbit/s fits
     assert main(["hil", "busload", "--profile", "canopen", "--bitrate", "1000000"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0].startswith("schedule of rrr_cia402.eds, three CiA 402 drives")
+    assert out[0].startswith("schedule of rrr_cia402.eds, three CiA 402 drives, SYNC every 1 ms")
     assert out[-1] == "worst-case bus load: 103.26 %"
+    assert main(["hil", "busload", "--profile", "canopen", "--sync-period-ms", "2"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert "SYNC every 2 ms" in out[0] and out[-1] == "worst-case bus load: 51.76 %"
+    assert main(["hil", "busload", "--sync-period-ms", "2"]) == 2  # the DBC profile
+    assert "--sync-period-ms applies to --profile canopen only" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        main(["hil", "busload", "--profile", "canopen", "--sync-period-ms", "0"])
+    assert exc.value.code == 2
     assert main(["hil", "busload", "--profile", "canopen", "--dbc", "x.dbc"]) == 2
     assert "--dbc and --lockstep do not apply" in capsys.readouterr().err

@@ -280,7 +280,8 @@ def format_report(load: BusLoad) -> str:
            "switch)" if load.data_bitrate is not None else f"classical CAN, {load.bitrate} bit/s")
     mode = "lockstep (Sync included)" if load.lockstep else "real time"
     if load.dbc.endswith(".eds"):
-        mode = "three CiA 402 drives, SYNC included"
+        sync = next((f.period_ms for f in load.frames if f.frame_id == 0x080), 0.0)
+        mode = f"three CiA 402 drives, SYNC every {sync:g} ms"
     lines = [f"schedule of {Path(load.dbc).name or 'the DBC'}, {mode}; bus: {bus}",
              f"{'id':>6} {'frame':<16} {'bytes':>5} {'period':>8} {'bits worst':>10} "
              f"{'bits no stuff':>13} {'us worst':>9} {'load worst':>10} {'load no stuff':>13}"]
