@@ -133,10 +133,14 @@ cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_FMU_FU
   -DRRR_BUILD_TESTS=OFF -DRRR_WERROR=ON -DRRR_FMU_WINDOWS=OFF -DRRR_FMU_AARCH64=OFF \
   -DCMAKE_BUILD_TYPE=Debug -DPython3_EXECUTABLE="$(command -v python)" >/dev/null
 cmake --build build-fuzz --target fuzz_hil_decode fuzz_fmu_state_plant fuzz_fmu_state_controller \
-  fuzz_fmu_state_reference fuzz_fmi_import -j "$JOBS"
+  fuzz_fmu_state_reference fuzz_fmi_import fuzz_hil_canopen -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
+echo "== libFuzzer on the CANopen slave: frame and time sequences through one node (short run) =="
+mkdir -p build-fuzz/corpus_canopen
+build-fuzz/c_src/hil/fuzz_hil_canopen -max_total_time="${RRR_CANOPEN_FUZZ_SECONDS:-15}" \
+  -max_len=600 -print_final_stats=1 build-fuzz/corpus_canopen 2>&1 | tail -n 4
 echo "== libFuzzer on forged FMU states with valid checksums (each FMU, FMI 2 and 3; short run) =="
 for model in plant controller reference; do
   mkdir -p "build-fuzz/corpus_$model"

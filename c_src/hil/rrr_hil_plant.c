@@ -33,6 +33,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "hil_canopen.h"
 #include "hil_codec.h"
 #include "hil_fmu.h"
 #include "hil_node.h"
@@ -55,6 +56,8 @@ typedef struct opts {
     int n_set;
     rrr_hil_sup_config sup;
     rrr_hil_rt_opts rt;
+    int canopen;         /* --profile canopen: three CiA 402 drives (docs/canopen.md) */
+    uint8_t node_ids[3]; /* --node-ids a,b,c (default 1,2,3) */
 } opts;
 
 typedef struct plant {
@@ -77,6 +80,13 @@ typedef struct plant {
     uint32_t rx_bad[RRR_HIL_RX_COUNT]; /* decode results of all frames */
     uint32_t rx_ignored;  /* frames of the bench not meant for the plant */
     FILE *log;
+    uint8_t log_zero;     /* logged: 0 V forced over the last period */
+    uint8_t log_faults;   /* logged: latched faults (DBC: RRR_HIL_FAULT_*; CANopen: bit i axis i) */
+    /* --profile canopen */
+    rrr_co_node co[3];
+    double kt[3];         /* torque constants of the plant (u = tau / k_t, eq 8) */
+    int synced;           /* the first SYNC in operational was seen (it does not step) */
+    uint32_t co_faults;   /* faults latched by the drives over the run */
 } plant;
 
 /* What handle() made of a frame. */
@@ -90,8 +100,11 @@ static void usage(void)
             "       [--realtime --duration S [--fifo PRIO] [--mlock] [--cpu N] [--spin-us N]\n"
             "       [--latency-log FILE.csv]]\n"
             "       [--q0 a,b,c] [--qd0 a,b,c] [--set NAME=VALUE]... [--max-missed N]\n"
-            "       [--max-delta-counter N] [--log FILE.csv]\n"
+            "       [--max-delta-counter N] [--log FILE.csv] [--profile dbc|canopen]\n"
+            "       [--node-ids a,b,c]\n"
             "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n"
+            "  --profile canopen: the axes as three CiA 402 drives (CST) with node ids\n"
+            "  --node-ids (default 1,2,3), stepped by the master's SYNC (docs/canopen.md)\n"
             RRR_HIL_RT_USAGE
             "  exit: 0 end of run (the controller's StopCmd), 1 usage, 2 setup, 3 controller lost,\n"
             "  4 SIGINT/SIGTERM, 5 FMU failed, 6 the controller stopped early, 7 end of run but the\n"
@@ -101,6 +114,9 @@ static void usage(void)
 static int parse_args(int argc, char **argv, opts *o)
 {
     memset(o, 0, sizeof *o);
+    o->node_ids[0] = 1;
+    o->node_ids[1] = 2;
+    o->node_ids[2] = 3;
     o->sup = rrr_hil_sup_config_default();
     rrr_hil_rt_opts_default(&o->rt);
     for (int i = 1; i < argc; ++i) {
@@ -160,6 +176,25 @@ static int parse_args(int argc, char **argv, opts *o)
             names[o->n_set][n] = '\0';
             o->set_name[o->n_set] = names[o->n_set];
             o->set_value[o->n_set++] = x;
+        } else if (strcmp(a, "--profile") == 0) {
+            if (strcmp(v, "dbc") != 0 && strcmp(v, "canopen") != 0) {
+                fprintf(stderr, PROG ": --profile: expected 'dbc' or 'canopen', got '%s'\n", v);
+                return -1;
+            }
+            o->canopen = strcmp(v, "canopen") == 0;
+        } else if (strcmp(a, "--node-ids") == 0) {
+            double ids[3];
+            int ok = rrr_hil_parse_vec3(v, ids) == 0;
+            for (int j = 0; ok && j < 3; ++j) {
+                ok = ids[j] >= 1.0 && ids[j] <= 127.0 && ids[j] == (double)(int)ids[j];
+                o->node_ids[j] = ok ? (uint8_t)ids[j] : 0u;
+            }
+            if (!ok || o->node_ids[0] == o->node_ids[1] || o->node_ids[0] == o->node_ids[2] ||
+                o->node_ids[1] == o->node_ids[2]) {
+                fprintf(stderr, PROG ": --node-ids: expected three distinct node ids 1..127 "
+                                     "a,b,c, got '%s'\n", v);
+                return -1;
+            }
         } else if (strcmp(a, "--max-missed") == 0 || strcmp(a, "--max-delta-counter") == 0) {
             const long x = strtol(v, &end, 10);
             if (*end != '\0' || x < 0 || x > 99) {
@@ -178,6 +213,11 @@ static int parse_args(int argc, char **argv, opts *o)
     }
     if (o->fmu_dir == NULL) {
         fprintf(stderr, PROG ": --fmu DIR is required\n");
+        return -1;
+    }
+    if (o->canopen && o->realtime) {
+        fprintf(stderr, PROG ": --profile canopen is stepped by the master's SYNC: --realtime is "
+                             "not supported with it yet\n");
         return -1;
     }
     if (o->realtime && o->duration_s <= 0.0) {
@@ -339,7 +379,7 @@ static void log_row(plant *p)
     for (int i = 0; i < 3; ++i) {
         fprintf(p->log, ",%.17g", p->u[i]);
     }
-    fprintf(p->log, ",%u,%u", (unsigned)p->sup.zero_applied, (unsigned)p->sup.faults);
+    fprintf(p->log, ",%u,%u", (unsigned)p->log_zero, (unsigned)p->log_faults);
     for (int i = 0; i < 6; ++i) {
         fprintf(p->log, ",%.17g", p->y[i]);
     }
@@ -374,9 +414,8 @@ static void publish(plant *p)
 }
 
 /* Advance one period: supervisor decision, FMU step, new state. 0 or -1 (FMU failed: why set). */
-static int advance(plant *p)
+static int step(plant *p)
 {
-    (void)rrr_hil_sup_next_period(&p->sup, p->u);
     if (rrr_hil_fmu_set(&p->fmu, p->vr_u, 3, p->u) != 0 ||
         rrr_hil_fmu_step(&p->fmu, RRR_HIL_PERIOD_S) != 0 ||
         rrr_hil_fmu_get(&p->fmu, p->vr_x, 6, p->x) != 0 ||
@@ -387,6 +426,14 @@ static int advance(plant *p)
     ++p->k;
     log_row(p);
     return 0;
+}
+
+static int advance(plant *p)
+{
+    (void)rrr_hil_sup_next_period(&p->sup, p->u);
+    p->log_zero = p->sup.zero_applied;
+    p->log_faults = p->sup.faults;
+    return step(p);
 }
 
 /* Handle one received frame: EV_SYNC for a lockstep Sync (period to advance), EV_STOP for an
@@ -532,6 +579,169 @@ static int run_realtime(plant *p, const opts *o, FILE *latency_log)
     return rc;
 }
 
+/* ---- --profile canopen: the axes as three CiA 402 drives (hil_canopen.h, docs/canopen.md) ---- */
+
+static int64_t now_us(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000 + ts.tv_nsec / 1000;
+}
+
+static void co_send(plant *p, const rrr_co_out *out)
+{
+    for (unsigned i = 0; i < out->n; ++i) {
+        (void)rrr_hil_send(p->tr, &out->f[i]);
+    }
+}
+
+/* The drives' rated torques from the FMU's k_t and u_max (0x6076 = k_t,i u_max, mN m); 0 or
+ * -1 with a message. */
+static int co_setup(plant *p, const opts *o)
+{
+    static const char *const ktn[3] = {"kt[1]", "kt[2]", "kt[3]"};
+    fmi2ValueReference vr[4];
+    double v[4];
+    const long vu = rrr_hil_fmu_vr(&p->fmu, "u_max");
+    if (resolve_vrs(&p->fmu, ktn, 3, vr) != 0 || vu < 0) {
+        fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+        return -1;
+    }
+    vr[3] = (fmi2ValueReference)vu;
+    if (rrr_hil_fmu_get(&p->fmu, vr, 4, v) != 0) {
+        fprintf(stderr, PROG ": %s\n", p->fmu.last_error);
+        return -1;
+    }
+    for (int i = 0; i < 3; ++i) {
+        const double rated = v[i] * v[3] * 1000.0;
+        const rrr_co_config cfg = {o->node_ids[i], (uint32_t)(rated + 0.5)};
+        if (!(rated >= 1.0 && rated < 4.0e9) || rrr_co_init(&p->co[i], &cfg) != 0) {
+            fprintf(stderr, PROG ": axis %d: k_t u_max = %g mN m is not a rated torque 0x6076 "
+                            "can hold (1 .. 4e9)\n", i + 1, rated);
+            return -1;
+        }
+        p->kt[i] = v[i];
+    }
+    return 0;
+}
+
+static int co_any_operational(const plant *p)
+{
+    for (int i = 0; i < 3; ++i) {
+        if (p->co[i].nmt == RRR_CO_NMT_OPERATIONAL) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* One SYNC fed to the drives: the period it closes (the first SYNC only starts), then TPDOs. */
+static int co_sync(plant *p)
+{
+    if (p->synced) {
+        p->log_zero = 0;
+        p->log_faults = 0;
+        for (int i = 0; i < 3; ++i) {
+            p->u[i] = rrr_co_torque_Nm(&p->co[i]) / p->kt[i]; /* eq 8: u = tau / k_t */
+            p->log_zero |= p->co[i].s402 != RRR_CO_402_OPERATION_ENABLED;
+            p->log_faults |= (uint8_t)((p->co[i].s402 == RRR_CO_402_FAULT) << i);
+        }
+        if (step(p) != 0) {
+            return -1;
+        }
+    }
+    p->synced = 1;
+    for (int i = 0; i < 3; ++i) {
+        rrr_co_out out = {0};
+        rrr_co_set_feedback(&p->co[i], p->x[i], p->x[3 + i]);
+        rrr_co_transmit(&p->co[i], &out);
+        co_send(p, &out);
+    }
+    return 0;
+}
+
+static int run_canopen(plant *p, const opts *o)
+{
+    const int idle_ms = rrr_hil_link_idle_ms(&o->link);
+    for (int i = 0; i < 3; ++i) { /* power on: boot-up messages (a socketcand server drops them
+                                   * before its client's first frame: a master resets the nodes) */
+        rrr_co_out out = {0};
+        rrr_co_boot(&p->co[i], &out);
+        co_send(p, &out);
+    }
+    int64_t last_us = now_us();
+    for (;;) {
+        if (rrr_hil_stop_requested()) {
+            return interrupted(p);
+        }
+        rrr_hil_frame f;
+        const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 10000);
+        const int64_t t = now_us();
+        for (int i = 0; i < 3; ++i) { /* heartbeat producer and consumer, in wall-clock time */
+            rrr_co_out out = {0};
+            rrr_co_advance(&p->co[i], (uint32_t)(t - last_us), &out);
+            co_send(p, &out);
+        }
+        last_us = t;
+        if (io == RRR_HIL_IO_TIMEOUT) {
+            if (p->started && now_ms() - p->last_rx_ms >= idle_ms) {
+                return co_any_operational(p) ? silence_lost(p, idle_ms)
+                                             : end_run(p, RRR_HIL_EXIT_OK,
+                                                       "the master fell silent with no drive "
+                                                       "in NMT operational");
+            }
+            continue;
+        }
+        if (io != RRR_HIL_IO_OK) {
+            if (p->started && !co_any_operational(p)) {
+                return end_run(p, RRR_HIL_EXIT_OK,
+                               "the master hung up with no drive in NMT operational");
+            }
+            return transport_lost(p, io);
+        }
+        p->started = 1;
+        p->last_rx_ms = now_ms();
+        const int is_sync = !f.extended && f.id == 0x080u && f.dlc <= 1u;
+        int sync_applied = 0;
+        for (int i = 0; i < 3; ++i) {
+            rrr_co_out out = {0};
+            const uint32_t faults = p->co[i].err.faults;
+            rrr_co_on_frame(&p->co[i], &f, &out);
+            sync_applied |= p->co[i].tx_pending;
+            co_send(p, &out);
+            p->co_faults += p->co[i].err.faults - faults;
+        }
+        if (is_sync && sync_applied && co_sync(p) != 0) {
+            return RRR_HIL_EXIT_FAULT;
+        }
+    }
+}
+
+static void co_summary(const plant *p, int rc)
+{
+    fprintf(stderr, PROG ": --profile canopen: %u periods; faults latched by the drives %u\n",
+            p->k, p->co_faults);
+    printf("RRR_HIL_SUMMARY {\"node\": \"plant\", \"profile\": \"canopen\", \"exit\": %d, "
+           "\"periods\": %u, \"drive_faults\": %u, \"drives\": [", rc, p->k, p->co_faults);
+    for (int i = 0; i < 3; ++i) {
+        const rrr_co_node *n = &p->co[i];
+        const rrr_co_err *e = &n->err;
+        printf("%s{\"node_id\": %u, \"nmt\": %u, \"state\": \"%s\", \"error_register\": %u, "
+               "\"error_code\": %u, \"faults\": %u, \"fault_resets\": %u, \"emcy\": %u, "
+               "\"sdo_aborts\": %u, \"hb_lost\": %u, \"rpdo_timeouts\": %u, \"rpdo_short\": %u, "
+               "\"nmt_ignored\": %u, \"sync_bad\": %u, \"out_overflow\": %u}",
+               i ? ", " : "", (unsigned)n->cfg.node_id, (unsigned)n->nmt,
+               rrr_co_402_str((rrr_co_402)n->s402), (unsigned)n->v[RRR_CO_OD_ERROR_REGISTER],
+               (unsigned)n->v[RRR_CO_OD_ERROR_CODE], e->faults, e->fault_resets, e->emcy_sent,
+               e->sdo_aborts, e->hb_lost, e->rpdo_timeouts, e->rpdo_short, e->nmt_ignored,
+               e->sync_bad, e->out_overflow);
+    }
+    printf("], ");
+    rrr_hil_link_json(stdout, p->tr);
+    printf("}\n");
+    fflush(stdout);
+}
+
 static void summary(const plant *p, int rc)
 {
     const rrr_hil_sup_err *e = &p->sup.err;
@@ -569,7 +779,8 @@ int main(int argc, char **argv)
     static plant p;
     memset(&p, 0, sizeof p);
     p.ctrl_nmt = 255u;
-    if (rrr_hil_sup_init(&p.sup, &o.sup) != 0 || setup_fmu(&p, &o) != 0) {
+    if (rrr_hil_sup_init(&p.sup, &o.sup) != 0 || setup_fmu(&p, &o) != 0 ||
+        (o.canopen && co_setup(&p, &o) != 0)) {
         rrr_hil_fmu_close(&p.fmu);
         return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "the plant could not be set up");
     }
@@ -597,7 +808,8 @@ int main(int argc, char **argv)
     static rrr_hil_framelog frames;
     const uint32_t rx_ids[] = {RRR_BENCH_SYNC_FRAME_ID, RRR_BENCH_VOLTAGE_CMD_FRAME_ID,
                                RRR_BENCH_STOP_CMD_FRAME_ID, RRR_BENCH_HEARTBEAT_CTRL_FRAME_ID};
-    if (rrr_hil_link_open(&o.link, &link, rx_ids, 4u, PROG, &frames) != 0) {
+    /* CANopen: every identifier (the master's heartbeat id is configured by SDO) */
+    if (rrr_hil_link_open(&o.link, &link, rx_ids, o.canopen ? 0u : 4u, PROG, &frames) != 0) {
         if (latency_log != NULL) {
             fclose(latency_log);
         }
@@ -608,6 +820,27 @@ int main(int argc, char **argv)
         return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "the transport did not open");
     }
     p.tr = &link.base;
+    if (o.canopen) {
+        p.last_rx_ms = now_ms();
+        int rc = run_canopen(&p, &o);
+        if (rc == RRR_HIL_EXIT_OK && p.co_faults != 0u) {
+            const size_t n = strlen(p.why);
+            (void)snprintf(p.why + n, sizeof p.why - n,
+                           "; the drives latched %u faults", p.co_faults);
+            rc = RRR_HIL_EXIT_SAFETY;
+        }
+        if (latency_log != NULL) {
+            fclose(latency_log);
+        }
+        (void)rrr_hil_framelog_close(&frames);
+        co_summary(&p, rc);
+        rrr_hil_close(p.tr);
+        if (p.log) {
+            fclose(p.log);
+        }
+        rrr_hil_fmu_close(&p.fmu);
+        return rrr_hil_report_exit(PROG, rc, p.k, "%s", p.why);
+    }
     {   /* CANopen-style boot-up message (dropped by a socketcand server without a client) */
         rrr_hil_frame f;
         const rrr_hil_heartbeat hb = {2u, RRR_HIL_NMT_BOOT, p.hb_counter++};

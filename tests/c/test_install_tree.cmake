@@ -35,7 +35,7 @@ foreach(f include/rrr/rrr.h include/rrr/rrr_kinematics.h
           lib/cmake/rrr/rrrTargets.cmake lib/pkgconfig/rrr.pc
           share/rrr/fmus/rrr_plant.fmu share/rrr/fmus/rrr_controller.fmu
           share/rrr/fmus/fmi3/rrr_plant.fmu share/rrr/fmus/fmi3/rrr_controller.fmu
-          share/rrr/rrr_bench.dbc bin/rrr_hil_plant bin/rrr_hil_controller)
+          share/rrr/rrr_bench.dbc share/rrr/rrr_cia402.eds bin/rrr_hil_plant bin/rrr_hil_controller)
   if(NOT EXISTS "${prefix}/${f}")
     message(FATAL_ERROR "cmake --install did not install ${f}")
   endif()

@@ -25,12 +25,13 @@ FAST = frozenset({
     "test_linearize", "test_model_api", "test_plant_api", "test_robot_file",
     "test_scenario_file", "test_startup_imports", "test_sweep_spec", "test_tables",
     "test_trajectory", "test_version", "test_habits", "test_fmu_vars", "test_log_formats",
+    "test_canopen_od",
 })
 #: The modules that start CAN bench nodes or a socketcand server.
 BUS = frozenset({
     "test_hil_bench", "test_hil_busload", "test_hil_cli", "test_hil_faults",
     "test_hil_python_plant", "test_hil_results", "test_hostile_inputs", "test_mcap",
-    "test_socketcan_guest",
+    "test_socketcan_guest", "test_hil_canopen",
 })
 #: The modules that boot a QEMU guest.
 VM = frozenset({"test_socketcan_guest"})

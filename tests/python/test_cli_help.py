@@ -67,8 +67,8 @@ HIL = {
               "--mcap", "-q", "--quiet", "-v", "--verbose"},
     "export-reference": {"--text", "--scenario", "--duration", "--out", "-q", "--quiet", "-v",
                          "--verbose"},
-    "busload": {"--bitrate", "--fd", "--lockstep", "--dbc", "-q", "--quiet", "-v",
-                "--verbose"},
+    "busload": {"--bitrate", "--fd", "--lockstep", "--dbc", "--profile", "--sync-period-ms",
+                "-q", "--quiet", "-v", "--verbose"},
 }
 
 

@@ -63,6 +63,17 @@ def bitrate(text: str) -> int:
     return value
 
 
+def sync_period_ms(text: str) -> float:
+    """--sync-period-ms: a finite period in (0, 1000] ms."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"ms expected (a number), got {text!r}") from None
+    if not 0.0 < value <= 1000.0:
+        raise argparse.ArgumentTypeError(f"a SYNC period in (0, 1000] ms expected, got {text}")
+    return value
+
+
 def spin_us(text: str) -> int:
     """--spin-us: 0 .. 250 us."""
     try:
@@ -291,6 +302,21 @@ def _cmd_busload(args: argparse.Namespace) -> int:
 
     rate = args.bitrate if args.bitrate is not None else 1_000_000
     check_bitrates(rate, args.fd)  # before the DBC is read
+    if args.profile == "canopen":
+        from ..errors import BadInputError
+        from ..hil.busload import canopen_load
+
+        if args.dbc is not None or args.lockstep:
+            raise BadInputError("--profile canopen: the schedule is the EDS's (SYNC always "
+                                "included): --dbc and --lockstep do not apply")
+        period = args.sync_period_ms if args.sync_period_ms is not None else 1.0
+        print(format_report(canopen_load(rate, args.fd, period_ms=period)))
+        return 0
+    if args.sync_period_ms is not None:
+        from ..errors import BadInputError
+
+        raise BadInputError("--sync-period-ms applies to --profile canopen only (the DBC's "
+                            "periods are its GenMsgCycleTime)")
     if args.dbc is not None:
         try:
             db = cantools.database.load_file(str(args.dbc))
@@ -464,5 +490,10 @@ def register_cli(subparsers: Any) -> None:
                     help="include the lockstep-only frames (Sync)")
     bl.add_argument("--dbc", type=Path, metavar="FILE",
                     help="another DBC (default: the bench's rrr_bench.dbc)")
+    bl.add_argument("--profile", choices=("dbc", "canopen"), default="dbc",
+                    help="canopen: the schedule of three CiA 402 drives of rrr_cia402.eds "
+                         "(SYNC, RPDO, TPDOs every period; heartbeats) instead of the DBC's")
+    bl.add_argument("--sync-period-ms", type=sync_period_ms, metavar="MS",
+                    help="--profile canopen: the SYNC period, ms (default 1)")
     add_verbosity_arguments(bl, bars=False)
     bl.set_defaults(func=_cmd_busload)

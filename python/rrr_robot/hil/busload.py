@@ -42,6 +42,7 @@ __all__ = [
     "BusLoad",
     "FrameLoad",
     "can_crc15",
+    "canopen_load",
     "classical_bits",
     "fd_bits",
     "format_report",
@@ -249,6 +250,21 @@ def schedule_load(db: Any, bitrate: int = MAX_NOMINAL_BITRATE, data_bitrate: int
     return BusLoad(dbc_name, bitrate, data_bitrate, lockstep, tuple(frames), tuple(excluded))
 
 
+def canopen_load(bitrate: int = MAX_NOMINAL_BITRATE, data_bitrate: int | None = None,
+                 period_ms: float = 1.0) -> BusLoad:
+    """The load of the CANopen profile's schedule (three CiA 402 drives of the EDS, one SYNC
+    every ``period_ms``: :func:`rrr_robot.hil.cia402.canopen_schedule`)."""
+    from types import SimpleNamespace
+
+    from .cia402 import EDS_PATH, canopen_schedule
+
+    check_bitrates(bitrate, data_bitrate)
+    schedule = SimpleNamespace(messages=canopen_schedule(period_ms))
+    load = schedule_load(schedule, bitrate, data_bitrate, dbc_name=str(EDS_PATH))
+    return BusLoad(load.dbc, load.bitrate, load.data_bitrate, load.lockstep, load.frames,
+                   ("SDO, EMCY and NMT: sent on events",))
+
+
 def measured_load(frames: Sequence[tuple[int, bytes, bool]], periods: int,
                   bitrate: int = MAX_NOMINAL_BITRATE, period_s: float = PERIOD,
                   ) -> dict[str, float]:
@@ -290,13 +306,16 @@ def format_report(load: BusLoad) -> str:
     bus = (f"CAN FD, {load.bitrate} bit/s nominal, {load.data_bitrate} bit/s data (bit-rate "
            "switch)" if load.data_bitrate is not None else f"classical CAN, {load.bitrate} bit/s")
     mode = "lockstep (Sync included)" if load.lockstep else "real time"
+    if load.dbc.endswith(".eds"):
+        sync = next((f.period_ms for f in load.frames if f.frame_id == 0x080), 0.0)
+        mode = f"three CiA 402 drives, SYNC every {sync:g} ms"
     lines = [f"schedule of {Path(load.dbc).name or 'the DBC'}, {mode}; bus: {bus}",
-             f"{'id':>6} {'frame':<15} {'bytes':>5} {'period':>8} {'bits worst':>10} "
+             f"{'id':>6} {'frame':<16} {'bytes':>5} {'period':>8} {'bits worst':>10} "
              f"{'bits no stuff':>13} {'us worst':>9} {'load worst':>10} {'load no stuff':>13}"]
     for f in load.frames:
         share = 100.0 * f.time_worst_us * 1e-6 * f.rate_hz
         share0 = 100.0 * f.time_nominal_us * 1e-6 * f.rate_hz
-        lines.append(f"0x{f.frame_id:03X} {f.name:<15} {f.length:>5} {f.period_ms:>5g} ms "
+        lines.append(f"0x{f.frame_id:03X} {f.name:<16} {f.length:>5} {f.period_ms:>5g} ms "
                      f"{f.bits_worst:>10.1f} {f.bits_nominal:>13.1f} {f.time_worst_us:>9.2f} "
                      f"{share:>9.2f} % {share0:>11.2f} %")
     lines += [f"not in the periodic schedule: {e}" for e in load.excluded]

@@ -1,0 +1,689 @@
+/* The CANopen slave of one simulated CiA 402 axis (hil_canopen.h): NMT, SDO (expedited,
+ * segmented upload, the abort codes), heartbeat producer and consumer, the 402 state machine,
+ * PDOs on SYNC with their mapping rewritten by SDO, EMCY on every fault, and hostile frames. */
+#include <string.h>
+
+#include "hil_canopen.h"
+#include "rrr_test.h"
+
+#define ID 2u
+#define RATED 120000u /* mN m */
+
+static rrr_co_out out;
+
+static rrr_co_node booted(void)
+{
+    rrr_co_node n;
+    const rrr_co_config cfg = {ID, RATED};
+    CHECK(rrr_co_init(&n, &cfg) == 0);
+    out.n = 0;
+    rrr_co_boot(&n, &out);
+    return n;
+}
+
+static rrr_hil_frame frame(uint32_t id, uint8_t dlc, const uint8_t *data)
+{
+    rrr_hil_frame f;
+    memset(&f, 0, sizeof f);
+    f.id = id;
+    f.dlc = dlc;
+    if (data) {
+        memcpy(f.data, data, dlc);
+    }
+    return f;
+}
+
+static void feed(rrr_co_node *n, uint32_t id, uint8_t dlc, const uint8_t *data)
+{
+    const rrr_hil_frame f = frame(id, dlc, data);
+    out.n = 0;
+    rrr_co_on_frame(n, &f, &out);
+}
+
+static void nmt(rrr_co_node *n, uint8_t cs, uint8_t node)
+{
+    const uint8_t d[2] = {cs, node};
+    feed(n, 0x000, 2, d);
+}
+
+static uint32_t le(const uint8_t *p, unsigned k)
+{
+    uint32_t v = 0;
+    for (unsigned i = 0; i < k; ++i) {
+        v |= (uint32_t)p[i] << (8u * i);
+    }
+    return v;
+}
+
+/* The one SDO response in out: its abort code (0 if not an abort), *value for an upload. */
+static uint32_t sdo_reply(uint16_t index, uint8_t sub, uint32_t *value)
+{
+    const rrr_hil_frame *r = NULL;
+    unsigned count = 0;
+    for (unsigned i = 0; i < out.n; ++i) {
+        if (out.f[i].id == 0x580u + ID) {
+            r = &out.f[i];
+            count++;
+        }
+    }
+    CHECK(count == 1); /* one SDO response (an EMCY may come with it) */
+    if (count != 1) {
+        return 0xFFFFFFFFu;
+    }
+    CHECK(r->dlc == 8);
+    CHECK(le(r->data + 1, 2) == index && r->data[3] == sub);
+    if (r->data[0] == 0x80) {
+        return le(r->data + 4, 4);
+    }
+    if (value) {
+        const unsigned size = 4u - ((r->data[0] >> 2) & 3u);
+        CHECK((r->data[0] & 0xE3u) == 0x43u); /* expedited upload, size indicated */
+        *value = le(r->data + 4, size);
+    } else {
+        CHECK(r->data[0] == 0x60);
+    }
+    return 0;
+}
+
+static uint32_t sdo_read(rrr_co_node *n, uint16_t index, uint8_t sub, uint32_t *value)
+{
+    const uint8_t d[8] = {0x40, (uint8_t)index, (uint8_t)(index >> 8), sub, 0, 0, 0, 0};
+    feed(n, 0x600u + ID, 8, d);
+    return sdo_reply(index, sub, value);
+}
+
+static uint32_t sdo_write(rrr_co_node *n, uint16_t index, uint8_t sub, uint32_t v, unsigned size)
+{
+    uint8_t d[8] = {(uint8_t)(0x23u | ((4u - size) << 2)), (uint8_t)index, (uint8_t)(index >> 8),
+                    sub, 0, 0, 0, 0};
+    for (unsigned i = 0; i < size; ++i) {
+        d[4 + i] = (uint8_t)(v >> (8u * i));
+    }
+    feed(n, 0x600u + ID, 8, d);
+    return sdo_reply(index, sub, NULL);
+}
+
+static const rrr_hil_frame *find_out(uint32_t id)
+{
+    for (unsigned i = 0; i < out.n; ++i) {
+        if (out.f[i].id == id) {
+            return &out.f[i];
+        }
+    }
+    return NULL;
+}
+
+/* An EMCY in out with this code and error register. */
+static int has_emcy(uint16_t code, uint8_t reg)
+{
+    const rrr_hil_frame *e = find_out(0x80u + ID);
+    return e && e->dlc == 8 && le(e->data, 2) == code && e->data[2] == reg;
+}
+
+static void sync(rrr_co_node *n)
+{
+    feed(n, 0x080, 0, NULL);
+    rrr_co_transmit(n, &out);
+}
+
+static void rpdo(rrr_co_node *n, uint16_t cw, int16_t torque)
+{
+    const uint8_t d[4] = {(uint8_t)cw, (uint8_t)(cw >> 8), (uint8_t)(uint16_t)torque,
+                          (uint8_t)((uint16_t)torque >> 8)};
+    feed(n, 0x200u + ID, 4, d);
+}
+
+/* A node in NMT operational and OPERATION ENABLED (controlwords by SDO). */
+static rrr_co_node enabled(void)
+{
+    rrr_co_node n = booted();
+    nmt(&n, 0x01, 0);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && n.s402 == RRR_CO_402_READY);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x07, 2) == 0 && n.s402 == RRR_CO_402_SWITCHED_ON);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0 && n.s402 == RRR_CO_402_OPERATION_ENABLED);
+    return n;
+}
+
+static void test_boot_and_nmt(void)
+{
+    rrr_co_node n;
+    const rrr_co_config bad = {0, RATED}, bad2 = {128, RATED}, bad3 = {1, 0};
+    CHECK(rrr_co_init(&n, &bad) == -1 && rrr_co_init(&n, &bad2) == -1);
+    CHECK(rrr_co_init(&n, &bad3) == -1 && rrr_co_init(NULL, &bad) == -1);
+    n = booted();
+    CHECK(out.n == 1 && out.f[0].id == 0x702 && out.f[0].dlc == 1 && out.f[0].data[0] == 0);
+    CHECK(n.nmt == RRR_CO_NMT_PREOPERATIONAL && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x6041, 0, &v) == 0 && v == 0x0240u);
+    nmt(&n, 0x01, 3); /* another node */
+    CHECK(n.nmt == RRR_CO_NMT_PREOPERATIONAL);
+    nmt(&n, 0x01, ID);
+    CHECK(n.nmt == RRR_CO_NMT_OPERATIONAL);
+    nmt(&n, 0x02, 0);
+    CHECK(n.nmt == RRR_CO_NMT_STOPPED && out.n == 0);
+    /* stopped: no SDO answer */
+    const uint8_t rd[8] = {0x40, 0x00, 0x10, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, rd);
+    CHECK(out.n == 0);
+    nmt(&n, 0x80, 0);
+    CHECK(n.nmt == RRR_CO_NMT_PREOPERATIONAL);
+    /* wrong DLC, unknown command: ignored and counted */
+    const uint8_t d3[3] = {0x01, 0x00, 0x00};
+    feed(&n, 0x000, 3, d3);
+    CHECK(n.nmt == RRR_CO_NMT_PREOPERATIONAL && n.err.nmt_ignored == 1);
+    nmt(&n, 0x07, 0);
+    CHECK(n.nmt == RRR_CO_NMT_PREOPERATIONAL && n.err.nmt_ignored == 2);
+    /* reset communication: the communication area only, and a boot-up */
+    CHECK(sdo_write(&n, 0x1017, 0, 250, 2) == 0 && sdo_write(&n, 0x2001, 0, 7, 1) == 0);
+    nmt(&n, 0x01, 0);
+    nmt(&n, 0x82, ID);
+    CHECK(out.n == 1 && out.f[0].id == 0x702 && out.f[0].data[0] == 0);
+    CHECK(n.nmt == RRR_CO_NMT_PREOPERATIONAL);
+    CHECK(sdo_read(&n, 0x1017, 0, &v) == 0 && v == 100);
+    CHECK(sdo_read(&n, 0x2001, 0, &v) == 0 && v == 7);
+    /* reset node: everything */
+    nmt(&n, 0x81, 0);
+    CHECK(out.n == 1 && out.f[0].id == 0x702 && out.f[0].data[0] == 0);
+    CHECK(sdo_read(&n, 0x2001, 0, &v) == 0 && v == 3);
+}
+
+static void test_sdo(void)
+{
+    rrr_co_node n = booted();
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x1000, 0, &v) == 0 && v == 0x00020192u);
+    CHECK(sdo_read(&n, 0x1018, 0, &v) == 0 && v == 4);
+    CHECK(sdo_read(&n, 0x1018, 4, &v) == 0 && v == ID); /* serial = node id */
+    CHECK(sdo_read(&n, 0x1400, 1, &v) == 0 && v == 0x200u + ID);
+    CHECK(sdo_read(&n, 0x1A00, 1, &v) == 0 && v == 0x60410010u);
+    CHECK(sdo_read(&n, 0x6076, 0, &v) == 0 && v == RATED);
+    CHECK(sdo_read(&n, 0x608F, 1, &v) == 0 && v == (1u << 20));
+    CHECK(sdo_read(&n, 0x6060, 0, &v) == 0 && v == 10);
+    CHECK(sdo_read(&n, 0x6502, 0, &v) == 0 && v == (1u << 9));
+    /* the standard abort codes */
+    CHECK(sdo_read(&n, 0x1234, 0, &v) == RRR_CO_ABORT_NO_OBJECT);
+    CHECK(sdo_read(&n, 0x1018, 9, &v) == RRR_CO_ABORT_NO_SUB);
+    CHECK(sdo_read(&n, 0x6041, 1, &v) == RRR_CO_ABORT_NO_SUB);
+    CHECK(sdo_read(&n, 0x2000, 0, &v) == RRR_CO_ABORT_WRITE_ONLY);
+    CHECK(sdo_write(&n, 0x6041, 0, 1, 2) == RRR_CO_ABORT_READ_ONLY);
+    CHECK(sdo_write(&n, 0x1000, 0, 1, 4) == RRR_CO_ABORT_READ_ONLY);
+    CHECK(sdo_write(&n, 0x1008, 0, 1, 4) == RRR_CO_ABORT_READ_ONLY);
+    CHECK(sdo_write(&n, 0x1017, 0, 100, 4) == RRR_CO_ABORT_LENGTH);
+    CHECK(sdo_write(&n, 0x1017, 0, 100, 1) == RRR_CO_ABORT_LENGTH);
+    CHECK(sdo_write(&n, 0x6071, 0, 1001, 2) == RRR_CO_ABORT_TOO_HIGH);
+    CHECK(sdo_write(&n, 0x6071, 0, (uint16_t)-1001, 2) == RRR_CO_ABORT_TOO_LOW);
+    CHECK(sdo_write(&n, 0x6071, 0, (uint16_t)-1000, 2) == 0);
+    CHECK(sdo_read(&n, 0x6071, 0, &v) == 0 && v == 0xFC18u);
+    CHECK(sdo_write(&n, 0x6060, 0, 9, 1) == RRR_CO_ABORT_TOO_LOW);
+    CHECK(sdo_write(&n, 0x2000, 0, 0, 2) == RRR_CO_ABORT_TOO_LOW);
+    CHECK(sdo_write(&n, 0x1800, 2, 0, 1) == RRR_CO_ABORT_TOO_LOW); /* TPDO: types 1..240 */
+    CHECK(sdo_write(&n, 0x1400, 2, 250, 1) == RRR_CO_ABORT_VALUE); /* RPDO: 0..240, 254, 255 */
+    CHECK(sdo_write(&n, 0x1400, 2, 255, 1) == 0);
+    /* expedited download without a size: the object's size */
+    const uint8_t nosize[8] = {0x22, 0x17, 0x10, 0, 0xC8, 0, 0xAA, 0xAA};
+    feed(&n, 0x602, 8, nosize);
+    CHECK(sdo_reply(0x1017, 0, NULL) == 0 && n.v[RRR_CO_OD_HB_PRODUCER] == 200);
+    /* segmented download: size given and right, one segment of 2 bytes (n = 5, c = 1) */
+    const uint8_t seg_ok[8] = {0x21, 0x17, 0x10, 0, 2, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_ok);
+    CHECK(sdo_reply(0x1017, 0, NULL) == 0 && n.dl_active);
+    const uint8_t seg1[8] = {0x0B, 0x2C, 0x01, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, seg1);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x20 && !n.dl_active);
+    CHECK(n.v[RRR_CO_OD_HB_PRODUCER] == 300);
+    /* size not given, two segments (1 byte, then 1 byte and the end), toggling */
+    const uint8_t seg_ns[8] = {0x20, 0x16, 0x10, 1, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_ns);
+    CHECK(sdo_reply(0x1016, 1, NULL) == 0);
+    const uint8_t s_a[8] = {0x0C, 0x64, 0, 0, 0, 0, 0, 0};  /* t 0, n 6 */
+    const uint8_t s_b[8] = {0x1C, 0x00, 0, 0, 0, 0, 0, 0};  /* t 1, n 6 */
+    const uint8_t s_c[8] = {0x0B, 0x7F, 0x00, 0, 0, 0, 0, 0}; /* t 0, n 5, last */
+    feed(&n, 0x602, 8, s_a);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x20);
+    feed(&n, 0x602, 8, s_b);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x30);
+    feed(&n, 0x602, 8, s_c);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x20 && n.v[RRR_CO_OD_HB_CONSUMER_1] == 0x007F0064u);
+    /* a repeated toggle bit, too many bytes, too few at the end, a value a write refuses */
+    feed(&n, 0x602, 8, seg_ns);
+    feed(&n, 0x602, 8, s_a);
+    feed(&n, 0x602, 8, s_a);
+    CHECK(sdo_reply(0x1016, 1, NULL) == RRR_CO_ABORT_TOGGLE && !n.dl_active);
+    feed(&n, 0x602, 8, seg_ok);
+    const uint8_t s_long[8] = {0x06, 1, 2, 3, 0, 0, 0, 0}; /* 4 bytes into 2 */
+    feed(&n, 0x602, 8, s_long);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH);
+    feed(&n, 0x602, 8, seg_ok);
+    const uint8_t s_short[8] = {0x0D, 1, 0, 0, 0, 0, 0, 0}; /* 1 byte, last */
+    feed(&n, 0x602, 8, s_short);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH && n.v[RRR_CO_OD_HB_PRODUCER] == 300);
+    const uint8_t seg_tq[8] = {0x21, 0x71, 0x60, 0, 2, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_tq);
+    const uint8_t s_tq[8] = {0x0B, 0xD0, 0x07, 0, 0, 0, 0, 0}; /* 2000 per mille */
+    feed(&n, 0x602, 8, s_tq);
+    CHECK(sdo_reply(0x6071, 0, NULL) == RRR_CO_ABORT_TOO_HIGH);
+    /* read-only, wrong size at the start */
+    const uint8_t seg_ro[8] = {0x21, 0x41, 0x60, 0, 2, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_ro);
+    CHECK(sdo_reply(0x6041, 0, NULL) == RRR_CO_ABORT_READ_ONLY);
+    const uint8_t seg_bad[8] = {0x21, 0x17, 0x10, 0, 9, 0, 0, 0};
+    feed(&n, 0x602, 8, seg_bad);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH);
+    /* bad command specifiers: block upload (5), block download (6), 7, a lone segment */
+    const uint8_t ccs[4] = {0xA0, 0xC0, 0xE0, 0x00};
+    for (unsigned i = 0; i < 4; ++i) {
+        const uint8_t d[8] = {ccs[i], 0x00, 0x10, 0, 0, 0, 0, 0};
+        feed(&n, 0x602, 8, d);
+        CHECK(sdo_reply(0x1000, 0, NULL) == RRR_CO_ABORT_CS);
+    }
+    const uint8_t lone_up[8] = {0x60, 0, 0, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, lone_up);
+    CHECK(sdo_reply(0, 0, NULL) == RRR_CO_ABORT_CS);
+    /* wrong DLC: an abort, nothing read or written */
+    const uint8_t shortw[5] = {0x2F, 0x01, 0x20, 0, 9};
+    feed(&n, 0x602, 5, shortw);
+    CHECK(sdo_reply(0x2001, 0, NULL) == RRR_CO_ABORT_CS && n.v[RRR_CO_OD_RPDO_TIMEOUT] == 3);
+    feed(&n, 0x602, 0, NULL);
+    CHECK(sdo_reply(0, 0, NULL) == RRR_CO_ABORT_CS);
+    /* another node's SDO and extended frames: ignored */
+    feed(&n, 0x603, 8, lone_up);
+    CHECK(out.n == 0);
+    rrr_hil_frame ext = frame(0x602, 8, lone_up);
+    ext.extended = 1;
+    out.n = 0;
+    rrr_co_on_frame(&n, &ext, &out);
+    CHECK(out.n == 0);
+}
+
+static void test_segmented_upload(void)
+{
+    rrr_co_node n = booted();
+    const char *name = "RRR simulated CiA 402 axis";
+    const uint8_t init[8] = {0x40, 0x08, 0x10, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, init);
+    CHECK(out.n == 1 && out.f[0].data[0] == 0x41 && le(out.f[0].data + 4, 4) == strlen(name));
+    char got[64] = {0};
+    unsigned len = 0, toggle = 0, done = 0;
+    for (int k = 0; k < 10 && !done; ++k) {
+        const uint8_t seg[8] = {(uint8_t)(0x60u | (toggle << 4)), 0, 0, 0, 0, 0, 0, 0};
+        feed(&n, 0x602, 8, seg);
+        CHECK(out.n == 1 && ((out.f[0].data[0] >> 4) & 1u) == toggle);
+        const unsigned kk = 7u - ((out.f[0].data[0] >> 1) & 7u);
+        memcpy(got + len, out.f[0].data + 1, kk);
+        len += kk;
+        done = out.f[0].data[0] & 1u;
+        toggle ^= 1u;
+    }
+    CHECK(done && len == strlen(name) && strcmp(got, name) == 0);
+    /* a wrong toggle bit aborts */
+    feed(&n, 0x602, 8, init);
+    const uint8_t seg1[8] = {0x70, 0, 0, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, seg1);
+    CHECK(sdo_reply(0x1008, 0, NULL) == RRR_CO_ABORT_TOGGLE && !n.seg_active);
+}
+
+static void test_402(void)
+{
+    rrr_co_node n = booted();
+    /* torque only in NMT operational and OPERATION ENABLED */
+    CHECK(sdo_write(&n, 0x6071, 0, 500, 2) == 0);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && n.s402 == RRR_CO_402_READY);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0 && n.s402 == RRR_CO_402_OPERATION_ENABLED);
+    CHECK(rrr_co_torque_Nm(&n) == 0.0); /* pre-operational */
+    nmt(&n, 0x01, 0);
+    CHECK_CLOSE(rrr_co_torque_Nm(&n), 60.0, 1e-12);
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x6041, 0, &v) == 0 && (v & 0x6Fu) == 0x27u);
+    /* disable operation, enable, quick stop, enable from quick stop, disable voltage */
+    CHECK(sdo_write(&n, 0x6040, 0, 0x07, 2) == 0 && n.s402 == RRR_CO_402_SWITCHED_ON);
+    CHECK(rrr_co_torque_Nm(&n) == 0.0);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0 && n.s402 == RRR_CO_402_OPERATION_ENABLED);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x02, 2) == 0 && n.s402 == RRR_CO_402_QUICK_STOP);
+    CHECK(rrr_co_torque_Nm(&n) == 0.0);
+    CHECK(sdo_read(&n, 0x6041, 0, &v) == 0 && (v & 0x6Fu) == 0x07u);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0 && n.s402 == RRR_CO_402_OPERATION_ENABLED);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x00, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    /* quick stop from READY goes to SWITCH ON DISABLED */
+    CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && n.s402 == RRR_CO_402_READY);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x02, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    /* a fault (simulated, 0x2000): FAULT, EMCY with 0x1001 and 0x603F */
+    CHECK(sdo_write(&n, 0x6040, 0, 0x80, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    CHECK(sdo_write(&n, 0x2000, 0, 0x5530, 2) == 0);
+    CHECK(out.n == 2 && has_emcy(0x5530, 0x81) && n.s402 == RRR_CO_402_FAULT);
+    CHECK(sdo_read(&n, 0x1001, 0, &v) == 0 && v == 0x81);
+    CHECK(sdo_read(&n, 0x603F, 0, &v) == 0 && v == 0x5530);
+    CHECK(sdo_read(&n, 0x6041, 0, &v) == 0 && (v & 0x4Fu) == 0x08u);
+    /* bit 7 already high: no edge, no reset; other commands are ignored in FAULT */
+    CHECK(sdo_write(&n, 0x6040, 0, 0x80, 2) == 0 && n.s402 == RRR_CO_402_FAULT);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && n.s402 == RRR_CO_402_FAULT);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x86, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    CHECK(has_emcy(0x0000, 0x00) && n.err.fault_resets == 1 && n.err.faults == 1);
+    CHECK(sdo_read(&n, 0x1001, 0, &v) == 0 && v == 0);
+    CHECK(sdo_read(&n, 0x603F, 0, &v) == 0 && v == 0);
+    CHECK(strcmp(rrr_co_402_str(RRR_CO_402_OPERATION_ENABLED), "OPERATION ENABLED") == 0);
+    /* NMT stop while enabled: EMCY 0x8100 (sent before stopping), FAULT */
+    rrr_co_node m = enabled();
+    nmt(&m, 0x02, 0);
+    CHECK(has_emcy(RRR_CO_EMCY_COMM, 0x11) && m.s402 == RRR_CO_402_FAULT);
+    CHECK(m.nmt == RRR_CO_NMT_STOPPED);
+    rrr_co_raise_fault(&m, 0x8140, RRR_CO_ERR_COMM, &out);
+    CHECK(m.err.faults == 2); /* counted; no EMCY in stopped */
+}
+
+static void test_pdo_on_sync(void)
+{
+    rrr_co_node n = booted();
+    nmt(&n, 0x01, 0);
+    rrr_co_set_feedback(&n, 3.14159265358979323846, -2.0 * 3.14159265358979323846);
+    /* the controlwords by RPDO: each acts at the next SYNC */
+    const uint16_t cws[3] = {0x06, 0x07, 0x0F};
+    const rrr_co_402 st[3] = {RRR_CO_402_READY, RRR_CO_402_SWITCHED_ON,
+                              RRR_CO_402_OPERATION_ENABLED};
+    for (unsigned i = 0; i < 3; ++i) {
+        rpdo(&n, cws[i], 0);
+        CHECK(out.n == 0 && n.s402 == (i == 0 ? RRR_CO_402_SWITCH_ON_DISABLED : st[i - 1]));
+        sync(&n);
+        CHECK(n.s402 == st[i]);
+    }
+    const rrr_hil_frame *t1 = find_out(0x182), *t2 = find_out(0x282);
+    CHECK(out.n == 2 && t1 && t2 && t1->dlc == 6 && t2->dlc == 6);
+    if (t1 && t2) {
+        CHECK(le(t1->data, 2) == 0x0237u);
+        CHECK(le(t1->data + 2, 4) == (1u << 19));            /* pi rad: half a revolution */
+        CHECK((int32_t)le(t2->data, 4) == -(1 << 20));       /* -2 pi rad/s */
+        CHECK(le(t2->data + 4, 2) == 0);
+    }
+    /* 200 periods of torque: applied from the SYNC after the RPDO, reported in 0x6077 */
+    for (int k = 0; k < 200; ++k) {
+        const int16_t tq = (int16_t)((k * 37) % 2001 - 1000);
+        rpdo(&n, 0x0F, tq);
+        sync(&n);
+        CHECK_CLOSE(rrr_co_torque_Nm(&n), tq * (RATED * 1e-6), 1e-9);
+        t2 = find_out(0x282);
+        CHECK(t2 && (int16_t)le(t2->data + 4, 2) == tq);
+    }
+    CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && n.err.faults == 0);
+    /* the SYNC applies, rrr_co_transmit samples what the caller set in between, once */
+    rpdo(&n, 0x0F, 250);
+    feed(&n, 0x080, 0, NULL);
+    CHECK(out.n == 0 && n.tx_pending);
+    CHECK_CLOSE(rrr_co_torque_Nm(&n), 250 * (RATED * 1e-6), 1e-9);
+    rrr_co_set_feedback(&n, -3.14159265358979323846 / 2.0, 0.0);
+    rrr_co_transmit(&n, &out);
+    t1 = find_out(0x182);
+    CHECK(out.n == 2 && t1 && (int32_t)le(t1->data + 2, 4) == -(1 << 18));
+    out.n = 0;
+    rrr_co_transmit(&n, &out);
+    CHECK(out.n == 0);
+    /* a short RPDO: EMCY 0x8210, not applied (no fault) */
+    const uint8_t d3[3] = {0x0F, 0, 0x10};
+    feed(&n, 0x202, 3, d3);
+    CHECK(has_emcy(RRR_CO_EMCY_PDO_LENGTH, 0x00) && n.err.rpdo_short == 1);
+    /* a target torque out of range: FAULT, EMCY 0x6320, 0 torque */
+    rpdo(&n, 0x0F, 1500);
+    sync(&n);
+    CHECK(has_emcy(RRR_CO_EMCY_PARAM, 0x21) && n.s402 == RRR_CO_402_FAULT);
+    CHECK(rrr_co_torque_Nm(&n) == 0.0);
+    /* the fault reset by RPDO (rising edge of bit 7), then enable again */
+    rpdo(&n, 0x80, 0);
+    sync(&n);
+    CHECK(n.s402 == RRR_CO_402_SWITCH_ON_DISABLED && has_emcy(0, 0));
+    /* pre-operational: no PDOs */
+    nmt(&n, 0x80, 0);
+    sync(&n);
+    CHECK(out.n == 0);
+}
+
+static void test_rpdo_timeout(void)
+{
+    rrr_co_node n = enabled();
+    rpdo(&n, 0x0F, 100);
+    sync(&n);
+    sync(&n);
+    sync(&n);
+    CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED); /* 2 SYNCs without an RPDO */
+    sync(&n);
+    CHECK(n.s402 == RRR_CO_402_FAULT && has_emcy(RRR_CO_EMCY_RPDO_TIMEOUT, 0x11));
+    CHECK(n.err.rpdo_timeouts == 1);
+    /* 0x2001 = 0: no timeout */
+    rrr_co_node m = enabled();
+    CHECK(sdo_write(&m, 0x2001, 0, 0, 1) == 0);
+    for (int k = 0; k < 50; ++k) {
+        sync(&m);
+    }
+    CHECK(m.s402 == RRR_CO_402_OPERATION_ENABLED);
+}
+
+static void test_heartbeat(void)
+{
+    rrr_co_node n = booted();
+    out.n = 0;
+    rrr_co_advance(&n, 99000, &out);
+    CHECK(out.n == 0);
+    rrr_co_advance(&n, 1000, &out);
+    CHECK(out.n == 1 && out.f[0].id == 0x702 && out.f[0].data[0] == 0x7F);
+    /* consumer of node 1, 50 ms; monitoring starts with the first heartbeat */
+    CHECK(sdo_write(&n, 0x1016, 1, (1u << 16) | 50u, 4) == 0);
+    CHECK(sdo_write(&n, 0x1017, 0, 0, 2) == 0); /* producer off */
+    out.n = 0;
+    rrr_co_advance(&n, 1000000, &out);
+    CHECK(out.n == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    const uint8_t op[1] = {0x05};
+    feed(&n, 0x701, 1, op);
+    out.n = 0;
+    rrr_co_advance(&n, 40000, &out);
+    feed(&n, 0x701, 1, op);
+    out.n = 0;
+    rrr_co_advance(&n, 50000, &out);
+    CHECK(out.n == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    rrr_co_advance(&n, 1000, &out);
+    CHECK(n.s402 == RRR_CO_402_FAULT && has_emcy(RRR_CO_EMCY_HEARTBEAT, 0x11));
+    CHECK(n.err.hb_lost == 1);
+    out.n = 0;
+    rrr_co_advance(&n, 1000000, &out); /* lost once: one fault */
+    CHECK(out.n == 0 && n.err.hb_lost == 1);
+}
+
+static void test_mapping_by_sdo(void)
+{
+    rrr_co_node n = booted();
+    /* the PDO must be invalid, and sub 0 = 0, to change the mapping */
+    CHECK(sdo_write(&n, 0x1A00, 0, 0, 1) == RRR_CO_ABORT_UNSUPPORTED);
+    CHECK(sdo_write(&n, 0x1800, 1, 0x183, 4) == RRR_CO_ABORT_VALUE); /* id while valid */
+    CHECK(sdo_write(&n, 0x1800, 1, 0xA0000182u, 4) == RRR_CO_ABORT_VALUE); /* 29-bit */
+    CHECK(sdo_write(&n, 0x1800, 1, 0x80000182u, 4) == 0);
+    CHECK(sdo_write(&n, 0x1A00, 1, 0x60770010u, 4) == RRR_CO_ABORT_UNSUPPORTED); /* sub0 != 0 */
+    CHECK(sdo_write(&n, 0x1A00, 0, 0, 1) == 0);
+    CHECK(sdo_write(&n, 0x1A00, 1, 0x10000020u, 4) == RRR_CO_ABORT_NO_MAP); /* not mappable */
+    CHECK(sdo_write(&n, 0x1A00, 1, 0x60410020u, 4) == RRR_CO_ABORT_NO_MAP); /* wrong length */
+    CHECK(sdo_write(&n, 0x1A00, 1, 0x20000010u, 4) == RRR_CO_ABORT_NO_MAP); /* write-only */
+    CHECK(sdo_write(&n, 0x1A00, 1, 0x60640020u, 4) == 0);
+    CHECK(sdo_write(&n, 0x1A00, 2, 0x606C0020u, 4) == 0);
+    CHECK(sdo_write(&n, 0x1A00, 3, 0x60410010u, 4) == 0);
+    CHECK(sdo_write(&n, 0x1A00, 0, 3, 1) == RRR_CO_ABORT_MAP_LEN);  /* 80 bits */
+    CHECK(sdo_write(&n, 0x1A00, 0, 5, 1) == RRR_CO_ABORT_TOO_HIGH);
+    CHECK(sdo_write(&n, 0x1A00, 0, 2, 1) == 0);
+    CHECK(sdo_write(&n, 0x1800, 2, 2, 1) == 0); /* every 2nd SYNC */
+    CHECK(sdo_write(&n, 0x1800, 1, 0x00000190u, 4) == 0); /* a new id, valid */
+    /* RPDO: a read-only object cannot be mapped */
+    CHECK(sdo_write(&n, 0x1400, 1, 0x80000202u, 4) == 0);
+    CHECK(sdo_write(&n, 0x1600, 0, 0, 1) == 0);
+    CHECK(sdo_write(&n, 0x1600, 1, 0x60410010u, 4) == RRR_CO_ABORT_NO_MAP);
+    CHECK(sdo_write(&n, 0x1600, 1, 0x60710010u, 4) == 0);
+    CHECK(sdo_write(&n, 0x1600, 0, 1, 1) == 0);
+    CHECK(sdo_write(&n, 0x1400, 1, 0x00000202u, 4) == 0);
+    nmt(&n, 0x01, 0);
+    rrr_co_set_feedback(&n, 1.0, 2.0);
+    sync(&n);
+    CHECK(find_out(0x190) == NULL && find_out(0x282) != NULL);
+    sync(&n);
+    const rrr_hil_frame *t = find_out(0x190);
+    CHECK(t && t->dlc == 8);
+    if (t) {
+        CHECK((int32_t)le(t->data, 4) == rrr_co_rad_to_inc(1.0, 1u << 20));
+        CHECK((int32_t)le(t->data + 4, 4) == rrr_co_rad_to_inc(2.0, 1u << 20));
+    }
+    CHECK(rrr_co_rad_to_inc(1.0, 1u << 20) == 166886); /* 2^20 / (2 pi), rounded */
+    CHECK(rrr_co_rad_to_inc(1e30, 1u << 20) == INT32_MAX);
+    CHECK(rrr_co_rad_to_inc(-1e30, 1u << 20) == INT32_MIN);
+    CHECK(rrr_co_rad_to_inc(NAN, 1u << 20) == 0);
+    /* the RPDO is now the torque alone (2 bytes); the controlword by SDO */
+    CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0);
+    const uint8_t d2[2] = {0xF4, 0x01};
+    feed(&n, 0x202, 2, d2);
+    sync(&n);
+    CHECK_CLOSE(rrr_co_torque_Nm(&n), 500 * (RATED * 1e-6), 1e-9);
+    /* a TPDO with nothing mapped is not sent */
+    CHECK(sdo_write(&n, 0x1801, 1, 0x80000282u, 4) == 0 && sdo_write(&n, 0x1A01, 0, 0, 1) == 0);
+    CHECK(sdo_write(&n, 0x1801, 1, 0x00000282u, 4) == 0);
+    sync(&n);
+    CHECK(find_out(0x282) == NULL);
+    /* reset communication restores the mapping */
+    nmt(&n, 0x82, 0);
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x1A00, 1, &v) == 0 && v == 0x60410010u);
+    CHECK(sdo_read(&n, 0x1600, 0, &v) == 0 && v == 2);
+}
+
+/* Random frames on the node's identifiers: never a crash, at most RRR_CO_MAX_OUT frames out,
+ * the statusword always that of the state. */
+static void test_hostile(void)
+{
+    rrr_co_node n = booted();
+    rrr_rng rng = {0x9E3779B97F4A7C15ull};
+    const uint32_t ids[] = {0x000, 0x080, 0x202, 0x602, 0x701, 0x702, 0x182, 0x7FF};
+    unsigned sent = 0;
+    for (int k = 0; k < 200000; ++k) {
+        rrr_hil_frame f;
+        memset(&f, 0, sizeof f);
+        f.id = ids[(unsigned)rrr_rng_uniform(&rng, 0, 8) & 7u];
+        f.dlc = (uint8_t)rrr_rng_uniform(&rng, 0, 9);
+        if (f.dlc > 8) {
+            f.dlc = 8;
+        }
+        for (unsigned i = 0; i < f.dlc; ++i) {
+            f.data[i] = (uint8_t)rrr_rng_uniform(&rng, 0, 256);
+        }
+        if (f.id == 0x000 && f.data[0] == 0x81 && k % 7 != 0) {
+            continue; /* fewer resets: let states be reached */
+        }
+        out.n = 0;
+        rrr_co_on_frame(&n, &f, &out);
+        rrr_co_transmit(&n, &out);
+        rrr_co_advance(&n, (uint32_t)rrr_rng_uniform(&rng, 0, 2000), &out);
+        CHECK(out.n <= RRR_CO_MAX_OUT);
+        CHECK(n.v[RRR_CO_OD_STATUSWORD] == rrr_co_statusword((rrr_co_402)n.s402));
+        CHECK(n.v[RRR_CO_OD_MODE] == RRR_CO_MODE_CST);
+        sent += out.n;
+    }
+    CHECK(sent > 0 && n.err.out_overflow == 0);
+}
+
+int rrr_hil_canopen_fuzz_one(const uint8_t *data, size_t size);
+
+/* The fuzz target (c_src/hil/fuzz/fuzz_hil_canopen.c: it traps on a broken invariant) with
+ * seeded random inputs shaped like a master's traffic: NMT commands, SDO requests on the
+ * dictionary's entries, controlwords and torques in RPDOs, SYNCs, heartbeats, time steps. */
+static void test_fuzz_smoke(unsigned runs)
+{
+    rrr_rng rng = {0x2545F4914F6CDD1Dull};
+    static const uint8_t sdo_cs[] = {0x40, 0x2F, 0x2B, 0x27, 0x23, 0x22, 0x21, 0x20,
+                                     0x60, 0x70, 0x00, 0x10, 0x0B, 0x80, 0xA0};
+    static const uint8_t nmt_cs[] = {0x01, 0x02, 0x80, 0x81, 0x82, 0x01, 0x01};
+    static const uint16_t cws[] = {0x06, 0x07, 0x0F, 0x02, 0x00, 0x80, 0x0F, 0x80};
+    uint8_t buf[1 + 12 * 48];
+    unsigned reached[4] = {0};
+    for (unsigned k = 0; k < runs; ++k) {
+        const unsigned records = 1u + (unsigned)rrr_rng_uniform(&rng, 0, 48);
+        buf[0] = (uint8_t)rrr_rng_uniform(&rng, 0, 256);
+        for (unsigned i = 0; i < records; ++i) {
+            uint8_t *r = buf + 1 + 12 * i;
+            for (unsigned b = 0; b < 12; ++b) {
+                r[b] = (uint8_t)rrr_rng_uniform(&rng, 0, 256);
+            }
+            if (rrr_rng_uniform(&rng, 0, 1) < 0.2) {
+                continue; /* raw bytes */
+            }
+            r[0] &= 0x87u;
+            if ((r[0] & 6u) == 4u && (r[1] & 1u)) {
+                r[0] = (uint8_t)((r[0] & 0x80u) | 1u); /* half of heartbeats and EMCYs: SYNCs */
+            }
+            r[2] = 8;
+            switch (r[0] & 7u) {
+            case 0:
+                r[2] = 2;
+                r[3] = nmt_cs[(unsigned)rrr_rng_uniform(&rng, 0, sizeof nmt_cs)];
+                r[4] = rrr_rng_uniform(&rng, 0, 1) < 0.5 ? 0 : (uint8_t)(buf[0] % 127u + 1u);
+                break;
+            case 1:
+                r[2] = 0;
+                break;
+            case 2: {
+                const rrr_co_od_entry *e =
+                    &rrr_co_od[(unsigned)rrr_rng_uniform(&rng, 0, RRR_CO_OD_COUNT)];
+                r[3] = sdo_cs[(unsigned)rrr_rng_uniform(&rng, 0, sizeof sdo_cs)];
+                r[4] = (uint8_t)e->index;
+                r[5] = (uint8_t)(e->index >> 8);
+                r[6] = e->subindex;
+                break;
+            }
+            case 3: {
+                const uint16_t cw = cws[(unsigned)rrr_rng_uniform(&rng, 0, 8)];
+                const int16_t t = (int16_t)rrr_rng_uniform(&rng, -1100, 1100);
+                r[2] = 4;
+                r[3] = (uint8_t)cw;
+                r[4] = (uint8_t)(cw >> 8);
+                r[5] = (uint8_t)(uint16_t)t;
+                r[6] = (uint8_t)((uint16_t)t >> 8);
+                break;
+            }
+            default:
+                r[2] = 1;
+                r[3] = 0x05;
+                break;
+            }
+        }
+        if (records >= 8u && rrr_rng_uniform(&rng, 0, 1) < 0.5) {
+            /* half of the longer inputs start as a master does: NMT start, then shutdown,
+             * switch on, enable operation by RPDO, each followed by a SYNC */
+            /* op, id low, dlc, data... */
+            static const uint8_t script[7][4] = {{0, 0, 2, 0x01}, {3, 0, 4, 0x06}, {1, 0, 0, 0},
+                                                 {3, 0, 4, 0x07}, {1, 0, 0, 0},    {3, 0, 4, 0x0F},
+                                                 {1, 0, 0, 0}};
+            for (unsigned i = 0; i < 7u; ++i) {
+                uint8_t *r = buf + 1 + 12 * i;
+                memset(r, 0, 12);
+                memcpy(r, script[i], 4);
+                if (script[i][0] == 3) {
+                    r[5] = (uint8_t)rrr_rng_uniform(&rng, 1, 200); /* a target torque */
+                }
+            }
+        }
+        const int got = rrr_hil_canopen_fuzz_one(buf, 1 + 12 * records);
+        for (unsigned b = 0; b < 4; ++b) {
+            reached[b] += (unsigned)(got >> b) & 1u;
+        }
+    }
+    /* a broken invariant traps the process; the inputs reach the deep states */
+    printf("fuzz smoke: %u runs: torque applied in %u, FAULT in %u, fault reset in %u, "
+           "segmented transfer in %u\n", runs, reached[0], reached[1], reached[2], reached[3]);
+    for (unsigned b = 0; b < 4; ++b) {
+        CHECK(reached[b] > runs / 100u);
+    }
+}
+
+int main(void)
+{
+    test_boot_and_nmt();
+    test_sdo();
+    test_segmented_upload();
+    test_402();
+    test_pdo_on_sync();
+    test_rpdo_timeout();
+    test_heartbeat();
+    test_mapping_by_sdo();
+    test_hostile();
+    test_fuzz_smoke(20000);
+    return rrr_test_report("test_hil_canopen");
+}

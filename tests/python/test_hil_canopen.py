@@ -1,0 +1,280 @@
+"""The plant as three CiA 402 drives (``rrr_hil_plant --profile canopen``, docs/canopen.md),
+mastered by the unmodified ``canopen`` package over python-can's socketcand interface: boot-up,
+identity by SDO, NMT start, ``BaseNode402`` to OPERATION ENABLED on the three axes, 1,000
+lockstep SYNC periods of torque with position and velocity back (checked against the plant's own
+log), the master's heartbeat lost -> FAULT with an EMCY, and ``reset_from_fault()``."""
+
+from __future__ import annotations
+
+import math
+import queue
+import subprocess
+import time
+from importlib.resources import files
+from pathlib import Path
+from typing import Any
+
+import canopen
+import numpy as np
+import pytest
+from rrr_robot.hil.nodes import node_executable, open_bus, start_plant
+
+EDS = str(files("rrr_robot") / "data" / "rrr_cia402.eds")
+IDS = (1, 2, 3)
+MASTER_ID = 0x7F
+KT = (12.0, 11.0, 4.7)  # the default robot's k_t (N m / V) and u_max (V): 0x6076 = k_t u_max
+U_MAX = 10.0
+INC = 1 << 20  # 0x608F: increments per revolution
+
+
+def _inc(x: float) -> int:
+    return round(x * INC / (2 * math.pi))
+
+
+class Rig:
+    def __init__(self, tmp_path: Path, extra: tuple[str, ...] = ()) -> None:
+        self.log_path = tmp_path / "plant.csv"
+        self.plant = start_plant(log_csv=self.log_path, extra=["--profile", "canopen", *extra])
+        self.bus = open_bus("socketcand", port=self.plant.port)
+        self.network = canopen.Network(self.bus)
+        self.network.connect()
+        self.nodes = [canopen.BaseNode402(i, EDS) for i in IDS]
+        self.tpdos: queue.Queue[tuple[int, bytes]] = queue.Queue()
+        for node in self.nodes:
+            self.network.add_node(node)
+            for cob in (0x180 + node.id, 0x280 + node.id):
+                self.network.subscribe(cob, self._on_tpdo)
+
+    def _on_tpdo(self, can_id: int, data: bytearray, timestamp: float) -> None:
+        self.tpdos.put((can_id, bytes(data)))
+
+    def close(self) -> None:
+        self.network.sync.stop()
+        self.network.disconnect()  # stops the periodic PDOs
+        self.plant.close()
+
+
+@pytest.fixture
+def rig(tmp_path: Path) -> Any:
+    r = Rig(tmp_path)
+    yield r
+    r.close()
+
+
+def _stop_cycle(rig: Rig) -> None:
+    rig.network.sync.stop()
+    for node in rig.nodes:
+        node.rpdo[1].stop()
+    time.sleep(0.05)
+
+
+def _boot_and_enable(rig: Rig) -> None:
+    net = rig.network
+    # a socketcand server sends nothing before its client's first frame: reset the nodes, as a
+    # master starting up does, and wait for their boot-up messages
+    booted: queue.Queue[int] = queue.Queue()
+    for node in rig.nodes:
+        net.subscribe(0x700 + node.id,
+                      lambda can_id, data, ts: booted.put(can_id) if bytes(data) == b"\0" else None)
+    net.nmt.send_command(0x81)
+    assert sorted(booted.get(timeout=5) for _ in IDS) == [0x700 + i for i in IDS]
+    time.sleep(0.25)  # a heartbeat (0x1017: 100 ms) of each
+    for node in rig.nodes:
+        assert node.nmt.state == "PRE-OPERATIONAL"
+    for node in rig.nodes:
+        assert node.sdo[0x1000].raw == 0x00020192
+        assert node.sdo[0x1018][1].raw == 0 and node.sdo[0x1018][2].raw == 0x52525233
+        assert node.sdo[0x1018][4].raw == node.id  # serial number: the node id
+        assert node.sdo[0x1008].raw == "RRR simulated CiA 402 axis"  # segmented upload
+        assert node.sdo[0x6076].raw == round(KT[node.id - 1] * U_MAX * 1000)
+        with pytest.raises(canopen.SdoAbortedError) as err:
+            node.sdo[0x6041].raw = 0
+        assert err.value.code == 0x06010002
+        node.sdo.download(0x1017, 0, (50).to_bytes(2, "little"), force_segment=True)
+        assert node.sdo[0x1017].raw == 50  # a segmented download
+        node.sdo[0x1017].raw = 100
+        node.sdo[0x2001].raw = 0  # no RPDO timeout while BaseNode402 steps through the states
+        node.setup_402_state_machine()  # reads the PDO mapping by SDO
+    net.nmt.state = "OPERATIONAL"
+    # a cyclic master: SYNC and the RPDOs (BaseNode402 writes the controlword into the RPDO of
+    # transmission type 1 and leaves its sending to the cycle) every 5 ms; the RPDOs act, and
+    # the TPDOs come, on SYNC
+    net.sync.start(0.005)
+    for node in rig.nodes:
+        node.rpdo[1].start(0.005)
+    for node in rig.nodes:
+        node.state = "OPERATION ENABLED"
+    for node in rig.nodes:
+        assert node.state == "OPERATION ENABLED"
+        assert node.op_mode == "CYCLIC SYNCHRONOUS TORQUE"
+    _stop_cycle(rig)
+    while not rig.tpdos.empty():
+        rig.tpdos.get_nowait()
+
+
+def _period(rig: Rig, torques: list[int]) -> dict[int, bytes]:
+    """One lockstep period: the RPDOs (controlword 0x0F, target torque), one SYNC, the six
+    TPDOs of that SYNC."""
+    for node, t in zip(rig.nodes, torques, strict=True):
+        node.rpdo[1]["Controlword"].raw = 0x0F
+        node.rpdo[1]["Target torque"].raw = t
+        node.rpdo[1].transmit()
+    rig.network.sync.transmit()
+    got: dict[int, bytes] = {}
+    while len(got) < 6:
+        cob, data = rig.tpdos.get(timeout=5)
+        got[cob] = data
+    return got
+
+
+def test_three_drives_mastered_by_canopen(rig: Rig) -> None:
+    _boot_and_enable(rig)
+    for node in rig.nodes:
+        node.sdo[0x2001].raw = 3  # from now on an RPDO every period, else a fault
+    n = 1000
+    sent, feedback = [], []
+    for k in range(n):
+        torques = [round(300 * math.sin(0.05 * k + j)) for j in range(3)]
+        got = _period(rig, torques)
+        sent.append(torques)
+        row = []
+        for node in rig.nodes:
+            sw, pos = int.from_bytes(got[0x180 + node.id][:2], "little"), \
+                int.from_bytes(got[0x180 + node.id][2:6], "little", signed=True)
+            vel = int.from_bytes(got[0x280 + node.id][:4], "little", signed=True)
+            tq = int.from_bytes(got[0x280 + node.id][4:6], "little", signed=True)
+            assert sw & 0x6F == 0x27  # OPERATION ENABLED
+            row.append((pos, vel, tq))
+        feedback.append(row)
+    # stop cleanly: disable the drives, then NMT stop; the plant ends when the master hangs up
+    for node in rig.nodes:
+        node.sdo[0x6040].raw = 0x00
+        assert node.sdo[0x6041].raw & 0x4F == 0x40  # SWITCH ON DISABLED
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    summary = rig.plant.wait(30)
+    assert summary["exit"] == 0, rig.plant.stderr
+    assert summary["profile"] == "canopen" and summary["drive_faults"] == 0
+    assert [d["node_id"] for d in summary["drives"]] == list(IDS)
+    assert all(d["sdo_aborts"] == 1 for d in summary["drives"])  # the write to 0x6041
+    # the plant's log: each period's voltage is the torque sent over k_t (eq 8), and the TPDOs
+    # of the SYNC that closed the period carry its state in increments
+    log = np.loadtxt(rig.log_path, delimiter=",", skiprows=1, ndmin=2)
+    last = log[-n:]
+    assert np.array_equal(last[:, 0], np.arange(log[-n, 0], log[-n, 0] + n))
+    for k in range(n):
+        for j in range(3):
+            u = last[k, 8 + j]
+            assert u == pytest.approx(sent[k][j] * U_MAX / 1000, abs=1e-12)  # t/1000 u_max
+            pos, vel, tq = feedback[k][j]
+            assert pos == _inc(last[k, 2 + j]) and vel == _inc(last[k, 5 + j])
+            assert tq == sent[k][j]
+    assert np.ptp(last[:, 2:5], axis=0).min() > 1e-3  # the torques moved every axis
+
+
+def test_master_heartbeat_lost_then_reset_from_fault(rig: Rig) -> None:
+    _boot_and_enable(rig)
+    hb = rig.network.send_periodic(0x700 + MASTER_ID, b"\x05", 0.02)
+    node = rig.nodes[1]
+    node.sdo[0x1016][1].raw = (MASTER_ID << 16) | 100  # 100 ms
+    node.emcy.reset()
+    time.sleep(0.3)
+    assert node.sdo[0x6041].raw & 0x6F == 0x27  # still enabled while the heartbeat comes
+    hb.stop()
+    emcy = node.emcy.wait(0x8130, timeout=2)
+    assert emcy is not None and emcy.register & 0x11 == 0x11
+    assert node.sdo[0x6041].raw & 0x4F == 0x08  # FAULT
+    assert node.sdo[0x1001].raw == 0x11 and node.sdo[0x603F].raw == 0x8130
+    for other in (rig.nodes[0], rig.nodes[2]):
+        assert other.sdo[0x6041].raw & 0x6F == 0x27  # the other axes are not affected
+    node.sdo[0x1016][1].raw = 0  # the master is not monitored any more
+    rig.network.sync.start(0.005)
+    node.rpdo[1].start(0.005)
+    node.check_statusword()  # a fresh TPDO
+    node.check_statusword()
+    assert node.state == "FAULT"
+    node.reset_from_fault()
+    assert node.state == "OPERATION ENABLED"
+    assert node.sdo[0x1001].raw == 0 and node.sdo[0x603F].raw == 0
+    time.sleep(0.05)
+    assert any(e.code == 0x0000 for e in node.emcy.log)  # the error-reset EMCY
+    assert not node.emcy.active
+    _stop_cycle(rig)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--profile", "cia402"], "--profile: expected 'dbc' or 'canopen', got 'cia402'"),
+    (["--profile", "canopen", "--node-ids", "1,1,2"], "--node-ids: expected three distinct"),
+    (["--profile", "canopen", "--node-ids", "1,2,128"], "--node-ids: expected three distinct"),
+    (["--profile", "canopen", "--node-ids", "1,2.5,3"], "--node-ids: expected three distinct"),
+    (["--profile", "canopen", "--realtime", "--duration", "1"],
+     "--realtime is not supported with it yet"),
+])
+def test_bad_canopen_options_are_refused(args: list[str], message: str) -> None:
+    result = subprocess.run([str(node_executable("plant")), "--fmu", "unused",
+                             "--listen", "127.0.0.1:0", *args],
+                            capture_output=True, text=True, timeout=30)
+    assert result.returncode == 1 and message in result.stderr, result.stderr
+
+
+def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
+    """Frames a broken master sends: an SDO request with a wrong DLC, a bad command
+    specifier, unknown objects, an NMT command with a wrong DLC or an unknown code, a SYNC
+    with 2 data bytes, a short RPDO: each gets its abort or EMCY, or is counted; the drives go
+    on answering."""
+    import can
+
+    _boot_and_enable(rig)
+    answers: queue.Queue[bytes] = queue.Queue()
+    rig.network.subscribe(0x581, lambda can_id, data, ts: answers.put(bytes(data)))
+    node = rig.nodes[0]
+    node.emcy.reset()
+
+    def send(can_id: int, data: bytes) -> None:
+        rig.bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
+
+    def abort_code() -> int:
+        data = answers.get(timeout=2)
+        assert data[0] == 0x80, data.hex()
+        return int.from_bytes(data[4:8], "little")
+
+    send(0x601, bytes([0x40, 0x00, 0x10, 0x00, 0x00]))  # DLC 5
+    assert abort_code() == 0x05040001
+    send(0x601, bytes([0xE0, 0x00, 0x10, 0, 0, 0, 0, 0]))  # command specifier 7
+    assert abort_code() == 0x05040001
+    send(0x601, bytes([0x40, 0x34, 0x12, 0, 0, 0, 0, 0]))  # no object 0x1234
+    assert abort_code() == 0x06020000
+    send(0x601, bytes([0x40, 0x18, 0x10, 7, 0, 0, 0, 0]))  # no sub-index 7 of 0x1018
+    assert abort_code() == 0x06090011
+    send(0x601, bytes([0x2B, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 0x1017 as 4 bytes: n says 2
+    assert answers.get(timeout=2)[0] == 0x60  # n = 2: a 2-byte write, accepted
+    send(0x601, bytes([0x23, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 4 bytes into 2
+    assert abort_code() == 0x06070010
+    with pytest.raises(canopen.SdoAbortedError) as err:
+        _ = node.sdo[0x2000].raw  # write-only
+    assert err.value.code == 0x06010001
+    send(0x000, bytes([0x02, 0x00, 0x00]))  # NMT stop with DLC 3: ignored
+    send(0x000, bytes([0x07, 0x00]))  # unknown NMT command: ignored
+    send(0x080, bytes([1, 2]))  # SYNC with 2 bytes: EMCY 0x8240, no fault
+    time.sleep(0.1)
+    assert [e.code for e in node.emcy.log] == [0x8240]
+    rig.network.sync.start(0.005)
+    node.rpdo[1].start(0.005)
+    send(0x201, bytes([0x0F, 0x00, 0x10]))  # RPDO of 3 bytes: EMCY 0x8210, dropped
+    time.sleep(0.1)
+    assert [e.code for e in node.emcy.log] == [0x8240, 0x8210]
+    node.check_statusword()
+    assert node.state == "OPERATION ENABLED"  # none of it is a fault
+    _stop_cycle(rig)
+    for n in rig.nodes:
+        n.sdo[0x6040].raw = 0
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    summary = rig.plant.wait(30)
+    assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
+    drive1 = summary["drives"][0]
+    assert drive1["nmt_ignored"] == 2 and drive1["sync_bad"] == 1 and drive1["rpdo_short"] == 1
+    assert drive1["sdo_aborts"] == 7  # the six above and the write to 0x6041 in the set-up
+    assert all(d["nmt_ignored"] == 2 and d["sync_bad"] == 1 for d in summary["drives"])
