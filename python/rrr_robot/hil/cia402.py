@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..core import fmu_vars as fv
 from ..core._package import DATA_DIR
 from ..errors import BadInputError
 
@@ -22,8 +23,9 @@ __all__ = ["DEFAULT_NODE_IDS", "EDS_PATH", "ScheduledFrame", "canopen_schedule"]
 
 #: The EDS of one drive (shipped in the package; installed by CMake in share/rrr/).
 EDS_PATH = DATA_DIR / "rrr_cia402.eds"
-#: The node ids of the three axes (rrr_hil_plant --profile canopen's default).
-DEFAULT_NODE_IDS = (1, 2, 3)
+#: The node ids of the three axes (rrr_hil_plant --profile canopen's default): node i drives
+#: joint i.
+DEFAULT_NODE_IDS: tuple[int, ...] = fv.JOINTS
 #: The master's node id for its heartbeat (0x700 + id).
 MASTER_NODE_ID = 0x7F
 
