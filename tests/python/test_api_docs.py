@@ -27,6 +27,7 @@ PUBLIC_MODULES = [
     "rrr_robot.core",
     "rrr_robot.identify",
     "rrr_robot.core.fmu_vars",
+    "rrr_robot.core.batch",
     "rrr_robot.sim.cosim",
     "rrr_robot.sim.native",
     "rrr_robot.sim.fmus",

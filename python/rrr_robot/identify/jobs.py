@@ -54,7 +54,7 @@ class IdentifyOutcome:
 def check_outputs(job: IdentifyJob) -> None:
     """The files the job will write, checked before it reads or estimates anything: each in an
     existing, writable folder, not a folder itself, not one of the input logs, and not the same
-    file twice (:class:`BadInputError` otherwise)."""
+    file twice (:class:`~rrr_robot.errors.BadInputError` otherwise)."""
     inputs = {Path(f).resolve(): f for f in (job.log, job.friction_log) if f}
     seen: dict[Path, str] = {}
     for option, path in (("--out", job.out), ("--report", job.report)):
