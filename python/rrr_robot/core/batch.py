@@ -1,7 +1,8 @@
 """librrr's batch calls (``rrr_batch.h``): n states in one C call, with kernels vectorised over
 the states (AVX2, AVX-512, with glibc's vector sin and cos) chosen from the CPU's features, or
-the scalar path, bit for bit the one-state calls. :meth:`rrr_robot.core.model.Model.inverse_dynamics`
-uses them for batches (its ``simd`` argument). The vector kernels' results differ from the
+the scalar path, bit for bit the one-state calls.
+:meth:`rrr_robot.core.model.Model.inverse_dynamics` uses them for batches (its ``simd``
+argument). The vector kernels' results differ from the
 scalar path's by rounding only: within 1e-13 N m (tests/c/test_batch.c,
 tests/python/test_batch.py); they exist in librrr built with GCC for x86-64 Linux."""
 
