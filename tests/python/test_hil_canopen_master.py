@@ -53,7 +53,10 @@ def test_writing_task_over_canopen(wc: cm.WritingController, tmp_path: Path) -> 
     out = tmp_path / "out"
     saved = json.loads((out / "summary.json").read_text())
     assert saved["side"] == "canopen" and saved["reference"]["periods"] == n
-    assert {"plant.csv", "controller.csv", "summary.json"} <= {p.name for p in out.iterdir()}
+    assert {"plant.csv", "controller.csv", "summary.json", "frames.rrrcan", "frames.blf"} <= {
+        p.name for p in out.iterdir()}
+    by_id = saved["bus"]["by_id"]  # the plant's frame log: one SYNC and 3 RPDOs per period
+    assert by_id["0x080"]["frames"] == n and by_id["0x201"]["frames"] == n
     plant_log = read_plant_log(out / "plant.csv")
     assert plant_log.shape[0] == n  # the initial row and one per stepping SYNC
     assert np.abs(mrun.torque_pm).max() > 10  # the law did command torque

@@ -338,7 +338,8 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     print(f"  drives: faults {s['faults'].get('faults')}, RPDO timeouts "
           f"{s['missed_commands']}; rated torque "
           f"{', '.join(str(d.rated_torque_mNm) for d in mrun.drives)} mN m")
-    print(f"results in {out}/ (summary.json, plant.csv, controller.csv, figures)")
+    print(f"results in {out}/ (summary.json, plant.csv, controller.csv, frames.rrrcan, "
+          f"frames.blf{'' if args.no_figures else ', figures'})")
     return 0
 
 
@@ -526,13 +527,14 @@ def register_cli(subparsers: Any) -> None:
     e.set_defaults(func=_cmd_hil)
 
     co = _action(actions, "canopen", "a CANopen master (canopen package) vs the plant's drives",
-                 "Start the C plant as three CiA 402 drives (rrr_hil_plant --profile canopen, "
+                 "Start the C plant node as three CiA 402 drives (its CANopen profile, over "
                  "socketcand) and master them with the canopen package: NMT reset and start, SDO "
                  "configuration (mode CST, rated torque, encoder resolution), the PDO mapping read "
                  "back, BaseNode402 to OPERATION ENABLED, then the computed-torque law of eq 15 in "
                  "lockstep (one SYNC per period, target torques in RPDOs, position and velocity "
                  "from TPDOs), NMT stop at the end; write summary.json, plant.csv, "
-                 "controller.csv and the figures into --out (docs/canopen.md).",
+                 "controller.csv, the plant's frame log (frames.rrrcan, frames.blf) and the "
+                 "figures into --out (docs/canopen.md).",
                  "rrr hil canopen --duration 2 --out results/hil-canopen")
     add_reference_arguments(co)
     g = co.add_argument_group("CANopen")

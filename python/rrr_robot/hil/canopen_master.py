@@ -44,6 +44,10 @@ EXPECTED_MAPPING = {"RPDO1": [(0x6040, 16), (0x6071, 16)],
                     "TPDO1": [(0x6041, 16), (0x6064, 32)],
                     "TPDO2": [(0x606C, 32), (0x6077, 16)]}
 _SW_MASK, _SW_ENABLED = 0x6F, 0x27  # statusword: OPERATION ENABLED
+#: The plant node's own frame log (hil_framelog.h: every frame it sent and received), and the
+#: standard frame log written from it.
+NODE_FRAMES = "frames.rrrcan"
+CAN_LOG = "frames.blf"
 
 Progress = Callable[[int, int], None]
 
@@ -292,7 +296,8 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                        qdd_ref: FloatArray, model: Model, gains: CtcGains, work: Path, *,
                        node_ids: Sequence[int] = DEFAULT_NODE_IDS, timeout: float = 5.0,
                        progress: Progress | None = None) -> MasterRun:
-    """Start ``rrr_hil_plant --profile canopen`` (log ``work``/plant.csv, the arm at q_ref[0],
+    """Start ``rrr_hil_plant --profile canopen`` (logs ``work``/plant.csv and the frame log
+    NODE_FRAMES, the arm at q_ref[0],
     qd_ref[0]) and master its drives ``node_ids`` along the reference with the computed-torque
     law of ``model`` (the controller's) and ``gains``: u_k = ctc(x_k decoded from the TPDOs of
     SYNC k), target torque = k_t u_k in per mille. HilError when a drive does not boot or
@@ -308,7 +313,7 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     pm = np.zeros((n, 3), dtype=np.int64)
     start = time.perf_counter()
     with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=Path(work) / "plant.csv",
-                     extra=["--profile", "canopen"]) as plant:
+                     frame_log=Path(work) / NODE_FRAMES, extra=["--profile", "canopen"]) as plant:
         master = _Master(plant, node_ids, timeout)
         try:
             master.boot()
@@ -373,12 +378,13 @@ def writing_controller(text: str | None = None, scenario: str = "ctc") -> Writin
 
 def write_master_results(rs: ResultSet, wc: WritingController, mrun: MasterRun, *,
                          scenario: str, figures: bool = True) -> dict[str, Any]:
-    """The run's files into the result set: controller.csv (the master's log), plant.csv
-    (already there: the plant node's), summary.json (results.bench_summary, core.summary) and
-    the figures. Returns the summary."""
+    """The run's files into the result set: controller.csv (the master's log), plant.csv and
+    the frame log NODE_FRAMES (already there: the plant node's), frames.blf (the same frames),
+    summary.json (results.bench_summary, core.summary) and the figures. Returns the summary."""
     from ..core.summary import write_summary
+    from . import framelog as fl
     from .bench import write_controller_log
-    from .busload import canopen_load
+    from .busload import canopen_load, measured_load
     from .results import bench_result, bench_summary, read_plant_log, unquantised_cosim
 
     work = rs.staging
@@ -388,7 +394,12 @@ def write_master_results(rs: ResultSet, wc: WritingController, mrun: MasterRun, 
         raise HilError(f"the plant logged {bench.t.shape[0]} periods of {wc.ref.t.shape[0]}")
     unq = unquantised_cosim(wc.ref, wc.model, wc.controller_values)
     n = bench.t.shape[0]
-    bus = {"profile": "canopen", "node_ids": [d.node_id for d in mrun.drives],
+    records = fl.read_node_log(work / NODE_FRAMES)
+    fl.write_can_log(records, rs.path(CAN_LOG))
+    bus = {"profile": "canopen", "node_log": NODE_FRAMES, "can_log": CAN_LOG,
+           "view": "the C plant node's (Tx: the drives' frames, Rx: the master's)",
+           **fl.rates(records), "measured_1mbit": measured_load(fl.frames(records), n),
+           "node_ids": [d.node_id for d in mrun.drives],
            "sync_periods": n, "frames_per_period": 1 + 3 * len(mrun.drives),
            "schedule_worst_percent_1mbit": canopen_load(1_000_000).worst_percent,
            "drives": [{"node_id": d.node_id, "rated_torque_mNm": d.rated_torque_mNm,
