@@ -324,7 +324,8 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     with ResultSet(out, kind="hil") as rs:
         with Bars(shown(quiet(args)), unit="period") as bars:
             mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
-                                         wc.gains, rs.staging, node_ids=args.node_ids,
+                                         wc.gains, rs.staging,
+                                         node_ids=args.node_ids or cm.DEFAULT_NODE_IDS,
                                          timeout=args.timeout,
                                          progress=bars.callback("CANopen master"))
         s = cm.write_master_results(rs, wc, mrun, scenario=args.scenario,
@@ -538,7 +539,7 @@ def register_cli(subparsers: Any) -> None:
                  "rrr hil canopen --duration 2 --out results/hil-canopen")
     add_reference_arguments(co)
     g = co.add_argument_group("CANopen")
-    g.add_argument("--node-ids", type=node_ids, default=(1, 2, 3), metavar="A,B,C",
+    g.add_argument("--node-ids", type=node_ids, metavar="A,B,C",
                    help="the drives' node ids, axes 1..3 (default 1,2,3: the plant's)")
     g.add_argument("--timeout", type=duration_seconds, default=5.0, metavar="S",
                    help="seconds to wait for a boot-up, an SDO answer or a period's TPDOs "

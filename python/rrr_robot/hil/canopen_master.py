@@ -33,9 +33,9 @@ from .cia402 import DEFAULT_NODE_IDS, EDS_PATH
 from .nodes import NodeProcess, open_bus, start_plant
 from .protocol import HilError
 
-__all__ = ["DriveInfo", "MasterRun", "WritingController", "inc_to_rad", "pdo_quantisation",
-           "rad_to_inc", "run_canopen_master", "torque_per_mille", "write_master_results",
-           "writing_controller"]
+__all__ = ["DEFAULT_NODE_IDS", "DriveInfo", "MasterRun", "WritingController", "inc_to_rad",
+           "pdo_quantisation", "rad_to_inc", "run_canopen_master", "torque_per_mille",
+           "write_master_results", "writing_controller"]
 
 #: CiA 402 mode of operation: cyclic synchronous torque.
 MODE_CST = 10
