@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import signal
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -16,6 +19,7 @@ from rrr_robot.cli.app import main
 from rrr_robot.core.outputs import ResultSet
 from rrr_robot.hil import canopen_master as cm
 from rrr_robot.hil.bench import run_c_bench
+from rrr_robot.hil.nodes import NodeProcess, start_plant
 from rrr_robot.hil.protocol import PERIOD, HilError
 from rrr_robot.hil.results import bench_result, read_plant_log, tracking
 from rrr_robot.sim.cosim import CosimOptions, run_cosim
@@ -103,3 +107,30 @@ def test_library_errors(wc: cm.WritingController, tmp_path: Path) -> None:
         cm.run_canopen_master(ref.t[:10], ref.q[:10], ref.qd[:10], ref.qdd[:10],
                               wc.controller_model, wc.gains, tmp_path, node_ids=(1, 5, 6),
                               timeout=1.0)
+
+
+# python-can's receive thread (canopen's Notifier) ends with the broken socket: its exception is
+# reported by pytest as a warning of that thread, not the master's
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnhandledThreadExceptionWarning")
+def test_a_plant_killed_mid_run_is_named(wc: cm.WritingController, tmp_path: Path,
+                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """The plant node killed at period 1000: the master stops with an error that says so
+    (not a hang, not a traceback of the bus)."""
+    started: list[NodeProcess] = []
+
+    def start(**kwargs: Any) -> NodeProcess:
+        node = start_plant(**kwargs)
+        started.append(node)
+        return node
+
+    def kill_at(k: int, n: int) -> None:
+        if k >= 1000 and started and started[0].running():
+            os.kill(started[0].pid, signal.SIGKILL)
+
+    monkeypatch.setattr(cm, "start_plant", start)
+    ref = wc.ref
+    # the kill is seen either while the master waits for the TPDOs or when it sends
+    with pytest.raises(HilError, match=r"SYNC \d+: .*plant node (ended|was killed).*SIGKILL|"
+                       r"plant node ended .* SYNC \d+: was killed by SIGKILL"):
+        cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model, wc.gains,
+                              tmp_path, timeout=5.0, progress=kill_at)

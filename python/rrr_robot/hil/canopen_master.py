@@ -251,11 +251,19 @@ class _Master:
     def period(self, torques: Sequence[int], k: int) -> list[tuple[int, int, int]]:
         """The RPDOs (controlword 0x0F, target torque), one SYNC, the six TPDOs: per drive
         (statusword, position, velocity)."""
-        for node, t in zip(self.nodes, torques, strict=True):
-            node.rpdo[1]["Controlword"].raw = 0x0F
-            node.rpdo[1]["Target torque"].raw = t
-            node.rpdo[1].transmit()
-        self.network.sync.transmit()
+        import can
+
+        try:
+            for node, t in zip(self.nodes, torques, strict=True):
+                node.rpdo[1]["Controlword"].raw = 0x0F
+                node.rpdo[1]["Target torque"].raw = t
+                node.rpdo[1].transmit()
+            self.network.sync.transmit()
+        except (can.CanError, OSError) as exc:
+            self.plant.died(1.0)  # a plant that was killed: give it the time to be reaped
+            lost = ("the plant node " + self.plant.how_it_ended() if not self.plant.running()
+                    else "the bus failed")
+            raise HilError(f"SYNC {k}: {lost} ({' '.join(str(exc).split())})") from exc
         got: dict[int, bytes] = {}
         deadline = time.monotonic() + self.timeout
         while len(got) < 2 * len(self.nodes):
