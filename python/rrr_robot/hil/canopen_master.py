@@ -239,14 +239,21 @@ class _Master:
         """BaseNode402 to OPERATION ENABLED (by SDO, in pre-operational: no SYNC, so the plant
         is held at its initial state), then NMT start."""
         for node in self.nodes:
-            with _quiet_p402():
-                try:
-                    node.state = "OPERATION ENABLED"
-                except (RuntimeError, ValueError) as exc:
-                    sw, code = _read(node, 0x6041), _read(node, 0x603F)
-                    raise HilError(f"drive {node.id} did not reach OPERATION ENABLED ({exc}): "
-                                   f"statusword 0x{sw:04X}, error code 0x{code:04X}") from exc
+            self._enable(node)
         self.network.nmt.send_command(0x01)  # all nodes operational
+
+    @staticmethod
+    def _enable(node: Any) -> None:
+        def go() -> None:
+            node.state = "OPERATION ENABLED"  # controlword / statusword by SDO
+
+        with _quiet_p402():
+            try:
+                _sdo("the 402 state machine (controlword by SDO)", node, go)
+            except (RuntimeError, ValueError) as exc:
+                sw, code = _read(node, 0x6041), _read(node, 0x603F)
+                raise HilError(f"drive {node.id} did not reach OPERATION ENABLED ({exc}): "
+                               f"statusword 0x{sw:04X}, error code 0x{code:04X}") from exc
 
     def period(self, torques: Sequence[int], k: int) -> list[tuple[int, int, int]]:
         """The RPDOs (controlword 0x0F, target torque), one SYNC, the six TPDOs: per drive
