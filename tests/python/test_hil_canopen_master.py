@@ -134,3 +134,25 @@ def test_a_plant_killed_mid_run_is_named(wc: cm.WritingController, tmp_path: Pat
                        r"plant node ended .* SYNC \d+: was killed by SIGKILL"):
         cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model, wc.gains,
                               tmp_path, timeout=5.0, progress=kill_at)
+
+
+def test_mismatch_scenario_equals_its_quantised_cosim(tmp_path: Path) -> None:
+    """The mismatch scenario: the controller's k_t (its model's) differs from the plant's by
+    10 %, so the master's target torque k_t u and the plant's u = tau / k_t do not cancel; the
+    run still equals the co-simulation with the same quantisation, bit for bit (1 s of it)."""
+    from rrr_robot.hil.results import extend_reference
+
+    w = cm.writing_controller(None, "mismatch")
+    assert not np.array_equal(w.controller_model.kt, w.model.kt)
+    ref = extend_reference(w.ref, 1.0)
+    mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model, w.gains,
+                                 tmp_path)
+    measure, actuate = cm.pdo_quantisation([float(v) for v in w.controller_model.kt],
+                                           [float(v) for v in w.model.kt],
+                                           [d.rated_torque_mNm for d in mrun.drives])
+    cosim = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
+                      CosimOptions(step=PERIOD, controller_values=w.controller_values,
+                                   measure=measure, actuate=actuate))
+    bench = bench_result(ref, mrun.run, read_plant_log(tmp_path / "plant.csv"))
+    assert np.array_equal(bench.q, cosim.q) and np.array_equal(mrun.run.u, cosim.u)
+    assert np.abs(bench.q - ref.q).max() > 1e-5  # the mismatch shows in the tracking
