@@ -36,7 +36,7 @@ def test_the_tree_has_every_command() -> None:
     names = {" ".join(path) for path, _ in ALL}
     assert {"fmus", "writing", "identify", "identify-experiment", "urdf", "ssp", "run-ssp",
             "sweep", "hil", "hil bench", "hil controller", "hil plant", "hil export-reference",
-            "hil busload"} <= names
+            "hil busload", "hil canopen"} <= names
 
 
 @pytest.mark.parametrize("path", [" ".join(p) for p, _ in ALL])
@@ -67,6 +67,8 @@ HIL = {
               "--mcap", "-q", "--quiet", "-v", "--verbose"},
     "export-reference": {"--text", "--scenario", "--duration", "--out", "-q", "--quiet", "-v",
                          "--verbose"},
+    "canopen": {"--text", "--scenario", "--duration", "--out", "--node-ids", "--timeout",
+                "--no-figures", "-q", "--quiet", "-v", "--verbose"},
     "busload": {"--bitrate", "--fd", "--lockstep", "--dbc", "--profile", "--sync-period-ms",
                 "-q", "--quiet", "-v", "--verbose"},
 }
