@@ -239,6 +239,22 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
              1, per=nb, agreement=f"{simd_diff:.1e} (within 1e-13: "
                                   f"{'yes' if simd_diff <= 1e-13 else 'NO'})"),
     ]
+    # the other batch kernels (regressor, FK, forward dynamics): vector against scalar
+    for label, method, inputs in (
+            ("regressor R(q, qd, qdd)", model.regressor, (bq, bqd, bqdd)),
+            ("FK (x and R)", model.fk, (bq,)),
+            ("forward dynamics", model.forward_dynamics, (bq, bqd, batch_scalar))):
+        vec = np.concatenate([np.ravel(a) for a in np.atleast_1d(method(*inputs))])
+        sca = np.concatenate([np.ravel(a) for a in np.atleast_1d(method(*inputs,
+                                                                       simd="scalar"))])
+        diff = float(np.abs(vec - sca).max())
+        name = method.__name__
+        pairs.append(Pair(
+            f"{label}, batch of {nb:,} states (per state): vector kernels against scalar",
+            f"Model.{name} ({simd_best()})",
+            lambda k, f=method, a=inputs: f(*a), f"Model.{name} (simd='scalar')",
+            lambda k, f=method, a=inputs: f(*a, simd="scalar"), 1, per=nb,
+            agreement=f"{diff:.1e} (within 1e-13: {'yes' if diff <= 1e-13 else 'NO'})"))
     if floor is not None:
         out = np.empty((nb, 3))
         addr = [a.ctypes.data for a in (bq, bqd, bqdd, out)]
