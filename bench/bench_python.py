@@ -244,10 +244,9 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
             ("regressor R(q, qd, qdd)", model.regressor, (bq, bqd, bqdd)),
             ("FK (x and R)", model.fk, (bq,)),
             ("forward dynamics", model.forward_dynamics, (bq, bqd, batch_scalar))):
-        vec = np.concatenate([np.ravel(a) for a in np.atleast_1d(method(*inputs))])
-        sca = np.concatenate([np.ravel(a) for a in np.atleast_1d(method(*inputs,
-                                                                       simd="scalar"))])
-        diff = float(np.abs(vec - sca).max())
+        vec, sca = method(*inputs), method(*inputs, simd="scalar")
+        pairs_out = zip(vec, sca, strict=True) if isinstance(vec, tuple) else [(vec, sca)]
+        diff = max(float(np.abs(np.asarray(a) - np.asarray(b)).max()) for a, b in pairs_out)
         name = method.__name__
         pairs.append(Pair(
             f"{label}, batch of {nb:,} states (per state): vector kernels against scalar",
