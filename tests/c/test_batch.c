@@ -268,9 +268,37 @@ static void test_other_calls(const rrr_model *m)
     check_refusal(m, run_fd, tq, rrr_forward_dynamics(m, q, qd, nan3, one), &broken,
                   rrr_forward_dynamics(&broken, q, qd, tq, one));
     CHECK(rrr_forward_dynamics(&broken, q, qd, tq, one) == RRR_NOT_POSITIVE_DEFINITE);
-    /* a row whose D is not positive definite in the middle of a batch: a model where D is
-     * singular only at some states is not at hand, so the vector kernels' NaN handling is
-     * checked by the negated model above (every row NaN, row 0 the scalar call's) */
+    /* rows whose D is not positive definite in the middle of a batch: p7 (the constant of
+     * D[0][0]) lowered so that D[0][0] <= 0 at the states whose rest of D[0][0] is below
+     * row 0's; the first such row is the status's, as on the scalar path */
+    double D[3][3], base0 = 0.0, lowest = 0.0;
+    for (int k = 0; k < N; ++k) {
+        CHECK_STATUS(rrr_mass_matrix(m, &q[3 * k], D), RRR_OK);
+        const double rest = D[0][0] - m->p[6];
+        if (k == 0) {
+            base0 = lowest = rest;
+        }
+        lowest = fmin(lowest, rest);
+    }
+    CHECK(lowest < base0);
+    broken = *m;
+    broken.p[6] = -(lowest + 0.01 * (base0 - lowest)); /* row 0 positive definite, few not */
+    size_t first = 0;
+    const rrr_status scalar_st =
+        rrr_forward_dynamics_batch(&broken, N, q, qd, tq, ref, RRR_SIMD_SCALAR, &first);
+    CHECK_STATUS(scalar_st, RRR_NOT_POSITIVE_DEFINITE);
+    CHECK(first > 0 && first < N);
+    for (int p = RRR_SIMD_AUTO; p <= RRR_SIMD_AVX512; ++p) {
+        if (rrr_simd_available((rrr_simd)p)) {
+            size_t done = 0;
+            CHECK_STATUS(rrr_forward_dynamics_batch(&broken, N, q, qd, tq, out, (rrr_simd)p,
+                                                    &done),
+                         scalar_st);
+            CHECK(done == first);
+            CHECK(max_diff(out, ref, 3 * first) <= 1e-13);
+        }
+    }
+    printf("test_batch: forward_dynamics: first row not positive definite: %zu\n", first);
     CHECK_STATUS(rrr_fk_batch(m, N, q, NULL, rout, RRR_SIMD_AUTO, NULL), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_fk_batch(m, 0, NULL, NULL, NULL, RRR_SIMD_AUTO, NULL), RRR_OK);
     CHECK_STATUS(rrr_regressor_batch(m, N, q, qd, NULL, yout, RRR_SIMD_AUTO, NULL),
