@@ -164,3 +164,27 @@ def test_a_mass_matrix_that_is_not_positive_definite_is_the_scalar_calls(model, 
             broken.forward_dynamics(*args, simd=simd)
         assert str(batch_err.value) == str(scalar_err.value)
     assert "sample 0" in str(scalar_err.value)
+
+
+@pytest.mark.parametrize("name", sorted(OTHER))
+def test_both_bindings_call_the_same_other_batch_kernels(model, states, name: str) -> None:
+    """The ctypes binding's batch path is the same librrr call as the extension's: bit for bit,
+    broadcast rows included; a bad row raises the same error through both."""
+    from rrr_robot.core import _ctypes_kernels
+
+    slow = _ctypes_kernels.Kernels(model.raw)
+    auto = batch.PATHS_HERE["auto"]
+    args = OTHER[name](model, *states)
+    assert flat(getattr(model, name)(*args)).tobytes() == flat(
+        getattr(slow, name)(*args, auto)).tobytes()
+    if len(args) > 1:
+        b_args = (args[0], args[1][0], *args[2:])
+        assert flat(getattr(model, name)(*b_args)).tobytes() == flat(
+            getattr(slow, name)(*b_args, auto)).tobytes()
+    bad = [a.copy() for a in args]
+    bad[-1][321, 0] = np.nan
+    with pytest.raises(rr.BadInputError) as ext_err:
+        getattr(model, name)(*bad)
+    with pytest.raises(rr.BadInputError) as ct_err:
+        getattr(slow, name)(*bad, auto)
+    assert str(ext_err.value) == str(ct_err.value) and "sample 321" in str(ct_err.value)
