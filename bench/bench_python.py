@@ -239,6 +239,21 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
              1, per=nb, agreement=f"{simd_diff:.1e} (within 1e-13: "
                                   f"{'yes' if simd_diff <= 1e-13 else 'NO'})"),
     ]
+    # the other batch kernels (regressor, FK, forward dynamics): vector against scalar
+    for label, method, inputs in (
+            ("regressor R(q, qd, qdd)", model.regressor, (bq, bqd, bqdd)),
+            ("FK (x and R)", model.fk, (bq,)),
+            ("forward dynamics", model.forward_dynamics, (bq, bqd, batch_scalar))):
+        vec, sca = method(*inputs), method(*inputs, simd="scalar")
+        pairs_out = zip(vec, sca, strict=True) if isinstance(vec, tuple) else [(vec, sca)]
+        diff = max(float(np.abs(np.asarray(a) - np.asarray(b)).max()) for a, b in pairs_out)
+        name = method.__name__
+        pairs.append(Pair(
+            f"{label}, batch of {nb:,} states (per state): vector kernels against scalar",
+            f"Model.{name} ({simd_best()})",
+            lambda k, f=method, a=inputs: f(*a), f"Model.{name} (simd='scalar')",
+            lambda k, f=method, a=inputs: f(*a, simd="scalar"), 1, per=nb,
+            agreement=f"{diff:.1e} (within 1e-13: {'yes' if diff <= 1e-13 else 'NO'})"))
     if floor is not None:
         out = np.empty((nb, 3))
         addr = [a.ctypes.data for a in (bq, bqd, bqdd, out)]

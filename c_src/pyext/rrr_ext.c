@@ -1064,35 +1064,130 @@ static PyObject *map_method(PyObject *self, const map_spec *s, PyObject *const *
         return map_method(self, &(spec), args, nargs);                                   \
     }
 
-MAP_METHOD(fk, S_FK)
 MAP_METHOD(fk_frames, S_FK_FRAMES)
 MAP_METHOD(jacobian, S_JACOBIAN)
 MAP_METHOD(tip_motion, S_TIP_MOTION)
 MAP_METHOD(joint_motion, S_JOINT_MOTION)
 MAP_METHOD(workspace_margin, S_WORKSPACE_MARGIN)
-MAP_METHOD(regressor, S_REGRESSOR)
-/* inverse_dynamics(q, qd, qdd[, path]) -> tau: one state, or a batch through librrr's batch
- * kernels (rrr_inverse_dynamics_batch) on `path`, an rrr_simd value (without it, or with
- * RRR_SIMD_SCALAR: the row loop, bit for bit the one-state call). Broadcast rows are expanded
- * into a buffer of this call's; a failing row raises as the row loop does. */
-static PyObject *K_inverse_dynamics(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+/* ------------------------------------------------------------------------------------------ */
+/* Batch methods: name(inputs...[, path]) -> one state, or a batch through librrr's batch      */
+/* kernels (rrr_batch.h) on `path`, an rrr_simd value (without it, or with RRR_SIMD_SCALAR:     */
+/* the row loop, bit for bit the one-state call). Broadcast rows are expanded into a buffer of */
+/* this call's; a failing row raises as the row loop does.                                     */
+/* ------------------------------------------------------------------------------------------ */
+
+typedef rrr_status (*batch_fn)(const rrr_model *m, size_t n, const double *const *in,
+                               double *const *out, rrr_simd path, size_t *done);
+
+static rrr_status batch_regressor(const rrr_model *m, size_t n, const double *const *in,
+                                  double *const *out, rrr_simd path, size_t *done)
 {
-    const map_spec *s = &S_INVERSE_DYNAMICS;
-    if (nargs != 3 && nargs != 4) {
-        PyErr_Format(PyExc_TypeError, "inverse_dynamics() takes 3 or 4 arguments (%zd given)",
-                     nargs);
+    return rrr_regressor_batch(m, n, in[0], in[1], in[2], out[0], path, done);
+}
+
+static rrr_status batch_inverse_dynamics(const rrr_model *m, size_t n, const double *const *in,
+                                         double *const *out, rrr_simd path, size_t *done)
+{
+    return rrr_inverse_dynamics_batch(m, n, in[0], in[1], in[2], out[0], path, done);
+}
+
+static rrr_status batch_fk(const rrr_model *m, size_t n, const double *const *in,
+                           double *const *out, rrr_simd path, size_t *done)
+{
+    return rrr_fk_batch(m, n, in[0], out[0], out[1], path, done);
+}
+
+static rrr_status batch_forward_dynamics(const rrr_model *m, size_t n, const double *const *in,
+                                         double *const *out, rrr_simd path, size_t *done)
+{
+    return rrr_forward_dynamics_batch(m, n, in[0], in[1], in[2], out[0], path, done);
+}
+
+/* The outputs of a batch call on parsed and broadcast arguments with n > 0 rows. */
+static PyObject *batch_parsed(const rrr_model *m, const map_spec *s, batch_fn fn,
+                              const vec_arg *a, Py_ssize_t n, rrr_simd path)
+{
+    /* every input as n contiguous rows: broadcast ones copied into one buffer */
+    const double *rows[MAX_IN];
+    int expand = 0;
+    for (int i = 0; i < s->n_in; ++i) {
+        expand += a[i].step == 0 && n > 1;
+    }
+    double *buf = NULL;
+    if (expand > 0) {
+        buf = PyMem_Malloc((size_t)expand * (size_t)n * NJ * sizeof *buf);
+        if (buf == NULL) {
+            return PyErr_NoMemory();
+        }
+    }
+    double *next = buf;
+    for (int i = 0; i < s->n_in; ++i) {
+        if (a[i].step == 0 && n > 1) {
+            for (Py_ssize_t k = 0; k < n; ++k) {
+                memcpy(&next[k * NJ], a[i].data, NJ * sizeof *next);
+            }
+            rows[i] = next;
+            next += n * NJ;
+        } else {
+            rows[i] = a[i].data;
+        }
+    }
+    PyObject *arrays[MAX_OUT] = {NULL};
+    double *outs[MAX_OUT];
+    PyObject *result = NULL;
+    for (int j = 0; j < s->n_out; ++j) {
+        arrays[j] = new_array(1, n, s->out_nd[j], s->out_dims[j], &outs[j]);
+        if (arrays[j] == NULL) {
+            goto done;
+        }
+    }
+    size_t ok = 0;
+    rrr_status st;
+    Py_BEGIN_ALLOW_THREADS
+    st = fn(m, (size_t)n, rows, outs, path, &ok);
+    Py_END_ALLOW_THREADS
+    if (st != RRR_OK) {
+        raise_failed_row(s, a, (Py_ssize_t)ok, st);
+        goto done;
+    }
+    if (s->n_out == 1) {
+        result = arrays[0];
+        arrays[0] = NULL;
+    } else {
+        result = PyTuple_New(s->n_out);
+        if (result != NULL) {
+            for (int j = 0; j < s->n_out; ++j) {
+                PyTuple_SET_ITEM(result, j, arrays[j]);
+                arrays[j] = NULL;
+            }
+        }
+    }
+done:
+    for (int j = 0; j < s->n_out; ++j) {
+        Py_XDECREF(arrays[j]);
+    }
+    PyMem_Free(buf);
+    return result;
+}
+
+static PyObject *batch_method(PyObject *self, const map_spec *s, batch_fn fn,
+                              PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != s->n_in && nargs != s->n_in + 1) {
+        PyErr_Format(PyExc_TypeError, "%s() takes %d or %d arguments (%zd given)", s->method,
+                     s->n_in, s->n_in + 1, nargs);
         return NULL;
     }
     long path = RRR_SIMD_SCALAR;
-    if (nargs == 4) {
-        path = PyLong_AsLong(args[3]);
+    if (nargs == s->n_in + 1) {
+        path = PyLong_AsLong(args[s->n_in]);
         if (path == -1 && PyErr_Occurred()) {
             return NULL;
         }
         if (path < RRR_SIMD_AUTO || path > RRR_SIMD_AVX512 ||
-            !rrr_simd_available((rrr_simd)path)) {
-            PyErr_Format(PyExc_ValueError, "inverse_dynamics: batch path %ld is not available "
-                         "here (rrr_simd_available)", path);
+            (path > RRR_SIMD_SCALAR && !rrr_simd_available((rrr_simd)path))) {
+            PyErr_Format(PyExc_ValueError, "%s: batch path %ld is not available here "
+                         "(rrr_simd_available)", s->method, path);
             return NULL;
         }
     }
@@ -1104,62 +1199,29 @@ static PyObject *K_inverse_dynamics(PyObject *self, PyObject *const *args, Py_ss
     int batch;
     PyObject *result = NULL;
     if (broadcast(a, s->n_in, s->in_names, &n, &batch) == 0) {
-        if (!batch || path == RRR_SIMD_SCALAR) {
+        if (!batch || path == RRR_SIMD_SCALAR || n == 0) {
             result = map_parsed(MODEL(self), s, NULL, a, n, batch);
         } else {
-            /* every input as n contiguous rows: broadcast ones copied into one buffer */
-            const double *rows[3];
-            int expand = 0;
-            for (int i = 0; i < 3; ++i) {
-                expand += a[i].step == 0 && n > 1;
-            }
-            double *buf = NULL;
-            if (expand > 0) {
-                buf = PyMem_Malloc((size_t)expand * (size_t)n * NJ * sizeof *buf);
-                if (buf == NULL) {
-                    args_release(a, s->n_in);
-                    return PyErr_NoMemory();
-                }
-            }
-            double *next = buf;
-            for (int i = 0; i < 3; ++i) {
-                if (a[i].step == 0 && n > 1) {
-                    for (Py_ssize_t k = 0; k < n; ++k) {
-                        memcpy(&next[k * NJ], a[i].data, NJ * sizeof *next);
-                    }
-                    rows[i] = next;
-                    next += n * NJ;
-                } else {
-                    rows[i] = a[i].data;
-                }
-            }
-            const Py_ssize_t dims[1] = {NJ};
-            double *out;
-            PyObject *arr = new_array(1, n, 1, dims, &out);
-            if (arr != NULL) {
-                size_t done = 0;
-                rrr_status st;
-                Py_BEGIN_ALLOW_THREADS
-                st = rrr_inverse_dynamics_batch(MODEL(self), (size_t)n, rows[0], rows[1],
-                                                rows[2], out, (rrr_simd)path, &done);
-                Py_END_ALLOW_THREADS
-                if (st == RRR_OK) {
-                    result = arr;
-                } else {
-                    Py_DECREF(arr);
-                    raise_failed_row(s, a, (Py_ssize_t)done, st);
-                }
-            }
-            PyMem_Free(buf);
+            result = batch_parsed(MODEL(self), s, fn, a, n, (rrr_simd)path);
         }
     }
     args_release(a, s->n_in);
     return result;
 }
+
+#define BATCH_METHOD(name, spec)                                                         \
+    static PyObject *K_##name(PyObject *self, PyObject *const *args, Py_ssize_t nargs) \
+    {                                                                                    \
+        return batch_method(self, &(spec), batch_##name, args, nargs);                   \
+    }
+
+BATCH_METHOD(regressor, S_REGRESSOR)
+BATCH_METHOD(inverse_dynamics, S_INVERSE_DYNAMICS)
+BATCH_METHOD(forward_dynamics, S_FORWARD_DYNAMICS)
 MAP_METHOD(mass_matrix, S_MASS_MATRIX)
 MAP_METHOD(coriolis, S_CORIOLIS)
 MAP_METHOD(gravity, S_GRAVITY)
-MAP_METHOD(forward_dynamics, S_FORWARD_DYNAMICS)
+BATCH_METHOD(fk, S_FK)
 MAP_METHOD(energy, S_ENERGY)
 MAP_METHOD(friction, S_FRICTION)
 MAP_METHOD(voltage_from_torque, S_VOLTAGE_FROM_TORQUE)
@@ -1599,7 +1661,7 @@ static PyObject *K_plant_accel(PyObject *self, PyObject *const *args, Py_ssize_t
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))K_##name, METH_FASTCALL, doc}
 
 static PyMethodDef Kernels_methods[] = {
-    FASTCALL(fk, "fk(q) -> (x, R)"),
+    FASTCALL(fk, "fk(q[, path]) -> (x, R)"),
     FASTCALL(fk_frames, "fk_frames(q) -> T (4, 4, 4): DH frames 0..3 in frame 0"),
     FASTCALL(jacobian, "jacobian(q) -> J"),
     FASTCALL(tip_motion, "tip_motion(q, qd, qdd) -> (xd, xdd)"),
@@ -1612,12 +1674,12 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, "
                           "shoulder_margin, det_jacobian)"),
     FASTCALL(workspace_margin, "workspace_margin(x) -> margin"),
-    FASTCALL(regressor, "regressor(q, qd, qdd) -> R"),
-    FASTCALL(inverse_dynamics, "inverse_dynamics(q, qd, qdd) -> tau"),
+    FASTCALL(regressor, "regressor(q, qd, qdd[, path]) -> R"),
+    FASTCALL(inverse_dynamics, "inverse_dynamics(q, qd, qdd[, path]) -> tau"),
     FASTCALL(mass_matrix, "mass_matrix(q) -> D"),
     FASTCALL(coriolis, "coriolis(q, qd) -> c"),
     FASTCALL(gravity, "gravity(q) -> h"),
-    FASTCALL(forward_dynamics, "forward_dynamics(q, qd, tau) -> qdd"),
+    FASTCALL(forward_dynamics, "forward_dynamics(q, qd, tau[, path]) -> qdd"),
     FASTCALL(energy, "energy(q, qd) -> (kinetic, potential)"),
     FASTCALL(friction, "friction(qd) -> u_f"),
     FASTCALL(voltage_from_torque, "voltage_from_torque(qd, tau) -> u"),

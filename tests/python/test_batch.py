@@ -1,7 +1,7 @@
-"""Batch inverse dynamics through librrr's batch kernels (rrr_robot.core.batch): every path this
-machine runs against the one-state calls (the scalar path bit for bit, the vector kernels within
-1e-13 N m, multi-turn angles included), broadcasting as before, a bad row raising the one-state
-call's error, and bad paths refused."""
+"""Batch inverse dynamics, regressor, FK and forward dynamics through librrr's batch kernels
+(rrr_robot.core.batch): every path this machine runs against the one-state calls (the scalar path
+bit for bit, the vector kernels within 1e-13, multi-turn angles included), broadcasting as
+before, a bad row raising the one-state call's error, and bad paths refused."""
 
 from __future__ import annotations
 
@@ -82,3 +82,109 @@ def test_both_bindings_call_the_same_batch_kernels(model, states) -> None:
     q, qd, qdd = states
     assert model.inverse_dynamics(q, qd[0], qdd).tobytes() == slow.inverse_dynamics(
         q, qd[0], qdd, auto).tobytes()
+
+
+# the other batch calls: Model method, its inputs from (q, qd, qdd), and the ctypes method
+OTHER = {
+    "regressor": lambda m, q, qd, qdd: (q, qd, qdd),
+    "fk": lambda m, q, qd, qdd: (q,),
+    "forward_dynamics": lambda m, q, qd, qdd: (q, qd, m.inverse_dynamics(q, qd, qdd,
+                                                                           simd="scalar")),
+}
+
+
+def flat(result: object) -> np.ndarray:
+    """One array of a result (fk's (x, R) concatenated)."""
+    if isinstance(result, tuple):
+        return np.concatenate([np.asarray(r).ravel() for r in result])
+    return np.asarray(result).ravel()
+
+
+@pytest.mark.parametrize("name", sorted(OTHER))
+@pytest.mark.parametrize("simd", ["auto", "scalar", "avx2", "avx512"])
+def test_every_path_of_the_other_batch_calls_agrees(model, states, name: str,
+                                                     simd: str) -> None:
+    args = OTHER[name](model, *states)
+    method = getattr(model, name)
+    if simd not in batch.simd_available():
+        with pytest.raises(rr.BadInputError, match="not available here"):
+            method(*args, simd=simd)
+        return
+    # the one-state results row by row, in the layout of the batch's
+    rows = [method(*(a[k] for a in args)) for k in range(N)]
+    if isinstance(rows[0], tuple):  # fk: (x, R)
+        ref = flat(tuple(np.stack([r[i] for r in rows]) for i in range(len(rows[0]))))
+    else:
+        ref = np.stack(rows).ravel()
+    got = flat(method(*args, simd=simd))
+    used = batch.simd_best() if simd == "auto" else simd
+    if used == "scalar":
+        assert got.tobytes() == ref.tobytes()
+    else:
+        assert np.abs(got - ref).max() <= 1e-13
+    # broadcasting: the first argument's row 0 against every row of the others
+    if len(args) > 1:
+        b_args = (args[0][0], *args[1:])
+        rows = [method(args[0][0], *(a[k] for a in args[1:])) for k in range(N)]
+        got_b = method(*b_args, simd=simd)
+        assert np.abs(got_b - np.stack(rows)).max() <= (0.0 if used == "scalar" else 1e-13)
+
+
+@pytest.mark.parametrize("name", sorted(OTHER))
+def test_a_bad_row_of_the_other_calls_raises_the_one_state_error(model, states,
+                                                                 name: str) -> None:
+    args = [a.copy() for a in OTHER[name](model, *states)]
+    args[-1][500, 1] = np.nan
+    args[0][700, 2] = np.inf
+    method = getattr(model, name)
+    with pytest.raises(rr.BadInputError) as batch_err:
+        method(*args)
+    with pytest.raises(rr.BadInputError) as scalar_err:
+        method(*args, simd="scalar")
+    assert str(batch_err.value) == str(scalar_err.value)
+    assert "sample 500" in str(batch_err.value)
+    with pytest.raises(rr.BadInputError, match="simd must be one of"):
+        method(*args, simd="fast")
+    with pytest.raises(rr.BadInputError, match="simd must be one of"):
+        method(*(a[0] for a in args), simd=None)
+
+
+def test_a_mass_matrix_that_is_not_positive_definite_is_the_scalar_calls(model, states) -> None:
+    """A model whose D is not positive definite (every p negated): the batch raises what the
+    row loop raises, at row 0."""
+    raw = type(model.raw).from_buffer_copy(model.raw)
+    for i in range(len(raw.p)):
+        raw.p[i] = -raw.p[i]
+    broken = rr.Model(raw, validate=False)
+    args = OTHER["forward_dynamics"](model, *states)
+    with pytest.raises(rr.RrrError) as scalar_err:
+        broken.forward_dynamics(*args, simd="scalar")
+    for simd in batch.simd_available():
+        with pytest.raises(type(scalar_err.value)) as batch_err:
+            broken.forward_dynamics(*args, simd=simd)
+        assert str(batch_err.value) == str(scalar_err.value)
+    assert "sample 0" in str(scalar_err.value)
+
+
+@pytest.mark.parametrize("name", sorted(OTHER))
+def test_both_bindings_call_the_same_other_batch_kernels(model, states, name: str) -> None:
+    """The ctypes binding's batch path is the same librrr call as the extension's: bit for bit,
+    broadcast rows included; a bad row raises the same error through both."""
+    from rrr_robot.core import _ctypes_kernels
+
+    slow = _ctypes_kernels.Kernels(model.raw)
+    auto = batch.PATHS_HERE["auto"]
+    args = OTHER[name](model, *states)
+    assert flat(getattr(model, name)(*args)).tobytes() == flat(
+        getattr(slow, name)(*args, auto)).tobytes()
+    if len(args) > 1:
+        b_args = (args[0], args[1][0], *args[2:])
+        assert flat(getattr(model, name)(*b_args)).tobytes() == flat(
+            getattr(slow, name)(*b_args, auto)).tobytes()
+    bad = [a.copy() for a in args]
+    bad[-1][321, 0] = np.nan
+    with pytest.raises(rr.BadInputError) as ext_err:
+        getattr(model, name)(*bad)
+    with pytest.raises(rr.BadInputError) as ct_err:
+        getattr(slow, name)(*bad, auto)
+    assert str(ext_err.value) == str(ct_err.value) and "sample 321" in str(ct_err.value)

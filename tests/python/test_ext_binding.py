@@ -156,6 +156,9 @@ def test_model_methods_use_the_extension() -> None:
     same_bits(MODEL.inverse_dynamics(q, qd, qdd, simd="scalar"), REF.inverse_dynamics(q, qd, qdd))
     assert np.abs(MODEL.inverse_dynamics(q, qd, qdd) - REF.inverse_dynamics(q, qd, qdd)).max() <= (
         1e-13)
+    same_bits(MODEL.regressor(q, qd, qdd, simd="scalar"), REF.regressor(q, qd, qdd))
+    same_bits(MODEL.fk(q, simd="scalar"), REF.fk(q))
+    same_bits(MODEL.forward_dynamics(q, qd, qdd, simd="scalar"), REF.forward_dynamics(q, qd, qdd))
     same_bits(MODEL.nominal_voltage(q[3], qd[3], qdd[3]), REF.nominal_voltage(q[3], qd[3], qdd[3]))
     x = draw("x", None)
     same_bits(MODEL.ik(x), REF.ik(x))

@@ -13,4 +13,16 @@ void rrr_simd_inverse_dynamics_avx2(const rrr_model *m, size_t n, const double *
 void rrr_simd_inverse_dynamics_avx512(const rrr_model *m, size_t n, const double *q,
                                       const double *qd, const double *qdd, double *tau);
 
+/* Y blocks (3 x RRR_NP), tip positions (and rotations if R is not NULL), accelerations. */
+void rrr_simd_regressor_avx2(const rrr_model *m, size_t n, const double *q, const double *qd,
+                             const double *qdd, double *Y);
+void rrr_simd_regressor_avx512(const rrr_model *m, size_t n, const double *q, const double *qd,
+                               const double *qdd, double *Y);
+void rrr_simd_fk_avx2(const rrr_model *m, size_t n, const double *q, double *x, double *R);
+void rrr_simd_fk_avx512(const rrr_model *m, size_t n, const double *q, double *x, double *R);
+void rrr_simd_forward_dynamics_avx2(const rrr_model *m, size_t n, const double *q,
+                                    const double *qd, const double *tau, double *qdd);
+void rrr_simd_forward_dynamics_avx512(const rrr_model *m, size_t n, const double *q,
+                                      const double *qd, const double *tau, double *qdd);
+
 #endif /* RRR_SIMD_H */

@@ -121,3 +121,176 @@ rrr_status rrr_inverse_dynamics_batch(const rrr_model *m, size_t n, const double
     }
     return st;
 }
+
+/* The common checks of a batch call: done = 0, the pointers, the path (AUTO resolved). 0 when
+ * the call goes on. */
+static int batch_start(const rrr_model *m, size_t n, const void *const *ptrs, int nptrs,
+                       rrr_simd *path, size_t *done)
+{
+    if (done != NULL) {
+        *done = 0;
+    }
+    if (m == NULL || !rrr_simd_available(*path)) {
+        return -1;
+    }
+    for (int i = 0; i < nptrs; ++i) {
+        if (n > 0 && ptrs[i] == NULL) {
+            return -1;
+        }
+    }
+    if (*path == RRR_SIMD_AUTO) {
+        *path = rrr_simd_best();
+    }
+    return 0;
+}
+
+/* A row of the vector kernels is kept when its inputs and outputs are finite; the others are
+ * the scalar call's (which the caller runs). */
+static int row_finite(const double *a, const double *b, const double *c, const double *out,
+                      size_t nout)
+{
+    return rrr_finite_n(a, 3) && (b == NULL || rrr_finite_n(b, 3)) &&
+           (c == NULL || rrr_finite_n(c, 3)) && rrr_finite_n(out, nout);
+}
+
+rrr_status rrr_regressor_batch(const rrr_model *m, size_t n, const double q[],
+                               const double qd[], const double qdd[], double Y[],
+                               rrr_simd path, size_t *done)
+{
+    const void *ptrs[4] = {q, qd, qdd, Y};
+    if (batch_start(m, n, ptrs, 4, &path, done) != 0) {
+        return RRR_BAD_INPUT;
+    }
+    enum { NY = 3 * RRR_NP };
+    size_t k = 0;
+    rrr_status st = RRR_OK;
+    if (path != RRR_SIMD_SCALAR && n > 0) {
+        /* row 0 first by the scalar call: the model checks (a model it refuses is refused at
+         * row 0, as the scalar path would) */
+        st = rrr_regressor(m, q, qd, qdd, (double(*)[RRR_NP])(void *)Y);
+        if (st != RRR_OK) {
+            return st;
+        }
+#ifdef RRR_HAVE_SIMD_X86
+        if (path == RRR_SIMD_AVX512) {
+            rrr_simd_regressor_avx512(m, n - 1, q + 3, qd + 3, qdd + 3, Y + NY);
+        } else {
+            rrr_simd_regressor_avx2(m, n - 1, q + 3, qd + 3, qdd + 3, Y + NY);
+        }
+#endif
+        for (k = 1; k < n; ++k) {
+            if (!row_finite(&q[3 * k], &qd[3 * k], &qdd[3 * k], &Y[NY * k], NY)) {
+                st = rrr_regressor(m, &q[3 * k], &qd[3 * k], &qdd[3 * k],
+                                   (double(*)[RRR_NP])(void *)&Y[NY * k]);
+                if (st != RRR_OK) {
+                    break;
+                }
+            }
+        }
+    } else {
+        for (k = 0; k < n; ++k) {
+            st = rrr_regressor(m, &q[3 * k], &qd[3 * k], &qdd[3 * k],
+                               (double(*)[RRR_NP])(void *)&Y[NY * k]);
+            if (st != RRR_OK) {
+                break;
+            }
+        }
+    }
+    if (done != NULL) {
+        *done = k;
+    }
+    return st;
+}
+
+rrr_status rrr_fk_batch(const rrr_model *m, size_t n, const double q[], double x[], double R[],
+                        rrr_simd path, size_t *done)
+{
+    const void *ptrs[2] = {q, x};
+    if (batch_start(m, n, ptrs, 2, &path, done) != 0) {
+        return RRR_BAD_INPUT;
+    }
+    size_t k = 0;
+    rrr_status st = RRR_OK;
+    if (path != RRR_SIMD_SCALAR && n > 0) {
+        /* row 0 first by the scalar call: the model checks (rrr_fk's kinematic ones) */
+        st = rrr_fk(m, q, x, (double(*)[3])(void *)R);
+        if (st != RRR_OK) {
+            return st;
+        }
+#ifdef RRR_HAVE_SIMD_X86
+        if (path == RRR_SIMD_AVX512) {
+            rrr_simd_fk_avx512(m, n - 1, q + 3, x + 3, R != NULL ? R + 9 : NULL);
+        } else {
+            rrr_simd_fk_avx2(m, n - 1, q + 3, x + 3, R != NULL ? R + 9 : NULL);
+        }
+#endif
+        for (k = 1; k < n; ++k) {
+            if (!row_finite(&q[3 * k], NULL, NULL, &x[3 * k], 3) ||
+                (R != NULL && !rrr_finite_n(&R[9 * k], 9))) {
+                st = rrr_fk(m, &q[3 * k], &x[3 * k],
+                            R != NULL ? (double(*)[3])(void *)&R[9 * k] : NULL);
+                if (st != RRR_OK) {
+                    break;
+                }
+            }
+        }
+    } else {
+        for (k = 0; k < n; ++k) {
+            st = rrr_fk(m, &q[3 * k], &x[3 * k],
+                        R != NULL ? (double(*)[3])(void *)&R[9 * k] : NULL);
+            if (st != RRR_OK) {
+                break;
+            }
+        }
+    }
+    if (done != NULL) {
+        *done = k;
+    }
+    return st;
+}
+
+rrr_status rrr_forward_dynamics_batch(const rrr_model *m, size_t n, const double q[],
+                                      const double qd[], const double tau[], double qdd[],
+                                      rrr_simd path, size_t *done)
+{
+    const void *ptrs[4] = {q, qd, tau, qdd};
+    if (batch_start(m, n, ptrs, 4, &path, done) != 0) {
+        return RRR_BAD_INPUT;
+    }
+    size_t k = 0;
+    rrr_status st = RRR_OK;
+    if (path != RRR_SIMD_SCALAR && n > 0) {
+        /* row 0 first by the scalar call: a model it refuses is refused at row 0 */
+        st = rrr_forward_dynamics(m, q, qd, tau, qdd);
+        if (st != RRR_OK) {
+            return st;
+        }
+#ifdef RRR_HAVE_SIMD_X86
+        if (path == RRR_SIMD_AVX512) {
+            rrr_simd_forward_dynamics_avx512(m, n - 1, q + 3, qd + 3, tau + 3, qdd + 3);
+        } else {
+            rrr_simd_forward_dynamics_avx2(m, n - 1, q + 3, qd + 3, tau + 3, qdd + 3);
+        }
+#endif
+        /* a D that is not positive definite shows as a non-finite row */
+        for (k = 1; k < n; ++k) {
+            if (!row_finite(&q[3 * k], &qd[3 * k], &tau[3 * k], &qdd[3 * k], 3)) {
+                st = rrr_forward_dynamics(m, &q[3 * k], &qd[3 * k], &tau[3 * k], &qdd[3 * k]);
+                if (st != RRR_OK) {
+                    break;
+                }
+            }
+        }
+    } else {
+        for (k = 0; k < n; ++k) {
+            st = rrr_forward_dynamics(m, &q[3 * k], &qd[3 * k], &tau[3 * k], &qdd[3 * k]);
+            if (st != RRR_OK) {
+                break;
+            }
+        }
+    }
+    if (done != NULL) {
+        *done = k;
+    }
+    return st;
+}

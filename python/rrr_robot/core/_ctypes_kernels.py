@@ -38,8 +38,14 @@ class Kernels:
         self._ref = ct.byref(raw)
 
     # ---- kinematics -----------------------------------------------------------------------
-    def fk(self, q: ArrayLike, /) -> tuple[FloatArray, FloatArray]:
+    def fk(self, q: ArrayLike, path: int = 1, /) -> tuple[FloatArray, FloatArray]:
+        """Rows of rrr_fk; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR) through
+        rrr_fk_batch (its failing row raised by the row loop)."""
         qs, batch = as_rows(q, "q")
+        if batch and path != 1:
+            outs = self._batch("rrr_fk_batch", [qs], [(3,), (3, 3)], path)
+            if outs is not None:
+                return outs[0], outs[1]
         x, rot = self._rowwise("rrr_fk", [qs], [(3,), (3, 3)], "q")
         return (x, rot) if batch else (x[0], rot[0])
 
@@ -129,24 +135,17 @@ class Kernels:
         return out if batch else float(out[0])
 
     # ---- dynamics -------------------------------------------------------------------------
-    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, /) -> FloatArray:
-        return self._map3("rrr_regressor", q, qd, qdd, (3, _lib.NP))
+    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, path: int = 1, /
+                  ) -> FloatArray:
+        """Rows of rrr_regressor; a batch with ``path`` other than 1 through
+        rrr_regressor_batch."""
+        return self._map3_batch("rrr_regressor", q, qd, qdd, (3, _lib.NP), path)
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, path: int = 1, /
                          ) -> FloatArray:
         """Rows of rrr_inverse_dynamics; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR)
         through rrr_inverse_dynamics_batch (its failing row raised by the row loop)."""
-        if path != 1:
-            (qs, qds, qdds), batch = broadcast_rows((q, "q"), (qd, "qd"), (qdd, "qdd"))
-            if batch:
-                n = qs.shape[0]
-                tau = np.empty((n, 3))
-                done = ct.c_size_t(0)
-                status = _lib.FUNCS["rrr_inverse_dynamics_batch"](
-                    self._ref, n, ptr(qs), ptr(qds), ptr(qdds), ptr(tau), path, ct.byref(done))
-                if status == 0:
-                    return tau
-        return self._map3("rrr_inverse_dynamics", q, qd, qdd, (3,))
+        return self._map3_batch("rrr_inverse_dynamics", q, qd, qdd, (3,), path)
 
     def mass_matrix(self, q: ArrayLike, /) -> FloatArray:
         return self._map1("rrr_mass_matrix", q, "q", (3, 3))
@@ -157,8 +156,12 @@ class Kernels:
     def gravity(self, q: ArrayLike, /) -> FloatArray:
         return self._map1("rrr_gravity", q, "q", (3,))
 
-    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, /) -> FloatArray:
-        return self._map3("rrr_forward_dynamics", q, qd, tau, (3,), names=("q", "qd", "tau"))
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, path: int = 1, /
+                         ) -> FloatArray:
+        """Rows of rrr_forward_dynamics; a batch with ``path`` other than 1 through
+        rrr_forward_dynamics_batch."""
+        return self._map3_batch("rrr_forward_dynamics", q, qd, tau, (3,), path,
+                                names=("q", "qd", "tau"))
 
     def energy(self, q: ArrayLike, qd: ArrayLike, /) -> tuple[Any, Any]:
         (qs, qds), batch = broadcast_rows((q, "q"), (qd, "qd"))
@@ -292,6 +295,31 @@ class Kernels:
     def _fail(fn: str, status: int, ins: list[FloatArray], names: str, i: int) -> None:
         values = ", ".join(str(a[i].tolist()) for a in ins)
         _lib.raise_for(fn, status, f"sample {i}: {names} = {values}")
+
+    def _batch(self, fn: str, ins: list[FloatArray], out_shapes: list[tuple[int, ...]],
+               path: int) -> list[FloatArray] | None:
+        """The outputs of the batch call ``fn`` on path ``path``, or None when it fails (the
+        caller's row loop then raises the failing row's error)."""
+        n = ins[0].shape[0]
+        outs = [np.empty((n, *shape)) for shape in out_shapes]
+        done = ct.c_size_t(0)
+        if _lib.FUNCS[fn](self._ref, n, *[ptr(a) for a in (*ins, *outs)], path,
+                          ct.byref(done)) == 0:
+            return outs
+        return None
+
+    def _map3_batch(
+        self, fn: str, a: ArrayLike, b: ArrayLike, c: ArrayLike, shape: tuple[int, ...],
+        path: int, names: tuple[str, str, str] = ("q", "qd", "qdd"),
+    ) -> FloatArray:
+        """_map3 of ``fn``, a batch on a path other than 1 through ``fn``_batch."""
+        if path != 1:
+            rows, batch = broadcast_rows((a, names[0]), (b, names[1]), (c, names[2]))
+            if batch:
+                outs = self._batch(f"{fn}_batch", rows, [shape], path)
+                if outs is not None:
+                    return outs[0]
+        return self._map3(fn, a, b, c, shape, names)
 
     def _map1(self, fn: str, a: ArrayLike, name: str, shape: tuple[int, ...]) -> FloatArray:
         rows, batch = as_rows(a, name)

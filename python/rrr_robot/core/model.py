@@ -52,6 +52,17 @@ ELBOW = {"up": 0, "down": 1}
 DEFAULT_ROBOT_TOML = DATA_DIR / "default_robot.toml"
 
 
+_AUTO = batch.SIMD_PATHS["auto"]
+
+
+def _path(simd: str) -> int:
+    """The rrr_simd value of a ``simd=`` name; BadInputError when it is not a path here."""
+    try:
+        return batch.PATHS_HERE[simd]
+    except (KeyError, TypeError):
+        batch.refuse(simd)
+
+
 @dataclass(frozen=True)
 class Singularity:
     """Distance of a configuration from the singular sets (see rrr_kinematics.h)."""
@@ -227,9 +238,13 @@ class Model:
         write_toml(self.to_dict(), Path(path))
 
     # ---- kinematics -----------------------------------------------------------------------
-    def fk(self, q: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """Tip position (3,) and orientation (3, 3) (eqs 3-5); (n, 3), (n, 3, 3) for batches."""
-        return self._k.fk(q)
+    def fk(self, q: ArrayLike, simd: str = "auto") -> tuple[FloatArray, FloatArray]:
+        """Tip position (3,) and orientation (3, 3) (eqs 3-5); (n, 3), (n, 3, 3) for batches.
+
+        A batch runs in one call of librrr's batch kernels; ``simd`` as for
+        :meth:`inverse_dynamics` (``"auto"``: within 1e-13 m of the scalar path)."""
+        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
+        return self._k.fk(q, path)
 
     def fk_frames(self, q: ArrayLike) -> FloatArray:
         """Every DH frame in frame 0 as 4 x 4 homogeneous transforms, shape (4, 4, 4) (frames
@@ -285,9 +300,14 @@ class Model:
         return self._k.workspace_margin(x)
 
     # ---- dynamics -------------------------------------------------------------------------
-    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> FloatArray:
-        """R(q, qd, qdd) of eq 10, (3, 16) or (n, 3, 16): tau = R p."""
-        return self._k.regressor(q, qd, qdd)
+    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
+                  simd: str = "auto") -> FloatArray:
+        """R(q, qd, qdd) of eq 10, (3, 16) or (n, 3, 16): tau = R p.
+
+        A batch runs in one call of librrr's batch kernels; ``simd`` as for
+        :meth:`inverse_dynamics` (``"auto"``: within 1e-13 of the scalar path)."""
+        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
+        return self._k.regressor(q, qd, qdd, path)
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
                          simd: str = "auto") -> FloatArray:
@@ -298,10 +318,7 @@ class Model:
         else scalar), within 1e-13 N m of the scalar path; ``"scalar"`` bit for bit the
         one-state call on every row; ``"avx2"``, ``"avx512"`` those kernels (refused where they
         are not available). One state is always the scalar call."""
-        try:
-            path = batch.PATHS_HERE[simd]
-        except (KeyError, TypeError):
-            batch.refuse(simd)
+        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
         return self._k.inverse_dynamics(q, qd, qdd, path)
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
@@ -316,9 +333,16 @@ class Model:
         """h(q) of eq 7, N m."""
         return self._k.gravity(q)
 
-    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike) -> FloatArray:
-        """qdd = D^-1 (tau - c - h), rad/s^2."""
-        return self._k.forward_dynamics(q, qd, tau)
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
+                         simd: str = "auto") -> FloatArray:
+        """qdd = D^-1 (tau - c - h), rad/s^2.
+
+        A batch runs in one call of librrr's batch kernels (a branch-free Cholesky over the
+        states; a row whose D is not positive definite is the scalar call's); ``simd`` as for
+        :meth:`inverse_dynamics` (``"auto"``: within 1e-13 rad/s^2 of the scalar path for
+        the default robot)."""
+        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
+        return self._k.forward_dynamics(q, qd, tau, path)
 
     def energy(self, q: ArrayLike, qd: ArrayLike) -> tuple[Any, Any]:
         """Kinetic and potential energy, J: two floats for one state, two (n,) arrays for a

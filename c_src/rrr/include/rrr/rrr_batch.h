@@ -7,8 +7,9 @@
  * The vector kernels compute the same closed form as the scalar calls (the same generated code,
  * compiled for 4 or 8 states per instruction, with glibc's vector sin and cos from libmvec), so
  * their results are not bit-identical to the scalar path: they differ by rounding, within 1e-13
- * (absolute, N m, for the default robot's torques of up to about 50 N m; tests/c/test_batch.c
- * checks it over random states, multi-turn angles included). A row the scalar call would refuse
+ * absolute for the default robot (torques of up to about 50 N m, regressor entries, tip
+ * positions in m, accelerations; tests/c/test_batch.c checks each call over random states,
+ * multi-turn angles included). A row the scalar call would refuse
  * (non-finite input, an invalid model) is handed to the scalar call, so statuses are the scalar
  * path's. The vector kernels exist in librrr built with GCC for x86-64 Linux (glibc); elsewhere
  * only RRR_SIMD_SCALAR is available and RRR_SIMD_AUTO means it.
@@ -56,6 +57,54 @@ RRR_API const char *rrr_simd_name(rrr_simd path);
 RRR_API rrr_status rrr_inverse_dynamics_batch(const rrr_model *m, size_t n, const double q[],
                                               const double qd[], const double qdd[],
                                               double tau[], rrr_simd path, size_t *done);
+
+/**
+ * @brief rrr_regressor of n states: row k of Y is R(q_k, qd_k, qdd_k), 3 x RRR_NP row-major.
+ * @param[in]  n    number of states (0: nothing happens, RRR_OK)
+ * @param[in]  q, qd, qdd  n rows of 3 each
+ * @param[out] Y    n blocks of 3 x RRR_NP (3 * RRR_NP numbers each)
+ * @param[in]  path the kernels (RRR_SIMD_AUTO: the best available)
+ * @param[out] done if not NULL, the rows written (n on RRR_OK; the first row whose scalar call
+ *                  fails otherwise: the rows before it are valid, the others unspecified)
+ * @return RRR_OK; RRR_BAD_INPUT (NULL with n > 0, a path that is not available here); otherwise
+ *         the status rrr_regressor gives row *done.
+ */
+RRR_API rrr_status rrr_regressor_batch(const rrr_model *m, size_t n, const double q[],
+                                       const double qd[], const double qdd[], double Y[],
+                                       rrr_simd path, size_t *done);
+
+/**
+ * @brief rrr_fk of n states: tip positions, and if R is not NULL the tool orientations.
+ * @param[in]  n    number of states (0: nothing happens, RRR_OK)
+ * @param[in]  q    n rows of 3
+ * @param[out] x    n rows of 3 (m)
+ * @param[out] R    NULL, or n row-major 3 x 3 rotations (9 numbers each)
+ * @param[in]  path the kernels (RRR_SIMD_AUTO: the best available)
+ * @param[out] done if not NULL, the rows written (n on RRR_OK; the first row whose scalar call
+ *                  fails otherwise: the rows before it are valid, the others unspecified)
+ * @return RRR_OK; RRR_BAD_INPUT (NULL with n > 0, a path that is not available here); otherwise
+ *         the status rrr_fk gives row *done.
+ */
+RRR_API rrr_status rrr_fk_batch(const rrr_model *m, size_t n, const double q[], double x[],
+                                double R[], rrr_simd path, size_t *done);
+
+/**
+ * @brief rrr_forward_dynamics of n states: row k of qdd = D(q_k)^-1 (tau_k - c - h).
+ *
+ * The vector kernels factorise D by the same 3 x 3 Cholesky steps without branches; a row whose
+ * D is not positive definite, or with a non-finite input or result, is the scalar call's.
+ * @param[in]  n    number of states (0: nothing happens, RRR_OK)
+ * @param[in]  q, qd, tau  n rows of 3 each
+ * @param[out] qdd  n rows of 3
+ * @param[in]  path the kernels (RRR_SIMD_AUTO: the best available)
+ * @param[out] done if not NULL, the rows written (n on RRR_OK; the first row whose scalar call
+ *                  fails otherwise: the rows before it are valid, the others unspecified)
+ * @return RRR_OK; RRR_BAD_INPUT (NULL with n > 0, a path that is not available here); otherwise
+ *         the status rrr_forward_dynamics gives row *done.
+ */
+RRR_API rrr_status rrr_forward_dynamics_batch(const rrr_model *m, size_t n, const double q[],
+                                              const double qd[], const double tau[],
+                                              double qdd[], rrr_simd path, size_t *done);
 
 #ifdef __cplusplus
 }
