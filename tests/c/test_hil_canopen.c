@@ -527,7 +527,7 @@ static void test_mapping_by_sdo(void)
     CHECK(rrr_co_rad_to_inc(1.0, 1u << 20) == 166886); /* 2^20 / (2 pi), rounded */
     CHECK(rrr_co_rad_to_inc(1e30, 1u << 20) == INT32_MAX);
     CHECK(rrr_co_rad_to_inc(-1e30, 1u << 20) == INT32_MIN);
-    CHECK(rrr_co_rad_to_inc(NAN, 1u << 20) == 0);
+    CHECK(rrr_co_rad_to_inc((double)NAN, 1u << 20) == 0);
     /* the RPDO is now the torque alone (2 bytes); the controlword by SDO */
     CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0);
     const uint8_t d2[2] = {0xF4, 0x01};

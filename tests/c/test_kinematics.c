@@ -312,7 +312,7 @@ static void test_fk_frames(const rrr_model *m, rrr_rng *rng)
     }
     double T[RRR_NFRAMES][4][4];
     memset(T, 0, sizeof T);
-    const double q_nan[3] = {0.1, NAN, 0.3}, q_inf[3] = {(double)INFINITY, 0.0, 0.0};
+    const double q_nan[3] = {0.1, (double)NAN, 0.3}, q_inf[3] = {(double)INFINITY, 0.0, 0.0};
     const double q_ok[3] = {0.1, 0.2, 0.3};
     CHECK_STATUS(rrr_fk_frames(m, q_nan, T), RRR_BAD_INPUT);
     CHECK_STATUS(rrr_fk_frames(m, q_inf, T), RRR_BAD_INPUT);

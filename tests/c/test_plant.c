@@ -553,7 +553,7 @@ static void test_stiffness(void)
     CHECK_STATUS(rrr_plant_stiffness(&stiff, &lambda, &field), RRR_TOO_STIFF);
     CHECK(strcmp(field, "b[3]") == 0);
     stiff = m;
-    stiff.w[1][2] = INFINITY;
+    stiff.w[1][2] = (double)INFINITY;
     CHECK_STATUS(rrr_plant_stiffness(&stiff, &lambda, &field), RRR_BAD_MODEL);
     stiff = m;
     stiff.p[0] = -1e3;
