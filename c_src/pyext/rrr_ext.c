@@ -873,6 +873,25 @@ static void raise_failed_row(const map_spec *s, const vec_arg *a, Py_ssize_t i, 
 }
 
 /* The outputs of a map, for parsed and broadcast arguments: one array (or number) or a tuple. */
+/* The result of n_out output objects: the one object, or a tuple of them; the objects move
+ * into the result (their slots set to NULL) when it is made. */
+static PyObject *pack_outputs(PyObject **arrays, int n_out)
+{
+    if (n_out == 1) {
+        PyObject *one = arrays[0];
+        arrays[0] = NULL;
+        return one;
+    }
+    PyObject *tuple = PyTuple_New(n_out);
+    if (tuple != NULL) {
+        for (int j = 0; j < n_out; ++j) {
+            PyTuple_SET_ITEM(tuple, j, arrays[j]);
+            arrays[j] = NULL;
+        }
+    }
+    return tuple;
+}
+
 static PyObject *map_parsed(const rrr_model *m, const map_spec *s, const void *ctx,
                             const vec_arg *a, Py_ssize_t n, int batch)
 {
@@ -906,18 +925,7 @@ static PyObject *map_parsed(const rrr_model *m, const map_spec *s, const void *c
             }
         }
     }
-    if (s->n_out == 1) {
-        result = arrays[0];
-        arrays[0] = NULL;
-    } else {
-        result = PyTuple_New(s->n_out);
-        if (result != NULL) {
-            for (int j = 0; j < s->n_out; ++j) {
-                PyTuple_SET_ITEM(result, j, arrays[j]);
-                arrays[j] = NULL;
-            }
-        }
-    }
+    result = pack_outputs(arrays, s->n_out);
 done:
     for (int j = 0; j < s->n_out; ++j) {
         Py_XDECREF(arrays[j]);
@@ -1150,18 +1158,7 @@ static PyObject *batch_parsed(const rrr_model *m, const map_spec *s, batch_fn fn
         raise_failed_row(s, a, (Py_ssize_t)ok, st);
         goto done;
     }
-    if (s->n_out == 1) {
-        result = arrays[0];
-        arrays[0] = NULL;
-    } else {
-        result = PyTuple_New(s->n_out);
-        if (result != NULL) {
-            for (int j = 0; j < s->n_out; ++j) {
-                PyTuple_SET_ITEM(result, j, arrays[j]);
-                arrays[j] = NULL;
-            }
-        }
-    }
+    result = pack_outputs(arrays, s->n_out);
 done:
     for (int j = 0; j < s->n_out; ++j) {
         Py_XDECREF(arrays[j]);

@@ -37,14 +37,7 @@ void RRR_SIMD_CAT(rrr_simd_inverse_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, 
     const rrr_model *m = &model;
 #pragma omp simd
     for (size_t k = 0; k < n; ++k) {
-        /* rrr_trig_of's formulas (the angle-sum identities for q2 + q3) */
-        rrr_trig t;
-        t.s2 = sin(q[3 * k + 1]);
-        t.c2 = cos(q[3 * k + 1]);
-        t.s3 = sin(q[3 * k + 2]);
-        t.c3 = cos(q[3 * k + 2]);
-        t.s23 = t.s2 * t.c3 + t.c2 * t.s3;
-        t.c23 = t.c2 * t.c3 - t.s2 * t.s3;
+        const rrr_trig t = rrr_trig_of(&q[3 * k]); /* inlined: vector sin, cos */
         rrr_gen_inverse_dynamics(m, &t, &qd[3 * k], &qdd[3 * k], &tau[3 * k]);
     }
 }
@@ -59,58 +52,53 @@ void RRR_SIMD_CAT(rrr_simd_regressor, RRR_SIMD_ISA)(const rrr_model *mp, size_t 
     const rrr_model *m = &model;
 #pragma omp simd
     for (size_t k = 0; k < n; ++k) {
-        rrr_trig t;
-        t.s2 = sin(q[3 * k + 1]);
-        t.c2 = cos(q[3 * k + 1]);
-        t.s3 = sin(q[3 * k + 2]);
-        t.c3 = cos(q[3 * k + 2]);
-        t.s23 = t.s2 * t.c3 + t.c2 * t.s3;
-        t.c23 = t.c2 * t.c3 - t.s2 * t.s3;
+        const rrr_trig t = rrr_trig_of(&q[3 * k]); /* inlined: vector sin, cos */
         rrr_gen_regressor(m, &t, &qd[3 * k], &qdd[3 * k],
                           (double(*)[RRR_NP])(void *)&Y[3 * RRR_NP * k]);
     }
 }
 
-/* rrr_fk's formulas, written as rrr_kinematics.c writes them */
+/* rrr_fk's formulas, written as rrr_kinematics.c writes them: the tip of row k, and the
+ * rotation when R is not NULL (one loop each way, so that neither tests R per state) */
+static inline __attribute__((always_inline)) void fk_row(const rrr_model *m, const double *q,
+                                                        double *x, double *R)
+{
+    const double e = m->d2 + m->d3;
+    const double s1 = sin(q[0]), c1 = cos(q[0]);
+    const rrr_trig t = rrr_trig_of(q);
+    const double r = m->a2 * t.c2 + m->a3 * t.c23;
+    x[0] = c1 * r + e * s1;
+    x[1] = s1 * r - e * c1;
+    x[2] = m->a2 * t.s2 + m->a3 * t.s23 + m->d1;
+    if (R != NULL) {
+        R[0] = c1 * t.c23;
+        R[1] = -c1 * t.s23;
+        R[2] = s1;
+        R[3] = s1 * t.c23;
+        R[4] = -s1 * t.s23;
+        R[5] = -c1;
+        R[6] = t.s23;
+        R[7] = t.c23;
+        R[8] = 0.0;
+    }
+}
+
 void RRR_SIMD_CAT(rrr_simd_fk, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
                                             const double *restrict q, double *restrict x,
                                             double *restrict R)
 {
-    const double a2 = mp->a2, a3 = mp->a3, d1 = mp->d1, e = mp->d2 + mp->d3;
+    const rrr_model model = *mp;
+    const rrr_model *m = &model;
     if (R == NULL) {
 #pragma omp simd
         for (size_t k = 0; k < n; ++k) {
-            const double s1 = sin(q[3 * k]), c1 = cos(q[3 * k]);
-            const double s2 = sin(q[3 * k + 1]), c2 = cos(q[3 * k + 1]);
-            const double s3 = sin(q[3 * k + 2]), c3 = cos(q[3 * k + 2]);
-            const double s23 = s2 * c3 + c2 * s3, c23 = c2 * c3 - s2 * s3;
-            const double r = a2 * c2 + a3 * c23;
-            x[3 * k] = c1 * r + e * s1;
-            x[3 * k + 1] = s1 * r - e * c1;
-            x[3 * k + 2] = a2 * s2 + a3 * s23 + d1;
+            fk_row(m, &q[3 * k], &x[3 * k], NULL);
         }
         return;
     }
 #pragma omp simd
     for (size_t k = 0; k < n; ++k) {
-        const double s1 = sin(q[3 * k]), c1 = cos(q[3 * k]);
-        const double s2 = sin(q[3 * k + 1]), c2 = cos(q[3 * k + 1]);
-        const double s3 = sin(q[3 * k + 2]), c3 = cos(q[3 * k + 2]);
-        const double s23 = s2 * c3 + c2 * s3, c23 = c2 * c3 - s2 * s3;
-        const double r = a2 * c2 + a3 * c23;
-        x[3 * k] = c1 * r + e * s1;
-        x[3 * k + 1] = s1 * r - e * c1;
-        x[3 * k + 2] = a2 * s2 + a3 * s23 + d1;
-        double *Rk = &R[9 * k];
-        Rk[0] = c1 * c23;
-        Rk[1] = -c1 * s23;
-        Rk[2] = s1;
-        Rk[3] = s1 * c23;
-        Rk[4] = -s1 * s23;
-        Rk[5] = -c1;
-        Rk[6] = s23;
-        Rk[7] = c23;
-        Rk[8] = 0.0;
+        fk_row(m, &q[3 * k], &x[3 * k], &R[9 * k]);
     }
 }
 
@@ -144,13 +132,7 @@ void RRR_SIMD_CAT(rrr_simd_forward_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, 
         const double *restrict qdb = &qd[3 * base];
 #pragma omp simd
         for (size_t k = 0; k < nb; ++k) {
-            rrr_trig t;
-            t.s2 = sin(qb[3 * k + 1]);
-            t.c2 = cos(qb[3 * k + 1]);
-            t.s3 = sin(qb[3 * k + 2]);
-            t.c3 = cos(qb[3 * k + 2]);
-            t.s23 = t.s2 * t.c3 + t.c2 * t.s3;
-            t.c23 = t.c2 * t.c3 - t.s2 * t.s3;
+            const rrr_trig t = rrr_trig_of(&qb[3 * k]); /* inlined: vector sin, cos */
             rrr_gen_bias(m, &t, &qdb[3 * k], buf[k].bias);
             rrr_gen_mass_matrix(m, &t, buf[k].D);
             buf[k].pad[0] = buf[k].pad[1] = buf[k].pad[2] = buf[k].pad[3] = 0.0;
