@@ -52,6 +52,8 @@ CAN_LOG = "frames.blf"
 Progress = Callable[[int, int], None]
 #: Over SocketCAN there is no hang-up: the plant ends when the master is silent this long (ms).
 IDLE_MS_SOCKETCAN = 1000
+#: Over SocketCAN, seconds to wait for the plant node's power-on boot-ups (at least).
+POWER_ON_S = 60.0
 
 
 def _lround(x: float) -> int:
@@ -180,7 +182,6 @@ class _Master:
         self.plant, self.timeout = plant, timeout
         self.bus = bus
         self.network = canopen.Network(self.bus)
-        self.network.connect()
         drive: Any = canopen.BaseNode402
         self.nodes: list[Any] = [drive(i, str(EDS_PATH)) for i in node_ids]
         self.frames: queue.Queue[tuple[int, bytes]] = queue.Queue()
@@ -188,6 +189,9 @@ class _Master:
             self.network.add_node(node)
             for cob in (0x180 + node.id, 0x280 + node.id, 0x700 + node.id, 0x80 + node.id):
                 self.network.subscribe(cob, self._on_frame)
+        # the receive thread starts here, once every subscriber is in: over SocketCAN the
+        # power-on boot-ups may be waiting in the socket already
+        self.network.connect()
 
     def _on_frame(self, can_id: int, data: bytearray, timestamp: float) -> None:
         self.frames.put((can_id, bytes(data)))
@@ -209,19 +213,19 @@ class _Master:
         send its boot-up within the timeout. ``power_on`` (SocketCAN, the bus opened before the
         plant started): first the power-on boot-ups, which tell that the plant listens (a frame
         sent before it has bound its socket is lost to it)."""
-        if power_on:
-            self._boot_ups("after the plant node started")
+        if power_on:  # the plant node's start (unzipping its FMU) is not bounded by timeout
+            self._boot_ups("after the plant node started", max(self.timeout, POWER_ON_S))
         self.network.nmt.send_command(0x81)
-        self._boot_ups("after NMT reset node")
+        self._boot_ups("after NMT reset node", self.timeout)
 
-    def _boot_ups(self, when: str) -> None:
+    def _boot_ups(self, when: str, timeout: float) -> None:
         want = {0x700 + n.id for n in self.nodes}
-        deadline = time.monotonic() + self.timeout
+        deadline = time.monotonic() + timeout
         while want:
             got = self._next(deadline, "the boot-up messages")
             if got is None:
                 ids = ", ".join(str(c - 0x700) for c in sorted(want))
-                raise HilError(f"drive(s) {ids} sent no boot-up within {self.timeout:g} s {when}"
+                raise HilError(f"drive(s) {ids} sent no boot-up within {timeout:g} s {when}"
                                ": no such node id on the bus?")
             if got[1] == b"\0":
                 want.discard(got[0])
