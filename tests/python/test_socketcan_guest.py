@@ -25,6 +25,7 @@ import cantools
 import numpy as np
 import pytest
 from can_guest import CanGuest, GuestError, GuestUnavailable, Result
+from guest_python_sides import CANOPEN_MASTERS
 from rrr_robot.hil import framelog
 from rrr_robot.hil.figures import FIGURES
 from rrr_robot.hil.logspec import CONTROLLER_LOG, PLANT_LOG, read_log
@@ -801,3 +802,79 @@ def test_python_side_over_socketcan(python_sides: dict[str, Any], side: str,
             assert a.shape == b.shape and np.abs(a[:, cols] - b[:, cols]).max() < 1e-9, \
                 (log, other)
 
+
+
+# ---- the CANopen masters against the C plant's three CiA 402 drives over vcan0 ----------------
+
+
+@pytest.mark.parametrize("master", sorted(CANOPEN_MASTERS))
+def test_canopen_master_over_socketcan(python_sides: dict[str, Any], master: str,
+                                       tmp_path: Path) -> None:
+    """A CANopen master (``rrr hil canopen --interface socketcan``: canopen.Network on
+    python-can's socketcan interface) against ``rrr_hil_plant --profile canopen`` on vcan0 in
+    the guest, PY_DURATION s of the writing task in lockstep: exit 0, no drive fault; its
+    summary.json, logs and frame log written; the plant's and master's logs equal, bit for bit,
+    the same master over socketcand here on the reference the guest ran and the co-simulation
+    with the PDOs' quantisation; summary.json equals that run's to SUMMARY_TOLERANCE, and the
+    frame counts of every identifier but the heartbeats (wall-clock timed) are the same."""
+    from dataclasses import replace
+
+    from rrr_robot.core.outputs import ResultSet
+    from rrr_robot.hil import canopen_master as cm
+    from rrr_robot.hil.bench import BenchRun
+    from rrr_robot.hil.protocol import PERIOD
+    from rrr_robot.hil.results import bench_result, extend_reference
+    from rrr_robot.sim.cosim import CosimOptions, run_cosim
+
+    case, out = python_sides["cases"].get(f"canopen_{master}"), python_sides["out"]
+    assert case is not None and case["rc"] == 0, (case, python_sides["result"].stderr[-3000:])
+    mine = out / f"canopen_{master}"
+    for name in ("summary.json", "plant.csv", "controller.csv", "frames.rrrcan", "frames.blf"):
+        assert (mine / name).stat().st_size > 0, name
+    s = json.loads((mine / "summary.json").read_text())
+    assert s["side"] == "canopen" and s["controller"]["transport"] == "socketcan"
+    assert s["plant_exit"] == 0 and s["missed_commands"] == 0, s
+    assert framelog.compare(framelog.read_node_log(mine / "frames.rrrcan"),
+                            framelog.read_can_log(mine / "frames.blf")) is None
+
+    # the same master over socketcand here, on the guest's reference
+    z = np.load(out / "canopen_reference.npz")
+    wc = cm.writing_controller(None, "ctc")
+    ref = replace(extend_reference(wc.ref, float(PY_DURATION)), t=z["t"], q=z["q"], qd=z["qd"],
+                  qdd=z["qdd"], x=z["x"])
+    wc = replace(wc, ref=ref)
+    with ResultSet(tmp_path / "host", kind="hil") as rs:
+        mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
+                                     wc.gains, rs.staging)
+        h = cm.write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
+    for name in ("plant.csv", "controller.csv"):
+        assert read_csv(mine / name) == read_csv(tmp_path / "host" / name), name
+
+    # the co-simulation with the PDOs' quantisation on that reference: bit for bit
+    measure, actuate = cm.pdo_quantisation([float(v) for v in wc.controller_model.kt],
+                                           [float(v) for v in wc.model.kt],
+                                           [d.rated_torque_mNm for d in mrun.drives])
+    cosim = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
+                      CosimOptions(step=PERIOD, controller_values=wc.controller_values,
+                                   measure=measure, actuate=actuate))
+    p = read_log(mine / "plant.csv", PLANT_LOG)
+    c = read_log(mine / "controller.csv", CONTROLLER_LOG)
+    run = BenchRun(t=c.col("t"), q=c.group("q"), qd=c.group("qd"), u=c.group("u"),
+                   plant_summary={}, controller_summary={}, u_n=c.group("u_n"),
+                   u_c=c.group("u_c"))
+    bench = bench_result(ref, run, p.rows)
+    assert np.array_equal(bench.q, cosim.q) and np.array_equal(bench.qd, cosim.qd)
+    assert np.array_equal(run.u, cosim.u) and np.array_equal(bench.tip, cosim.tip)
+
+    for key, (rtol, atol) in SUMMARY_TOLERANCE.items():
+        assert _close(_untimed(s[key]), _untimed(h[key]), rtol, atol), key
+    assert s["controller"] == {**h["controller"], "transport": "socketcan"}
+
+    def counts(summary: dict[str, Any]) -> dict[str, Any]:
+        return {i: v["frames"] for i, v in summary["bus"]["by_id"].items()
+                if not 0x701 <= int(i, 16) <= 0x77F}
+
+    assert counts(s) == counts(h) and counts(s)["0x080"] == ref.t.shape[0]
+    print(f"  CANopen master {master} over vcan0: {ref.t.shape[0]} SYNC periods in "
+          f"{case['seconds']:.1f} s in the guest; tip error max "
+          f"{1e3 * s['bench']['tip_error_max']:.4f} mm")
