@@ -878,3 +878,65 @@ def test_canopen_master_over_socketcan(python_sides: dict[str, Any], master: str
     print(f"  CANopen master {master} over vcan0: {ref.t.shape[0]} SYNC periods in "
           f"{case['seconds']:.1f} s in the guest; tip error max "
           f"{1e3 * s['bench']['tip_error_max']:.4f} mm")
+
+
+def test_canopen_nmt_and_heartbeat_loss_on_vcan(guest: CanGuest, bench_inputs: dict[str, Any],
+                                                tmp_path_factory: pytest.TempPathFactory
+                                                ) -> None:
+    """``rrr_hil_plant --profile canopen`` on vcan0, driven by can-utils' cansend and recorded by
+    candump: the three power-on boot-ups, NMT reset node (boot-ups again), NMT start
+    (heartbeats in operational, 0x05), node 2 set by an expedited SDO download to monitor a
+    master heartbeat (0x1016 sub 1 = node 0x7F, 100 ms) that comes and then stops: node 2 sends
+    EMCY 0x8130 with the error register 0x11 once, the others do not; NMT stop (heartbeats
+    0x04); the plant then ends on the silence. One master heartbeat only: a cansend process
+    takes longer than 100 ms to start under emulation, so a train of them would be lost between
+    each two (measured: ten sent 20 ms apart, ten losses)."""
+    work = guest.scratch / "canopen_nmt"
+    work.mkdir()
+    w = shlex.quote(str(work))
+    plant = shlex.join([str(node_executable("plant")), *bench_inputs["plant_args"],
+                        "--profile", "canopen", "--socketcan", "vcan0",
+                        "--idle-timeout-ms", "1500"])
+    script = RECORDER + f"""
+record_start vcan0
+{plant} > {w}/plant.out 2> {w}/plant.err &
+P=$!
+wait_for ' 703#00' $L || {{ echo "no boot-up" >&2; exit 91; }}
+cansend vcan0 000#8100
+n=0; until [ "$(grep -c ' 703#00' $L)" -ge 2 ]; do sleep 0.05; n=$((n+1));
+  [ $n -gt 400 ] && {{ echo "no boot-up after reset" >&2; exit 93; }}; done
+cansend vcan0 000#0100
+wait_for ' 702#05' $L || {{ echo "no heartbeat in operational" >&2; exit 94; }}
+cansend vcan0 602#2316100164007F00
+wait_for ' 582#60161001' $L || {{ echo "no SDO answer" >&2; exit 95; }}
+cansend vcan0 77F#05
+wait_for ' 082#308111' $L || {{ echo "no EMCY" >&2; exit 96; }}
+cansend vcan0 000#0200
+wait_for ' 702#04' $L || {{ echo "no heartbeat in stopped" >&2; exit 97; }}
+wait $P
+echo "plant $?" > {w}/exit
+record_stop vcan0 {w}
+"""
+    (work / "run.sh").write_text(script)
+    r = run(guest, f"sh {work / 'run.sh'}", "CANopen plant on vcan0 (cansend, candump)",
+            timeout=120)
+    assert r.rc == 0, (r.stderr, (work / "plant.err").read_text() if (work / "plant.err")
+                       .exists() else "")
+    exits = dict(line.split() for line in (work / "exit").read_text().splitlines())
+    # (exit 0, not 7: the plant's count of latched faults misses the heartbeat consumer's)
+    assert exits["candump"] == "0" and exits["plant"] in ("0", str(EXIT_SAFETY)), exits
+    bus = candump_messages(work / "candump.log")
+    frames = [(m.arbitration_id, bytes(m.data)) for m in bus]
+    for node in (1, 2, 3):
+        assert frames.count((0x700 + node, b"\0")) == 2  # power-on and after the reset
+        assert (0x700 + node, b"\x05") in frames and (0x700 + node, b"\x04") in frames
+    emcy = [(cob, data) for cob, data in frames if 0x81 <= cob <= 0x83]
+    assert len(emcy) == 1 and emcy[0][0] == 0x82, emcy
+    assert emcy[0][1][:3] == bytes([0x30, 0x81, 0x11]), emcy
+    s = summary_lines((work / "plant.out").read_text())
+    assert s["profile"] == "canopen" and s["transport"] == "socketcan"
+    hb = [d["hb_lost"] for d in s["drives"]]
+    assert hb == [0, 1, 0] and [d["state"] for d in s["drives"]] == [
+        "SWITCH ON DISABLED", "FAULT", "SWITCH ON DISABLED"], s["drives"]
+    assert (s["drives"][1]["error_code"], s["drives"][1]["error_register"]) == (0x8130, 0x11)
+    assert [d["nmt"] for d in s["drives"]] == [4, 4, 4]  # stopped
