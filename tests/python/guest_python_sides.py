@@ -17,6 +17,9 @@ writing task (scenario ctc), each in a folder of OUT:
 - ``plant``: ``rrr hil plant --interface socketcan`` (the plant FMU behind the C supervisor)
   and the C controller node, started when the Python plant's boot-up heartbeat is on the bus;
   the C controller's logs go to ``plant/node``.
+- ``canopen_python``: ``rrr hil canopen --interface socketcan`` (the Python CANopen master on
+  python-can's socketcan interface) against the C plant's three CiA 402 drives, which it
+  starts; the reference it ran goes to ``canopen_reference.npz``.
 
 Writes OUT/cases.json: each case's exit statuses and seconds. The nodes' stdout and stderr go
 to files beside their logs.
@@ -72,6 +75,9 @@ def inject_bad_crc(channel: str, injected: dict[str, Any], listening: threading.
 
 #: Period after whose Sync the bad frame goes on the bus (of the 1001 of a 1 s run).
 INJECT_AT = 200
+#: The CANopen masters run against the C plant node (``rrr_hil_plant --profile canopen``) over
+#: SocketCAN: kind -> the rrr command (``--channel``, ``--out`` and the duration are added).
+CANOPEN_MASTERS = {"python": ["hil", "canopen", "--interface", "socketcan"]}
 
 
 def main(argv: list[str]) -> int:
@@ -157,6 +163,20 @@ def main(argv: list[str]) -> int:
         (node / "controller.err").write_text(ctrl.stderr)
     cases["plant"] = {"rc": rc, "node_rc": cs["exit"], "seconds": time.monotonic() - t0,
                       "error": started.get("error")}
+
+    # the CANopen masters (CANOPEN_MASTERS) against the C plant's three CiA 402 drives on
+    # CHANNEL, and the reference they ran (computed here: its last bits are this CPU's)
+    import numpy as np
+    from rrr_robot.hil.canopen_master import writing_controller
+    from rrr_robot.hil.results import extend_reference
+
+    ref = extend_reference(writing_controller(None, "ctc").ref, float(duration))
+    np.savez(out / "canopen_reference.npz", t=ref.t, q=ref.q, qd=ref.qd, qdd=ref.qdd, x=ref.x)
+    for kind, argv in CANOPEN_MASTERS.items():
+        t0 = time.monotonic()
+        rc = rrr([*argv, "--channel", channel, "--out", str(out / f"canopen_{kind}"),
+                  "--no-figures", *common])
+        cases[f"canopen_{kind}"] = {"rc": rc, "seconds": time.monotonic() - t0}
     cases["total_s"] = time.monotonic() - t_start
     (out / "cases.json").write_text(json.dumps(cases, indent=1))
     subprocess.run(["sync"], check=False)

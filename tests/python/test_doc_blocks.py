@@ -40,6 +40,7 @@ NOT_RUN_HERE = {
                           "# DIR: the unzipped plant FMU"),
     ("docs/socketcan.md", "ip link set can0 type can bitrate 1000000 restart-ms 100   "
                           "# 1 Mbit/s; restart after bus-off"),
+    ("docs/canopen.md", "sudo ip link add dev vcan0 type vcan && sudo ip link set vcan0 up"),
     ("docs/c-library.md", "cmake -S . -B build && cmake --build build -j2"),
     ("docs/sweeps.md", "dask scheduler --host 0.0.0.0 --port 8786"),
 }

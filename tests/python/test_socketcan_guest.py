@@ -25,6 +25,7 @@ import cantools
 import numpy as np
 import pytest
 from can_guest import CanGuest, GuestError, GuestUnavailable, Result
+from guest_python_sides import CANOPEN_MASTERS
 from rrr_robot.hil import framelog
 from rrr_robot.hil.figures import FIGURES
 from rrr_robot.hil.logspec import CONTROLLER_LOG, PLANT_LOG, read_log
@@ -801,3 +802,141 @@ def test_python_side_over_socketcan(python_sides: dict[str, Any], side: str,
             assert a.shape == b.shape and np.abs(a[:, cols] - b[:, cols]).max() < 1e-9, \
                 (log, other)
 
+
+
+# ---- the CANopen masters against the C plant's three CiA 402 drives over vcan0 ----------------
+
+
+@pytest.mark.parametrize("master", sorted(CANOPEN_MASTERS))
+def test_canopen_master_over_socketcan(python_sides: dict[str, Any], master: str,
+                                       tmp_path: Path) -> None:
+    """A CANopen master (``rrr hil canopen --interface socketcan``: canopen.Network on
+    python-can's socketcan interface) against ``rrr_hil_plant --profile canopen`` on vcan0 in
+    the guest, PY_DURATION s of the writing task in lockstep: exit 0, no drive fault; its
+    summary.json, logs and frame log written; the plant's and master's logs equal, bit for bit,
+    the same master over socketcand here on the reference the guest ran and the co-simulation
+    with the PDOs' quantisation; summary.json equals that run's to SUMMARY_TOLERANCE, and the
+    frame counts of every identifier but the heartbeats (wall-clock timed) are the same."""
+    from dataclasses import replace
+
+    from rrr_robot.core.outputs import ResultSet
+    from rrr_robot.hil import canopen_master as cm
+    from rrr_robot.hil.bench import BenchRun
+    from rrr_robot.hil.protocol import PERIOD
+    from rrr_robot.hil.results import bench_result, extend_reference
+    from rrr_robot.sim.cosim import CosimOptions, run_cosim
+
+    case, out = python_sides["cases"].get(f"canopen_{master}"), python_sides["out"]
+    assert case is not None and case["rc"] == 0, (case, python_sides["result"].stderr[-3000:])
+    mine = out / f"canopen_{master}"
+    for name in ("summary.json", "plant.csv", "controller.csv", "frames.rrrcan", "frames.blf"):
+        assert (mine / name).stat().st_size > 0, name
+    s = json.loads((mine / "summary.json").read_text())
+    assert s["side"] == "canopen" and s["controller"]["transport"] == "socketcan"
+    assert s["plant_exit"] == 0 and s["missed_commands"] == 0, s
+    assert framelog.compare(framelog.read_node_log(mine / "frames.rrrcan"),
+                            framelog.read_can_log(mine / "frames.blf")) is None
+
+    # the same master over socketcand here, on the guest's reference
+    z = np.load(out / "canopen_reference.npz")
+    wc = cm.writing_controller(None, "ctc")
+    ref = replace(extend_reference(wc.ref, float(PY_DURATION)), t=z["t"], q=z["q"], qd=z["qd"],
+                  qdd=z["qdd"], x=z["x"])
+    wc = replace(wc, ref=ref)
+    with ResultSet(tmp_path / "host", kind="hil") as rs:
+        mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
+                                     wc.gains, rs.staging)
+        h = cm.write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
+    for name in ("plant.csv", "controller.csv"):
+        assert read_csv(mine / name) == read_csv(tmp_path / "host" / name), name
+
+    # the co-simulation with the PDOs' quantisation on that reference: bit for bit
+    measure, actuate = cm.pdo_quantisation([float(v) for v in wc.controller_model.kt],
+                                           [float(v) for v in wc.model.kt],
+                                           [d.rated_torque_mNm for d in mrun.drives])
+    cosim = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
+                      CosimOptions(step=PERIOD, controller_values=wc.controller_values,
+                                   measure=measure, actuate=actuate))
+    p = read_log(mine / "plant.csv", PLANT_LOG)
+    c = read_log(mine / "controller.csv", CONTROLLER_LOG)
+    run = BenchRun(t=c.col("t"), q=c.group("q"), qd=c.group("qd"), u=c.group("u"),
+                   plant_summary={}, controller_summary={}, u_n=c.group("u_n"),
+                   u_c=c.group("u_c"))
+    bench = bench_result(ref, run, p.rows)
+    assert np.array_equal(bench.q, cosim.q) and np.array_equal(bench.qd, cosim.qd)
+    assert np.array_equal(run.u, cosim.u) and np.array_equal(bench.tip, cosim.tip)
+
+    for key, (rtol, atol) in SUMMARY_TOLERANCE.items():
+        assert _close(_untimed(s[key]), _untimed(h[key]), rtol, atol), key
+    assert s["controller"] == {**h["controller"], "transport": "socketcan"}
+
+    def counts(summary: dict[str, Any]) -> dict[str, Any]:
+        return {i: v["frames"] for i, v in summary["bus"]["by_id"].items()
+                if not 0x701 <= int(i, 16) <= 0x77F}
+
+    assert counts(s) == counts(h) and counts(s)["0x080"] == ref.t.shape[0]
+    print(f"  CANopen master {master} over vcan0: {ref.t.shape[0]} SYNC periods in "
+          f"{case['seconds']:.1f} s in the guest; tip error max "
+          f"{1e3 * s['bench']['tip_error_max']:.4f} mm")
+
+
+def test_canopen_nmt_and_heartbeat_loss_on_vcan(guest: CanGuest, bench_inputs: dict[str, Any],
+                                                tmp_path_factory: pytest.TempPathFactory
+                                                ) -> None:
+    """``rrr_hil_plant --profile canopen`` on vcan0, driven by can-utils' cansend and recorded by
+    candump: the three power-on boot-ups, NMT reset node (boot-ups again), NMT start
+    (heartbeats in operational, 0x05), node 2 set by an expedited SDO download to monitor a
+    master heartbeat (0x1016 sub 1 = node 0x7F, 100 ms) that comes and then stops: node 2 sends
+    EMCY 0x8130 with the error register 0x11 once, the others do not; NMT stop (heartbeats
+    0x04); the plant then ends on the silence. One master heartbeat only: a cansend process
+    takes longer than 100 ms to start under emulation, so a train of them would be lost between
+    each two (measured: ten sent 20 ms apart, ten losses)."""
+    work = guest.scratch / "canopen_nmt"
+    work.mkdir()
+    w = shlex.quote(str(work))
+    plant = shlex.join([str(node_executable("plant")), *bench_inputs["plant_args"],
+                        "--profile", "canopen", "--socketcan", "vcan0",
+                        "--idle-timeout-ms", "1500"])
+    script = RECORDER + f"""
+record_start vcan0
+{plant} > {w}/plant.out 2> {w}/plant.err &
+P=$!
+wait_for ' 703#00' $L || {{ echo "no boot-up" >&2; exit 91; }}
+cansend vcan0 000#8100
+n=0; until [ "$(grep -c ' 703#00' $L)" -ge 2 ]; do sleep 0.05; n=$((n+1));
+  [ $n -gt 400 ] && {{ echo "no boot-up after reset" >&2; exit 93; }}; done
+cansend vcan0 000#0100
+wait_for ' 702#05' $L || {{ echo "no heartbeat in operational" >&2; exit 94; }}
+cansend vcan0 602#2316100164007F00
+wait_for ' 582#60161001' $L || {{ echo "no SDO answer" >&2; exit 95; }}
+cansend vcan0 77F#05
+wait_for ' 082#308111' $L || {{ echo "no EMCY" >&2; exit 96; }}
+cansend vcan0 000#0200
+wait_for ' 702#04' $L || {{ echo "no heartbeat in stopped" >&2; exit 97; }}
+wait $P
+echo "plant $?" > {w}/exit
+record_stop vcan0 {w}
+"""
+    (work / "run.sh").write_text(script)
+    r = run(guest, f"sh {work / 'run.sh'}", "CANopen plant on vcan0 (cansend, candump)",
+            timeout=120)
+    assert r.rc == 0, (r.stderr, (work / "plant.err").read_text() if (work / "plant.err")
+                       .exists() else "")
+    exits = dict(line.split() for line in (work / "exit").read_text().splitlines())
+    # (exit 0, not 7: the plant's count of latched faults misses the heartbeat consumer's)
+    assert exits["candump"] == "0" and exits["plant"] in ("0", str(EXIT_SAFETY)), exits
+    bus = candump_messages(work / "candump.log")
+    frames = [(m.arbitration_id, bytes(m.data)) for m in bus]
+    for node in (1, 2, 3):
+        assert frames.count((0x700 + node, b"\0")) == 2  # power-on and after the reset
+        assert (0x700 + node, b"\x05") in frames and (0x700 + node, b"\x04") in frames
+    emcy = [(cob, data) for cob, data in frames if 0x81 <= cob <= 0x83]
+    assert len(emcy) == 1 and emcy[0][0] == 0x82, emcy
+    assert emcy[0][1][:3] == bytes([0x30, 0x81, 0x11]), emcy
+    s = summary_lines((work / "plant.out").read_text())
+    assert s["profile"] == "canopen" and s["transport"] == "socketcan"
+    hb = [d["hb_lost"] for d in s["drives"]]
+    assert hb == [0, 1, 0] and [d["state"] for d in s["drives"]] == [
+        "SWITCH ON DISABLED", "FAULT", "SWITCH ON DISABLED"], s["drives"]
+    assert (s["drives"][1]["error_code"], s["drives"][1]["error_register"]) == (0x8130, 0x11)
+    assert [d["nmt"] for d in s["drives"]] == [4, 4, 4]  # stopped

@@ -327,7 +327,8 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
                                          wc.gains, rs.staging,
                                          node_ids=args.node_ids or cm.DEFAULT_NODE_IDS,
                                          timeout=args.timeout,
-                                         progress=bars.callback("CANopen master"))
+                                         progress=bars.callback("CANopen master"),
+                                         interface=args.interface, channel=args.channel)
         s = cm.write_master_results(rs, wc, mrun, scenario=args.scenario,
                                     figures=not args.no_figures)
     b, unq = s["bench"], s["unquantised_cosim"]
@@ -544,6 +545,12 @@ def register_cli(subparsers: Any) -> None:
     g.add_argument("--timeout", type=duration_seconds, default=5.0, metavar="S",
                    help="seconds to wait for a boot-up, an SDO answer or a period's TPDOs "
                    "(default 5)")
+    g.add_argument("--interface", default="socketcand", choices=["socketcand", "socketcan"],
+                   help="socketcand: the plant node serves the socketcand protocol on loopback "
+                   "TCP (the default); socketcan: the plant and the master (python-can's "
+                   "socketcan interface) on the SocketCAN interface --channel")
+    g.add_argument("--channel", default="vcan0",
+                   help="with --interface socketcan: the interface (default vcan0)")
     co.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     add_verbosity_arguments(co)
     co.set_defaults(func=_cmd_canopen)

@@ -50,6 +50,10 @@ NODE_FRAMES = "frames.rrrcan"
 CAN_LOG = "frames.blf"
 
 Progress = Callable[[int, int], None]
+#: Over SocketCAN there is no hang-up: the plant ends when the master is silent this long (ms).
+IDLE_MS_SOCKETCAN = 1000
+#: Over SocketCAN, seconds to wait for the plant node's power-on boot-ups (at least).
+POWER_ON_S = 60.0
 
 
 def _lround(x: float) -> int:
@@ -169,13 +173,15 @@ def _quiet_p402() -> Iterator[None]:
 
 
 class _Master:
-    def __init__(self, plant: NodeProcess, node_ids: Sequence[int], timeout: float) -> None:
+    def __init__(self, bus: Any, plant: NodeProcess | None, node_ids: Sequence[int],
+                 timeout: float) -> None:
+        """On the python-can ``bus``; ``plant``: the node whose end stops a wait (set later
+        when the bus is opened before the plant starts, as SocketCAN needs)."""
         import canopen
 
         self.plant, self.timeout = plant, timeout
-        self.bus = open_bus("socketcand", port=int(plant.port or 0))
+        self.bus = bus
         self.network = canopen.Network(self.bus)
-        self.network.connect()
         drive: Any = canopen.BaseNode402
         self.nodes: list[Any] = [drive(i, str(EDS_PATH)) for i in node_ids]
         self.frames: queue.Queue[tuple[int, bytes]] = queue.Queue()
@@ -183,6 +189,9 @@ class _Master:
             self.network.add_node(node)
             for cob in (0x180 + node.id, 0x280 + node.id, 0x700 + node.id, 0x80 + node.id):
                 self.network.subscribe(cob, self._on_frame)
+        # the receive thread starts here, once every subscriber is in: over SocketCAN the
+        # power-on boot-ups may be waiting in the socket already
+        self.network.connect()
 
     def _on_frame(self, can_id: int, data: bytearray, timestamp: float) -> None:
         self.frames.put((can_id, bytes(data)))
@@ -195,22 +204,29 @@ class _Master:
             try:
                 return self.frames.get(timeout=min(left, 0.2))
             except queue.Empty:
-                if not self.plant.running():
+                if self.plant is not None and not self.plant.running():
                     raise HilError(f"the plant node ended while the master waited for {what}: "
                                    f"{self.plant.how_it_ended()}") from None
 
-    def boot(self) -> None:
+    def boot(self, power_on: bool = False) -> None:
         """NMT reset node (a socketcand server drops the power-on boot-up): every drive must
-        send its boot-up within the timeout."""
+        send its boot-up within the timeout. ``power_on`` (SocketCAN, the bus opened before the
+        plant started): first the power-on boot-ups, which tell that the plant listens (a frame
+        sent before it has bound its socket is lost to it)."""
+        if power_on:  # the plant node's start (unzipping its FMU) is not bounded by timeout
+            self._boot_ups("after the plant node started", max(self.timeout, POWER_ON_S))
         self.network.nmt.send_command(0x81)
+        self._boot_ups("after NMT reset node", self.timeout)
+
+    def _boot_ups(self, when: str, timeout: float) -> None:
         want = {0x700 + n.id for n in self.nodes}
-        deadline = time.monotonic() + self.timeout
+        deadline = time.monotonic() + timeout
         while want:
             got = self._next(deadline, "the boot-up messages")
             if got is None:
                 ids = ", ".join(str(c - 0x700) for c in sorted(want))
-                raise HilError(f"drive(s) {ids} sent no boot-up within {self.timeout:g} s after "
-                               "NMT reset node: no such node id on the bus?")
+                raise HilError(f"drive(s) {ids} sent no boot-up within {timeout:g} s {when}"
+                               ": no such node id on the bus?")
             if got[1] == b"\0":
                 want.discard(got[0])
 
@@ -267,6 +283,8 @@ class _Master:
                 node.rpdo[1].transmit()
             self.network.sync.transmit()
         except (can.CanError, OSError) as exc:
+            if self.plant is None:
+                raise HilError(f"SYNC {k}: the bus failed ({' '.join(str(exc).split())})") from exc
             self.plant.died(1.0)  # a plant that was killed: give it the time to be reaped
             lost = ("the plant node " + self.plant.how_it_ended() if not self.plant.running()
                     else "the bus failed")
@@ -310,13 +328,19 @@ class _Master:
 def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                        qdd_ref: FloatArray, model: Model, gains: CtcGains, work: Path, *,
                        node_ids: Sequence[int] = DEFAULT_NODE_IDS, timeout: float = 5.0,
-                       progress: Progress | None = None) -> MasterRun:
+                       progress: Progress | None = None, interface: str = "socketcand",
+                       channel: str = "vcan0") -> MasterRun:
     """Start ``rrr_hil_plant --profile canopen`` (logs ``work``/plant.csv and the frame log
     NODE_FRAMES, the arm at q_ref[0],
     qd_ref[0]) and master its drives ``node_ids`` along the reference with the computed-torque
     law of ``model`` (the controller's) and ``gains``: u_k = ctc(x_k decoded from the TPDOs of
-    SYNC k), target torque = k_t u_k in per mille. HilError when a drive does not boot or
+    SYNC k), target torque = k_t u_k in per mille. ``interface``: ``socketcand`` (the plant
+    is the server on loopback TCP) or ``socketcan`` (both on the SocketCAN interface
+    ``channel``, python-can's socketcan interface under ``canopen.Network``; the plant ends
+    IDLE_MS_SOCKETCAN after the master's NMT stop). HilError when a drive does not boot or
     enable, on an SDO abort, a lost plant or a timeout (``timeout`` s per wait)."""
+    if interface not in ("socketcand", "socketcan"):
+        raise BadInputError(f"interface must be socketcand or socketcan, got {interface!r}")
     n = t.shape[0]
     if n < 2 or q_ref.shape != (n, 3):
         raise BadInputError(f"the reference needs at least 2 periods of 3 joints, got "
@@ -327,11 +351,24 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     q_rec, qd_rec, out = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 9))
     pm = np.zeros((n, 3), dtype=np.int64)
     start = time.perf_counter()
-    with start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=Path(work) / "plant.csv",
-                     frame_log=Path(work) / NODE_FRAMES, extra=["--profile", "canopen"]) as plant:
-        master = _Master(plant, node_ids, timeout)
+    sc = interface == "socketcan"
+    # SocketCAN: the master's socket first, so that the plant's power-on boot-ups reach it
+    bus = open_bus("socketcan", channel=channel) if sc else None
+    try:
+        plant = start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=Path(work) / "plant.csv",
+                            frame_log=Path(work) / NODE_FRAMES, socketcan=channel if sc else None,
+                            extra=["--profile", "canopen",
+                                   *(["--idle-timeout-ms", str(IDLE_MS_SOCKETCAN)] if sc
+                                     else [])])
+    except BaseException:
+        if bus is not None:
+            bus.shutdown()
+        raise
+    with plant:
+        master = _Master(bus if sc else open_bus("socketcand", port=int(plant.port or 0)),
+                         plant, node_ids, timeout)
         try:
-            master.boot()
+            master.boot(power_on=sc)
             drives = master.configure()
             master.enable()
             every = max(1, n // 100)
@@ -357,7 +394,7 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
         raise HilError(f"the plant node ended with exit {summary.get('exit')} "
                        f"(drive faults {summary.get('drive_faults')}): {plant.stderr.strip()}")
     run = BenchRun(t=t, q=q_rec, qd=qd_rec, u=out[:, 0:3], plant_summary=summary,
-                   controller_summary={"exit": 0, "profile": "canopen",
+                   controller_summary={"exit": 0, "profile": "canopen", "transport": interface,
                                        "node_ids": list(node_ids)},
                    u_n=out[:, 3:6], u_c=out[:, 6:9], wall_time=time.perf_counter() - start)
     return MasterRun(run, pm, drives, summary)
