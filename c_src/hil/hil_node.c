@@ -55,6 +55,17 @@ int rrr_hil_parse_vec3(const char *s, double v[3])
     return 0;
 }
 
+int rrr_hil_parse_node_ids(const char *s, uint8_t ids[3])
+{
+    double v[3];
+    int ok = rrr_hil_parse_vec3(s, v) == 0;
+    for (int j = 0; ok && j < 3; ++j) {
+        ok = v[j] >= 1.0 && v[j] <= 127.0 && v[j] == (double)(int)v[j];
+        ids[j] = ok ? (uint8_t)v[j] : 0u;
+    }
+    return ok && ids[0] != ids[1] && ids[0] != ids[2] && ids[1] != ids[2] ? 0 : -1;
+}
+
 /* ---- exit statuses --------------------------------------------------------------------------- */
 
 const char *rrr_hil_exit_str(int code)

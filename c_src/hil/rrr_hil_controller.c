@@ -35,6 +35,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "hil_canopen_master.h"
 #include "hil_codec.h"
 #include "hil_node.h"
 #include "rrr_hil_logs.h"
@@ -53,6 +54,8 @@ typedef struct opts {
     rrr_hil_rt_opts rt;
     const char *sets[64]; /* "NAME=VALUE" model parameters (--set), applied in order */
     int n_sets;
+    int canopen;         /* --profile canopen: master of three CiA 402 drives */
+    uint8_t node_ids[3]; /* --node-ids a,b,c (default 1,2,3) */
 } opts;
 
 typedef struct ctrl {
@@ -78,6 +81,13 @@ typedef struct ctrl {
     uint32_t k;             /* current period (for the exit line) */
     char why[320];          /* how the run ended (the exit line) */
     FILE *log;
+    /* --profile canopen */
+    uint32_t rated_mNm[3];   /* 0x6076 of each drive */
+    uint32_t increments[3];  /* 0x608F sub 1 (per revolution, sub 2 = 1) */
+    rrr_com_feedback fb[3];  /* TPDO1/TPDO2 of the current SYNC */
+    uint32_t syncs;          /* SYNCs sent */
+    uint32_t sdo_transfers;  /* SDO transfers confirmed */
+    int16_t pm_max[3];       /* largest |target torque| sent, per mille */
 } ctrl;
 
 static void usage(void)
@@ -88,12 +98,17 @@ static void usage(void)
             "       [--realtime [--fifo PRIO] [--mlock] [--cpu N] [--spin-us N]\n"
             "       [--latency-log FILE.csv]]\n"
             "       [--kp a,b,c] [--kd a,b,c] [--no-feedforward] [--set NAME=VALUE]...\n"
-            "       [--timeout-ms N] [--log FILE.csv]\n"
+            "       [--timeout-ms N] [--log FILE.csv] [--profile dbc|canopen]\n"
+            "       [--node-ids a,b,c]\n"
             "  the model is the default robot (rrr_model_default) with the --set parameters\n"
             "  (named as in the FMUs: d1, a2, a3, d2, d3, g, u_max, p[k], kt[i], b[i], f[i,k],\n"
             "  w[i,k]), so the controller's model may differ from the plant's; gains default\n"
             "  to rrr_ctc_gains_default; --timeout-ms (5000): longest wait for a joint state\n"
             "  real time: Sync is not sent (it is the lockstep time base)\n"
+            "  --profile canopen: a CANopen master of three CiA 402 drives (node ids --node-ids,\n"
+            "  default 1,2,3): NMT, SDO configuration (CST), the 402 state machine to\n"
+            "  OPERATION ENABLED, then one SYNC per period with the target torques (lockstep\n"
+            "  only; docs/canopen.md)\n"
             RRR_HIL_RT_USAGE
             "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault,\n"
             "  7 completed but the plant's safety policy fired (PlantStatus: a fault latched or\n"
@@ -106,6 +121,9 @@ static int parse_args(int argc, char **argv, opts *o)
     (void)rrr_ctc_gains_default(&o->gains);
     o->timeout_ms = 5000;
     rrr_hil_rt_opts_default(&o->rt);
+    o->node_ids[0] = 1;
+    o->node_ids[1] = 2;
+    o->node_ids[2] = 3;
     for (int i = 1; i < argc; ++i) {
         int r = rrr_hil_link_arg(&o->link, argc, argv, &i, PROG);
         if (r == 0) {
@@ -147,6 +165,18 @@ static int parse_args(int argc, char **argv, opts *o)
                     fprintf(stderr, PROG ": %s: expected three numbers a,b,c, got '%s'\n", a, v);
                     return -1;
                 }
+            } else if (strcmp(a, "--profile") == 0) {
+                if (strcmp(v, "dbc") != 0 && strcmp(v, "canopen") != 0) {
+                    fprintf(stderr, PROG ": --profile: expected 'dbc' or 'canopen', got '%s'\n", v);
+                    return -1;
+                }
+                o->canopen = strcmp(v, "canopen") == 0;
+            } else if (strcmp(a, "--node-ids") == 0) {
+                if (rrr_hil_parse_node_ids(v, o->node_ids) != 0) {
+                    fprintf(stderr, PROG ": --node-ids: expected three distinct node ids 1..127 "
+                                         "a,b,c, got '%s'\n", v);
+                    return -1;
+                }
             } else if (strcmp(a, "--timeout-ms") == 0) {
                 const long x = strtol(v, &end, 10);
                 if (*end != '\0' || x < 0 || x > 3600000) {
@@ -162,6 +192,11 @@ static int parse_args(int argc, char **argv, opts *o)
     }
     if (o->ref_path == NULL) {
         fprintf(stderr, PROG ": --reference REF.csv is required\n");
+        return -1;
+    }
+    if (o->canopen && o->realtime) {
+        fprintf(stderr, PROG ": --profile canopen runs in lockstep (one SYNC per period): "
+                             "--realtime is not supported with it\n");
         return -1;
     }
     return 0;
@@ -462,6 +497,332 @@ static int run_realtime(ctrl *c, const opts *o, FILE *latency_log)
     return rc;
 }
 
+/* ---- --profile canopen: a CANopen master of three CiA 402 drives (docs/canopen.md) ---------- */
+
+/* The PDO mapping this master decodes, as 0x1600/0x1A00/0x1A01 hold it (index << 16 | sub << 8 |
+ * bits), and the COB-IDs of RPDO1, TPDO1, TPDO2 (0x1400/0x1800/0x1801 sub 1) less the node id. */
+static const struct {
+    uint16_t map_index, comm_index, cob_base;
+    uint32_t entries[2];
+} CO_PDOS[3] = {{0x1600u, 0x1400u, 0x200u, {0x60400010u, 0x60710010u}},
+                {0x1A00u, 0x1800u, 0x180u, {0x60410010u, 0x60640020u}},
+                {0x1A01u, 0x1801u, 0x280u, {0x606C0020u, 0x60770010u}}};
+#define CO_SW_MASK 0x6Fu
+
+/* The next frame within the deadline; 0, or an exit status with why set. */
+static int co_recv(ctrl *c, int64_t deadline, const opts *o, const char *what, rrr_hil_frame *f)
+{
+    for (;;) {
+        if (rrr_hil_stop_requested()) {
+            return interrupted(c);
+        }
+        const int64_t left = deadline - now_ms();
+        if (left <= 0) {
+            return end_run(c, RRR_HIL_EXIT_PEER_LOST, "plant lost: no %s within %d ms (--timeout-ms)",
+                           what, o->timeout_ms);
+        }
+        const rrr_hil_io io = rrr_hil_recv(c->tr, f, (int)(left < 100 ? left : 100) * 1000);
+        if (io == RRR_HIL_IO_OK) {
+            return 0;
+        }
+        if (io != RRR_HIL_IO_TIMEOUT) {
+            return plant_lost(c, what, io);
+        }
+    }
+}
+
+/* One expedited SDO transfer (download: size 1, 2 or 4 bytes of *value; upload: size 0, the
+ * value into *value). 0, or an exit status with why set: an abort or an answer this master cannot
+ * use is a setup failure, no answer within --timeout-ms a lost plant. */
+static int co_sdo(ctrl *c, const opts *o, uint8_t node, uint16_t index, uint8_t sub,
+                  unsigned size, uint32_t *value)
+{
+    char what[96];
+    const int upload = size == 0u;
+    (void)snprintf(what, sizeof what, "answer to the SDO %s of drive %u, 0x%04X sub %u",
+                   upload ? "upload" : "download", (unsigned)node, (unsigned)index, (unsigned)sub);
+    rrr_hil_frame f;
+    if ((upload ? rrr_com_sdo_upload(node, index, sub, &f)
+                : rrr_com_sdo_download(node, index, sub, *value, size, &f)) != 0) {
+        return end_run(c, RRR_HIL_EXIT_FAULT, "SDO request of drive %u cannot be encoded",
+                       (unsigned)node);
+    }
+    int rc = send_frame(c, &f, "send an SDO request");
+    const int64_t deadline = now_ms() + o->timeout_ms;
+    while (rc == 0) {
+        rc = co_recv(c, deadline, o, what, &f);
+        uint32_t v = 0;
+        const rrr_com_sdo_answer a =
+            rc == 0 ? rrr_com_sdo_reply(&f, node, index, sub, upload, &v) : RRR_COM_SDO_OTHER;
+        if (a == RRR_COM_SDO_DONE) {
+            ++c->sdo_transfers;
+            if (upload) {
+                *value = v;
+            }
+            return 0;
+        }
+        if (a == RRR_COM_SDO_ABORT) {
+            return end_run(c, RRR_HIL_EXIT_SETUP, "drive %u: SDO %s of 0x%04X sub %u aborted: "
+                           "code 0x%08X (CiA 301)", (unsigned)node, upload ? "upload" : "download",
+                           (unsigned)index, (unsigned)sub, v);
+        }
+        if (a == RRR_COM_SDO_BAD) {
+            return end_run(c, RRR_HIL_EXIT_SETUP, "drive %u: the %s is not an expedited SDO "
+                           "answer this master handles (command byte 0x%02X, DLC %u)",
+                           (unsigned)node, what, (unsigned)f.data[0], (unsigned)f.dlc);
+        }
+    }
+    return rc;
+}
+
+static int co_read(ctrl *c, const opts *o, uint8_t node, uint16_t index, uint8_t sub,
+                   uint32_t *value)
+{
+    return co_sdo(c, o, node, index, sub, 0u, value);
+}
+
+static int co_write(ctrl *c, const opts *o, uint8_t node, uint16_t index, uint8_t sub,
+                    uint32_t value, unsigned size)
+{
+    return co_sdo(c, o, node, index, sub, size, &value);
+}
+
+static int co_send_nmt(ctrl *c, uint8_t command_)
+{
+    rrr_hil_frame f;
+    rrr_com_nmt(command_, 0u, &f);
+    return send_frame(c, &f, "send NMT");
+}
+
+/* NMT reset node (a socketcand server drops the power-on boot-up): every drive's boot-up. */
+static int co_boot(ctrl *c, const opts *o)
+{
+    int rc = co_send_nmt(c, RRR_COM_NMT_RESET_NODE);
+    const int64_t deadline = now_ms() + o->timeout_ms;
+    unsigned want = 7u;
+    while (rc == 0 && want != 0u) {
+        rrr_hil_frame f;
+        rc = co_recv(c, deadline, o, "boot-up message of every drive after NMT reset node", &f);
+        for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
+            if (!f.extended && f.id == 0x700u + o->node_ids[j] && f.dlc == 1u && f.data[0] == 0u) {
+                want &= ~(1u << j);
+            }
+        }
+    }
+    return rc;
+}
+
+/* SDO: the mode CST, the rated torque, the encoder resolution, the PDO mapping and COB-IDs. */
+static int co_configure(ctrl *c, const opts *o)
+{
+    int rc = 0;
+    for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
+        const uint8_t id = o->node_ids[j];
+        uint32_t mode = 0, rev = 0;
+        rc = co_write(c, o, id, 0x6060u, 0u, RRR_COM_MODE_CST, 1u);
+        if (rc == 0) {
+            rc = co_read(c, o, id, 0x6061u, 0u, &mode);
+        }
+        if (rc == 0 && mode != RRR_COM_MODE_CST) {
+            rc = end_run(c, RRR_HIL_EXIT_SETUP, "drive %u: mode of operation display 0x6061 = "
+                         "%u, not %d (cyclic synchronous torque)", (unsigned)id, mode,
+                         RRR_COM_MODE_CST);
+        }
+        if (rc == 0) {
+            rc = co_read(c, o, id, 0x6076u, 0u, &c->rated_mNm[j]);
+        }
+        if (rc == 0) {
+            rc = co_read(c, o, id, 0x608Fu, 1u, &c->increments[j]);
+        }
+        if (rc == 0) {
+            rc = co_read(c, o, id, 0x608Fu, 2u, &rev);
+        }
+        if (rc == 0 && (c->rated_mNm[j] == 0u || c->increments[j] == 0u ||
+                        c->increments[j] > 0x7FFFFFFFu || rev != 1u)) {
+            rc = end_run(c, RRR_HIL_EXIT_SETUP, "drive %u: rated torque %u mN m, encoder %u/%u: "
+                         "not a configuration this master handles", (unsigned)id,
+                         c->rated_mNm[j], c->increments[j], rev);
+        }
+        for (unsigned p = 0; rc == 0 && p < 3u; ++p) {
+            uint32_t count = 0, entry = 0, cob = 0;
+            rc = co_read(c, o, id, CO_PDOS[p].map_index, 0u, &count);
+            for (uint8_t e = 0; rc == 0 && e < 2u; ++e) {
+                rc = co_read(c, o, id, CO_PDOS[p].map_index, (uint8_t)(e + 1u), &entry);
+                if (rc == 0 && (count != 2u || entry != CO_PDOS[p].entries[e])) {
+                    rc = end_run(c, RRR_HIL_EXIT_SETUP, "drive %u: PDO mapping 0x%04X: %u "
+                                 "entries, sub %u = 0x%08X; this master decodes 0x%08X, 0x%08X",
+                                 (unsigned)id, (unsigned)CO_PDOS[p].map_index, count,
+                                 (unsigned)e + 1u, entry, CO_PDOS[p].entries[0],
+                                 CO_PDOS[p].entries[1]);
+                }
+            }
+            if (rc == 0) {
+                rc = co_read(c, o, id, CO_PDOS[p].comm_index, 1u, &cob);
+            }
+            if (rc == 0 && cob != CO_PDOS[p].cob_base + id) {
+                rc = end_run(c, RRR_HIL_EXIT_SETUP, "drive %u: COB-ID 0x%04X sub 1 = 0x%08X, "
+                             "not the valid default 0x%03X", (unsigned)id,
+                             (unsigned)CO_PDOS[p].comm_index, cob,
+                             (unsigned)(CO_PDOS[p].cob_base + id));
+            }
+        }
+    }
+    return rc;
+}
+
+/* The 402 state machine to OPERATION ENABLED by SDO, in pre-operational (no SYNC: the plant is
+ * held at its initial state): shutdown, switch on, enable operation, each checked on the
+ * statusword; then NMT start of all nodes. */
+static int co_enable(ctrl *c, const opts *o)
+{
+    static const struct {
+        uint16_t controlword, statusword;
+        const char *state;
+    } steps[3] = {{0x06u, 0x21u, "READY TO SWITCH ON"},
+                  {0x07u, 0x23u, "SWITCHED ON"},
+                  {0x0Fu, 0x27u, "OPERATION ENABLED"}};
+    int rc = 0;
+    for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
+        for (unsigned s = 0; rc == 0 && s < 3u; ++s) {
+            uint32_t sw = 0, code = 0;
+            rc = co_write(c, o, o->node_ids[j], 0x6040u, 0u, steps[s].controlword, 2u);
+            if (rc == 0) {
+                rc = co_read(c, o, o->node_ids[j], 0x6041u, 0u, &sw);
+            }
+            if (rc == 0 && (sw & CO_SW_MASK) != steps[s].statusword) {
+                (void)co_read(c, o, o->node_ids[j], 0x603Fu, 0u, &code);
+                rc = end_run(c, RRR_HIL_EXIT_SETUP, "drive %u did not reach %s after controlword "
+                             "0x%02X: statusword 0x%04X, error code 0x%04X", (unsigned)o->node_ids[j],
+                             steps[s].state, (unsigned)steps[s].controlword, sw, code);
+            }
+        }
+    }
+    return rc == 0 ? co_send_nmt(c, RRR_COM_NMT_START) : rc;
+}
+
+/* The RPDO1 of each drive (controlword 0x0F, target torque), one SYNC, then the six TPDOs: the
+ * decoded state into c->q, c->qd. An EMCY, or a drive that left OPERATION ENABLED, ends the run:
+ * the drive's safety reaction fired. 0, or an exit status with why set. */
+static int co_period(ctrl *c, const opts *o, const int16_t pm[3], uint32_t k)
+{
+    rrr_hil_frame f;
+    int rc = 0;
+    for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
+        rrr_com_rpdo1(o->node_ids[j], 0x0Fu, pm[j], &f);
+        rc = send_frame(c, &f, "send RPDO1");
+        const int16_t a = (int16_t)(pm[j] < 0 ? -pm[j] : pm[j]);
+        if (a > c->pm_max[j]) {
+            c->pm_max[j] = a;
+        }
+    }
+    if (rc == 0) {
+        rrr_com_sync(&f);
+        rc = send_frame(c, &f, "send SYNC");
+    }
+    if (rc != 0) {
+        return rc;
+    }
+    ++c->syncs;
+    memset(c->fb, 0, sizeof c->fb);
+    const int64_t deadline = now_ms() + o->timeout_ms;
+    char what[64];
+    (void)snprintf(what, sizeof what, "TPDOs of SYNC %u", (unsigned)k);
+    while ((c->fb[0].have & c->fb[1].have & c->fb[2].have) != 3u) {
+        rc = co_recv(c, deadline, o, what, &f);
+        if (rc != 0) {
+            return rc;
+        }
+        uint16_t code = 0;
+        const uint8_t from = rrr_com_emcy(&f, &code);
+        if (from != 0u) {
+            return end_run(c, RRR_HIL_EXIT_SAFETY, "SYNC %u: EMCY 0x%04X from drive %u",
+                           (unsigned)k, (unsigned)code, (unsigned)from);
+        }
+        for (unsigned j = 0; j < 3u; ++j) {
+            if (rrr_com_tpdo(&f, o->node_ids[j], &c->fb[j]) < 0) {
+                ++c->rx_bad[RRR_HIL_RX_BAD_DLC];
+            }
+        }
+    }
+    for (unsigned j = 0; j < 3u; ++j) {
+        if ((c->fb[j].statusword & CO_SW_MASK) != 0x27u) {
+            return end_run(c, RRR_HIL_EXIT_SAFETY, "SYNC %u: drive %u left OPERATION ENABLED "
+                           "(statusword 0x%04X)", (unsigned)k, (unsigned)o->node_ids[j],
+                           (unsigned)c->fb[j].statusword);
+        }
+        c->q[j] = rrr_com_inc_to_rad(c->fb[j].position_inc, c->increments[j]);
+        c->qd[j] = rrr_com_inc_to_rad(c->fb[j].velocity_inc, c->increments[j]);
+    }
+    ++c->states;
+    return 0;
+}
+
+/* As the Python master (rrr_robot.hil.canopen_master): boot, configure, enable; the first SYNC
+ * gives the initial state (no step); then for k = 0 .. n-1: u_k = ctc(state of SYNC k), the
+ * target torques k_t u_k in per mille and, for k < n-1, SYNC k+1. At the end: controlword 0
+ * (disable voltage) by SDO and NMT stop; after a failed run NMT stop only, best effort. */
+static int run_canopen(ctrl *c, const opts *o)
+{
+    int rc = co_boot(c, o);
+    if (rc == 0) {
+        rc = co_configure(c, o);
+    }
+    if (rc == 0) {
+        rc = co_enable(c, o);
+    }
+    const int16_t zero[3] = {0, 0, 0};
+    if (rc == 0) {
+        rc = co_period(c, o, zero, 0u);
+    }
+    for (size_t k = 0; k < c->ref.n && rc == 0; ++k) {
+        c->k = (uint32_t)k;
+        rrr_hil_voltage_cmd cmd;
+        command(c, o, k, 1, &cmd);
+        int16_t pm[3];
+        for (unsigned j = 0; j < 3u; ++j) {
+            pm[j] = rrr_com_torque_pm(cmd.u_V[j], c->model.kt[j], c->rated_mNm[j]);
+        }
+        if (k + 1u < c->ref.n) {
+            rc = co_period(c, o, pm, (uint32_t)(k + 1u));
+        }
+    }
+    if (rc == 0) {
+        c->k = (uint32_t)c->ref.n;
+        for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
+            rc = co_write(c, o, o->node_ids[j], 0x6040u, 0u, 0u, 2u);
+        }
+        if (rc == 0) {
+            rc = co_send_nmt(c, RRR_COM_NMT_STOP);
+        }
+        if (rc == 0) {
+            rc = end_run(c, RRR_HIL_EXIT_OK, "all %zu periods of the reference", c->ref.n);
+        }
+    } else {
+        (void)co_send_nmt(c, RRR_COM_NMT_STOP); /* best effort: the plant may be gone */
+    }
+    return rc;
+}
+
+static void co_summary(const ctrl *c, const opts *o, int rc)
+{
+    fprintf(stderr, PROG ": CANopen master of drives %u, %u, %u: %u SYNCs, %u states, %u SDO "
+                         "transfers, %u TPDOs of a wrong length; rrr_ctc failures %u\n",
+            (unsigned)o->node_ids[0], (unsigned)o->node_ids[1], (unsigned)o->node_ids[2],
+            c->syncs, c->states, c->sdo_transfers, c->rx_bad[RRR_HIL_RX_BAD_DLC], c->ctc_failed);
+    printf("RRR_HIL_SUMMARY {\"node\": \"controller\", \"profile\": \"canopen\", \"exit\": %d, "
+           "\"node_ids\": [%u, %u, %u], \"syncs\": %u, \"states\": %u, \"sdo_transfers\": %u, "
+           "\"tpdo_bad_length\": %u, \"ctc_failed\": %u, "
+           "\"rated_torque_mNm\": [%u, %u, %u], \"increments_per_revolution\": [%u, %u, %u], "
+           "\"target_torque_per_mille_max_abs\": [%d, %d, %d], ",
+           rc, (unsigned)o->node_ids[0], (unsigned)o->node_ids[1], (unsigned)o->node_ids[2],
+           c->syncs, c->states, c->sdo_transfers, c->rx_bad[RRR_HIL_RX_BAD_DLC], c->ctc_failed,
+           c->rated_mNm[0], c->rated_mNm[1], c->rated_mNm[2], c->increments[0], c->increments[1],
+           c->increments[2], c->pm_max[0], c->pm_max[1], c->pm_max[2]);
+    rrr_hil_link_json(stdout, c->tr);
+    printf("}\n");
+    fflush(stdout);
+}
+
 /* A run that completed (exit 0) while the plant reported the safety policy firing (PlantStatus:
  * a latched fault, or 0 V forced) ends with its own status, as the plant does. */
 static int safety_status(ctrl *c, int rc)
@@ -546,17 +907,33 @@ int main(int argc, char **argv)
     }
     static rrr_hil_link link;
     static rrr_hil_framelog frames;
-    const uint32_t rx_ids[] = {RRR_BENCH_JOINT_STATE1_FRAME_ID, RRR_BENCH_JOINT_STATE2_FRAME_ID,
-                               RRR_BENCH_JOINT_STATE3_FRAME_ID, RRR_BENCH_PLANT_STATUS_FRAME_ID,
-                               RRR_BENCH_HEARTBEAT_PLANT_FRAME_ID};
+    const uint32_t dbc_ids[] = {RRR_BENCH_JOINT_STATE1_FRAME_ID, RRR_BENCH_JOINT_STATE2_FRAME_ID,
+                                RRR_BENCH_JOINT_STATE3_FRAME_ID, RRR_BENCH_PLANT_STATUS_FRAME_ID,
+                                RRR_BENCH_HEARTBEAT_PLANT_FRAME_ID};
+    uint32_t co_ids[15]; /* per drive: TPDO1, TPDO2, SDO answers, heartbeat / boot-up, EMCY */
+    for (unsigned j = 0; j < 3u; ++j) {
+        const uint32_t base[5] = {0x180u, 0x280u, 0x580u, 0x700u, 0x080u};
+        for (unsigned b = 0; b < 5u; ++b) {
+            co_ids[5u * j + b] = base[b] + o.node_ids[j];
+        }
+    }
     int rc = end_run(&c, RRR_HIL_EXIT_SETUP, "the transport did not open");
-    if (rrr_hil_link_open(&o.link, &link, rx_ids, 5u, PROG, &frames) == 0) {
+    if (rrr_hil_link_open(&o.link, &link, o.canopen ? co_ids : dbc_ids, o.canopen ? 15u : 5u,
+                          PROG, &frames) == 0) {
         c.tr = &link.base;
-        rc = safety_status(&c, o.realtime ? run_realtime(&c, &o, latency_log)
-                                          : run_lockstep(&c, &o));
-        latency_log = NULL; /* the real-time loop owns it */
+        if (o.canopen) {
+            rc = run_canopen(&c, &o);
+        } else {
+            rc = safety_status(&c, o.realtime ? run_realtime(&c, &o, latency_log)
+                                              : run_lockstep(&c, &o));
+            latency_log = NULL; /* the real-time loop owns it */
+        }
         (void)rrr_hil_framelog_close(&frames); /* reported in the summary */
-        summary(&c, rc);
+        if (o.canopen) {
+            co_summary(&c, &o, rc);
+        } else {
+            summary(&c, rc);
+        }
         rrr_hil_close(c.tr);
     }
     if (latency_log != NULL) {

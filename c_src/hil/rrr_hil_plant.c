@@ -183,14 +183,7 @@ static int parse_args(int argc, char **argv, opts *o)
             }
             o->canopen = strcmp(v, "canopen") == 0;
         } else if (strcmp(a, "--node-ids") == 0) {
-            double ids[3];
-            int ok = rrr_hil_parse_vec3(v, ids) == 0;
-            for (int j = 0; ok && j < 3; ++j) {
-                ok = ids[j] >= 1.0 && ids[j] <= 127.0 && ids[j] == (double)(int)ids[j];
-                o->node_ids[j] = ok ? (uint8_t)ids[j] : 0u;
-            }
-            if (!ok || o->node_ids[0] == o->node_ids[1] || o->node_ids[0] == o->node_ids[2] ||
-                o->node_ids[1] == o->node_ids[2]) {
+            if (rrr_hil_parse_node_ids(v, o->node_ids) != 0) {
                 fprintf(stderr, PROG ": --node-ids: expected three distinct node ids 1..127 "
                                      "a,b,c, got '%s'\n", v);
                 return -1;

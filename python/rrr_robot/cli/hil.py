@@ -323,16 +323,24 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     ref = wc.ref
     with ResultSet(out, kind="hil") as rs:
         with Bars(shown(quiet(args)), unit="period") as bars:
-            mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
-                                         wc.gains, rs.staging,
-                                         node_ids=args.node_ids or cm.DEFAULT_NODE_IDS,
-                                         timeout=args.timeout,
-                                         progress=bars.callback("CANopen master"),
-                                         interface=args.interface, channel=args.channel)
+            ids = args.node_ids or cm.DEFAULT_NODE_IDS
+            if args.master == "c":
+                mrun = cm.run_c_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
+                                       wc.controller_values, rs.staging, node_ids=ids,
+                                       timeout=args.timeout,
+                                       progress=bars.callback("CANopen master (C)"),
+                                       interface=args.interface, channel=args.channel)
+            else:
+                mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd,
+                                             wc.controller_model, wc.gains, rs.staging,
+                                             node_ids=ids, timeout=args.timeout,
+                                             progress=bars.callback("CANopen master"),
+                                             interface=args.interface, channel=args.channel)
         s = cm.write_master_results(rs, wc, mrun, scenario=args.scenario,
                                     figures=not args.no_figures)
     b, unq = s["bench"], s["unquantised_cosim"]
-    print(f"CANopen master (drives {', '.join(str(d.node_id) for d in mrun.drives)}, lockstep, "
+    drives = ", ".join(str(d.node_id) for d in mrun.drives)
+    print(f"CANopen master ({args.master}; drives {drives}, lockstep, "
           f"scenario {s['scenario']}): {s['reference']['periods']} SYNC periods in "
           f"{mrun.run.wall_time:.2f} s; tip error max {1e3 * b['tip_error_max']:.3f} mm, rms "
           f"{1e3 * b['tip_error_rms']:.3f} mm (unquantised {1e3 * unq['tip_error_max']:.3f} mm); "
@@ -551,6 +559,10 @@ def register_cli(subparsers: Any) -> None:
                    "socketcan interface) on the SocketCAN interface --channel")
     g.add_argument("--channel", default="vcan0",
                    help="with --interface socketcan: the interface (default vcan0)")
+    g.add_argument("--master", default="python", choices=["python", "c"],
+                   help="python: the canopen package's master in this process (the default); "
+                   "c: the C controller node, rrr_hil_controller --profile canopen (the same "
+                   "sequence and law)")
     co.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     add_verbosity_arguments(co)
     co.set_defaults(func=_cmd_canopen)

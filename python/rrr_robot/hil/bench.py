@@ -117,7 +117,7 @@ class LogProgress:
         self.progress(max(0, min(self._rows, self.total)), self.total)
 
 
-def _wait(node: Any, timeout: float, poll: LogProgress | None) -> dict[str, Any]:
+def wait_node(node: Any, timeout: float, poll: LogProgress | None) -> dict[str, Any]:
     """node.wait(timeout), reporting progress every 0.2 s."""
     if poll is None or poll.progress is None:
         result: dict[str, Any] = node.wait(timeout)
@@ -273,9 +273,11 @@ def _optional_atomic(path: Path | None) -> Iterator[Path | None]:
 
 
 @contextlib.contextmanager
-def _boot_up_watch(socketcan: str | None, can_fd: bool = False) -> Iterator[Any]:
-    """A python-can bus on ``socketcan`` that receives only HeartbeatPlant (``can_fd``: CAN FD
-    frames too), opened before the plant starts (None without SocketCAN)."""
+def boot_up_watch(socketcan: str | None, can_fd: bool = False,
+                  boot_id: int = 0x702) -> Iterator[Any]:
+    """A python-can bus on ``socketcan`` that receives only the plant's boot-up ``boot_id``
+    (HeartbeatPlant; the CANopen profile: 0x700 + a drive's node id; ``can_fd``: CAN FD frames
+    too), opened before the plant starts (None without SocketCAN)."""
     if not socketcan:
         yield None
         return
@@ -283,7 +285,7 @@ def _boot_up_watch(socketcan: str | None, can_fd: bool = False) -> Iterator[Any]
 
     try:
         bus = can.Bus(interface="socketcan", channel=socketcan, fd=can_fd,
-                      can_filters=[{"can_id": 0x702, "can_mask": 0x7FF, "extended": False}])
+                      can_filters=[{"can_id": boot_id, "can_mask": 0x7FF, "extended": False}])
     except (OSError, can.CanError) as exc:
         hint = (" (this kernel has no AF_CAN: use the socketcand transport; docs/socketcan.md)"
                 if getattr(exc, "errno", None) == errno.EAFNOSUPPORT else "")
@@ -336,7 +338,7 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                 rt_ctrl += ["--latency-log", str(lat_c)]
                 rt_plant += ["--latency-log", str(lat_p)]
             start = time.perf_counter()
-            with _boot_up_watch(socketcan, can_fd) as watch, \
+            with boot_up_watch(socketcan, can_fd) as watch, \
                     start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log,
                                 extra=rt_plant, socketcan=socketcan) as plant:
                 if watch is not None:
@@ -346,7 +348,7 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                                         extra=[*controller_node_args(controller_values),
                                                *rt_ctrl], socketcan=socketcan)
                 with ctrl:
-                    cs = _wait(ctrl, timeout, LogProgress(ctrl_log, n, progress))
+                    cs = wait_node(ctrl, timeout, LogProgress(ctrl_log, n, progress))
                     if cs["exit"] not in (0, EXIT_SAFETY):  # the plant would wait for it
                         # the node that died first is the one to name: a controller whose
                         # plant was killed ends with an error of its own

@@ -14,8 +14,9 @@ import contextlib
 import logging
 import math
 import queue
+import tempfile
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,14 +29,24 @@ from ..core.model import Model
 from ..core.outputs import ResultSet
 from ..errors import BadInputError
 from ..writing.trajectory import Reference
-from .bench import BenchRun
+from .bench import BenchRun, LogProgress, boot_up_watch, wait_node
 from .cia402 import DEFAULT_NODE_IDS, EDS_PATH
-from .nodes import NodeProcess, open_bus, start_plant
+from .logspec import CONTROLLER_LOG, read_log
+from .nodes import (
+    NodeProcess,
+    controller_node_args,
+    export_reference,
+    failure_folder,
+    open_bus,
+    start_controller,
+    start_plant,
+    wait_for_boot_up,
+)
 from .protocol import HilError
 
 __all__ = ["DEFAULT_NODE_IDS", "DriveInfo", "MasterRun", "WritingController", "inc_to_rad",
-           "pdo_quantisation", "rad_to_inc", "run_canopen_master", "torque_per_mille",
-           "write_master_results", "writing_controller"]
+           "pdo_quantisation", "rad_to_inc", "run_c_master", "run_canopen_master",
+           "torque_per_mille", "write_master_results", "writing_controller"]
 
 #: CiA 402 mode of operation: cyclic synchronous torque.
 MODE_CST = 10
@@ -325,6 +336,21 @@ class _Master:
             self.network.disconnect()
 
 
+def _start_drives(q_ref: FloatArray, qd_ref: FloatArray, work: Path,
+                  socketcan: str | None) -> NodeProcess:
+    """``rrr_hil_plant --profile canopen`` at (q_ref[0], qd_ref[0]), logging ``work``/plant.csv
+    and NODE_FRAMES; on the SocketCAN interface ``socketcan``, or as socketcand server."""
+    idle = ["--idle-timeout-ms", str(IDLE_MS_SOCKETCAN)] if socketcan else []
+    return start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=work / "plant.csv",
+                       frame_log=work / NODE_FRAMES, socketcan=socketcan,
+                       extra=["--profile", "canopen", *idle])
+
+
+def _check_interface(interface: str) -> None:
+    if interface not in ("socketcand", "socketcan"):
+        raise BadInputError(f"interface must be socketcand or socketcan, got {interface!r}")
+
+
 def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                        qdd_ref: FloatArray, model: Model, gains: CtcGains, work: Path, *,
                        node_ids: Sequence[int] = DEFAULT_NODE_IDS, timeout: float = 5.0,
@@ -339,8 +365,7 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     ``channel``, python-can's socketcan interface under ``canopen.Network``; the plant ends
     IDLE_MS_SOCKETCAN after the master's NMT stop). HilError when a drive does not boot or
     enable, on an SDO abort, a lost plant or a timeout (``timeout`` s per wait)."""
-    if interface not in ("socketcand", "socketcan"):
-        raise BadInputError(f"interface must be socketcand or socketcan, got {interface!r}")
+    _check_interface(interface)
     n = t.shape[0]
     if n < 2 or q_ref.shape != (n, 3):
         raise BadInputError(f"the reference needs at least 2 periods of 3 joints, got "
@@ -355,11 +380,7 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     # SocketCAN: the master's socket first, so that the plant's power-on boot-ups reach it
     bus = open_bus("socketcan", channel=channel) if sc else None
     try:
-        plant = start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=Path(work) / "plant.csv",
-                            frame_log=Path(work) / NODE_FRAMES, socketcan=channel if sc else None,
-                            extra=["--profile", "canopen",
-                                   *(["--idle-timeout-ms", str(IDLE_MS_SOCKETCAN)] if sc
-                                     else [])])
+        plant = _start_drives(q_ref, qd_ref, Path(work), channel if sc else None)
     except BaseException:
         if bus is not None:
             bus.shutdown()
@@ -399,6 +420,63 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                    u_n=out[:, 3:6], u_c=out[:, 6:9], wall_time=time.perf_counter() - start)
     return MasterRun(run, pm, drives, summary)
 
+
+def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
+                 model: Model, controller_values: Mapping[str, float | bool], work: Path, *,
+                 node_ids: Sequence[int] = DEFAULT_NODE_IDS, timeout: float = 5.0,
+                 progress: Progress | None = None, interface: str = "socketcand",
+                 channel: str = "vcan0") -> MasterRun:
+    """As :func:`run_canopen_master`, with the C controller node as the master
+    (``rrr_hil_controller --profile canopen``: the same NMT, SDO and 402 sequence, the core's
+    computed-torque law with the controller FMU's ``controller_values``, one SYNC per period).
+    ``model`` is the same controller model (its k_t give the target torques of the log's u).
+    HilError when a node fails: the C master's exit status and its reason."""
+    _check_interface(interface)
+    n = t.shape[0]
+    if n < 2 or q_ref.shape != (n, 3):
+        raise BadInputError(f"the reference needs at least 2 periods of 3 joints, got "
+                            f"{q_ref.shape}")
+    if len(node_ids) != 3:
+        raise BadInputError(f"three node ids expected (one per axis), got {list(node_ids)}")
+    sc = interface == "socketcan"
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="rrr_co_") as tmp:
+        ref_csv = export_reference(t, q_ref, qd_ref, qdd_ref, Path(tmp) / "reference.csv")
+        ctrl_log = Path(tmp) / "controller.csv"
+        with contextlib.ExitStack() as stack:
+            boot = 0x700 + DEFAULT_NODE_IDS[0]  # the plant's first drive
+            watch = stack.enter_context(boot_up_watch(channel, boot_id=boot)) if sc else None
+            plant = stack.enter_context(_start_drives(q_ref, qd_ref, Path(work),
+                                                      channel if sc else None))
+            if watch is not None:
+                wait_for_boot_up(watch, plant, boot_id=boot)
+            extra = ["--profile", "canopen", "--node-ids", ",".join(str(i) for i in node_ids),
+                     "--timeout-ms", str(round(timeout * 1000)),
+                     *controller_node_args(controller_values)]
+            ctrl = stack.enter_context(start_controller(
+                ref_csv, connect=f"127.0.0.1:{plant.port}", log_csv=ctrl_log, extra=extra,
+                socketcan=channel if sc else None))
+            cs = wait_node(ctrl, 60.0 + n * 0.01, LogProgress(ctrl_log, n, progress))
+            if cs.get("exit") != 0:
+                dead = plant if plant.died() else ctrl
+                plant.close()
+                raise dead.failure("the CANopen bench (C master) failed", failure_folder(work))
+            ps = plant.wait(30)
+        if ps.get("exit") != 0:
+            raise HilError(f"the plant node ended with exit {ps.get('exit')} "
+                           f"(drive faults {ps.get('drive_faults')}): {plant.stderr.strip()}")
+        c = read_log(ctrl_log, CONTROLLER_LOG)
+    u = c.group("u")
+    drives = [DriveInfo(int(i), int(r), int(inc), EXPECTED_MAPPING)
+              for i, r, inc in zip(cs["node_ids"], cs["rated_torque_mNm"],
+                                   cs["increments_per_revolution"], strict=True)]
+    kt = [float(v) for v in model.kt]
+    pm = np.array([[torque_per_mille(float(row[j]), kt[j], d.rated_torque_mNm)
+                    for j, d in enumerate(drives)] for row in u], dtype=np.int64)
+    run = BenchRun(t=t, q=c.group("q"), qd=c.group("qd"), u=u, plant_summary=ps,
+                   controller_summary={**cs, "transport": interface, "master": "c"},
+                   u_n=c.group("u_n"), u_c=c.group("u_c"), wall_time=time.perf_counter() - start)
+    return MasterRun(run, pm, drives, ps)
 
 
 @dataclass(frozen=True)

@@ -325,15 +325,17 @@ def open_bus(interface: str = "socketcand", *, host: str = "127.0.0.1", port: in
     raise ValueError(f"interface must be 'socketcand' or 'socketcan', got {interface!r}")
 
 
-def wait_for_boot_up(bus: Any, node: NodeProcess | None, timeout: float = 60.0) -> None:
+def wait_for_boot_up(bus: Any, node: NodeProcess | None, timeout: float = 60.0,
+                     boot_id: int = _HEARTBEAT_PLANT) -> None:
     """Wait for the plant's boot-up heartbeat (HeartbeatPlant, NMT state 0) on ``bus`` (a
     python-can bus opened before the plant started): on SocketCAN a frame sent before a node
     has bound its socket is lost to it, and the plant listens once it has sent this. HilError
-    when ``node`` ends first or nothing comes within ``timeout`` s."""
+    when ``node`` ends first or nothing comes within ``timeout`` s. ``boot_id``: the CANopen
+    profile's boot-up of a drive, 0x700 + its node id."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         msg = bus.recv(timeout=0.2)
-        if (msg is not None and msg.arbitration_id == _HEARTBEAT_PLANT and len(msg.data) >= 1
+        if (msg is not None and msg.arbitration_id == boot_id and len(msg.data) >= 1
                 and msg.data[0] == NMT_BOOT):
             return
         if node is not None and not node.running():
