@@ -77,7 +77,8 @@ def inject_bad_crc(channel: str, injected: dict[str, Any], listening: threading.
 INJECT_AT = 200
 #: The CANopen masters run against the C plant node (``rrr_hil_plant --profile canopen``) over
 #: SocketCAN: kind -> the rrr command (``--channel``, ``--out`` and the duration are added).
-CANOPEN_MASTERS = {"python": ["hil", "canopen", "--interface", "socketcan"]}
+CANOPEN_MASTERS = {"python": ["hil", "canopen", "--interface", "socketcan"],
+                   "c": ["hil", "canopen", "--master", "c", "--interface", "socketcan"]}
 
 
 def main(argv: list[str]) -> int:

@@ -68,7 +68,8 @@ HIL = {
     "export-reference": {"--text", "--scenario", "--duration", "--out", "-q", "--quiet", "-v",
                          "--verbose"},
     "canopen": {"--text", "--scenario", "--duration", "--out", "--node-ids", "--timeout",
-                "--interface", "--channel", "--no-figures", "-q", "--quiet", "-v", "--verbose"},
+                "--interface", "--channel", "--master", "--no-figures", "-q", "--quiet", "-v",
+                "--verbose"},
     "busload": {"--bitrate", "--fd", "--lockstep", "--dbc", "--profile", "--sync-period-ms",
                 "-q", "--quiet", "-v", "--verbose"},
 }

@@ -1,5 +1,6 @@
 """``rrr hil canopen`` (docs/canopen.md, "A master"): the Python CANopen master on the
-unmodified ``canopen`` package runs the writing task's ctc scenario in lockstep against
+unmodified ``canopen`` package, and the C controller node as master (``--master c``,
+``rrr_hil_controller --profile canopen``), run the writing task's ctc scenario in lockstep against
 ``rrr_hil_plant --profile canopen``; it equals the co-simulation with the PDOs' quantisation bit
 for bit, its tracking error is within 2x of the DBC bench's, and a drive that is not there is a
 clear error."""
@@ -40,11 +41,21 @@ def test_rounding_is_the_drives() -> None:
     assert cm.torque_per_mille(50.0, 12.0, 120000) == 1000  # within the range
 
 
-def test_writing_task_over_canopen(wc: cm.WritingController, tmp_path: Path) -> None:
+def _master(kind: str, w: cm.WritingController, ref: Any, work: Path,
+            **kwargs: Any) -> cm.MasterRun:
+    """A lockstep run of the master ``kind`` (python: the canopen package's; c: the C node)."""
+    if kind == "c":
+        return cm.run_c_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model,
+                               w.controller_values, work, **kwargs)
+    return cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model, w.gains,
+                                 work, **kwargs)
+
+
+@pytest.mark.parametrize("kind", ["python", "c"])
+def test_writing_task_over_canopen(kind: str, wc: cm.WritingController, tmp_path: Path) -> None:
     ref, n = wc.ref, wc.ref.t.shape[0]
     with ResultSet(tmp_path / "out", kind="hil") as rs:
-        mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
-                                     wc.gains, rs.staging)
+        mrun = _master(kind, wc, ref, rs.staging)
         summary = cm.write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
     ps = mrun.plant_summary
     # every axis was OPERATION ENABLED in every period (the master checks each statusword),
@@ -64,6 +75,12 @@ def test_writing_task_over_canopen(wc: cm.WritingController, tmp_path: Path) -> 
     plant_log = read_plant_log(out / "plant.csv")
     assert plant_log.shape[0] == n  # the initial row and one per stepping SYNC
     assert np.abs(mrun.torque_pm).max() > 10  # the law did command torque
+    if kind == "c":  # the C master's own account: one SYNC and one decoded state per period
+        cs = mrun.run.controller_summary
+        assert cs["exit"] == 0 and cs["syncs"] == n and cs["states"] == n, cs
+        assert cs["tpdo_bad_length"] == 0 and cs["ctc_failed"] == 0, cs
+        assert cs["target_torque_per_mille_max_abs"] == np.abs(mrun.torque_pm).max(
+            axis=0).tolist()
 
     # the co-simulation with the PDOs' quantisation: bit for bit
     kt = [float(v) for v in wc.controller_model.kt]
@@ -92,12 +109,15 @@ def test_writing_task_over_canopen(wc: cm.WritingController, tmp_path: Path) -> 
           f"{base['tip_error_rms']:.6e} m; master wall time {mrun.run.wall_time:.2f} s")
 
 
-def test_a_missing_drive_is_a_clear_error(tmp_path: Path,
+@pytest.mark.parametrize(("kind", "message"), [
+    ("python", "drive(s) 9 sent no boot-up within 1 s"),
+    ("c", "no boot-up message of every drive after NMT reset node within 1000 ms")])
+def test_a_missing_drive_is_a_clear_error(kind: str, message: str, tmp_path: Path,
                                           capsys: pytest.CaptureFixture[str]) -> None:
-    rc = main(["hil", "canopen", "--node-ids", "1,2,9", "--duration", "0.1", "--timeout", "1",
-               "--no-figures", "--out", str(tmp_path / "out")])
+    rc = main(["hil", "canopen", "--master", kind, "--node-ids", "1,2,9", "--duration", "0.1",
+               "--timeout", "1", "--no-figures", "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
-    assert rc != 0 and "drive(s) 9 sent no boot-up within 1 s" in err, err
+    assert rc != 0 and message in err, err
     assert not (tmp_path / "out" / "summary.json").exists()
 
 
@@ -136,7 +156,8 @@ def test_a_plant_killed_mid_run_is_named(wc: cm.WritingController, tmp_path: Pat
                               tmp_path, timeout=5.0, progress=kill_at)
 
 
-def test_mismatch_scenario_equals_its_quantised_cosim(tmp_path: Path) -> None:
+@pytest.mark.parametrize("kind", ["python", "c"])
+def test_mismatch_scenario_equals_its_quantised_cosim(kind: str, tmp_path: Path) -> None:
     """The mismatch scenario: the controller's k_t (its model's) differs from the plant's by
     10 %, so the master's target torque k_t u and the plant's u = tau / k_t do not cancel; the
     run still equals the co-simulation with the same quantisation, bit for bit (1 s of it)."""
@@ -145,8 +166,7 @@ def test_mismatch_scenario_equals_its_quantised_cosim(tmp_path: Path) -> None:
     w = cm.writing_controller(None, "mismatch")
     assert not np.array_equal(w.controller_model.kt, w.model.kt)
     ref = extend_reference(w.ref, 1.0)
-    mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model, w.gains,
-                                 tmp_path)
+    mrun = _master(kind, w, ref, tmp_path)
     measure, actuate = cm.pdo_quantisation([float(v) for v in w.controller_model.kt],
                                            [float(v) for v in w.model.kt],
                                            [d.rated_torque_mNm for d in mrun.drives])

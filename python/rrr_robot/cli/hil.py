@@ -561,8 +561,8 @@ def register_cli(subparsers: Any) -> None:
                    help="with --interface socketcan: the interface (default vcan0)")
     g.add_argument("--master", default="python", choices=["python", "c"],
                    help="python: the canopen package's master in this process (the default); "
-                   "c: the C controller node, rrr_hil_controller --profile canopen (the same "
-                   "sequence and law)")
+                   "c: the C controller node in its CANopen profile (the same sequence and "
+                   "law)")
     co.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     add_verbosity_arguments(co)
     co.set_defaults(func=_cmd_canopen)
