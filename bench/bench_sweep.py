@@ -6,7 +6,9 @@ and the wall time of a 1,000-run sweep with the native engine and with the FMUs.
    are started once (their start-up time is printed) and warmed up with one block each. Then
    blocks of ``--runs`` runs of the same random spec alternate between them (1, 2, 2, 1, ...),
    each block submitted in batches and recorded as the sweep records them (one Parquet part
-   per batch): runs per second of each, and their ratio per pair of blocks.
+   per batch): runs per second of each (and per core: a worker is one process of one
+   thread), and their ratio per pair of blocks, for blocks of 10, 100 and 1,000 runs
+   (``--sizes``).
 2. Overhead: blocks of the same runs alternate between the one-worker cluster (as above) and a
    plain loop over ``rrr_robot.sweep.runs.run_one`` in a process of its own (the reference: a
    direct run, no Dask, no recording); overhead = time through the cluster / direct time - 1,
@@ -19,7 +21,8 @@ and the wall time of a 1,000-run sweep with the native engine and with the FMUs.
 
 Ratios are min / median / max over ``--repeats`` pairs of blocks (the machine is shared).
 
-Run:  python bench/bench_sweep.py [--runs 200] [--repeats 5] [--big 1000] [--skip-big]
+Run:  python bench/bench_sweep.py [--engine fmpy] [--sizes 10,100,1000] [--runs 200]
+      [--repeats 5] [--big 1000] [--skip-big] [--quick]
 """
 
 from __future__ import annotations
@@ -97,35 +100,41 @@ def direct(pool: ProcessPoolExecutor, plan: object, inputs: list) -> tuple[float
 
 
 def rates(args: argparse.Namespace, case: tuple, one: object) -> None:
-    """Runs per second on one and on two workers, alternating blocks."""
+    """Runs per second on one and on two workers (and per core: per worker process of one
+    thread), alternating blocks, for each block size of ``--sizes``."""
     plan, inputs, folder, arrow_schema = case
     t0 = time.perf_counter()
     with dask_client(2) as two:
         print(f"local cluster of 2 workers: ready (run module imported) in "
               f"{time.perf_counter() - t0:.2f} s")
-        print(f"\n{args.runs} runs per block, engine {args.engine}, {args.repeats} pairs of "
-              "blocks; min / median / max\n")
-        print("| measure | value |\n|---|---|")
+        print(f"\nengine {args.engine}, {args.repeats} pairs of blocks per size; "
+              "min / median / max\n")
+        print("| runs per block | runs/s, 1 worker (= per core) | runs/s, 2 workers | "
+              "runs/s per core, 2 workers | speed-up, 2 / 1 worker (per pair) |")
+        print("|---:|---|---|---|---|")
         clusters = {1: one, 2: two}
         through_cluster(two, plan, inputs[:8], folder, arrow_schema, args.engine)  # warm-up
-        rate: dict[int, list[float]] = {1: [], 2: []}
-        ratio = []
-        for r in range(args.repeats):
-            order = (1, 2) if r % 2 == 0 else (2, 1)
-            t = {w: through_cluster(clusters[w], plan, inputs, folder, arrow_schema,
-                                    args.engine)[0] for w in order}
-            for w in order:
-                rate[w].append(len(inputs) / t[w])
-            ratio.append(t[1] / t[2])
-    print(f"| runs/s, 1 worker | {mmm(rate[1])} |")
-    print(f"| runs/s, 2 workers | {mmm(rate[2])} |")
-    print(f"| speed-up, 2 workers / 1 worker (per pair) | {mmm(ratio)} |")
+        for size in args.sizes:
+            rate: dict[int, list[float]] = {1: [], 2: []}
+            ratio = []
+            for r in range(args.repeats):
+                order = (1, 2) if r % 2 == 0 else (2, 1)
+                t = {w: through_cluster(clusters[w], plan, inputs[:size], folder,
+                                        arrow_schema, args.engine)[0] for w in order}
+                for w in order:
+                    rate[w].append(size / t[w])
+                ratio.append(t[1] / t[2])
+            print(f"| {size} | {mmm(rate[1])} | {mmm(rate[2])} | "
+                  f"{mmm([x / 2 for x in rate[2]])} | {mmm(ratio)} |")
+    print(f"\noverhead: {args.runs} runs per block, 1 worker against direct runs\n")
+    print("| measure | value |\n|---|---|")
 
 
 def overheads(args: argparse.Namespace, case: tuple, one: object) -> None:
     """The one-worker cluster against direct runs in a plain process, alternating blocks (only
     this cluster is running: its scheduler and nanny are the only ones in this process)."""
     plan, inputs, folder, arrow_schema = case
+    inputs = inputs[:args.runs]
     with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
         direct(pool, plan, inputs[:2])  # warm-up
         overhead, cpu_overhead, per_run_direct = [], [], []
@@ -149,7 +158,7 @@ def overheads(args: argparse.Namespace, case: tuple, one: object) -> None:
 
 def blocks(args: argparse.Namespace, work: Path) -> None:
     spec_path = work / "bench.toml"
-    spec_path.write_text(SPEC.format(samples=args.runs))
+    spec_path.write_text(SPEC.format(samples=max(args.runs, *args.sizes)))
     spec = read_spec(spec_path)
     case = (make_plan(spec, args.engine), design(spec), work / "results.parquet",
             schema(spec.vary))
@@ -166,8 +175,9 @@ def big(args: argparse.Namespace, work: Path) -> None:
     spec_path = work / "big.toml"
     spec_path.write_text(SPEC.format(samples=args.big))
     print(f"\n`rrr sweep` of {args.big} runs, default local cluster ({os.cpu_count()} workers)\n")
-    print("| engine | command wall time (s) | runs (s) | cluster start (s) | runs/s | statuses |")
-    print("|---|---:|---:|---:|---:|---|")
+    print("| engine | command wall time (s) | runs (s) | cluster start (s) | runs/s | "
+          "runs/s per core | statuses |")
+    print("|---|---:|---:|---:|---:|---:|---|")
     for engine in args.big_engine or ("native", "fmpy"):
         out = work / f"big-{engine}"
         start = time.perf_counter()
@@ -179,12 +189,18 @@ def big(args: argparse.Namespace, work: Path) -> None:
         inv = s["this_invocation"]
         statuses = ", ".join(f"{k} {v}" for k, v in s["status"].items() if v)
         print(f"| {engine} | {wall:.1f} | {inv['wall_time']:.1f} | {inv['cluster_start']:.1f} "
-              f"| {inv['runs_per_second']:.1f} | {statuses} |")
+              f"| {inv['runs_per_second']:.1f} "
+              f"| {inv['runs_per_second'] / inv['worker_threads']:.1f} "
+              f"| {statuses} |")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--runs", type=int, default=200, help="runs per block (default 200)")
+    ap.add_argument("--runs", type=int, default=200,
+                    help="runs per block of the overhead (default 200)")
+    ap.add_argument("--sizes", type=lambda s: [int(x) for x in s.split(",")],
+                    default=[10, 100, 1000],
+                    help="runs per block of the 1 / 2 worker rates (default 10,100,1000)")
     ap.add_argument("--repeats", type=int, default=5, help="pairs of blocks (default 5)")
     ap.add_argument("--engine", choices=("native", "fmpy"), default="native",
                     help="engine of the blocks (default native)")
@@ -194,7 +210,8 @@ def main() -> None:
                     help="the engines of the big sweeps (repeatable; default both)")
     add_quick(ap)
     args = apply_quick(ap, ap.parse_args(),
-                       {"runs": 4, "repeats": 1, "big": 8, "big_engine": ["native"]})
+                       {"runs": 4, "sizes": [4, 8], "repeats": 1, "big": 8,
+                        "big_engine": ["native"]})
     import dask
     import distributed
 

@@ -83,3 +83,23 @@ def test_reuse_can_be_turned_off(monkeypatch: pytest.MonkeyPatch) -> None:
     assert len(idle(2)) == 1
     for f in FIELDS:
         assert np.array_equal(getattr(off, f), getattr(on, f)), f
+
+
+def test_the_direct_fmi2_calls_give_the_results_of_fmpys_wrappers(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The stepping loop's FMI 2 calls go to the library's functions directly (_Fmi2._raw);
+    through FMPy's wrappers (its call logger on) the results are the same bit for bit, and a
+    failed call is the same CosimError."""
+    fmu_slave.clear_pool()
+    direct = run(2)
+    with pytest.raises(rr.CosimError) as direct_err:
+        run(2, measure=nan_at(50))
+    monkeypatch.setattr(fmu_slave._Fmi2, "_raw", lambda self, name: None)
+    fmu_slave.clear_pool()
+    wrapped = run(2)
+    with pytest.raises(rr.CosimError) as wrapped_err:
+        run(2, measure=nan_at(50))
+    for name in FIELDS:
+        assert np.array_equal(getattr(direct, name), getattr(wrapped, name)), name
+    assert str(direct_err.value) == str(wrapped_err.value)
+    assert "fmi2" in str(direct_err.value)
