@@ -103,7 +103,10 @@ class _Fmi2:
     # fewer per call, about a third of an FMU sweep's run (docs/performance.md, "Sweeps").
     # With FMPy's call logger set (debug), they go through FMPy's wrappers.
     def _raw(self, name: str) -> Any:
-        return None if self.fmu.fmiCallLogger is not None else self.fmu._functions.get(name)
+        functions = getattr(self.fmu, "_functions", None)  # FMPy keeps its ctypes functions there
+        if self.fmu.fmiCallLogger is not None or not isinstance(functions, dict):
+            return None
+        return functions.get(name)
 
     def setter(self, vrs: ct.Array[Any], n: int) -> Callable[[Any], object]:
         raw = self._raw("fmi2SetReal")
