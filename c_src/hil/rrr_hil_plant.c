@@ -672,8 +672,10 @@ static int run_canopen(plant *p, const opts *o)
         const int64_t t = now_us();
         for (int i = 0; i < 3; ++i) { /* heartbeat producer and consumer, in wall-clock time */
             rrr_co_out out = {0};
+            const uint32_t faults = p->co[i].err.faults;
             rrr_co_advance(&p->co[i], (uint32_t)(t - last_us), &out);
             co_send(p, &out);
+            p->co_faults += p->co[i].err.faults - faults; /* a lost master heartbeat */
         }
         last_us = t;
         if (io == RRR_HIL_IO_TIMEOUT) {
