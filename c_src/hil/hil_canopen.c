@@ -490,7 +490,8 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
             return;
         }
         if (n->seg_pos + k > e->size || (last && n->seg_pos + k != e->size)) {
-            sdo_abort(n, e->index, e->subindex, RRR_CO_ABORT_LENGTH, out);
+            sdo_abort(n, e->index, e->subindex,
+                      n->seg_pos + k > e->size ? RRR_CO_ABORT_LEN_HIGH : RRR_CO_ABORT_LEN_LOW, out);
             return;
         }
         memcpy(n->dl_buf + n->seg_pos, d + 1, k);
@@ -563,7 +564,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         len = get_le(d + 4, 4);
     }
     if (len != e->size) {
-        sdo_abort(n, index, sub, RRR_CO_ABORT_LENGTH, out);
+        sdo_abort(n, index, sub, len > e->size ? RRR_CO_ABORT_LEN_HIGH : RRR_CO_ABORT_LEN_LOW, out);
         return;
     }
     if (!expedited) { /* segmented: the data follow in segments */

@@ -51,6 +51,8 @@
 #define RRR_CO_ABORT_NO_MAP 0x06040041u        ///< object cannot be mapped to the PDO
 #define RRR_CO_ABORT_MAP_LEN 0x06040042u       ///< mapped objects would exceed the PDO length
 #define RRR_CO_ABORT_LENGTH 0x06070010u        ///< data type length does not match
+#define RRR_CO_ABORT_LEN_HIGH 0x06070012u      ///< data type does not match, length too high
+#define RRR_CO_ABORT_LEN_LOW 0x06070013u       ///< data type does not match, length too low
 #define RRR_CO_ABORT_NO_SUB 0x06090011u        ///< sub-index does not exist
 #define RRR_CO_ABORT_VALUE 0x06090030u         ///< invalid value
 #define RRR_CO_ABORT_TOO_HIGH 0x06090031u      ///< value too high

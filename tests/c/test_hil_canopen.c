@@ -208,8 +208,8 @@ static void test_sdo(void)
     CHECK(sdo_write(&n, 0x6041, 0, 1, 2) == RRR_CO_ABORT_READ_ONLY);
     CHECK(sdo_write(&n, 0x1000, 0, 1, 4) == RRR_CO_ABORT_READ_ONLY);
     CHECK(sdo_write(&n, 0x1008, 0, 1, 4) == RRR_CO_ABORT_READ_ONLY);
-    CHECK(sdo_write(&n, 0x1017, 0, 100, 4) == RRR_CO_ABORT_LENGTH);
-    CHECK(sdo_write(&n, 0x1017, 0, 100, 1) == RRR_CO_ABORT_LENGTH);
+    CHECK(sdo_write(&n, 0x1017, 0, 100, 4) == RRR_CO_ABORT_LEN_HIGH);
+    CHECK(sdo_write(&n, 0x1017, 0, 100, 1) == RRR_CO_ABORT_LEN_LOW);
     CHECK(sdo_write(&n, 0x6071, 0, 1001, 2) == RRR_CO_ABORT_TOO_HIGH);
     CHECK(sdo_write(&n, 0x6071, 0, (uint16_t)-1001, 2) == RRR_CO_ABORT_TOO_LOW);
     CHECK(sdo_write(&n, 0x6071, 0, (uint16_t)-1000, 2) == 0);
@@ -252,11 +252,11 @@ static void test_sdo(void)
     feed(&n, 0x602, 8, seg_ok);
     const uint8_t s_long[8] = {0x06, 1, 2, 3, 0, 0, 0, 0}; /* 4 bytes into 2 */
     feed(&n, 0x602, 8, s_long);
-    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LEN_HIGH);
     feed(&n, 0x602, 8, seg_ok);
     const uint8_t s_short[8] = {0x0D, 1, 0, 0, 0, 0, 0, 0}; /* 1 byte, last */
     feed(&n, 0x602, 8, s_short);
-    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH && n.v[RRR_CO_OD_HB_PRODUCER] == 300);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LEN_LOW && n.v[RRR_CO_OD_HB_PRODUCER] == 300);
     const uint8_t seg_tq[8] = {0x21, 0x71, 0x60, 0, 2, 0, 0, 0};
     feed(&n, 0x602, 8, seg_tq);
     const uint8_t s_tq[8] = {0x0B, 0xD0, 0x07, 0, 0, 0, 0, 0}; /* 2000 per mille */
@@ -268,7 +268,7 @@ static void test_sdo(void)
     CHECK(sdo_reply(0x6041, 0, NULL) == RRR_CO_ABORT_READ_ONLY);
     const uint8_t seg_bad[8] = {0x21, 0x17, 0x10, 0, 9, 0, 0, 0};
     feed(&n, 0x602, 8, seg_bad);
-    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LENGTH);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_LEN_HIGH);
     /* bad command specifiers: block upload (5), block download (6), 7, a lone segment */
     const uint8_t ccs[4] = {0xA0, 0xC0, 0xE0, 0x00};
     for (unsigned i = 0; i < 4; ++i) {

@@ -250,7 +250,9 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
     send(0x601, bytes([0x2B, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 0x1017 as 4 bytes: n says 2
     assert answers.get(timeout=2)[0] == 0x60  # n = 2: a 2-byte write, accepted
     send(0x601, bytes([0x23, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 4 bytes into 2
-    assert abort_code() == 0x06070010
+    assert abort_code() == 0x06070012  # length too high
+    send(0x601, bytes([0x2F, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 1 byte into 2
+    assert abort_code() == 0x06070013  # length too low
     with pytest.raises(canopen.SdoAbortedError) as err:
         _ = node.sdo[0x2000].raw  # write-only
     assert err.value.code == 0x06010001
