@@ -280,3 +280,120 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
     assert drive1["nmt_ignored"] == 2 and drive1["sync_bad"] == 1 and drive1["rpdo_short"] == 1
     assert drive1["sdo_aborts"] == 7  # the six above and the write to 0x6041 in the set-up
     assert all(d["nmt_ignored"] == 2 and d["sync_bad"] == 1 for d in summary["drives"])
+
+
+def _cycle(rig: Rig, torques: list[int], cws: list[int]) -> dict[int, bytes]:
+    """One lockstep period with the controlword ``cws[j]`` of each drive: the RPDOs, one SYNC,
+    the TPDOs of that SYNC (of the drives in NMT operational)."""
+    for node, t, cw in zip(rig.nodes, torques, cws, strict=True):
+        node.rpdo[1]["Controlword"].raw = cw
+        node.rpdo[1]["Target torque"].raw = t
+        node.rpdo[1].transmit()
+    rig.network.sync.transmit()
+    got: dict[int, bytes] = {}
+    while len(got) < 6:
+        cob, data = rig.tpdos.get(timeout=5)
+        got[cob] = data
+    return got
+
+
+def _sw(got: dict[int, bytes], node_id: int) -> int:
+    return int.from_bytes(got[0x180 + node_id][:2], "little")
+
+
+# each fault on drive 2 while all three run: (how it is caused, its EMCY code)
+FAULTS = {"rpdo_timeout": 0x8250, "nmt_stop_in_operation": 0x8100, "torque_out_of_range": 0x6320}
+
+
+@pytest.mark.parametrize("fault", sorted(FAULTS))
+def test_a_drive_fault_latches_0_V_until_the_402_fault_reset(fault: str, rig: Rig) -> None:
+    """A fault of drive 2 in OPERATION ENABLED: its EMCY (the code, error register 0x1001), the
+    statusword FAULT, 0 V to joint 2 while the other axes go on, counted by the plant; a
+    controlword of enable operation does not clear it; the 402 fault reset (rising edge of bit
+    7) and shutdown, switch on, enable operation bring the drive back to torque."""
+    _boot_and_enable(rig)
+    node = rig.nodes[1]
+    node.sdo[0x2001].raw = 3 if fault == "rpdo_timeout" else 0
+    node.emcy.reset()
+    on, t = [0x0F] * 3, [200, 300, 100]
+    for _ in range(3):
+        assert _sw(_cycle(rig, t, on), 2) & 0x6F == 0x27
+    if fault == "rpdo_timeout":  # drive 2's RPDO missing for 3 SYNC periods
+        for _ in range(3):
+            for other, tq in ((rig.nodes[0], t[0]), (rig.nodes[2], t[2])):
+                other.rpdo[1]["Controlword"].raw, other.rpdo[1]["Target torque"].raw = 0x0F, tq
+                other.rpdo[1].transmit()
+            rig.network.sync.transmit()
+            time.sleep(0.02)
+    elif fault == "nmt_stop_in_operation":
+        node.nmt.send_command(0x02)  # NMT stop of drive 2 alone
+        time.sleep(0.05)
+        node.nmt.send_command(0x01)  # and start again: it stays in FAULT
+    else:
+        _cycle(rig, [200, 1500, 100], on)  # beyond +-1000 per mille of 0x6076
+    deadline = time.monotonic() + 2  # the EMCY may come before a wait() would start
+    while not any(e.code == FAULTS[fault] for e in node.emcy.log) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    emcy = [e for e in node.emcy.log if e.code == FAULTS[fault]]
+    assert len(emcy) == 1 and emcy[0].register & 0x01, (fault, node.emcy.log)
+    time.sleep(0.05)
+    while not rig.tpdos.empty():
+        rig.tpdos.get_nowait()
+    latched = [_sw(_cycle(rig, t, on), 2) for _ in range(3)]  # enable operation: no effect
+    assert all(sw & 0x4F == 0x08 for sw in latched), [hex(s) for s in latched]  # FAULT
+    assert node.sdo[0x603F].raw == FAULTS[fault] and node.sdo[0x1001].raw & 0x01
+    for other in (rig.nodes[0], rig.nodes[2]):
+        assert other.sdo[0x6041].raw & 0x6F == 0x27  # the other axes are not affected
+    # the 402 fault reset, then the enabling sequence, all in the RPDOs
+    for cw in (0x80, 0x06, 0x07, 0x0F):
+        got = _cycle(rig, t, [0x0F, cw, 0x0F])
+    assert _sw(got, 2) & 0x6F == 0x27 and node.sdo[0x1001].raw == 0
+    assert any(e.code == 0x0000 for e in node.emcy.log)  # the error-reset EMCY
+    for _ in range(3):
+        _cycle(rig, t, on)
+    for n in rig.nodes:
+        n.sdo[0x6040].raw = 0x00
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    summary = rig.plant.wait(30)
+    assert summary["exit"] == 7, rig.plant.stderr  # completed, but the safety policy fired
+    d = summary["drives"][1]
+    assert d["faults"] == 1 and d["fault_resets"] == 1 and summary["drive_faults"] == 1, d
+    assert [x["faults"] for x in summary["drives"]] == [0, 1, 0]
+    log = np.loadtxt(rig.log_path, delimiter=",", skiprows=1, ndmin=2)
+    u2 = log[:, 9]  # the voltage applied to joint 2 per period
+    run = np.abs(log[:, 8] - 200 * U_MAX / 1000) < 1e-12  # joint 1 commanded
+    assert run.sum() >= 12
+    # 0 V to joint 2 while latched (and through the reset sequence), joint 1 unaffected
+    assert np.count_nonzero(run & (u2 == 0.0)) >= 6
+    assert u2[-1] == pytest.approx(300 * U_MAX / 1000, abs=1e-12)  # torque again after reset
+
+
+def test_quick_stop_holds_0_V_until_enable_operation(rig: Rig) -> None:
+    """Controlword quick stop (0x02) in OPERATION ENABLED: QUICK STOP ACTIVE (statusword
+    0x07 under mask 0x6F), 0 V; no EMCY, no fault; enable operation (0x0F) leaves it."""
+    _boot_and_enable(rig)
+    node = rig.nodes[2]
+    node.emcy.reset()
+    t = [200, 300, 100]
+    _cycle(rig, t, [0x0F] * 3)
+    got = _cycle(rig, t, [0x0F, 0x0F, 0x02])
+    assert _sw(got, 3) & 0x6F == 0x07  # QUICK STOP ACTIVE
+    got = _cycle(rig, t, [0x0F, 0x0F, 0x02])
+    assert _sw(got, 3) & 0x6F == 0x07
+    got = _cycle(rig, t, [0x0F] * 3)
+    assert _sw(got, 3) & 0x6F == 0x27  # enable operation: back to OPERATION ENABLED
+    _cycle(rig, t, [0x0F] * 3)
+    assert not node.emcy.log
+    for n in rig.nodes:
+        n.sdo[0x6040].raw = 0x00
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    summary = rig.plant.wait(30)
+    assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
+    log = np.loadtxt(rig.log_path, delimiter=",", skiprows=1, ndmin=2)
+    u3 = log[-4:, 10]
+    assert u3[0] == 0.0 and u3[1] == 0.0  # the two quick-stop periods
+    assert u3[-1] == pytest.approx(100 * U_MAX / 1000, abs=1e-12)
