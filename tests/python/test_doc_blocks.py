@@ -43,6 +43,9 @@ NOT_RUN_HERE = {
     ("docs/canopen.md", "sudo ip link add dev vcan0 type vcan && sudo ip link set vcan0 up"),
     ("docs/c-library.md", "cmake -S . -B build && cmake --build build -j2"),
     ("docs/sweeps.md", "dask scheduler --host 0.0.0.0 --port 8786"),
+    # minutes of measurement (its --quick mode runs in the test command)
+    ("docs/performance.md",
+     "python bench/bench_sweep.py --engine fmpy --sizes 10,100 --runs 100 --repeats 3 --skip-big"),
 }
 #: Seconds one block may take (the longest is the README's first command, about 15 s here).
 BLOCK_TIMEOUT = 120.0
