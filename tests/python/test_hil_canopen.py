@@ -278,7 +278,7 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
     assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
     drive1 = summary["drives"][0]
     assert drive1["nmt_ignored"] == 2 and drive1["sync_bad"] == 1 and drive1["rpdo_short"] == 1
-    assert drive1["sdo_aborts"] == 7  # the six above and the write to 0x6041 in the set-up
+    assert drive1["sdo_aborts"] == 8  # the seven above and the write to 0x6041 in the set-up
     assert all(d["nmt_ignored"] == 2 and d["sync_bad"] == 1 for d in summary["drives"])
 
 
