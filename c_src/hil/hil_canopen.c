@@ -89,14 +89,14 @@ static rrr_hil_frame *push(rrr_co_node *n, rrr_co_out *out, uint32_t id, uint8_t
     return f;
 }
 
-static void put_le(uint8_t *p, uint32_t v, unsigned size)
+void rrr_co_put_le(uint8_t *p, uint32_t v, unsigned size)
 {
     for (unsigned i = 0; i < size; ++i) {
         p[i] = (uint8_t)(v >> (8u * i));
     }
 }
 
-static uint32_t get_le(const uint8_t *p, unsigned size)
+uint32_t rrr_co_get_le(const uint8_t *p, unsigned size)
 {
     uint32_t v = 0;
     for (unsigned i = 0; i < size; ++i) {
@@ -112,7 +112,7 @@ static void emcy(rrr_co_node *n, uint16_t code, rrr_co_out *out)
     }
     rrr_hil_frame *f = push(n, out, n->v[RRR_CO_OD_EMCY_COBID], 8);
     if (f) {
-        put_le(f->data, code, 2);
+        rrr_co_put_le(f->data, code, 2);
         f->data[2] = (uint8_t)n->v[RRR_CO_OD_ERROR_REGISTER];
         n->err.emcy_sent++;
     }
@@ -431,9 +431,9 @@ static void sdo_abort(rrr_co_node *n, uint16_t index, uint8_t sub, uint32_t code
     rrr_hil_frame *f = push(n, out, COB_SDO_TX + n->cfg.node_id, 8);
     if (f) {
         f->data[0] = 0x80;
-        put_le(f->data + 1, index, 2);
+        rrr_co_put_le(f->data + 1, index, 2);
         f->data[3] = sub;
-        put_le(f->data + 4, code, 4);
+        rrr_co_put_le(f->data + 4, code, 4);
     }
 }
 
@@ -499,7 +499,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         n->seg_toggle ^= 1u;
         if (last) {
             n->dl_active = 0;
-            const uint32_t ab = write_entry(n, n->seg_slot, get_le(n->dl_buf, e->size), out);
+            const uint32_t ab = write_entry(n, n->seg_slot, rrr_co_get_le(n->dl_buf, e->size), out);
             if (ab) {
                 sdo_abort(n, e->index, e->subindex, ab, out);
                 return;
@@ -532,11 +532,11 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         if (!r) {
             return;
         }
-        put_le(r->data + 1, index, 2);
+        rrr_co_put_le(r->data + 1, index, 2);
         r->data[3] = sub;
         if (e->str && e->size > 4u) {
             r->data[0] = 0x41; /* segmented, size indicated */
-            put_le(r->data + 4, e->size, 4);
+            rrr_co_put_le(r->data + 4, e->size, 4);
             n->seg_active = 1;
             n->seg_toggle = 0;
             n->seg_slot = (uint16_t)slot;
@@ -546,7 +546,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
             if (e->str) {
                 memcpy(r->data + 4, e->str, e->size);
             } else {
-                put_le(r->data + 4, n->v[slot], e->size);
+                rrr_co_put_le(r->data + 4, n->v[slot], e->size);
             }
         }
         return;
@@ -561,7 +561,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
     if (expedited && sized) {
         len = 4u - ((d[0] >> 2) & 3u);
     } else if (!expedited && sized) {
-        len = get_le(d + 4, 4);
+        len = rrr_co_get_le(d + 4, 4);
     }
     if (len != e->size) {
         sdo_abort(n, index, sub, len > e->size ? RRR_CO_ABORT_LEN_HIGH : RRR_CO_ABORT_LEN_LOW, out);
@@ -575,7 +575,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         rrr_hil_frame *r = push(n, out, COB_SDO_TX + n->cfg.node_id, 8);
         if (r) {
             r->data[0] = 0x60;
-            put_le(r->data + 1, index, 2);
+            rrr_co_put_le(r->data + 1, index, 2);
             r->data[3] = sub;
             n->dl_active = 1;
             n->seg_toggle = 0;
@@ -585,7 +585,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
         }
         return;
     }
-    const uint32_t ab = write_entry(n, slot, get_le(d + 4, e->size), out);
+    const uint32_t ab = write_entry(n, slot, rrr_co_get_le(d + 4, e->size), out);
     if (ab) {
         sdo_abort(n, index, sub, ab, out);
         return;
@@ -593,7 +593,7 @@ static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
     rrr_hil_frame *r = push(n, out, COB_SDO_TX + n->cfg.node_id, 8);
     if (r) {
         r->data[0] = 0x60;
-        put_le(r->data + 1, index, 2);
+        rrr_co_put_le(r->data + 1, index, 2);
         r->data[3] = sub;
     }
 }
@@ -612,7 +612,7 @@ static void apply_rpdo(rrr_co_node *n, rrr_co_out *out)
         const uint32_t m = n->v[p->map_n + 1 + (int)i];
         slots[i] = rrr_co_od_find((uint16_t)(m >> 16), (uint8_t)(m >> 8));
         const unsigned size = (m & 0xFFu) / 8u;
-        vals[i] = get_le(n->rpdo_data + off, size);
+        vals[i] = rrr_co_get_le(n->rpdo_data + off, size);
         off += size;
         if (slots[i] >= 0 && check_limits(&rrr_co_od[slots[i]], vals[i]) != 0) {
             fault(n, RRR_CO_EMCY_PARAM, RRR_CO_ERR_PROFILE, out);
@@ -724,7 +724,7 @@ void rrr_co_transmit(rrr_co_node *n, rrr_co_out *out)
             const uint32_t m = n->v[p->map_n + (int)i];
             const int slot = rrr_co_od_find((uint16_t)(m >> 16), (uint8_t)(m >> 8));
             const unsigned size = (m & 0xFFu) / 8u;
-            put_le(r->data + off, slot >= 0 ? n->v[slot] : 0u, size);
+            rrr_co_put_le(r->data + off, slot >= 0 ? n->v[slot] : 0u, size);
             off += size;
         }
     }

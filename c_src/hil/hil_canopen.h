@@ -190,5 +190,9 @@ int rrr_co_od_find(uint16_t index, uint8_t sub);
 /** Position in increments (0x6064) and velocity in increments/s (0x606C) of q (rad) and qd
  *  (rad/s): round(x * increments / 2 pi), saturated to int32. */
 int32_t rrr_co_rad_to_inc(double x, uint32_t increments);
+/** The @p size (1..4) low bytes of @p v at @p p, little-endian (CANopen's byte order). */
+void rrr_co_put_le(uint8_t *p, uint32_t v, unsigned size);
+/** @p size (1..4) little-endian bytes at @p p, zero-extended. */
+uint32_t rrr_co_get_le(const uint8_t *p, unsigned size);
 
 #endif /* RRR_HIL_CANOPEN_H */

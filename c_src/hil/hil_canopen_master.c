@@ -1,26 +1,12 @@
 /* The frames of the CANopen master (hil_canopen_master.h). */
 #include "hil_canopen_master.h"
 
+#include "hil_canopen.h"
+
 #include <math.h>
 #include <string.h>
 
 #define COM_PI 3.14159265358979323846
-
-static void put_le(uint8_t *p, uint32_t v, unsigned n)
-{
-    for (unsigned i = 0; i < n; ++i) {
-        p[i] = (uint8_t)(v >> (8u * i));
-    }
-}
-
-static uint32_t get_le(const uint8_t *p, unsigned n)
-{
-    uint32_t v = 0;
-    for (unsigned i = 0; i < n; ++i) {
-        v |= (uint32_t)p[i] << (8u * i);
-    }
-    return v;
-}
 
 static void frame(rrr_hil_frame *f, uint32_t id, uint8_t dlc)
 {
@@ -45,7 +31,7 @@ static void sdo_head(rrr_hil_frame *f, uint8_t node, uint8_t cs, uint16_t index,
 {
     frame(f, 0x600u + node, 8u);
     f->data[0] = cs;
-    put_le(&f->data[1], index, 2u);
+    rrr_co_put_le(&f->data[1], index, 2u);
     f->data[3] = sub;
 }
 
@@ -57,7 +43,7 @@ int rrr_com_sdo_download(uint8_t node, uint16_t index, uint8_t sub, uint32_t val
     }
     /* initiate download, expedited (e = 1), size indicated (s = 1), n = 4 - size unused bytes */
     sdo_head(f, node, (uint8_t)(0x23u | ((4u - size) << 2)), index, sub);
-    put_le(&f->data[4], value, size);
+    rrr_co_put_le(&f->data[4], value, size);
     return 0;
 }
 
@@ -74,7 +60,7 @@ rrr_com_sdo_answer rrr_com_sdo_reply(const rrr_hil_frame *f, uint8_t node, uint1
                                      uint8_t sub, int upload, uint32_t *value)
 {
     if (f->extended || f->id != 0x580u + node || f->dlc < 4u ||
-        get_le(&f->data[1], 2u) != index || f->data[3] != sub) {
+        rrr_co_get_le(&f->data[1], 2u) != index || f->data[3] != sub) {
         return RRR_COM_SDO_OTHER;
     }
     const uint8_t cs = f->data[0];
@@ -82,7 +68,7 @@ rrr_com_sdo_answer rrr_com_sdo_reply(const rrr_hil_frame *f, uint8_t node, uint1
         if (f->dlc != 8u) {
             return RRR_COM_SDO_BAD;
         }
-        *value = get_le(&f->data[4], 4u);
+        *value = rrr_co_get_le(&f->data[4], 4u);
         return RRR_COM_SDO_ABORT;
     }
     if (f->dlc != 8u) {
@@ -94,15 +80,15 @@ rrr_com_sdo_answer rrr_com_sdo_reply(const rrr_hil_frame *f, uint8_t node, uint1
     if ((cs & 0xE3u) != 0x43u) { /* scs 2, expedited, size indicated */
         return RRR_COM_SDO_BAD;
     }
-    *value = get_le(&f->data[4], 4u - ((cs >> 2) & 3u));
+    *value = rrr_co_get_le(&f->data[4], 4u - ((cs >> 2) & 3u));
     return RRR_COM_SDO_DONE;
 }
 
 void rrr_com_rpdo1(uint8_t node, uint16_t controlword, int16_t torque_pm, rrr_hil_frame *f)
 {
     frame(f, 0x200u + node, 4u);
-    put_le(&f->data[0], controlword, 2u);
-    put_le(&f->data[2], (uint16_t)torque_pm, 2u);
+    rrr_co_put_le(&f->data[0], controlword, 2u);
+    rrr_co_put_le(&f->data[2], (uint16_t)torque_pm, 2u);
 }
 
 int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb)
@@ -114,11 +100,11 @@ int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb)
         return -1;
     }
     if (f->id == 0x180u + node) {
-        fb->statusword = (uint16_t)get_le(&f->data[0], 2u);
-        fb->position_inc = (int32_t)get_le(&f->data[2], 4u);
+        fb->statusword = (uint16_t)rrr_co_get_le(&f->data[0], 2u);
+        fb->position_inc = (int32_t)rrr_co_get_le(&f->data[2], 4u);
         fb->have |= 1u;
     } else {
-        fb->velocity_inc = (int32_t)get_le(&f->data[0], 4u);
+        fb->velocity_inc = (int32_t)rrr_co_get_le(&f->data[0], 4u);
         fb->have |= 2u;
     }
     return 1;
@@ -129,7 +115,7 @@ uint8_t rrr_com_emcy(const rrr_hil_frame *f, uint16_t *code)
     if (f->extended || f->id <= 0x080u || f->id > 0x0FFu || f->dlc != 8u) {
         return 0u;
     }
-    *code = (uint16_t)get_le(&f->data[0], 2u);
+    *code = (uint16_t)rrr_co_get_le(&f->data[0], 2u);
     return (uint8_t)(f->id - 0x080u);
 }
 

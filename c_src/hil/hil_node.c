@@ -55,7 +55,7 @@ int rrr_hil_parse_vec3(const char *s, double v[3])
     return 0;
 }
 
-int rrr_hil_parse_node_ids(const char *s, uint8_t ids[3])
+static int parse_node_ids(const char *s, uint8_t ids[3])
 {
     double v[3];
     int ok = rrr_hil_parse_vec3(s, v) == 0;
@@ -64,6 +64,28 @@ int rrr_hil_parse_node_ids(const char *s, uint8_t ids[3])
         ids[j] = ok ? (uint8_t)v[j] : 0u;
     }
     return ok && ids[0] != ids[1] && ids[0] != ids[2] && ids[1] != ids[2] ? 0 : -1;
+}
+
+int rrr_hil_profile_arg(const char *a, const char *v, int *canopen, uint8_t ids[3],
+                        const char *prog)
+{
+    if (strcmp(a, "--profile") == 0) {
+        if (strcmp(v, "dbc") != 0 && strcmp(v, "canopen") != 0) {
+            fprintf(stderr, "%s: --profile: expected 'dbc' or 'canopen', got '%s'\n", prog, v);
+            return -1;
+        }
+        *canopen = strcmp(v, "canopen") == 0;
+        return 1;
+    }
+    if (strcmp(a, "--node-ids") == 0) {
+        if (parse_node_ids(v, ids) != 0) {
+            fprintf(stderr, "%s: --node-ids: expected three distinct node ids 1..127 a,b,c, "
+                            "got '%s'\n", prog, v);
+            return -1;
+        }
+        return 1;
+    }
+    return 0;
 }
 
 /* ---- exit statuses --------------------------------------------------------------------------- */

@@ -89,8 +89,11 @@ const char *rrr_hil_stop_signal_name(void);
 int rrr_hil_parse_hostport(const char *s, char host[64], uint16_t *port);
 /** Parse "a,b,c" into three finite doubles. 0 or -1. */
 int rrr_hil_parse_vec3(const char *s, double v[3]);
-/** Parse three distinct CANopen node ids "a,b,c" (each 1..127) into ids. 0, or -1. */
-int rrr_hil_parse_node_ids(const char *s, uint8_t ids[3]);
+/** The options both nodes share for their CANopen profile: "--profile dbc|canopen" (into
+ *  *canopen) and "--node-ids a,b,c" (three distinct node ids 1..127, into ids). @p a is the
+ *  option, @p v its value. 1 consumed, 0 not one of them, -1 a bad value (message printed). */
+int rrr_hil_profile_arg(const char *a, const char *v, int *canopen, uint8_t ids[3],
+                        const char *prog);
 /** Apply "NAME=VALUE" to a model, NAME as the FMUs name the parameters: d1, a2, a3, d2, d3, g,
  *  u_max, p[1..16], kt[i], b[i], f[i,k], w[i,k] (i, k = 1..3). The value must be finite; the
  *  model is not validated here (call rrr_model_validate after the last one). 0, or -1 with a

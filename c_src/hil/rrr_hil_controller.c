@@ -165,16 +165,8 @@ static int parse_args(int argc, char **argv, opts *o)
                     fprintf(stderr, PROG ": %s: expected three numbers a,b,c, got '%s'\n", a, v);
                     return -1;
                 }
-            } else if (strcmp(a, "--profile") == 0) {
-                if (strcmp(v, "dbc") != 0 && strcmp(v, "canopen") != 0) {
-                    fprintf(stderr, PROG ": --profile: expected 'dbc' or 'canopen', got '%s'\n", v);
-                    return -1;
-                }
-                o->canopen = strcmp(v, "canopen") == 0;
-            } else if (strcmp(a, "--node-ids") == 0) {
-                if (rrr_hil_parse_node_ids(v, o->node_ids) != 0) {
-                    fprintf(stderr, PROG ": --node-ids: expected three distinct node ids 1..127 "
-                                         "a,b,c, got '%s'\n", v);
+            } else if ((r = rrr_hil_profile_arg(a, v, &o->canopen, o->node_ids, PROG)) != 0) {
+                if (r < 0) {
                     return -1;
                 }
             } else if (strcmp(a, "--timeout-ms") == 0) {
@@ -388,12 +380,11 @@ static int finish(ctrl *c, int rc)
     return rc;
 }
 
-/* Wait up to --timeout-ms for a frame, in slices so that SIGINT/SIGTERM end the wait at once.
- * want < 0: any frame of the bench; else the complete joint state with alive counter `want`.
- * 0, or an exit status with why set. */
-static int wait_frames(ctrl *c, const opts *o, int want, const char *what)
+/* The next frame before the deadline (ms of now_ms), waiting in slices so that SIGINT/SIGTERM end
+ * the wait at once; 0, or an exit status with why set. */
+static int recv_until(ctrl *c, int64_t deadline, const opts *o, const char *what,
+                      rrr_hil_frame *f)
 {
-    const int64_t deadline = now_ms() + o->timeout_ms;
     for (;;) {
         if (rrr_hil_stop_requested()) {
             return interrupted(c);
@@ -403,13 +394,26 @@ static int wait_frames(ctrl *c, const opts *o, int want, const char *what)
             return end_run(c, RRR_HIL_EXIT_PEER_LOST, "plant lost: no %s within %d ms (--timeout-ms)",
                            what, o->timeout_ms);
         }
-        rrr_hil_frame f;
-        const rrr_hil_io io = rrr_hil_recv(c->tr, &f, (int)(left < 100 ? left : 100) * 1000);
-        if (io == RRR_HIL_IO_TIMEOUT) {
-            continue;
+        const rrr_hil_io io = rrr_hil_recv(c->tr, f, (int)(left < 100 ? left : 100) * 1000);
+        if (io == RRR_HIL_IO_OK) {
+            return 0;
         }
-        if (io != RRR_HIL_IO_OK) {
+        if (io != RRR_HIL_IO_TIMEOUT) {
             return plant_lost(c, what, io);
+        }
+    }
+}
+
+/* Wait up to --timeout-ms for a frame. want < 0: any frame of the bench; else the complete joint
+ * state with alive counter `want`. 0, or an exit status with why set. */
+static int wait_frames(ctrl *c, const opts *o, int want, const char *what)
+{
+    const int64_t deadline = now_ms() + o->timeout_ms;
+    for (;;) {
+        rrr_hil_frame f;
+        const int rc = recv_until(c, deadline, o, what, &f);
+        if (rc != 0) {
+            return rc;
         }
         if (handle(c, &f) ? (want < 0 || c->pending == (uint8_t)want) : want < 0) {
             return 0;
@@ -509,28 +513,6 @@ static const struct {
                 {0x1A01u, 0x1801u, 0x280u, {0x606C0020u, 0x60770010u}}};
 #define CO_SW_MASK 0x6Fu
 
-/* The next frame within the deadline; 0, or an exit status with why set. */
-static int co_recv(ctrl *c, int64_t deadline, const opts *o, const char *what, rrr_hil_frame *f)
-{
-    for (;;) {
-        if (rrr_hil_stop_requested()) {
-            return interrupted(c);
-        }
-        const int64_t left = deadline - now_ms();
-        if (left <= 0) {
-            return end_run(c, RRR_HIL_EXIT_PEER_LOST, "plant lost: no %s within %d ms (--timeout-ms)",
-                           what, o->timeout_ms);
-        }
-        const rrr_hil_io io = rrr_hil_recv(c->tr, f, (int)(left < 100 ? left : 100) * 1000);
-        if (io == RRR_HIL_IO_OK) {
-            return 0;
-        }
-        if (io != RRR_HIL_IO_TIMEOUT) {
-            return plant_lost(c, what, io);
-        }
-    }
-}
-
 /* One expedited SDO transfer (download: size 1, 2 or 4 bytes of *value; upload: size 0, the
  * value into *value). 0, or an exit status with why set: an abort or an answer this master cannot
  * use is a setup failure, no answer within --timeout-ms a lost plant. */
@@ -550,7 +532,7 @@ static int co_sdo(ctrl *c, const opts *o, uint8_t node, uint16_t index, uint8_t 
     int rc = send_frame(c, &f, "send an SDO request");
     const int64_t deadline = now_ms() + o->timeout_ms;
     while (rc == 0) {
-        rc = co_recv(c, deadline, o, what, &f);
+        rc = recv_until(c, deadline, o, what, &f);
         uint32_t v = 0;
         const rrr_com_sdo_answer a =
             rc == 0 ? rrr_com_sdo_reply(&f, node, index, sub, upload, &v) : RRR_COM_SDO_OTHER;
@@ -602,7 +584,7 @@ static int co_boot(ctrl *c, const opts *o)
     unsigned want = 7u;
     while (rc == 0 && want != 0u) {
         rrr_hil_frame f;
-        rc = co_recv(c, deadline, o, "boot-up message of every drive after NMT reset node", &f);
+        rc = recv_until(c, deadline, o, "boot-up message of every drive after NMT reset node", &f);
         for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
             if (!f.extended && f.id == 0x700u + o->node_ids[j] && f.dlc == 1u && f.data[0] == 0u) {
                 want &= ~(1u << j);
@@ -728,7 +710,7 @@ static int co_period(ctrl *c, const opts *o, const int16_t pm[3], uint32_t k)
     char what[64];
     (void)snprintf(what, sizeof what, "TPDOs of SYNC %u", (unsigned)k);
     while ((c->fb[0].have & c->fb[1].have & c->fb[2].have) != 3u) {
-        rc = co_recv(c, deadline, o, what, &f);
+        rc = recv_until(c, deadline, o, what, &f);
         if (rc != 0) {
             return rc;
         }

@@ -176,16 +176,8 @@ static int parse_args(int argc, char **argv, opts *o)
             names[o->n_set][n] = '\0';
             o->set_name[o->n_set] = names[o->n_set];
             o->set_value[o->n_set++] = x;
-        } else if (strcmp(a, "--profile") == 0) {
-            if (strcmp(v, "dbc") != 0 && strcmp(v, "canopen") != 0) {
-                fprintf(stderr, PROG ": --profile: expected 'dbc' or 'canopen', got '%s'\n", v);
-                return -1;
-            }
-            o->canopen = strcmp(v, "canopen") == 0;
-        } else if (strcmp(a, "--node-ids") == 0) {
-            if (rrr_hil_parse_node_ids(v, o->node_ids) != 0) {
-                fprintf(stderr, PROG ": --node-ids: expected three distinct node ids 1..127 "
-                                     "a,b,c, got '%s'\n", v);
+        } else if ((r = rrr_hil_profile_arg(a, v, &o->canopen, o->node_ids, PROG)) != 0) {
+            if (r < 0) {
                 return -1;
             }
         } else if (strcmp(a, "--max-missed") == 0 || strcmp(a, "--max-delta-counter") == 0) {

@@ -115,16 +115,7 @@ def _boot_and_enable(rig: Rig) -> None:
 def _period(rig: Rig, torques: list[int]) -> dict[int, bytes]:
     """One lockstep period: the RPDOs (controlword 0x0F, target torque), one SYNC, the six
     TPDOs of that SYNC."""
-    for node, t in zip(rig.nodes, torques, strict=True):
-        node.rpdo[1]["Controlword"].raw = 0x0F
-        node.rpdo[1]["Target torque"].raw = t
-        node.rpdo[1].transmit()
-    rig.network.sync.transmit()
-    got: dict[int, bytes] = {}
-    while len(got) < 6:
-        cob, data = rig.tpdos.get(timeout=5)
-        got[cob] = data
-    return got
+    return _cycle(rig, torques, [0x0F] * 3)
 
 
 def test_three_drives_mastered_by_canopen(rig: Rig) -> None:

@@ -346,9 +346,17 @@ def _start_drives(q_ref: FloatArray, qd_ref: FloatArray, work: Path,
                        extra=["--profile", "canopen", *idle])
 
 
-def _check_interface(interface: str) -> None:
+def _check_run(t: FloatArray, q_ref: FloatArray, node_ids: Sequence[int], interface: str) -> None:
+    """BadInputError for a master run that cannot be: an unknown interface, a reference of
+    fewer than 2 periods or not of 3 joints, other than three node ids."""
     if interface not in ("socketcand", "socketcan"):
         raise BadInputError(f"interface must be socketcand or socketcan, got {interface!r}")
+    n = t.shape[0]
+    if n < 2 or q_ref.shape != (n, 3):
+        raise BadInputError(f"the reference needs at least 2 periods of 3 joints, got "
+                            f"{q_ref.shape}")
+    if len(node_ids) != 3:
+        raise BadInputError(f"three node ids expected (one per axis), got {list(node_ids)}")
 
 
 def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
@@ -365,13 +373,8 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     ``channel``, python-can's socketcan interface under ``canopen.Network``; the plant ends
     IDLE_MS_SOCKETCAN after the master's NMT stop). HilError when a drive does not boot or
     enable, on an SDO abort, a lost plant or a timeout (``timeout`` s per wait)."""
-    _check_interface(interface)
+    _check_run(t, q_ref, node_ids, interface)
     n = t.shape[0]
-    if n < 2 or q_ref.shape != (n, 3):
-        raise BadInputError(f"the reference needs at least 2 periods of 3 joints, got "
-                            f"{q_ref.shape}")
-    if len(node_ids) != 3:
-        raise BadInputError(f"three node ids expected (one per axis), got {list(node_ids)}")
     kt = [float(v) for v in model.kt]
     q_rec, qd_rec, out = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 9))
     pm = np.zeros((n, 3), dtype=np.int64)
@@ -431,13 +434,8 @@ def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: 
     computed-torque law with the controller FMU's ``controller_values``, one SYNC per period).
     ``model`` is the same controller model (its k_t give the target torques of the log's u).
     HilError when a node fails: the C master's exit status and its reason."""
-    _check_interface(interface)
+    _check_run(t, q_ref, node_ids, interface)
     n = t.shape[0]
-    if n < 2 or q_ref.shape != (n, 3):
-        raise BadInputError(f"the reference needs at least 2 periods of 3 joints, got "
-                            f"{q_ref.shape}")
-    if len(node_ids) != 3:
-        raise BadInputError(f"three node ids expected (one per axis), got {list(node_ids)}")
     sc = interface == "socketcan"
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="rrr_co_") as tmp:
