@@ -11,10 +11,21 @@ classified (collection fails otherwise):
 
 from __future__ import annotations
 
+import atexit
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 import pytest
 import rrr_robot as rr
+
+# the writing task's plan cache (rrr_robot.writing.plan_cache) of this session: its own folder,
+# shared by the processes the tests start, never the user's ~/.cache; removed at the end
+_PLAN_CACHE = tempfile.mkdtemp(prefix="rrr-test-plan-cache-")
+os.environ["RRR_CACHE_DIR"] = _PLAN_CACHE
+os.environ.pop("RRR_NO_CACHE", None)
+atexit.register(shutil.rmtree, _PLAN_CACHE, ignore_errors=True)
 
 #: The modules of the fast subset: the model, its files and tables, the CLI's argument checks,
 #: the API and version checks (each a few seconds at most).
@@ -43,7 +54,7 @@ SLOW = frozenset({
     "test_fmu_reference", "test_fmu_start_values", "test_fmu_state", "test_fmu_variants",
     "test_friction_methods", "test_generated_code", "test_hostile_archives",
     "test_hostile_sweeps", "test_identify_pipeline", "test_identify_threads",
-    "test_native_engine", "test_native_signals", "test_notebook", "test_outputs",
+    "test_native_engine", "test_native_signals", "test_plan_cache", "test_notebook", "test_outputs",
     "test_plant_fmu", "test_plant_integrator", "test_progress", "test_ssp", "test_sweep_dask",
     "test_sweep_examples", "test_text_layout", "test_urdf", "test_view", "test_writing",
     "test_writing_engine",

@@ -40,13 +40,12 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.interpolate import BSpline, make_interp_spline
 
 from ..core._arrays import FloatArray
 from ..core.checked import Invalid, show
@@ -63,6 +62,9 @@ from ..errors import BadInputError, NumericError, RobotFileError
 from .letters import text_strokes
 from .writing_path import PathOptions, WritingPath, build_path
 
+if TYPE_CHECKING:  # scipy.interpolate is imported where a timing law is built (about 0.4 s)
+    from scipy.interpolate import BSpline
+
 __all__ = [
     "DEFAULT_TEXT",
     "MAX_PATH_LENGTH",
@@ -72,12 +74,14 @@ __all__ = [
     "MIN_HEIGHT_CORNER_RADII",
     "Reference",
     "TimingLaw",
+    "TipPlan",
     "WritingSpec",
     "fit_letter_height",
     "fitted_spec",
     "letter_height_range",
     "make_reference",
     "numeric_ik_path",
+    "tip_plan",
     "writing_path",
 ]
 
@@ -302,8 +306,18 @@ def writing_path(spec: WritingSpec) -> WritingPath:
 def check_workspace(model: Model, path: WritingPath, spec: WritingSpec) -> float:
     """Least workspace margin along the path (pen lifts included), m; raises BadInputError if
     it is below ``spec.min_workspace_margin``."""
+    return workspace_margin(model, workspace_samples(path), spec)
+
+
+def workspace_samples(path: WritingPath) -> FloatArray:
+    """The tip positions at which the workspace margin is checked: every 0.2 mm of the path."""
     s = np.linspace(0.0, path.length, max(2, int(path.length / 2e-4) + 1))
-    x = path.evaluate(s)[0]
+    return path.evaluate(s)[0]
+
+
+def workspace_margin(model: Model, x: FloatArray, spec: WritingSpec) -> float:
+    """Least workspace margin of the tip positions x (n, 3), m; raises BadInputError if it is
+    below ``spec.min_workspace_margin``."""
     margin = np.asarray(model.workspace_margin(x))
     k = int(np.argmin(margin))
     if margin[k] < spec.min_workspace_margin:
@@ -427,6 +441,8 @@ def timing_law(path: WritingPath, spec: WritingSpec) -> TimingLaw:
     s_smooth[still_before] = 0.0
     s_smooth[still_after] = path.length
     t_out = tau - tau[0]
+    from scipy.interpolate import make_interp_spline
+
     return TimingLaw(
         spline=make_interp_spline(t_out, s_smooth, k=5),
         t_start=float(t_out[still_before][-1]),
@@ -460,33 +476,73 @@ def _singular_margins(model: Model, q: FloatArray, spec: WritingSpec) -> tuple[f
     return float(elbow.min()), float(shoulder.min())
 
 
-def make_reference(model: Model, spec: WritingSpec | None = None) -> Reference:
-    """Build the reference motion of the writing task (see the module doc)."""
-    spec = fitted_spec(WritingSpec() if spec is None else spec)
-    start = time.perf_counter()
+@dataclass(frozen=True)
+class TipPlan:
+    """The part of the reference that does not depend on the robot: the tip motion on the time
+    grid ``spec.dt`` (t, the path parameter s, x, xd, xdd, pen_down) and the tip positions of the
+    workspace check (``ws_x``, every 0.2 mm of the path). Built by :func:`tip_plan` (the splines:
+    the expensive part) or read back from the cache of :mod:`rrr_robot.writing.plan_cache`."""
+
+    t: FloatArray
+    s: FloatArray
+    x: FloatArray
+    xd: FloatArray
+    xdd: FloatArray
+    pen_down: np.ndarray
+    ws_x: FloatArray
+    path_length: float
+
+
+def tip_plan(spec: WritingSpec,
+             check: Callable[[FloatArray], object] | None = None) -> TipPlan:
+    """The tip motion of a (fitted) spec: steps 1-4 of the module doc. ``check`` is called with
+    the workspace samples before the timing law is built (a text the robot cannot reach fails
+    before the expensive steps)."""
     path = writing_path(spec)
     check_path_length(path, spec)
-    margin = check_workspace(model, path, spec)
+    ws_x = workspace_samples(path)
+    if check is not None:
+        check(ws_x)
     law = timing_law(path, spec)
     check_reference_size(law.duration, spec)
     t = np.arange(math.floor(law.duration / spec.dt + 1e-9) + 1, dtype=np.float64) * spec.dt
     s, sd, sdd = law.evaluate(t)
     c, c1, c2 = path.evaluate(s)
-    x = c
-    xd = c1 * sd[:, None]
-    xdd = c2 * sd[:, None] ** 2 + c1 * sdd[:, None]
-    q = _joint_path(model, x, spec)
+    return TipPlan(t=t, s=s, x=c, xd=c1 * sd[:, None],
+                   xdd=c2 * sd[:, None] ** 2 + c1 * sdd[:, None], pen_down=path.pen_down(s),
+                   ws_x=ws_x, path_length=path.length)
+
+
+def make_reference(model: Model, spec: WritingSpec | None = None, *,
+                   cache: bool = True) -> Reference:
+    """Build the reference motion of the writing task (see the module doc). With ``cache``, the
+    robot-independent tip plan is read from (or added to) the plan cache
+    (:mod:`rrr_robot.writing.plan_cache`: the same numbers, bit for bit, without the spline
+    fits); the robot-dependent part (workspace margin, IK, singular margins, joint motion) is
+    computed every time."""
+    from . import plan_cache
+
+    spec = fitted_spec(WritingSpec() if spec is None else spec)
+    start = time.perf_counter()
+    plan = plan_cache.load(spec) if cache else None
+    cached = plan is not None
+    if plan is None:
+        plan = tip_plan(spec, lambda ws_x: workspace_margin(model, ws_x, spec))
+        if cache:
+            plan_cache.store(spec, plan)
+    margin = workspace_margin(model, plan.ws_x, spec)
+    q = _joint_path(model, plan.x, spec)
     elbow, shoulder = _singular_margins(model, q, spec)
-    qd, qdd = model.joint_motion(q, xd, xdd)
+    qd, qdd = model.joint_motion(q, plan.xd, plan.xdd)
     ref = Reference(
-        t=t, x=x, xd=xd, xdd=xdd, q=q, qd=qd, qdd=qdd, pen_down=path.pen_down(s),
-        speed=np.hypot(xd[:, 0], xd[:, 2]), s=s, min_margin_m=margin,
-        min_elbow_margin=elbow, min_shoulder_margin_m=shoulder, spec=spec,
+        t=plan.t, x=plan.x, xd=plan.xd, xdd=plan.xdd, q=q, qd=qd, qdd=qdd,
+        pen_down=plan.pen_down, speed=np.hypot(plan.xd[:, 0], plan.xd[:, 2]), s=plan.s,
+        min_margin_m=margin, min_elbow_margin=elbow, min_shoulder_margin_m=shoulder, spec=spec,
     )
     logger.info(
         "writing %r: %.2f s, path %.3f m, peak speed %.3f m/s, margins %.3f m / %.3f / %.3f m, "
-        "built in %.2f s", spec.text, ref.duration, path.length, ref.speed.max(), margin,
-        elbow, shoulder, time.perf_counter() - start,
+        "built in %.2f s%s", spec.text, ref.duration, plan.path_length, ref.speed.max(), margin,
+        elbow, shoulder, time.perf_counter() - start, " (tip plan cached)" if cached else "",
     )
     return ref
 

@@ -20,11 +20,14 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.interpolate import BSpline, make_interp_spline, splprep
 
 from ..core._arrays import FloatArray
+
+if TYPE_CHECKING:  # scipy.interpolate is imported where a path is built (about 0.4 s)
+    from scipy.interpolate import BSpline
 
 __all__ = ["PathOptions", "WritingPath", "build_path"]
 
@@ -82,6 +85,8 @@ def _bump(u: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
 
 def _fit_piece(pts: FloatArray, noise: float) -> BSpline:
     """C2 curve through / near the vertices, parameterised by chord length."""
+    from scipy.interpolate import BSpline, make_interp_spline, splprep
+
     u = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
     m = len(pts)
     if m <= 3:
@@ -102,6 +107,8 @@ def _split_corners(pts: FloatArray, corner_angle: float) -> list[FloatArray]:
 
 
 def _line(p0: FloatArray, p1: FloatArray) -> BSpline:
+    from scipy.interpolate import make_interp_spline
+
     return make_interp_spline([0.0, float(np.hypot(*(p1 - p0)))], np.vstack([p0, p1]), k=1)
 
 
