@@ -18,6 +18,8 @@ from rrr_robot.writing import plan_cache
 from rrr_robot.writing import trajectory as tr
 
 SPEC = tr.WritingSpec(text="ab")
+#: a text too wide for the writing area at its letter height: fitted (shrunk) when built
+WIDE = tr.WritingSpec(text="abcdefghij")
 
 
 @pytest.fixture
@@ -47,8 +49,10 @@ def _entries(folder: Path) -> list[Path]:
     return sorted(folder.glob("plan-*.npz"))
 
 
+@pytest.mark.parametrize("spec", [SPEC, WIDE], ids=["fits", "fitted"])
 def test_a_cached_reference_is_the_built_one_bit_for_bit(cache: Path, model: rr.Model,
-                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+                                                         monkeypatch: pytest.MonkeyPatch,
+                                                         spec: tr.WritingSpec) -> None:
     built_laws = []
     real_law = tr.timing_law
 
@@ -57,20 +61,33 @@ def test_a_cached_reference_is_the_built_one_bit_for_bit(cache: Path, model: rr.
         return real_law(*args, **kwargs)  # type: ignore[arg-type]
 
     monkeypatch.setattr(tr, "timing_law", counted)
-    built = tr.make_reference(model, SPEC, cache=False)
+    built = tr.make_reference(model, spec, cache=False)
     assert not cache.exists() and len(built_laws) == 1
-    first = tr.make_reference(model, SPEC)          # a miss: builds and stores
+    first = tr.make_reference(model, spec)          # a miss: builds and stores
     assert len(_entries(cache)) == 1 and len(built_laws) == 2
     _assert_same(built, first)
-    second = tr.make_reference(model, SPEC)         # a hit: no spline is built
+    fonts_read = []
+    real_strokes = tr._strokes
+
+    def strokes(*args: object) -> object:
+        fonts_read.append(1)
+        return real_strokes(*args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(tr, "_strokes", strokes)
+    second = tr.make_reference(model, spec)         # a hit: no spline built, no font read
+    assert fonts_read == []
     assert len(built_laws) == 2
     _assert_same(built, second)
     # the robot-dependent part is not cached: another arm gets its own joint motion, as built
     other = model.with_params(a2=model.dh["a2"] * 1.01)
-    own = tr.make_reference(other, SPEC, cache=False)
-    _assert_same(own, tr.make_reference(other, SPEC))
+    own = tr.make_reference(other, spec, cache=False)
+    _assert_same(own, tr.make_reference(other, spec))
     assert len(built_laws) == 3
     assert not np.array_equal(own.q, built.q)
+
+
+def test_the_wide_text_is_fitted(model: rr.Model) -> None:
+    assert tr.fitted_spec(WIDE).letter_height < WIDE.letter_height
 
 
 def test_the_key_follows_every_spec_field(cache: Path) -> None:
@@ -103,9 +120,9 @@ def test_a_damaged_entry_is_rebuilt_not_trusted(cache: Path, model: rr.Model,
             arrays["xdd"][5, 1] = np.nan
         with entry.open("wb") as f:
             np.savez(f, **arrays)
-    assert plan_cache.load(tr.fitted_spec(SPEC)) is None
+    assert plan_cache.load(SPEC) is None
     _assert_same(built, tr.make_reference(model, SPEC))      # rebuilt ...
-    assert plan_cache.load(tr.fitted_spec(SPEC)) is not None  # ... and stored again
+    assert plan_cache.load(SPEC) is not None  # ... and stored again
 
 
 def test_an_unwritable_cache_is_no_failure(tmp_path: Path, model: rr.Model,
@@ -115,7 +132,7 @@ def test_an_unwritable_cache_is_no_failure(tmp_path: Path, model: rr.Model,
     monkeypatch.setenv("RRR_CACHE_DIR", str(blocker / "cache"))
     ref = tr.make_reference(model, SPEC)
     _assert_same(tr.make_reference(model, SPEC, cache=False), ref)
-    assert plan_cache.load(tr.fitted_spec(SPEC)) is None
+    assert plan_cache.load(SPEC) is None
 
 
 def test_no_cache_env_turns_it_off(cache: Path, model: rr.Model,
@@ -156,7 +173,7 @@ def test_the_cache_keeps_at_most_max_entries(cache: Path, model: rr.Model,
     entries = _entries(cache)
     assert len(entries) == 2
     kept = {e.name for e in entries}
-    assert all(f"plan-{plan_cache.plan_key(tr.fitted_spec(tr.WritingSpec(text=t)))[:40]}.npz"
+    assert all(f"plan-{plan_cache.plan_key(tr.WritingSpec(text=t))[:40]}.npz"
                in kept for t in ("b", "c"))
     assert not list(cache.glob(".plan-*"))  # no temporary file left behind
 

@@ -10,9 +10,11 @@ both ways and compares).
 - Where: ``$RRR_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/rrr-robot``, else
   ``~/.cache/rrr-robot``. ``RRR_NO_CACHE=1`` (or ``make_reference(..., cache=False)``) turns the
   cache off.
-- Key: a SHA-256 of the spec's fields, the source of the modules that build the plan
-  (``letters``, ``writing_path``, ``trajectory``, this one) and the versions of NumPy, SciPy and
-  HersheyFonts: a change of any of them misses the cache. The key is stored in the file and
+- Key: a SHA-256 of the spec's fields (as asked: the plan holds the letter height the text was
+  fitted to, so that a hit does not even read the font), the source of the modules that build
+  the plan (``letters``, ``writing_path``, ``trajectory``, this one) and the installed versions
+  of NumPy, SciPy and HersheyFonts (their ``.dist-info`` folders): a change of any of them
+  misses the cache. The key is stored in the file and
   compared on reading.
 - A file is written atomically (a temporary file in the cache folder, then renamed), and a file
   that cannot be read, holds another key or arrays of the wrong shape is ignored and rebuilt:
@@ -29,7 +31,7 @@ import json
 import logging
 import os
 import tempfile
-from importlib import metadata
+from importlib.machinery import PathFinder
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -47,7 +49,8 @@ MAX_ENTRIES = 64
 _FORMAT = 1
 _ARRAYS = ("t", "s", "x", "xd", "xdd", "pen_down", "ws_x")
 _SOURCES = ("letters.py", "writing_path.py", "trajectory.py", "plan_cache.py")
-_PACKAGES = ("numpy", "scipy", "HersheyFonts")
+#: (import name, distribution name) of the libraries whose versions the key holds
+_PACKAGES = (("numpy", "numpy"), ("scipy", "scipy"), ("HersheyFonts", "Hershey_Fonts"))
 
 
 def cache_dir() -> Path | None:
@@ -60,6 +63,17 @@ def cache_dir() -> Path | None:
     return Path(base) / "rrr-robot"
 
 
+def _installed(module: str, dist: str) -> str:
+    """Which version of a library is installed, without importing it nor importlib.metadata
+    (16 ms): its top-level folder and the names of the ``.dist-info`` folders beside it."""
+    spec = PathFinder.find_spec(module)
+    if spec is None or not spec.origin:
+        return "absent"
+    folder = Path(spec.origin).parent
+    infos = sorted(p.name for p in folder.parent.glob(f"{dist}-*.dist-info"))
+    return f"{folder}:{','.join(infos)}"
+
+
 @functools.cache
 def _code_fingerprint() -> str:
     here = Path(__file__).parent
@@ -67,12 +81,8 @@ def _code_fingerprint() -> str:
     for name in _SOURCES:
         h.update(name.encode())
         h.update((here / name).read_bytes())
-    for pkg in _PACKAGES:
-        try:
-            version = metadata.version(pkg)
-        except metadata.PackageNotFoundError:
-            version = "absent"
-        h.update(f"{pkg}={version}".encode())
+    for module, dist in _PACKAGES:
+        h.update(f"{module}={_installed(module, dist)}".encode())
     return h.hexdigest()
 
 
@@ -104,6 +114,7 @@ def load(spec: WritingSpec) -> TipPlan | None:
                 raise ValueError("another key")
             arrays = {name: z[name] for name in _ARRAYS}
             length = float(z["path_length"])
+            height = float(z["letter_height"])
     except FileNotFoundError:
         return None
     except Exception as exc:  # a damaged or foreign file: rebuilt, never trusted
@@ -116,11 +127,12 @@ def load(spec: WritingSpec) -> TipPlan | None:
                  and arrays["pen_down"].dtype == np.bool_
                  and all(arrays[a].dtype == np.float64 for a in _ARRAYS if a != "pen_down"))
     if not shapes_ok or not all(np.all(np.isfinite(arrays[a])) for a in _ARRAYS
-                                if a != "pen_down") or not np.isfinite(length):
+                                if a != "pen_down") or not np.isfinite(length) \
+            or not (np.isfinite(height) and height > 0):
         log.debug("plan cache: ignoring %s (wrong arrays)", file)
         return None
     os.utime(file)  # most recently used: kept longest
-    return TipPlan(path_length=length, **arrays)
+    return TipPlan(path_length=length, letter_height=height, **arrays)
 
 
 def store(spec: WritingSpec, plan: TipPlan) -> None:
@@ -136,6 +148,7 @@ def store(spec: WritingSpec, plan: TipPlan) -> None:
         try:
             with os.fdopen(fd, "wb") as f:
                 np.savez(f, key=np.array(key), path_length=np.array(plan.path_length),
+                         letter_height=np.array(plan.letter_height),
                          **{name: getattr(plan, name) for name in _ARRAYS})
             os.replace(tmp, _path(folder, key))
         except BaseException:

@@ -266,7 +266,10 @@ def letter_height_range(spec: WritingSpec) -> tuple[float, float]:
 def fitted_spec(spec: WritingSpec) -> WritingSpec:
     """``spec`` at the letter height :func:`fit_letter_height` chose (``spec`` itself when the
     text fits as it is)."""
-    height = fit_letter_height(spec)
+    return _at_height(spec, fit_letter_height(spec))
+
+
+def _at_height(spec: WritingSpec, height: float) -> WritingSpec:
     if height == spec.letter_height:
         return spec
     logger.info("text %s scaled to letter_height %.4f m (from %g m) to fit the writing area",
@@ -491,6 +494,7 @@ class TipPlan:
     pen_down: np.ndarray
     ws_x: FloatArray
     path_length: float
+    letter_height: float  # the fitted spec's (:func:`fitted_spec`)
 
 
 def tip_plan(spec: WritingSpec,
@@ -510,26 +514,30 @@ def tip_plan(spec: WritingSpec,
     c, c1, c2 = path.evaluate(s)
     return TipPlan(t=t, s=s, x=c, xd=c1 * sd[:, None],
                    xdd=c2 * sd[:, None] ** 2 + c1 * sdd[:, None], pen_down=path.pen_down(s),
-                   ws_x=ws_x, path_length=path.length)
+                   ws_x=ws_x, path_length=path.length, letter_height=spec.letter_height)
 
 
 def make_reference(model: Model, spec: WritingSpec | None = None, *,
                    cache: bool = True) -> Reference:
-    """Build the reference motion of the writing task (see the module doc). With ``cache``, the
-    robot-independent tip plan is read from (or added to) the plan cache
+    """Build the reference motion of the writing task (see the module doc); ``spec`` is fitted
+    to the writing area (:func:`fitted_spec`). With ``cache``, the robot-independent tip plan
+    (and the fitted letter height) is read from (or added to) the plan cache
     (:mod:`rrr_robot.writing.plan_cache`: the same numbers, bit for bit, without the spline
     fits); the robot-dependent part (workspace margin, IK, singular margins, joint motion) is
     computed every time."""
     from . import plan_cache
 
-    spec = fitted_spec(WritingSpec() if spec is None else spec)
+    asked = WritingSpec() if spec is None else spec
     start = time.perf_counter()
-    plan = plan_cache.load(spec) if cache else None
+    plan = plan_cache.load(asked) if cache else None  # keyed by the spec as asked
     cached = plan is not None
     if plan is None:
+        spec = fitted_spec(asked)
         plan = tip_plan(spec, lambda ws_x: workspace_margin(model, ws_x, spec))
         if cache:
-            plan_cache.store(spec, plan)
+            plan_cache.store(asked, plan)
+    else:  # the fitted height is the plan's: the font is not even read
+        spec = _at_height(asked, plan.letter_height)
     margin = workspace_margin(model, plan.ws_x, spec)
     q = _joint_path(model, plan.x, spec)
     elbow, shoulder = _singular_margins(model, q, spec)
