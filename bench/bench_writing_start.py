@@ -58,7 +58,7 @@ def main() -> int:
             beyond[name].append(t - sim)
             cosim.append(sim)
 
-        writing("cached tip plan", -1, record=False)  # warms the file cache and fills the plan cache
+        writing("cached tip plan", -1, record=False)  # warms the file cache, fills the plan cache
         for k in range(args.repeats):
             for name in envs:
                 writing(name, k)

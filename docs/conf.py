@@ -52,7 +52,7 @@ nitpick_ignore_regex = [
     ("py:.*", r"(.*\.)?_[A-Za-z]\w*(\..*)?"),
     # names that autodoc leaves unresolved in signatures (aliases, TYPE_CHECKING imports)
     ("py:class", r"ArrayLike|Path|Mapping|Sequence|Callable|Iterator|Any|Progress"
-                 r"|ScipyStateSpace"),
+                 r"|ScipyStateSpace|BSpline"),
 ]
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
