@@ -108,6 +108,11 @@ MODE_CST = 10
 #: Position actual value 0x6064 in increments: 2^20 per revolution of the joint (0x608F).
 ENCODER_INCREMENTS = 1 << 20
 
+#: 0x605A: slow down on the quick-stop ramp and stay in QUICK STOP ACTIVE.
+QUICK_STOP_OPTION = 6
+#: 0x6072 in per mille of the rated torque 0x6076: |target torque 0x6071| <= 1000.
+MAX_TORQUE = 1000
+
 OD: tuple[Obj, ...] = (
     var(0x1000, "DEVICE_TYPE", "Device type", "UNSIGNED32", "ro", DEVICE_TYPE),
     var(0x1001, "ERROR_REGISTER", "Error register", "UNSIGNED8", "ro", 0),
@@ -142,14 +147,20 @@ OD: tuple[Obj, ...] = (
     var(0x603F, "ERROR_CODE", "Error code", "UNSIGNED16", "ro", 0),
     var(0x6040, "CONTROLWORD", "Controlword", "UNSIGNED16", "rw", 0, pdo=True),
     var(0x6041, "STATUSWORD", "Statusword", "UNSIGNED16", "ro", 0, pdo=True),
+    # 0: disable drive function; 1, 2: slow down on the slow-down / quick-stop ramp, then
+    # SWITCH ON DISABLED; 5, 6: the same ramp, then stay in QUICK STOP ACTIVE (a torque drive at
+    # 0 V: the ramp is immediate). Other values: abort 0x06090030 (checked in hil_canopen.c)
+    var(0x605A, "QUICK_STOP_OPTION", "Quick stop option code", "INTEGER16", "rw",
+        QUICK_STOP_OPTION),
     var(0x6060, "MODE", "Modes of operation", "INTEGER8", "rw", MODE_CST, pdo=True,
         low=MODE_CST, high=MODE_CST),
     var(0x6061, "MODE_DISPLAY", "Modes of operation display", "INTEGER8", "ro", MODE_CST,
         pdo=True),
     var(0x6064, "POSITION_ACTUAL", "Position actual value", "INTEGER32", "ro", 0, pdo=True),
     var(0x606C, "VELOCITY_ACTUAL", "Velocity actual value", "INTEGER32", "ro", 0, pdo=True),
-    var(0x6071, "TARGET_TORQUE", "Target torque", "INTEGER16", "rw", 0, pdo=True,
-        low=-1000, high=1000),
+    # the target torque's limit is the max torque 0x6072 (checked in hil_canopen.c)
+    var(0x6071, "TARGET_TORQUE", "Target torque", "INTEGER16", "rw", 0, pdo=True),
+    var(0x6072, "MAX_TORQUE", "Max torque", "UNSIGNED16", "rw", MAX_TORQUE),
     var(0x6076, "RATED_TORQUE", "Motor rated torque", "UNSIGNED32", "ro", 100000),
     var(0x6077, "TORQUE_ACTUAL", "Torque actual value", "INTEGER16", "ro", 0, pdo=True),
     Obj(0x608F, "Position encoder resolution", "ARRAY", (

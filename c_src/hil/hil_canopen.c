@@ -144,11 +144,13 @@ static void set_state(rrr_co_node *n, rrr_co_402 s)
     }
 }
 
+/* A fault: the latch (0 torque until its reset event), the 402 state FAULT, 0x1001, 0x603F and
+ * the EMCY. */
 static void fault(rrr_co_node *n, uint16_t code, uint8_t reg, rrr_co_out *out)
 {
+    rrr_hil_latch_fault(&n->latch, code);
     n->v[RRR_CO_OD_ERROR_REGISTER] |= (uint32_t)(reg | RRR_CO_ERR_GENERIC);
-    n->v[RRR_CO_OD_ERROR_CODE] = code;
-    n->err.faults++;
+    n->v[RRR_CO_OD_ERROR_CODE] = n->latch.code;
     set_state(n, RRR_CO_402_FAULT);
     emcy(n, code, out);
 }
@@ -158,16 +160,37 @@ void rrr_co_raise_fault(rrr_co_node *n, uint16_t code, uint8_t reg_bits, rrr_co_
     fault(n, code, reg_bits, out);
 }
 
+/* 0x605A: 1 for the codes that stay in QUICK STOP ACTIVE (5, 6), 0 for those that end in SWITCH
+ * ON DISABLED (0, 1, 2); -1 for a code the drive does not support. */
+static int quick_stop_option(uint32_t raw)
+{
+    switch ((int16_t)(uint16_t)raw) {
+    case RRR_CO_QS_DISABLE:
+    case RRR_CO_QS_SLOW_DOWN:
+    case RRR_CO_QS_QUICK:
+        return 0;
+    case RRR_CO_QS_SLOW_DOWN_STAY:
+    case RRR_CO_QS_QUICK_STAY:
+        return 1;
+    default:
+        return -1;
+    }
+}
+
+static int quick_stop_stays(uint32_t raw)
+{
+    return quick_stop_option(raw) == 1;
+}
+
 static void controlword(rrr_co_node *n, uint16_t cw, rrr_co_out *out)
 {
     const uint16_t prev = n->last_cw;
     n->last_cw = cw;
     const rrr_co_402 s = (rrr_co_402)n->s402;
-    if (cw & 0x80u) { /* fault reset: only its rising edge, only in FAULT */
-        if (!(prev & 0x80u) && s == RRR_CO_402_FAULT) {
+    if (cw & 0x80u) { /* fault reset: only its rising edge, only when a fault is latched (FAULT) */
+        if (!(prev & 0x80u) && rrr_hil_latch_reset(&n->latch)) {
             n->v[RRR_CO_OD_ERROR_REGISTER] = 0;
             n->v[RRR_CO_OD_ERROR_CODE] = 0;
-            n->err.fault_resets++;
             n->hb_seen = 0; /* monitoring restarts with the next heartbeat */
             set_state(n, RRR_CO_402_SWITCH_ON_DISABLED);
             emcy(n, RRR_CO_EMCY_RESET, out);
@@ -185,7 +208,11 @@ static void controlword(rrr_co_node *n, uint16_t cw, rrr_co_out *out)
         }
     } else if (!(cw & 0x4u)) { /* quick stop (7, 10, 11) */
         if (s == RRR_CO_402_OPERATION_ENABLED) {
-            set_state(n, RRR_CO_402_QUICK_STOP);
+            /* 11, and with the option codes 0..2 at once 12: the torque is 0 from now on, so
+             * the stop (ramp) is complete now */
+            set_state(n, quick_stop_stays(n->v[RRR_CO_OD_QUICK_STOP_OPTION])
+                             ? RRR_CO_402_QUICK_STOP
+                             : RRR_CO_402_SWITCH_ON_DISABLED);
         } else if (s == RRR_CO_402_READY || s == RRR_CO_402_SWITCHED_ON) {
             set_state(n, RRR_CO_402_SWITCH_ON_DISABLED);
         }
@@ -272,13 +299,39 @@ static uint32_t check_limits(const rrr_co_od_entry *e, uint32_t raw)
     return 0;
 }
 
+/* The table's limits and the checks that depend on the node's values: the target torque 0x6071
+ * within +-0x6072 (the max torque, per mille of 0x6076), the max torque not below the target
+ * torque in force, a quick stop option code 0x605A the drive supports. 0 or an abort code. */
+static uint32_t check_value(const rrr_co_node *n, int slot, uint32_t raw)
+{
+    const uint32_t ab = check_limits(&rrr_co_od[slot], raw);
+    if (ab) {
+        return ab;
+    }
+    switch (slot) {
+    case RRR_CO_OD_TARGET_TORQUE: {
+        const int32_t t = (int16_t)(uint16_t)raw;
+        const int32_t max = (int32_t)n->v[RRR_CO_OD_MAX_TORQUE];
+        return t > max ? RRR_CO_ABORT_TOO_HIGH : t < -max ? RRR_CO_ABORT_TOO_LOW : 0u;
+    }
+    case RRR_CO_OD_MAX_TORQUE: {
+        const int32_t t = (int16_t)(uint16_t)n->v[RRR_CO_OD_TARGET_TORQUE];
+        return (uint32_t)(t < 0 ? -t : t) > raw ? RRR_CO_ABORT_TOO_LOW : 0u;
+    }
+    case RRR_CO_OD_QUICK_STOP_OPTION:
+        return quick_stop_option(raw) < 0 ? RRR_CO_ABORT_VALUE : 0u;
+    default:
+        return 0;
+    }
+}
+
 /* Write raw bits into slot with the side effects; returns 0 or an abort code (nothing
  * changed). The access check is the caller's. */
 static uint32_t write_entry(rrr_co_node *n, int slot, uint32_t raw, rrr_co_out *out)
 {
     const rrr_co_od_entry *e = &rrr_co_od[slot];
     raw &= size_mask(e->size);
-    uint32_t ab = check_limits(e, raw);
+    uint32_t ab = check_value(n, slot, raw);
     if (ab) {
         return ab;
     }
@@ -340,6 +393,9 @@ static uint32_t write_entry(rrr_co_node *n, int slot, uint32_t raw, rrr_co_out *
         controlword(n, (uint16_t)raw, out);
     } else if (slot == RRR_CO_OD_MODE) {
         n->v[RRR_CO_OD_MODE_DISPLAY] = raw;
+    } else if (slot == RRR_CO_OD_QUICK_STOP_OPTION && n->s402 == RRR_CO_402_QUICK_STOP &&
+               !quick_stop_stays(raw)) {
+        set_state(n, RRR_CO_402_SWITCH_ON_DISABLED); /* 12: the stop is complete (0 torque) */
     }
     return 0;
 }
@@ -378,6 +434,7 @@ static void reset_comm(rrr_co_node *n, rrr_co_out *out)
 static void reset_node(rrr_co_node *n, rrr_co_out *out)
 {
     leave_operational(n, out);
+    (void)rrr_hil_latch_reset(&n->latch); /* the application restarts: a reset event (counted) */
     n->nmt = RRR_CO_NMT_INIT; /* the application restarts: no EMCY until the boot-up */
     reset_range(n, 0x0000u, 0xFFFFu);
     n->last_cw = 0;
@@ -614,7 +671,7 @@ static void apply_rpdo(rrr_co_node *n, rrr_co_out *out)
         const unsigned size = (m & 0xFFu) / 8u;
         vals[i] = rrr_co_get_le(n->rpdo_data + off, size);
         off += size;
-        if (slots[i] >= 0 && check_limits(&rrr_co_od[slots[i]], vals[i]) != 0) {
+        if (slots[i] >= 0 && check_value(n, slots[i], vals[i]) != 0) {
             fault(n, RRR_CO_EMCY_PARAM, RRR_CO_ERR_PROFILE, out);
             return;
         }
@@ -691,6 +748,8 @@ static void on_sync(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
     }
     n->rpdo_seen = 0;
     n->tx_pending = 1;
+    double tau = rrr_co_torque_Nm(n); /* the period this SYNC starts, through the output stage */
+    (void)rrr_hil_latch_output(&n->latch, n->s402 == RRR_CO_402_QUICK_STOP, &tau, 1u);
 }
 
 void rrr_co_transmit(rrr_co_node *n, rrr_co_out *out)
@@ -739,6 +798,7 @@ int rrr_co_init(rrr_co_node *n, const rrr_co_config *cfg)
     }
     memset(n, 0, sizeof *n);
     n->cfg = *cfg;
+    rrr_hil_latch_init(&n->latch);
     n->nmt = RRR_CO_NMT_INIT;
     reset_range(n, 0x0000u, 0xFFFFu);
     set_state(n, RRR_CO_402_NOT_READY);
@@ -815,9 +875,11 @@ void rrr_co_set_feedback(rrr_co_node *n, double q_rad, double qd_rad_s)
 
 double rrr_co_torque_Nm(const rrr_co_node *n)
 {
-    if (n->nmt != RRR_CO_NMT_OPERATIONAL || n->s402 != RRR_CO_402_OPERATION_ENABLED) {
-        return 0.0;
+    double tau = 0.0; /* the drive function: the target torque, in OPERATION ENABLED only */
+    if (n->nmt == RRR_CO_NMT_OPERATIONAL && n->s402 == RRR_CO_402_OPERATION_ENABLED) {
+        const int16_t t = (int16_t)(uint16_t)n->v[RRR_CO_OD_TARGET_TORQUE];
+        tau = (double)t * (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-6;
     }
-    const int16_t t = (int16_t)(uint16_t)n->v[RRR_CO_OD_TARGET_TORQUE];
-    return (double)t * (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-6;
+    /* the output stage of the safety policy: 0 while a fault is latched or in a quick stop */
+    return rrr_hil_latch_blocks(&n->latch, n->s402 == RRR_CO_402_QUICK_STOP) ? 0.0 : tau;
 }

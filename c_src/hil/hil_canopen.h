@@ -21,14 +21,18 @@
  * - PDO mapping readable and writable by SDO, in CiA 301's order (COB-ID bit 31 = 1, sub 0 = 0,
  *   the entries, sub 0 = n, COB-ID bit 31 = 0), checked (mappable, direction, length <= 64 bits);
  * - the CiA 402 state machine on the controlword 0x6040 / statusword 0x6041 (shutdown, switch
- *   on, enable operation, disable operation, quick stop, disable voltage, fault, fault reset on
- *   the rising edge of bit 7);
+ *   on, enable operation, disable operation, quick stop with the quick stop option code 0x605A,
+ *   disable voltage, fault, fault reset on the rising edge of bit 7);
  * - EMCY producer (0x80 + id) with the error register 0x1001 and the error code 0x603F on every
  *   fault, and the error reset EMCY (code 0x0000) on the fault reset.
  * Faults (each latches FAULT, 0 torque, until the 402 fault reset): master heartbeat lost
  * (0x8130), RPDO timeout (no RPDO for 0x2001 SYNC periods in OPERATION ENABLED: 0x8250), NMT
- * state left operational in OPERATION ENABLED (0x8100), a target torque out of range in an RPDO
- * (0x6320), a simulated fault written to 0x2000 (its code), and rrr_co_raise_fault.
+ * state left operational in OPERATION ENABLED (0x8100), a target torque beyond the max torque
+ * 0x6072 in an RPDO (0x6320), a simulated fault written to 0x2000 (its code), and
+ * rrr_co_raise_fault. The latch and the 0 torque are the supervisor's rrr_hil_latch
+ * (hil_supervisor.h), one per node: a fault latches it with its EMCY code, the 402 fault reset
+ * (or a reset node, the application's restart) is its reset event, and rrr_co_torque_Nm is its
+ * output stage (0 while latched or in QUICK STOP ACTIVE).
  *
  * Pure logic: no I/O, no allocation, no globals (the table is const); every function is
  * reentrant on distinct nodes. Frames to send are appended to a caller's rrr_co_out.
@@ -40,6 +44,7 @@
 
 #include "hil_codec.h"
 #include "hil_canopen_od_table.h"
+#include "hil_supervisor.h"
 
 /** SDO abort codes (CiA 301). */
 #define RRR_CO_ABORT_TOGGLE 0x05030000u        ///< toggle bit not alternated
@@ -88,12 +93,23 @@ typedef enum rrr_co_402 {
     RRR_CO_402_READY,              ///< READY TO SWITCH ON
     RRR_CO_402_SWITCHED_ON,        ///< SWITCHED ON
     RRR_CO_402_OPERATION_ENABLED,  ///< OPERATION ENABLED: the target torque is applied
-    RRR_CO_402_QUICK_STOP,         ///< QUICK STOP ACTIVE: 0 torque (leaves by disable voltage
-                                   ///< or enable operation)
+    RRR_CO_402_QUICK_STOP,         ///< QUICK STOP ACTIVE: 0 torque (quick stop option code 5
+                                   ///< or 6; leaves by disable voltage or enable operation)
     RRR_CO_402_FAULT,              ///< FAULT: 0 torque until the fault reset (the fault reaction,
                                    ///< 0 torque, is immediate: FAULT REACTION ACTIVE is never seen)
     RRR_CO_402_COUNT
 } rrr_co_402;
+
+/** Quick stop option codes (0x605A) the drive supports; any other value is refused (SDO abort
+ *  0x06090030). The drive applies 0 torque at once, so every "ramp" is immediate: 0, 1 and 2
+ *  end in SWITCH ON DISABLED at once, 5 and 6 in QUICK STOP ACTIVE. */
+enum {
+    RRR_CO_QS_DISABLE = 0,          ///< disable drive function: SWITCH ON DISABLED
+    RRR_CO_QS_SLOW_DOWN = 1,        ///< slow-down ramp, then SWITCH ON DISABLED
+    RRR_CO_QS_QUICK = 2,            ///< quick-stop ramp, then SWITCH ON DISABLED
+    RRR_CO_QS_SLOW_DOWN_STAY = 5,   ///< slow-down ramp, stay in QUICK STOP ACTIVE
+    RRR_CO_QS_QUICK_STAY = 6        ///< quick-stop ramp, stay in QUICK STOP ACTIVE (the default)
+};
 
 /** Frames to send, appended by the node's calls. */
 #define RRR_CO_MAX_OUT 8u
@@ -114,8 +130,6 @@ typedef struct rrr_co_err {
     uint32_t nmt_ignored;     ///< NMT frames with a wrong DLC or an unknown command
     uint32_t sync_bad;        ///< SYNC frames with a DLC other than 0 or 1
     uint32_t rpdo_short;      ///< RPDOs shorter than their mapping
-    uint32_t faults;          ///< faults latched (a new fault while in FAULT counts too)
-    uint32_t fault_resets;    ///< fault resets (FAULT -> SWITCH ON DISABLED)
     uint32_t hb_lost;         ///< heartbeat consumer timeouts
     uint32_t rpdo_timeouts;   ///< RPDO timeouts
     uint32_t emcy_sent;       ///< EMCY frames sent
@@ -145,6 +159,11 @@ typedef struct rrr_co_node {
     uint32_t seg_pos;               ///< bytes sent or received
     uint8_t dl_buf[4];              ///< a segmented download's data (writable entries: <= 4 bytes)
     double q_rad, qd_rad_s;         ///< feedback set by the plant (sampled at SYNC)
+    rrr_hil_latch latch;            ///< the safety policy: latched in FAULT (its code 0x603F);
+                                    ///< fault_events: faults latched (one while in FAULT counts
+                                    ///< too), resets: FAULT left by the fault reset or a reset
+                                    ///< node, zero_periods: SYNC periods in NMT operational with
+                                    ///< 0 torque forced (FAULT or QUICK STOP ACTIVE)
     rrr_co_err err;
 } rrr_co_node;
 
@@ -171,7 +190,8 @@ void rrr_co_advance(rrr_co_node *n, uint32_t dt_us, rrr_co_out *out);
 void rrr_co_set_feedback(rrr_co_node *n, double q_rad, double qd_rad_s);
 
 /** The torque to apply now, N m: the target torque in OPERATION ENABLED and NMT operational,
- *  0 otherwise. */
+ *  0 otherwise, through the output stage of the node's latch (0 while a fault is latched or in
+ *  QUICK STOP ACTIVE). */
 double rrr_co_torque_Nm(const rrr_co_node *n);
 
 /** Latch a fault from outside (e.g. the bus is lost): FAULT, 0x1001 |= reg_bits | generic,

@@ -14,6 +14,74 @@ _Static_assert(offsetof(rrr_hil_sup, cmd) == 16u && offsetof(rrr_hil_sup, u_hold
                "rrr_hil_sup fields moved: update the ctypes mirror");
 #endif
 
+/* ---- the latch: the safety policy's output stage (hil_supervisor.h) ------------------------- */
+
+void rrr_hil_latch_init(rrr_hil_latch *l)
+{
+    memset(l, 0, sizeof *l);
+}
+
+void rrr_hil_latch_fault(rrr_hil_latch *l, uint16_t code)
+{
+    l->latched = 1;
+    l->code = code;
+    ++l->fault_events;
+}
+
+int rrr_hil_latch_reset(rrr_hil_latch *l)
+{
+    if (!l->latched) {
+        return 0;
+    }
+    l->latched = 0;
+    l->code = 0;
+    ++l->resets;
+    return 1;
+}
+
+int rrr_hil_latch_blocks(const rrr_hil_latch *l, int stop)
+{
+    return l->latched || stop;
+}
+
+int rrr_hil_latch_output(rrr_hil_latch *l, int stop, double *u, unsigned n)
+{
+    const int zero = rrr_hil_latch_blocks(l, stop);
+    if (zero) {
+        for (unsigned i = 0; i < n; ++i) {
+            u[i] = 0.0;
+        }
+        ++l->zero_periods;
+    }
+    l->zero = (uint8_t)zero;
+    return zero;
+}
+
+/* ---- the DBC profile's supervisor ----------------------------------------------------------- */
+
+/* The supervisor's latch lives in the fields the Python binding mirrors (the ABI note in
+ * hil_supervisor.h): loaded before and stored after each latch call. */
+static rrr_hil_latch load_latch(const rrr_hil_sup *s)
+{
+    rrr_hil_latch l;
+    l.latched = s->faults != 0u;
+    l.zero = s->zero_applied;
+    l.code = s->faults;
+    l.fault_events = s->err.fault_events;
+    l.resets = s->err.resets;
+    l.zero_periods = s->err.zero_periods;
+    return l;
+}
+
+static void store_latch(rrr_hil_sup *s, const rrr_hil_latch *l)
+{
+    s->faults = l->latched ? (uint8_t)l->code : 0u;
+    s->zero_applied = l->zero;
+    s->err.fault_events = l->fault_events;
+    s->err.resets = l->resets;
+    s->err.zero_periods = l->zero_periods;
+}
+
 rrr_hil_sup_config rrr_hil_sup_config_default(void)
 {
     const rrr_hil_sup_config c = {3u, 3u};
@@ -39,8 +107,9 @@ static void disarm_reset(rrr_hil_sup *s)
 static void latch(rrr_hil_sup *s, uint8_t fault, uint32_t *counter)
 {
     ++*counter;
-    ++s->err.fault_events;
-    s->faults |= fault;
+    rrr_hil_latch l = load_latch(s);
+    rrr_hil_latch_fault(&l, (uint16_t)(s->faults | fault)); /* the code: every fault bit latched */
+    store_latch(s, &l);
     s->pending = 0;
     disarm_reset(s); /* a new fault aborts a fault reset in progress */
 }
@@ -69,8 +138,9 @@ static int reset_step(rrr_hil_sup *s, const rrr_hil_voltage_cmd *c, unsigned del
     }
     if (c->enable && !c->reset_fault) {
         if (++s->reset_enables >= RRR_HIL_RESET_ENABLE_FRAMES) {
-            s->faults = 0;
-            ++s->err.resets;
+            rrr_hil_latch l = load_latch(s);
+            (void)rrr_hil_latch_reset(&l); /* the explicit reset event */
+            store_latch(s, &l);
             disarm_reset(s);
         }
         return 0;
@@ -146,33 +216,24 @@ int rrr_hil_sup_on_stop(rrr_hil_sup *s, rrr_hil_rx rx, const rrr_hil_stop_cmd *s
 
 int rrr_hil_sup_next_period(rrr_hil_sup *s, double u_V[3])
 {
-    int zero = 0;
-    if (s->stop) {
-        zero = 1;
-    } else if (s->pending) {
+    int stop = s->stop; /* 0 V for ever once a stop was honoured */
+    if (!stop && s->pending) {
         s->missed_in_row = 0;
         for (int i = 0; i < 3; ++i) {
             s->u_hold_V[i] = s->cmd.enable ? s->cmd.u_V[i] : 0.0;
         }
-    } else {
+    } else if (!stop) {
         ++s->err.cmd_missed;
         if (++s->missed_in_row == s->cfg.max_missed) {
             latch(s, RRR_HIL_FAULT_TIMEOUT, &s->err.timeout);
         }
-        if (s->missed_in_row >= s->cfg.max_missed) {
-            zero = 1;
-        }
+        stop = s->missed_in_row >= s->cfg.max_missed;
     }
     s->pending = 0;
-    if (s->faults != 0u) {
-        zero = 1;
-    }
-    if (zero) {
-        memset(s->u_hold_V, 0, sizeof s->u_hold_V);
-        ++s->err.zero_periods;
-    }
+    rrr_hil_latch l = load_latch(s);
+    const int zero = rrr_hil_latch_output(&l, stop, s->u_hold_V, 3u); /* 0 V if latched */
+    store_latch(s, &l);
     memcpy(u_V, s->u_hold_V, sizeof s->u_hold_V);
-    s->zero_applied = (uint8_t)zero;
     return zero;
 }
 

@@ -664,10 +664,10 @@ static int run_canopen(plant *p, const opts *o)
         const int64_t t = now_us();
         for (int i = 0; i < 3; ++i) { /* heartbeat producer and consumer, in wall-clock time */
             rrr_co_out out = {0};
-            const uint32_t faults = p->co[i].err.faults;
+            const uint32_t faults = p->co[i].latch.fault_events;
             rrr_co_advance(&p->co[i], (uint32_t)(t - last_us), &out);
             co_send(p, &out);
-            p->co_faults += p->co[i].err.faults - faults; /* a lost master heartbeat */
+            p->co_faults += p->co[i].latch.fault_events - faults; /* a lost master heartbeat */
         }
         last_us = t;
         if (io == RRR_HIL_IO_TIMEOUT) {
@@ -692,11 +692,11 @@ static int run_canopen(plant *p, const opts *o)
         int sync_applied = 0;
         for (int i = 0; i < 3; ++i) {
             rrr_co_out out = {0};
-            const uint32_t faults = p->co[i].err.faults;
+            const uint32_t faults = p->co[i].latch.fault_events;
             rrr_co_on_frame(&p->co[i], &f, &out);
             sync_applied |= p->co[i].tx_pending;
             co_send(p, &out);
-            p->co_faults += p->co[i].err.faults - faults;
+            p->co_faults += p->co[i].latch.fault_events - faults;
         }
         if (is_sync && sync_applied && co_sync(p) != 0) {
             return RRR_HIL_EXIT_FAULT;
@@ -714,12 +714,14 @@ static void co_summary(const plant *p, int rc)
         const rrr_co_node *n = &p->co[i];
         const rrr_co_err *e = &n->err;
         printf("%s{\"node_id\": %u, \"nmt\": %u, \"state\": \"%s\", \"error_register\": %u, "
-               "\"error_code\": %u, \"faults\": %u, \"fault_resets\": %u, \"emcy\": %u, "
+               "\"error_code\": %u, \"faults\": %u, \"fault_resets\": %u, "
+               "\"zero_periods\": %u, \"emcy\": %u, "
                "\"sdo_aborts\": %u, \"hb_lost\": %u, \"rpdo_timeouts\": %u, \"rpdo_short\": %u, "
                "\"nmt_ignored\": %u, \"sync_bad\": %u, \"out_overflow\": %u}",
                i ? ", " : "", (unsigned)n->cfg.node_id, (unsigned)n->nmt,
                rrr_co_402_str((rrr_co_402)n->s402), (unsigned)n->v[RRR_CO_OD_ERROR_REGISTER],
-               (unsigned)n->v[RRR_CO_OD_ERROR_CODE], e->faults, e->fault_resets, e->emcy_sent,
+               (unsigned)n->v[RRR_CO_OD_ERROR_CODE], n->latch.fault_events, n->latch.resets,
+               n->latch.zero_periods, e->emcy_sent,
                e->sdo_aborts, e->hb_lost, e->rpdo_timeouts, e->rpdo_short, e->nmt_ignored,
                e->sync_bad, e->out_overflow);
     }

@@ -358,7 +358,7 @@ static void test_402(void)
     CHECK(sdo_write(&n, 0x6040, 0, 0x80, 2) == 0 && n.s402 == RRR_CO_402_FAULT);
     CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && n.s402 == RRR_CO_402_FAULT);
     CHECK(sdo_write(&n, 0x6040, 0, 0x86, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
-    CHECK(has_emcy(0x0000, 0x00) && n.err.fault_resets == 1 && n.err.faults == 1);
+    CHECK(has_emcy(0x0000, 0x00) && n.latch.resets == 1 && n.latch.fault_events == 1);
     CHECK(sdo_read(&n, 0x1001, 0, &v) == 0 && v == 0);
     CHECK(sdo_read(&n, 0x603F, 0, &v) == 0 && v == 0);
     CHECK(strcmp(rrr_co_402_str(RRR_CO_402_OPERATION_ENABLED), "OPERATION ENABLED") == 0);
@@ -368,7 +368,7 @@ static void test_402(void)
     CHECK(has_emcy(RRR_CO_EMCY_COMM, 0x11) && m.s402 == RRR_CO_402_FAULT);
     CHECK(m.nmt == RRR_CO_NMT_STOPPED);
     rrr_co_raise_fault(&m, 0x8140, RRR_CO_ERR_COMM, &out);
-    CHECK(m.err.faults == 2); /* counted; no EMCY in stopped */
+    CHECK(m.latch.fault_events == 2); /* counted; no EMCY in stopped */
 }
 
 static void test_pdo_on_sync(void)
@@ -403,7 +403,7 @@ static void test_pdo_on_sync(void)
         t2 = find_out(0x282);
         CHECK(t2 && (int16_t)le(t2->data + 4, 2) == tq);
     }
-    CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && n.err.faults == 0);
+    CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && n.latch.fault_events == 0);
     /* the SYNC applies, rrr_co_transmit samples what the caller set in between, once */
     rpdo(&n, 0x0F, 250);
     feed(&n, 0x080, 0, NULL);
@@ -673,8 +673,182 @@ static void test_fuzz_smoke(unsigned runs)
     }
 }
 
+/* The quick stop option code 0x605A: 5 and 6 (the default) stay in QUICK STOP ACTIVE, 0, 1
+ * and 2 end in SWITCH ON DISABLED at once (0 torque: the ramp is immediate), the others are
+ * refused with 0x06090030; never a fault, 0 torque through the latch's output stage. */
+static void test_quick_stop_option(void)
+{
+    rrr_co_node n = enabled();
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x605A, 0, &v) == 0 && v == 6u);
+    static const int16_t refused[] = {3, 4, 7, 8, -1, -32768, 32767};
+    for (unsigned i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+        CHECK(sdo_write(&n, 0x605A, 0, (uint16_t)refused[i], 2) == RRR_CO_ABORT_VALUE);
+    }
+    CHECK(sdo_write(&n, 0x605A, 0, 6, 1) == RRR_CO_ABORT_LEN_LOW); /* INTEGER16 */
+    CHECK(sdo_read(&n, 0x605A, 0, &v) == 0 && v == 6u && n.s402 == RRR_CO_402_OPERATION_ENABLED);
+    static const uint16_t stays[] = {5, 6}, leaves[] = {0, 1, 2};
+    for (unsigned i = 0; i < 2; ++i) {
+        n = enabled();
+        CHECK(sdo_write(&n, 0x605A, 0, stays[i], 2) == 0);
+        rpdo(&n, 0x0F, 400);
+        sync(&n);
+        CHECK_CLOSE(rrr_co_torque_Nm(&n), 400 * (RATED * 1e-6), 1e-9);
+        const uint32_t zero0 = n.latch.zero_periods;
+        rpdo(&n, 0x02, 400);
+        sync(&n);
+        CHECK(n.s402 == RRR_CO_402_QUICK_STOP && rrr_co_torque_Nm(&n) == 0.0);
+        CHECK(find_out(0x80u + ID) == NULL); /* not a fault: no EMCY */
+        const rrr_hil_frame *t1 = find_out(0x182);
+        CHECK(t1 && (le(t1->data, 2) & 0x6Fu) == 0x07u);
+        rpdo(&n, 0x02, 400);
+        sync(&n); /* held, counted by the output stage */
+        CHECK(n.latch.zero_periods == zero0 + 2u && n.latch.zero && !n.latch.latched);
+        rpdo(&n, 0x0F, 400); /* 16: enable operation leaves it */
+        sync(&n);
+        CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && !n.latch.zero);
+        CHECK_CLOSE(rrr_co_torque_Nm(&n), 400 * (RATED * 1e-6), 1e-9);
+        CHECK(n.latch.fault_events == 0 && n.latch.zero_periods == zero0 + 2u);
+    }
+    for (unsigned i = 0; i < 3; ++i) {
+        n = enabled();
+        CHECK(sdo_write(&n, 0x605A, 0, leaves[i], 2) == 0);
+        rpdo(&n, 0x0F, -300);
+        sync(&n);
+        CHECK(rrr_co_torque_Nm(&n) != 0.0);
+        rpdo(&n, 0x02, -300);
+        sync(&n); /* 11 and 12 at once */
+        CHECK(n.s402 == RRR_CO_402_SWITCH_ON_DISABLED && rrr_co_torque_Nm(&n) == 0.0);
+        const rrr_hil_frame *t1 = find_out(0x182);
+        CHECK(t1 && (le(t1->data, 2) & 0x4Fu) == 0x40u && find_out(0x80u + ID) == NULL);
+        rpdo(&n, 0x0F, -300); /* not back by enable operation: the 402 sequence again */
+        sync(&n);
+        CHECK(n.s402 == RRR_CO_402_SWITCH_ON_DISABLED && rrr_co_torque_Nm(&n) == 0.0);
+        for (unsigned k = 0; k < 3; ++k) {
+            const uint16_t cw[3] = {0x06, 0x07, 0x0F};
+            rpdo(&n, cw[k], -300);
+            sync(&n);
+        }
+        CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && n.latch.fault_events == 0);
+        CHECK_CLOSE(rrr_co_torque_Nm(&n), -300 * (RATED * 1e-6), 1e-9);
+    }
+    /* the option changed to 0..2 during a quick stop: the stop is complete, SWITCH ON DISABLED */
+    n = enabled();
+    CHECK(sdo_write(&n, 0x6040, 0, 0x02, 2) == 0 && n.s402 == RRR_CO_402_QUICK_STOP);
+    CHECK(sdo_write(&n, 0x605A, 0, 5, 2) == 0 && n.s402 == RRR_CO_402_QUICK_STOP);
+    CHECK(sdo_write(&n, 0x605A, 0, 2, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    /* quick stop from READY TO SWITCH ON / SWITCHED ON is SWITCH ON DISABLED with any code */
+    CHECK(sdo_write(&n, 0x605A, 0, 6, 2) == 0);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x06, 2) == 0 && sdo_write(&n, 0x6040, 0, 0x07, 2) == 0);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x02, 2) == 0 && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    /* reset communication keeps it (0x6000 range), reset node restores the default */
+    CHECK(sdo_write(&n, 0x605A, 0, 0, 2) == 0);
+    nmt(&n, 0x82, 0);
+    CHECK(sdo_read(&n, 0x605A, 0, &v) == 0 && v == 0u);
+    nmt(&n, 0x81, 0);
+    CHECK(sdo_read(&n, 0x605A, 0, &v) == 0 && v == 6u);
+}
+
+/* The max torque 0x6072 (per mille of 0x6076) is the target torque's limit: an SDO write
+ * beyond it is refused, an RPDO beyond it is a fault (EMCY 0x6320, FAULT, 0 torque, latched
+ * until the 402 fault reset); the default 1000 is the rated torque. */
+static void test_max_torque(void)
+{
+    rrr_co_node n = enabled();
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x6072, 0, &v) == 0 && v == 1000u);
+    CHECK(sdo_write(&n, 0x6072, 0, 500, 2) == 0);
+    CHECK(sdo_write(&n, 0x6071, 0, 501, 2) == RRR_CO_ABORT_TOO_HIGH);
+    CHECK(sdo_write(&n, 0x6071, 0, (uint16_t)-501, 2) == RRR_CO_ABORT_TOO_LOW);
+    CHECK(sdo_write(&n, 0x6071, 0, (uint16_t)-500, 2) == 0);
+    CHECK_CLOSE(rrr_co_torque_Nm(&n), -500 * (RATED * 1e-6), 1e-9);
+    /* not below the target torque in force */
+    CHECK(sdo_write(&n, 0x6072, 0, 499, 2) == RRR_CO_ABORT_TOO_LOW);
+    CHECK(sdo_read(&n, 0x6072, 0, &v) == 0 && v == 500u);
+    rpdo(&n, 0x0F, 500);
+    sync(&n);
+    CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && n.latch.fault_events == 0);
+    const uint32_t zero0 = n.latch.zero_periods;
+    rpdo(&n, 0x0F, 501); /* beyond 0x6072, within the rated torque */
+    sync(&n);
+    CHECK(has_emcy(RRR_CO_EMCY_PARAM, 0x21) && n.s402 == RRR_CO_402_FAULT);
+    CHECK(n.latch.latched && n.latch.code == RRR_CO_EMCY_PARAM && n.latch.fault_events == 1);
+    CHECK(rrr_co_torque_Nm(&n) == 0.0 && n.v[RRR_CO_OD_TARGET_TORQUE] == 500u); /* not applied */
+    const rrr_hil_frame *t1 = find_out(0x182);
+    CHECK(t1 && (le(t1->data, 2) & 0x4Fu) == 0x08u);
+    for (int k = 0; k < 3; ++k) { /* enable operation does not clear it */
+        rpdo(&n, 0x0F, 100);
+        sync(&n);
+        CHECK(n.s402 == RRR_CO_402_FAULT && rrr_co_torque_Nm(&n) == 0.0);
+    }
+    CHECK(n.latch.zero_periods == zero0 + 4u && n.latch.resets == 0);
+    CHECK(sdo_read(&n, 0x603F, 0, &v) == 0 && v == RRR_CO_EMCY_PARAM);
+    /* the 402 fault reset, then the enabling sequence */
+    const uint16_t seq[4] = {0x80, 0x06, 0x07, 0x0F};
+    for (unsigned k = 0; k < 4; ++k) {
+        rpdo(&n, seq[k], 100);
+        sync(&n);
+        if (k == 0) {
+            CHECK(has_emcy(RRR_CO_EMCY_RESET, 0x00) && n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+        }
+    }
+    CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED && !n.latch.latched && n.latch.resets == 1);
+    CHECK_CLOSE(rrr_co_torque_Nm(&n), 100 * (RATED * 1e-6), 1e-9);
+    /* above the rated torque (an overload range): 1500 per mille is applied, 1501 is not */
+    CHECK(sdo_write(&n, 0x6072, 0, 1500, 2) == 0);
+    rpdo(&n, 0x0F, 1500);
+    sync(&n);
+    CHECK(n.s402 == RRR_CO_402_OPERATION_ENABLED);
+    CHECK_CLOSE(rrr_co_torque_Nm(&n), 1500 * (RATED * 1e-6), 1e-9);
+    t1 = find_out(0x282);
+    CHECK(t1 && (int16_t)le(t1->data + 4, 2) == 1500); /* the torque actual value */
+    rpdo(&n, 0x0F, -1501);
+    sync(&n);
+    CHECK(has_emcy(RRR_CO_EMCY_PARAM, 0x21) && n.s402 == RRR_CO_402_FAULT);
+    CHECK(n.latch.fault_events == 2);
+    /* 0: only a zero target; 65535: every INTEGER16 */
+    n = enabled();
+    CHECK(sdo_write(&n, 0x6072, 0, 0, 2) == 0);
+    CHECK(sdo_write(&n, 0x6071, 0, 1, 2) == RRR_CO_ABORT_TOO_HIGH);
+    CHECK(sdo_write(&n, 0x6072, 0, 65535, 2) == 0);
+    CHECK(sdo_write(&n, 0x6071, 0, (uint16_t)INT16_MIN, 2) == 0);
+    CHECK(sdo_write(&n, 0x6072, 0, 32767, 2) == RRR_CO_ABORT_TOO_LOW); /* |-32768| > 32767 */
+    CHECK(sdo_write(&n, 0x6072, 0, 1000, 4) == RRR_CO_ABORT_LEN_HIGH); /* UNSIGNED16 */
+    /* reset node restores the default */
+    nmt(&n, 0x81, 0);
+    CHECK(sdo_read(&n, 0x6072, 0, &v) == 0 && v == 1000u);
+    CHECK(sdo_read(&n, 0x6071, 0, &v) == 0 && v == 0u);
+}
+
+/* The latch is the drive's safety policy: latched exactly in FAULT with the EMCY code, reset by
+ * the 402 fault reset's rising edge only (and by a reset node, the application's restart). */
+static void test_latch_is_the_policy(void)
+{
+    rrr_co_node n = enabled();
+    CHECK(!n.latch.latched && n.latch.fault_events == 0 && n.latch.resets == 0);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x80, 2) == 0); /* a rising edge with nothing latched */
+    CHECK(n.latch.resets == 0 && n.s402 == RRR_CO_402_OPERATION_ENABLED);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0);
+    rrr_co_raise_fault(&n, 0x8140, RRR_CO_ERR_COMM, &out);
+    CHECK(n.latch.latched && n.latch.code == 0x8140u && n.s402 == RRR_CO_402_FAULT);
+    CHECK(rrr_co_torque_Nm(&n) == 0.0 && has_emcy(0x8140, 0x11));
+    nmt(&n, 0x82, 0); /* reset communication does not clear it */
+    CHECK(n.latch.latched && n.s402 == RRR_CO_402_FAULT && n.v[RRR_CO_OD_ERROR_REGISTER] == 0x11u);
+    nmt(&n, 0x01, 0);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x0F, 2) == 0 && n.latch.latched);
+    CHECK(sdo_write(&n, 0x6040, 0, 0x8F, 2) == 0 && !n.latch.latched && n.latch.resets == 1);
+    CHECK(n.s402 == RRR_CO_402_SWITCH_ON_DISABLED);
+    rrr_co_raise_fault(&n, 0x5530, RRR_CO_ERR_MANUFACTURER, &out);
+    nmt(&n, 0x81, 0); /* reset node: the drive restarts, every value at its default */
+    CHECK(!n.latch.latched && n.latch.resets == 2 && n.latch.fault_events == 2);
+    CHECK(n.s402 == RRR_CO_402_SWITCH_ON_DISABLED && n.v[RRR_CO_OD_ERROR_REGISTER] == 0u);
+}
+
 int main(void)
 {
+    test_quick_stop_option();
+    test_max_torque();
+    test_latch_is_the_policy();
     test_boot_and_nmt();
     test_sdo();
     test_segmented_upload();

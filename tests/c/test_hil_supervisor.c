@@ -397,8 +397,57 @@ static void test_stop(void)
     CHECK(rrr_hil_sup_on_stop(&s, RRR_HIL_RX_OK, &late) == 1 && s.stop_reason == RRR_HIL_STOP_FAULT);
 }
 
+/* The output stage both profiles share (rrr_hil_latch): latched with its code, 0 V while
+ * latched or stopped (counted per period), cleared only by the explicit reset event. */
+static void test_latch(void)
+{
+    rrr_hil_latch l;
+    memset(&l, 0x5A, sizeof l);
+    rrr_hil_latch_init(&l);
+    CHECK(!l.latched && l.code == 0 && l.fault_events == 0 && l.resets == 0 && l.zero_periods == 0);
+    double u[2] = {1.5, -2.0};
+    CHECK(!rrr_hil_latch_blocks(&l, 0) && rrr_hil_latch_output(&l, 0, u, 2) == 0);
+    CHECK(u[0] == 1.5 && u[1] == -2.0 && l.zero == 0 && l.zero_periods == 0);
+    CHECK(rrr_hil_latch_reset(&l) == 0 && l.resets == 0); /* nothing latched: no effect */
+    /* the stop input alone: 0 V, counted, nothing latched */
+    CHECK(rrr_hil_latch_blocks(&l, 1) && rrr_hil_latch_output(&l, 1, u, 2) == 1);
+    CHECK(u[0] == 0.0 && u[1] == 0.0 && l.zero == 1 && l.zero_periods == 1 && !l.latched);
+    /* a fault: latched with its code; a second replaces the code and counts */
+    rrr_hil_latch_fault(&l, 0x8130u);
+    CHECK(l.latched && l.code == 0x8130u && l.fault_events == 1);
+    rrr_hil_latch_fault(&l, 0x6320u);
+    CHECK(l.latched && l.code == 0x6320u && l.fault_events == 2);
+    for (int k = 0; k < 5; ++k) { /* every period 0 V, whatever the caller computed */
+        u[0] = 3.0;
+        u[1] = 4.0;
+        CHECK(rrr_hil_latch_blocks(&l, 0) && rrr_hil_latch_output(&l, 0, u, 2) == 1);
+        CHECK(u[0] == 0.0 && u[1] == 0.0 && l.zero == 1);
+    }
+    CHECK(l.zero_periods == 6 && l.latched);
+    /* the reset event clears it, once */
+    CHECK(rrr_hil_latch_reset(&l) == 1 && !l.latched && l.code == 0 && l.resets == 1);
+    CHECK(rrr_hil_latch_reset(&l) == 0 && l.resets == 1);
+    u[0] = 3.0;
+    CHECK(rrr_hil_latch_output(&l, 0, u, 1) == 0 && u[0] == 3.0 && l.zero == 0);
+    CHECK(l.zero_periods == 6 && l.fault_events == 2); /* counters only grow */
+    /* the DBC supervisor's storage of its latch: the fault bits are the code, the counters
+     * and the zero flag are err's and zero_applied */
+    rrr_hil_sup s = fresh();
+    rrr_hil_sup_raise(&s, RRR_HIL_FAULT_SYNC);
+    rrr_hil_sup_raise(&s, RRR_HIL_FAULT_BUS);
+    CHECK(s.faults == (RRR_HIL_FAULT_SYNC | RRR_HIL_FAULT_BUS) && s.err.fault_events == 2);
+    double v[3] = {1.0, 1.0, 1.0};
+    CHECK(period(&s, v) == 1 && v[0] == 0.0 && s.zero_applied == 1 && s.err.zero_periods == 1);
+    rrr_hil_sup_raise(&s, 0); /* no fault bit: counted as today, nothing more latched */
+    CHECK(s.faults == (RRR_HIL_FAULT_SYNC | RRR_HIL_FAULT_BUS) && s.err.fault_events == 3);
+    rrr_hil_sup t = fresh();
+    rrr_hil_sup_raise(&t, 0);
+    CHECK(t.faults == 0 && t.err.fault_events == 1 && period(&t, v) == 0 && t.zero_applied == 0);
+}
+
 int main(void)
 {
+    test_latch();
     test_normal_and_hold();
     test_silent_controller();
     test_immediate_faults();

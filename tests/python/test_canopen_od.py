@@ -111,7 +111,12 @@ def test_the_objects_of_the_profile() -> None:
             assert len(var.encode_raw(0)) * 8 == m & 0xFF
     assert od[0x1800][2].default == 1 and od[0x1801][2].default == 1  # every SYNC
     assert od[0x608F][1].default == 1 << 20 and od[0x608F][2].default == 1
-    assert od[0x6071].min == -1000 and od[0x6071].max == 1000
+    # the target torque's range is the max torque 0x6072 (per mille, rw; the node checks it),
+    # and the quick stop option code 0x605A (rw) stays in QUICK STOP ACTIVE by default
+    assert od[0x6071].min is None and od[0x6071].max is None
+    assert od[0x6072].default == 1000 and od[0x6072].access_type == "rw"
+    assert od[0x605A].default == 6 and od[0x605A].access_type == "rw"
+    assert od[0x605A].data_type == canopen.objectdictionary.INTEGER16
 
 
 def test_the_canopen_schedule_is_read_from_the_eds() -> None:

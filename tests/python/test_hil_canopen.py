@@ -388,3 +388,75 @@ def test_quick_stop_holds_0_V_until_enable_operation(rig: Rig) -> None:
     u3 = log[-4:, 10]
     assert u3[0] == 0.0 and u3[1] == 0.0  # the two quick-stop periods
     assert u3[-1] == pytest.approx(100 * U_MAX / 1000, abs=1e-12)
+
+
+def _rows(log: np.ndarray, u1: float) -> np.ndarray:
+    """The log rows of the periods whose joint 1 voltage is u1 (a phase's marker)."""
+    return log[np.abs(log[:, 8] - u1) < 1e-12]
+
+
+def test_quick_stop_option_and_max_torque_written_by_sdo(rig: Rig) -> None:
+    """0x605A and 0x6072 written by SDO with the ``canopen`` package: an unsupported quick stop
+    option code is aborted with 0x06090030; with code 0 a quick stop ends in SWITCH ON DISABLED
+    at once (0 V, no EMCY, enable operation alone does not bring it back); a target torque
+    beyond a lowered max torque in an RPDO is a fault (EMCY 0x6320, FAULT, 0 V) that enable
+    operation does not clear and the 402 fault reset does."""
+    _boot_and_enable(rig)
+    n2, n3 = rig.nodes[1], rig.nodes[2]
+    for node in rig.nodes:
+        node.emcy.reset()
+    for code in (3, 7, -1):
+        with pytest.raises(canopen.SdoAbortedError) as err:
+            n3.sdo[0x605A].raw = code
+        assert err.value.code == 0x06090030, code
+    assert n3.sdo[0x605A].raw == 6 and n3.sdo[0x6072].raw == 1000  # the defaults
+    n3.sdo[0x605A].raw = 0  # disable drive function
+    assert n3.sdo[0x605A].raw == 0
+    # phase A (joint 1 at 200 per mille): drive 3 quick-stopped with code 0
+    t = [200, 240, 100]
+    states = [_sw(_cycle(rig, t, [0x0F, 0x0F, cw]), 3) for cw in (0x0F, 0x02, 0x0F, 0x06, 0x07,
+                                                                    0x0F)]
+    assert [s & 0x6F for s in states] == [0x27, 0x40, 0x40, 0x21, 0x23, 0x27], \
+        [hex(s) for s in states]  # SWITCH ON DISABLED at once, then the 402 sequence
+    assert not n3.emcy.log  # a quick stop is not a fault
+    # phase B (joint 1 at 210): drive 2's max torque lowered to 250 per mille, 300 commanded
+    with pytest.raises(canopen.SdoAbortedError) as err:
+        n2.sdo[0x6072].raw = 200  # below the target torque in force (240)
+    assert err.value.code == 0x06090032
+    n2.sdo[0x6072].raw = 250
+    t = [210, 300, 100]
+    got = _cycle(rig, t, [0x0F] * 3)
+    deadline = time.monotonic() + 2
+    while not n2.emcy.log and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert [(e.code, e.register) for e in n2.emcy.log] == [(0x6320, 0x21)]
+    t = [210, 200, 100]  # within the limit now: enable operation still does not clear it
+    latched = [_sw(_cycle(rig, t, [0x0F] * 3), 2) for _ in range(3)]
+    assert all(s & 0x4F == 0x08 for s in [_sw(got, 2), *latched])  # FAULT throughout
+    assert n2.sdo[0x603F].raw == 0x6320 and n2.sdo[0x1001].raw == 0x21
+    with pytest.raises(canopen.SdoAbortedError) as err:
+        n2.sdo[0x6071].raw = 251  # by SDO: refused, not a fault
+    assert err.value.code == 0x06090031
+    # phase C (joint 1 at 220): the 402 fault reset, the sequence, 200 per mille <= 250
+    t = [220, 200, 100]
+    states = [_sw(_cycle(rig, t, [0x0F, cw, 0x0F]), 2) for cw in (0x80, 0x06, 0x07, 0x0F, 0x0F)]
+    assert [s & 0x6F for s in states] == [0x40, 0x21, 0x23, 0x27, 0x27], [hex(s) for s in states]
+    assert n2.sdo[0x1001].raw == 0 and [e.code for e in n2.emcy.log] == [0x6320, 0x0000]
+    for node in rig.nodes:
+        node.sdo[0x6040].raw = 0x00
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    summary = rig.plant.wait(30)
+    assert summary["exit"] == 7, rig.plant.stderr  # drive 2 latched a fault
+    d1, d2, d3 = summary["drives"]
+    assert (d2["faults"], d2["fault_resets"], d2["zero_periods"]) == (1, 1, 4), d2  # B, below
+    assert (d3["faults"], d3["fault_resets"], d3["zero_periods"]) == (0, 0, 0), d3  # no QSA
+    assert d1["faults"] == 0 and d1["zero_periods"] == 0
+    assert d2["sdo_aborts"] == 3 and d3["sdo_aborts"] == 4  # the set-up's 0x6041 write too
+    log = np.loadtxt(rig.log_path, delimiter=",", skiprows=1, ndmin=2)
+    a, b, c = _rows(log, 2.0), _rows(log, 2.1), _rows(log, 2.2)
+    assert a[:, 10].tolist() == pytest.approx([1.0, 0.0, 0.0, 0.0, 0.0, 1.0], abs=1e-12)
+    assert len(b) == 4 and np.all(b[:, 9] == 0.0)  # 0 V to joint 2 while latched
+    assert c[:, 9].tolist() == pytest.approx([0.0, 0.0, 0.0, 2.0, 2.0], abs=1e-12)
+    assert np.all(np.abs(a[:, 9] - 2.4) < 1e-12) and np.all(c[:, 10] == 1.0)  # the other axes go on

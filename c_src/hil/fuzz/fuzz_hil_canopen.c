@@ -3,9 +3,11 @@
  * one booted node, with its invariants checked after every step (a violation traps):
  *  - a call never appends more than RRR_CO_MAX_OUT frames, none with a DLC above 8;
  *  - the statusword is that of the 402 state; the mode is CST;
- *  - torque only in NMT operational and OPERATION ENABLED, and never beyond the rated torque;
+ *  - torque only in NMT operational and OPERATION ENABLED, and never beyond the max torque
+ *    0x6072 (per mille of the rated torque);
  *  - FAULT has the error register's generic bit set; the error register is 0 outside FAULT
- *    (every fault goes to FAULT, only the fault reset clears it);
+ *    (every fault goes to FAULT, only the fault reset clears it); the safety policy's latch
+ *    (rrr_hil_latch) is set exactly in FAULT, with the code 0x603F;
  *  - the PDO mappings never exceed 64 bits nor RRR_CO_MAX_MAPPED entries.
  *
  * Input layout: byte 0: the node id (1..127, from byte 0 % 127 + 1); then 12-byte records: op,
@@ -46,12 +48,19 @@ static void check(const rrr_co_node *n, const rrr_co_out *out)
         __builtin_trap();
     }
     const double tau = rrr_co_torque_Nm(n);
-    const double rated = (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-3;
+    /* never beyond the max torque 0x6072 (per mille of the rated torque 0x6076) */
+    const double rated = (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-6 *
+                         (double)n->v[RRR_CO_OD_MAX_TORQUE];
     if (tau != 0.0 && (n->nmt != RRR_CO_NMT_OPERATIONAL ||
                        n->s402 != RRR_CO_402_OPERATION_ENABLED)) {
         __builtin_trap();
     }
     if (!(fabs(tau) <= rated * (1.0 + 1e-12))) {
+        __builtin_trap();
+    }
+    /* the latch of the safety policy is set exactly in FAULT, with the code 0x603F */
+    if ((n->s402 == RRR_CO_402_FAULT) != (n->latch.latched != 0u) ||
+        (n->latch.latched && n->latch.code != n->v[RRR_CO_OD_ERROR_CODE])) {
         __builtin_trap();
     }
     const uint32_t reg = n->v[RRR_CO_OD_ERROR_REGISTER];
@@ -118,7 +127,7 @@ int rrr_hil_canopen_fuzz_one(const uint8_t *data, size_t size)
         rrr_co_transmit(&n, &out);
         check(&n, &out);
         reached |= (rrr_co_torque_Nm(&n) != 0.0 ? 1 : 0) | (n.s402 == RRR_CO_402_FAULT ? 2 : 0) |
-                   (n.err.fault_resets ? 4 : 0) | (n.dl_active || n.seg_active ? 8 : 0);
+                   (n.latch.resets ? 4 : 0) | (n.dl_active || n.seg_active ? 8 : 0);
     }
     return reached;
 }

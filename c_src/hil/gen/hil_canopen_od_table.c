@@ -47,11 +47,13 @@ const rrr_co_od_entry rrr_co_od[RRR_CO_OD_COUNT] = {
     {0x603Fu, 0u, RRR_CO_T_UNSIGNED16, RRR_CO_RO, 2u, 0u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Error code"}, /* ERROR_CODE */
     {0x6040u, 0u, RRR_CO_T_UNSIGNED16, RRR_CO_RW, 2u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Controlword"}, /* CONTROLWORD */
     {0x6041u, 0u, RRR_CO_T_UNSIGNED16, RRR_CO_RO, 2u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Statusword"}, /* STATUSWORD */
+    {0x605Au, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 0u, 0u, 0u, 0u, 0, 0, 0x00000006u, NULL, "Quick stop option code"}, /* QUICK_STOP_OPTION */
     {0x6060u, 0u, RRR_CO_T_INTEGER8, RRR_CO_RW, 1u, 1u, 0u, 1u, 1u, 10, 10, 0x0000000Au, NULL, "Modes of operation"}, /* MODE */
     {0x6061u, 0u, RRR_CO_T_INTEGER8, RRR_CO_RO, 1u, 1u, 0u, 0u, 0u, 0, 0, 0x0000000Au, NULL, "Modes of operation display"}, /* MODE_DISPLAY */
     {0x6064u, 0u, RRR_CO_T_INTEGER32, RRR_CO_RO, 4u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Position actual value"}, /* POSITION_ACTUAL */
     {0x606Cu, 0u, RRR_CO_T_INTEGER32, RRR_CO_RO, 4u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Velocity actual value"}, /* VELOCITY_ACTUAL */
-    {0x6071u, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 1u, 0u, 1u, 1u, -1000, 1000, 0x00000000u, NULL, "Target torque"}, /* TARGET_TORQUE */
+    {0x6071u, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Target torque"}, /* TARGET_TORQUE */
+    {0x6072u, 0u, RRR_CO_T_UNSIGNED16, RRR_CO_RW, 2u, 0u, 0u, 0u, 0u, 0, 0, 0x000003E8u, NULL, "Max torque"}, /* MAX_TORQUE */
     {0x6076u, 0u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x000186A0u, NULL, "Motor rated torque"}, /* RATED_TORQUE */
     {0x6077u, 0u, RRR_CO_T_INTEGER16, RRR_CO_RO, 2u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Torque actual value"}, /* TORQUE_ACTUAL */
     {0x608Fu, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RO, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000002u, NULL, "Highest sub-index supported"}, /* ENCODER_N */

@@ -90,18 +90,20 @@ enum rrr_co_od_slot {
     RRR_CO_OD_ERROR_CODE = 39, ///< 0x603F sub 0: Error code
     RRR_CO_OD_CONTROLWORD = 40, ///< 0x6040 sub 0: Controlword
     RRR_CO_OD_STATUSWORD = 41, ///< 0x6041 sub 0: Statusword
-    RRR_CO_OD_MODE = 42, ///< 0x6060 sub 0: Modes of operation
-    RRR_CO_OD_MODE_DISPLAY = 43, ///< 0x6061 sub 0: Modes of operation display
-    RRR_CO_OD_POSITION_ACTUAL = 44, ///< 0x6064 sub 0: Position actual value
-    RRR_CO_OD_VELOCITY_ACTUAL = 45, ///< 0x606C sub 0: Velocity actual value
-    RRR_CO_OD_TARGET_TORQUE = 46, ///< 0x6071 sub 0: Target torque
-    RRR_CO_OD_RATED_TORQUE = 47, ///< 0x6076 sub 0: Motor rated torque
-    RRR_CO_OD_TORQUE_ACTUAL = 48, ///< 0x6077 sub 0: Torque actual value
-    RRR_CO_OD_ENCODER_N = 49, ///< 0x608F sub 0: Highest sub-index supported
-    RRR_CO_OD_ENCODER_INCREMENTS = 50, ///< 0x608F sub 1: Encoder increments
-    RRR_CO_OD_ENCODER_REVOLUTIONS = 51, ///< 0x608F sub 2: Motor revolutions
-    RRR_CO_OD_SUPPORTED_MODES = 52, ///< 0x6502 sub 0: Supported drive modes
-    RRR_CO_OD_COUNT = 53
+    RRR_CO_OD_QUICK_STOP_OPTION = 42, ///< 0x605A sub 0: Quick stop option code
+    RRR_CO_OD_MODE = 43, ///< 0x6060 sub 0: Modes of operation
+    RRR_CO_OD_MODE_DISPLAY = 44, ///< 0x6061 sub 0: Modes of operation display
+    RRR_CO_OD_POSITION_ACTUAL = 45, ///< 0x6064 sub 0: Position actual value
+    RRR_CO_OD_VELOCITY_ACTUAL = 46, ///< 0x606C sub 0: Velocity actual value
+    RRR_CO_OD_TARGET_TORQUE = 47, ///< 0x6071 sub 0: Target torque
+    RRR_CO_OD_MAX_TORQUE = 48, ///< 0x6072 sub 0: Max torque
+    RRR_CO_OD_RATED_TORQUE = 49, ///< 0x6076 sub 0: Motor rated torque
+    RRR_CO_OD_TORQUE_ACTUAL = 50, ///< 0x6077 sub 0: Torque actual value
+    RRR_CO_OD_ENCODER_N = 51, ///< 0x608F sub 0: Highest sub-index supported
+    RRR_CO_OD_ENCODER_INCREMENTS = 52, ///< 0x608F sub 1: Encoder increments
+    RRR_CO_OD_ENCODER_REVOLUTIONS = 53, ///< 0x608F sub 2: Motor revolutions
+    RRR_CO_OD_SUPPORTED_MODES = 54, ///< 0x6502 sub 0: Supported drive modes
+    RRR_CO_OD_COUNT = 55
 };
 
 /** The dictionary, sorted by (index, sub-index). */
