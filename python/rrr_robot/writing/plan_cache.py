@@ -1,4 +1,4 @@
-"""The cache of the writing task's tip plans (:class:`~rrr_robot.writing.trajectory.TipPlan`).
+"""The cache of the writing task's tip plans (:class:`TipPlan`).
 
 A tip plan is a pure function of the (fitted) :class:`~rrr_robot.writing.trajectory.WritingSpec`
 and of the code that builds it, and building it needs SciPy's splines: about 0.4 s to import
@@ -31,16 +31,16 @@ import json
 import logging
 import os
 import tempfile
+from dataclasses import dataclass
 from importlib.machinery import PathFinder
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .trajectory import TipPlan, WritingSpec
+from ..core._arrays import FloatArray
 
-__all__ = ["MAX_ENTRIES", "cache_dir", "load", "plan_key", "store"]
+__all__ = ["MAX_ENTRIES", "TipPlan", "cache_dir", "load", "plan_key", "store"]
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +51,25 @@ _ARRAYS = ("t", "s", "x", "xd", "xdd", "pen_down", "ws_x")
 _SOURCES = ("letters.py", "writing_path.py", "trajectory.py", "plan_cache.py")
 #: (import name, distribution name) of the libraries whose versions the key holds
 _PACKAGES = (("numpy", "numpy"), ("scipy", "scipy"), ("HersheyFonts", "Hershey_Fonts"))
+
+
+@dataclass(frozen=True)
+class TipPlan:
+    """The part of the reference that does not depend on the robot: the tip motion on the time
+    grid ``spec.dt`` (t, the path parameter s, x, xd, xdd, pen_down) and the tip positions of the
+    workspace check (``ws_x``, every 0.2 mm of the path). Built by
+    :func:`~rrr_robot.writing.trajectory.tip_plan` (the splines: the expensive part) or read
+    back from this cache."""
+
+    t: FloatArray
+    s: FloatArray
+    x: FloatArray
+    xd: FloatArray
+    xdd: FloatArray
+    pen_down: np.ndarray
+    ws_x: FloatArray
+    path_length: float
+    letter_height: float  # the fitted spec's (:func:`fitted_spec`)
 
 
 def cache_dir() -> Path | None:
@@ -86,8 +105,9 @@ def _code_fingerprint() -> str:
     return h.hexdigest()
 
 
-def plan_key(spec: WritingSpec) -> str:
-    """The cache key of a spec's tip plan (hex SHA-256)."""
+def plan_key(spec: Any) -> str:
+    """The cache key of a spec's tip plan (hex SHA-256); ``spec`` is a
+    :class:`~rrr_robot.writing.trajectory.WritingSpec`."""
     fields = {f.name: getattr(spec, f.name) for f in dataclasses.fields(spec)}
     text = json.dumps({"format": _FORMAT, "code": _code_fingerprint(), "spec": fields},
                       sort_keys=True, default=repr)
@@ -98,11 +118,9 @@ def _path(folder: Path, key: str) -> Path:
     return folder / f"plan-{key[:40]}.npz"
 
 
-def load(spec: WritingSpec) -> TipPlan | None:
+def load(spec: Any) -> TipPlan | None:
     """The cached tip plan of ``spec``, or None (cache off, no entry, or an entry that is not
     exactly what :func:`store` writes: it is then ignored)."""
-    from .trajectory import TipPlan
-
     folder = cache_dir()
     if folder is None:
         return None
@@ -135,7 +153,7 @@ def load(spec: WritingSpec) -> TipPlan | None:
     return TipPlan(path_length=length, letter_height=height, **arrays)
 
 
-def store(spec: WritingSpec, plan: TipPlan) -> None:
+def store(spec: Any, plan: TipPlan) -> None:
     """Add ``plan`` to the cache (atomically); a cache folder that cannot be written is left
     alone (logged at debug level): the run goes on without the cache."""
     folder = cache_dir()

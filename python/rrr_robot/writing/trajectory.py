@@ -59,7 +59,9 @@ from ..core.robot_file import (
     writing_values,
 )
 from ..errors import BadInputError, NumericError, RobotFileError
+from . import plan_cache
 from .letters import text_strokes
+from .plan_cache import TipPlan
 from .writing_path import PathOptions, WritingPath, build_path
 
 if TYPE_CHECKING:  # scipy.interpolate is imported where a timing law is built (about 0.4 s)
@@ -74,7 +76,6 @@ __all__ = [
     "MIN_HEIGHT_CORNER_RADII",
     "Reference",
     "TimingLaw",
-    "TipPlan",
     "WritingSpec",
     "fit_letter_height",
     "fitted_spec",
@@ -479,24 +480,6 @@ def _singular_margins(model: Model, q: FloatArray, spec: WritingSpec) -> tuple[f
     return float(elbow.min()), float(shoulder.min())
 
 
-@dataclass(frozen=True)
-class TipPlan:
-    """The part of the reference that does not depend on the robot: the tip motion on the time
-    grid ``spec.dt`` (t, the path parameter s, x, xd, xdd, pen_down) and the tip positions of the
-    workspace check (``ws_x``, every 0.2 mm of the path). Built by :func:`tip_plan` (the splines:
-    the expensive part) or read back from the cache of :mod:`rrr_robot.writing.plan_cache`."""
-
-    t: FloatArray
-    s: FloatArray
-    x: FloatArray
-    xd: FloatArray
-    xdd: FloatArray
-    pen_down: np.ndarray
-    ws_x: FloatArray
-    path_length: float
-    letter_height: float  # the fitted spec's (:func:`fitted_spec`)
-
-
 def tip_plan(spec: WritingSpec,
              check: Callable[[FloatArray], object] | None = None) -> TipPlan:
     """The tip motion of a (fitted) spec: steps 1-4 of the module doc. ``check`` is called with
@@ -525,15 +508,13 @@ def make_reference(model: Model, spec: WritingSpec | None = None, *,
     (:mod:`rrr_robot.writing.plan_cache`: the same numbers, bit for bit, without the spline
     fits); the robot-dependent part (workspace margin, IK, singular margins, joint motion) is
     computed every time."""
-    from . import plan_cache
-
     asked = WritingSpec() if spec is None else spec
     start = time.perf_counter()
     plan = plan_cache.load(asked) if cache else None  # keyed by the spec as asked
     cached = plan is not None
     if plan is None:
-        spec = fitted_spec(asked)
-        plan = tip_plan(spec, lambda ws_x: workspace_margin(model, ws_x, spec))
+        fitted = spec = fitted_spec(asked)
+        plan = tip_plan(fitted, lambda ws_x: workspace_margin(model, ws_x, fitted))
         if cache:
             plan_cache.store(asked, plan)
     else:  # the fitted height is the plan's: the font is not even read
