@@ -1245,6 +1245,63 @@ static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t n
     return map_rows(MODEL(self), &S_IK_BRANCH, &p, args);
 }
 
+/* ik_batch(x, shoulder, elbow[, path]): one target by rrr_ik_branch (as ik_branch), rows by
+ * rrr_ik_batch on `path` (RRR_SIMD_SCALAR: rrr_ik_branch row by row, bit for bit); the first
+ * row that fails raises its error, as the other batch methods do. */
+static PyObject *K_ik_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 3 && nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "ik_batch() takes 3 or 4 arguments (%zd given)", nargs);
+        return NULL;
+    }
+    const long shoulder = PyLong_AsLong(args[1]);
+    const long elbow = PyLong_AsLong(args[2]);
+    const long path = nargs == 4 ? PyLong_AsLong(args[3]) : RRR_SIMD_SCALAR;
+    if (PyErr_Occurred()) {
+        return NULL;
+    }
+    if ((shoulder != 0 && shoulder != 1) || (elbow != 0 && elbow != 1)) {
+        PyErr_Format(g_bad_input, "posture indices must be 0 or 1, got %ld, %ld", shoulder, elbow);
+        return NULL;
+    }
+    if (path < RRR_SIMD_AUTO || path > RRR_SIMD_AVX512 ||
+        (path > RRR_SIMD_SCALAR && !rrr_simd_available((rrr_simd)path))) {
+        PyErr_Format(PyExc_ValueError, "ik_batch: batch path %ld is not available here "
+                     "(rrr_simd_available)", path);
+        return NULL;
+    }
+    const posture p = {shoulder ? RRR_SHOULDER_BACK : RRR_SHOULDER_FRONT,
+                       elbow ? RRR_ELBOW_DOWN : RRR_ELBOW_UP};
+    vec_arg x;
+    if (parse_arg(args[0], "x", &x) != 0) {
+        return NULL;
+    }
+    PyObject *result = NULL;
+    if (!x.batch || x.rows == 0) {
+        result = map_parsed(MODEL(self), &S_IK_BRANCH, &p, &x, x.rows, x.batch);
+    } else {
+        const Py_ssize_t dims[1] = {NJ};
+        double *q;
+        PyObject *out = new_array(1, x.rows, 1, dims, &q);
+        if (out != NULL) {
+            size_t done = 0;
+            rrr_status st;
+            Py_BEGIN_ALLOW_THREADS
+            st = rrr_ik_batch(MODEL(self), (size_t)x.rows, x.data, p.shoulder, p.elbow, q, NULL,
+                              (rrr_simd)path, &done);
+            Py_END_ALLOW_THREADS
+            if (st != RRR_OK) {
+                raise_failed_row(&S_IK_BRANCH, &x, (Py_ssize_t)done, st);
+                Py_DECREF(out);
+            } else {
+                result = out;
+            }
+        }
+    }
+    arg_release(&x);
+    return result;
+}
+
 /* One target only: parse x and refuse a batch with the method's message. */
 static int one_target(PyObject *obj, const char *name, const char *refusal, vec_arg *a)
 {
@@ -1286,7 +1343,9 @@ static int solve_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs, con
 static PyObject *K_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     rrr_ik_set sol;
-    if (solve_ik(self, args, nargs, "ik", "ik takes one target (3,); use ik_nearest for paths",
+    if (solve_ik(self, args, nargs, "ik",
+                 "ik of a batch (n, 3) needs a posture: ik(x, shoulder, elbow) (one branch per "
+                 "row); ik_nearest follows a path",
                  &sol) != 0) {
         return NULL;
     }
@@ -1667,6 +1726,7 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(ik_branches, "ik_branches(x) -> [(shoulder, elbow), ...]"),
     FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow) -> q (shoulder 0 front / 1 back, "
                         "elbow 0 up / 1 down)"),
+    FASTCALL(ik_batch, "ik_batch(x, shoulder, elbow[, path]) -> q (one branch per row)"),
     FASTCALL(ik_nearest, "ik_nearest(x, q_prev) -> q"),
     FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, "
                           "shoulder_margin, det_jacobian)"),

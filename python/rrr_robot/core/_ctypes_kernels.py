@@ -30,6 +30,11 @@ def finite_scalar(value: object, name: str) -> float:
     return v
 
 
+#: what ``ik`` (all branches of one target) says to a batch
+IK_BATCH_REFUSAL = ("ik of a batch (n, 3) needs a posture: ik(x, shoulder, elbow) (one branch "
+                    "per row); ik_nearest follows a path")
+
+
 class Kernels:
     """The librrr calls on ``raw`` (read in place), one ctypes call per row."""
 
@@ -76,7 +81,7 @@ class Kernels:
         return sol
 
     def ik(self, x: ArrayLike, /) -> FloatArray:
-        sol = self._ik_set(x, "ik takes one target (3,); use ik_nearest for paths")
+        sol = self._ik_set(x, IK_BATCH_REFUSAL)
         return np.array([sol.q[i][:] for i in range(sol.n)]).reshape(sol.n, 3)
 
     def ik_branches(self, x: ArrayLike, /) -> list[tuple[str, str]]:
@@ -94,6 +99,25 @@ class Kernels:
             if status := fn(self._ref, xb + i * xs_, shoulder, elbow, qb + i * qs_):
                 _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
         return q if batch else q[0]
+
+    def ik_batch(self, x: ArrayLike, shoulder: int, elbow: int, path: int = 1, /
+                 ) -> FloatArray:
+        """rrr_ik_branch of one target, or rrr_ik_batch of rows on ``path``: the first row
+        that fails raises its error (as the other batch calls do)."""
+        if shoulder not in (0, 1) or elbow not in (0, 1):
+            raise BadInputError(f"posture indices must be 0 or 1, got {shoulder}, {elbow}")
+        xs, batch = as_rows(x, "x")
+        if not batch:
+            return self.ik_branch(xs[0], shoulder, elbow)
+        xs = np.ascontiguousarray(xs)
+        q = np.empty_like(xs)
+        done = ct.c_size_t(0)
+        status = _lib.FUNCS["rrr_ik_batch"](self._ref, xs.shape[0], ptr(xs), shoulder, elbow,
+                                            ptr(q), None, path, ct.byref(done))
+        if status:
+            i = done.value
+            _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
+        return q
 
     def ik_nearest(self, x: ArrayLike, q_prev: ArrayLike, /) -> FloatArray:
         xs, batch = as_rows(x, "x")
