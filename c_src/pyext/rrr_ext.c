@@ -1225,33 +1225,14 @@ MAP_METHOD(voltage_from_torque, S_VOLTAGE_FROM_TORQUE)
 MAP_METHOD(torque_from_voltage, S_TORQUE_FROM_VOLTAGE)
 MAP_METHOD(plant_jacobian, S_PLANT_JACOBIAN)
 
-/* ik_branch(x, shoulder, elbow): shoulder 0 front / 1 back, elbow 0 up / 1 down. */
+/* ik_branch(x, shoulder, elbow[, path]): shoulder 0 front / 1 back, elbow 0 up / 1 down; one
+ * target, or rows by the row loop of rrr_ik_branch (without path, or with RRR_SIMD_SCALAR), or
+ * by rrr_ik_batch on `path` (an rrr_simd value); the first row that fails raises its error, as
+ * in the other batch methods. */
 static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (check_nargs("ik_branch", nargs, 3) != 0) {
-        return NULL;
-    }
-    const long shoulder = PyLong_AsLong(args[1]);
-    const long elbow = PyLong_AsLong(args[2]);
-    if (PyErr_Occurred()) {
-        return NULL;
-    }
-    if ((shoulder != 0 && shoulder != 1) || (elbow != 0 && elbow != 1)) {
-        PyErr_Format(g_bad_input, "posture indices must be 0 or 1, got %ld, %ld", shoulder, elbow);
-        return NULL;
-    }
-    const posture p = {shoulder ? RRR_SHOULDER_BACK : RRR_SHOULDER_FRONT,
-                       elbow ? RRR_ELBOW_DOWN : RRR_ELBOW_UP};
-    return map_rows(MODEL(self), &S_IK_BRANCH, &p, args);
-}
-
-/* ik_batch(x, shoulder, elbow[, path]): one target by rrr_ik_branch (as ik_branch), rows by
- * rrr_ik_batch on `path` (RRR_SIMD_SCALAR: rrr_ik_branch row by row, bit for bit); the first
- * row that fails raises its error, as the other batch methods do. */
-static PyObject *K_ik_batch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
-{
     if (nargs != 3 && nargs != 4) {
-        PyErr_Format(PyExc_TypeError, "ik_batch() takes 3 or 4 arguments (%zd given)", nargs);
+        PyErr_Format(PyExc_TypeError, "ik_branch() takes 3 or 4 arguments (%zd given)", nargs);
         return NULL;
     }
     const long shoulder = PyLong_AsLong(args[1]);
@@ -1266,12 +1247,15 @@ static PyObject *K_ik_batch(PyObject *self, PyObject *const *args, Py_ssize_t na
     }
     if (path < RRR_SIMD_AUTO || path > RRR_SIMD_AVX512 ||
         (path > RRR_SIMD_SCALAR && !rrr_simd_available((rrr_simd)path))) {
-        PyErr_Format(PyExc_ValueError, "ik_batch: batch path %ld is not available here "
+        PyErr_Format(PyExc_ValueError, "ik_branch: batch path %ld is not available here "
                      "(rrr_simd_available)", path);
         return NULL;
     }
     const posture p = {shoulder ? RRR_SHOULDER_BACK : RRR_SHOULDER_FRONT,
                        elbow ? RRR_ELBOW_DOWN : RRR_ELBOW_UP};
+    if (path == RRR_SIMD_SCALAR) {
+        return map_rows(MODEL(self), &S_IK_BRANCH, &p, args);
+    }
     vec_arg x;
     if (parse_arg(args[0], "x", &x) != 0) {
         return NULL;
@@ -1344,8 +1328,8 @@ static PyObject *K_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     rrr_ik_set sol;
     if (solve_ik(self, args, nargs, "ik",
-                 "ik of a batch (n, 3) needs a posture: ik(x, shoulder, elbow) (one branch per "
-                 "row); ik_nearest follows a path",
+                 "ik without a posture takes one target (3,) (every branch); a batch (n, 3) "
+                 "needs a posture: ik(x, shoulder, elbow); ik_nearest follows a path",
                  &sol) != 0) {
         return NULL;
     }
@@ -1724,9 +1708,8 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(joint_motion, "joint_motion(q, xd, xdd) -> (qd, qdd)"),
     FASTCALL(ik, "ik(x) -> (k, 3) solutions"),
     FASTCALL(ik_branches, "ik_branches(x) -> [(shoulder, elbow), ...]"),
-    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow) -> q (shoulder 0 front / 1 back, "
-                        "elbow 0 up / 1 down)"),
-    FASTCALL(ik_batch, "ik_batch(x, shoulder, elbow[, path]) -> q (one branch per row)"),
+    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow[, path]) -> q (shoulder 0 front / 1 "
+                        "back, elbow 0 up / 1 down; rows by rrr_ik_batch on path)"),
     FASTCALL(ik_nearest, "ik_nearest(x, q_prev) -> q"),
     FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, "
                           "shoulder_margin, det_jacobian)"),

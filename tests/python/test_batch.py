@@ -236,8 +236,8 @@ def test_batch_ik_auto_within_1e_13_of_scalar_and_both_bindings_agree(model, tar
     assert np.abs(auto - scalar).max() <= 1e-13
     slow = _ctypes_kernels.Kernels(model.raw)
     path = batch.PATHS_HERE["auto"]
-    assert slow.ik_batch(targets, 1, 1, path).tobytes() == auto.tobytes()
-    assert slow.ik_batch(targets, 1, 1, 1).tobytes() == scalar.tobytes()
+    assert slow.ik_branch(targets, 1, 1, path).tobytes() == auto.tobytes()
+    assert slow.ik_branch(targets, 1, 1, 1).tobytes() == scalar.tobytes()
 
 
 @pytest.mark.parametrize("simd", ["auto", "scalar"])
@@ -252,7 +252,7 @@ def test_a_bad_ik_row_raises_its_error_naming_the_first_one(model, targets, simd
         model.ik(x, "front", "up", simd=simd)
     assert "rrr_ik_branch failed with RRR_UNREACHABLE" in str(err.value)
     with pytest.raises(rr.UnreachableError) as ct_err:
-        slow.ik_batch(x, 0, 0, batch.PATHS_HERE[simd])
+        slow.ik_branch(x, 0, 0, batch.PATHS_HERE[simd])
     assert str(ct_err.value) == str(err.value)
     x[300] = targets[300]
     with pytest.raises(rr.BadInputError, match="sample 400") as nan_err:

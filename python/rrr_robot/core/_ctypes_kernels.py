@@ -31,8 +31,8 @@ def finite_scalar(value: object, name: str) -> float:
 
 
 #: what ``ik`` (all branches of one target) says to a batch
-IK_BATCH_REFUSAL = ("ik of a batch (n, 3) needs a posture: ik(x, shoulder, elbow) (one branch "
-                    "per row); ik_nearest follows a path")
+IK_BATCH_REFUSAL = ("ik without a posture takes one target (3,) (every branch); a batch (n, 3) "
+                    "needs a posture: ik(x, shoulder, elbow); ik_nearest follows a path")
 
 
 class Kernels:
@@ -88,36 +88,27 @@ class Kernels:
         sol = self._ik_set(x, "ik_branches takes one target (3,), as ik does")
         return [_BRANCHES[sol.branch[i]] for i in range(sol.n)]
 
-    def ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, /) -> FloatArray:
+    def ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, path: int = 1, /
+                  ) -> FloatArray:
+        """Rows of rrr_ik_branch; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR) through
+        rrr_ik_batch. The first row that fails raises its error."""
         if shoulder not in (0, 1) or elbow not in (0, 1):
             raise BadInputError(f"posture indices must be 0 or 1, got {shoulder}, {elbow}")
         xs, batch = as_rows(x, "x")
         q = np.empty_like(xs)
+        if batch and path != 1 and xs.shape[0] > 0:
+            done = ct.c_size_t(0)
+            if status := _lib.FUNCS["rrr_ik_batch"](self._ref, xs.shape[0], ptr(xs), shoulder,
+                                                    elbow, ptr(q), None, path, ct.byref(done)):
+                i = done.value
+                _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
+            return q
         fn = _lib.FUNCS["rrr_ik_branch"]
         (xb, xs_), (qb, qs_) = rows_of(xs), rows_of(q)
         for i in range(xs.shape[0]):
             if status := fn(self._ref, xb + i * xs_, shoulder, elbow, qb + i * qs_):
                 _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
         return q if batch else q[0]
-
-    def ik_batch(self, x: ArrayLike, shoulder: int, elbow: int, path: int = 1, /
-                 ) -> FloatArray:
-        """rrr_ik_branch of one target, or rrr_ik_batch of rows on ``path``: the first row
-        that fails raises its error (as the other batch calls do)."""
-        if shoulder not in (0, 1) or elbow not in (0, 1):
-            raise BadInputError(f"posture indices must be 0 or 1, got {shoulder}, {elbow}")
-        xs, batch = as_rows(x, "x")
-        if not batch:
-            return self.ik_branch(xs[0], shoulder, elbow)
-        xs = np.ascontiguousarray(xs)
-        q = np.empty_like(xs)
-        done = ct.c_size_t(0)
-        status = _lib.FUNCS["rrr_ik_batch"](self._ref, xs.shape[0], ptr(xs), shoulder, elbow,
-                                            ptr(q), None, path, ct.byref(done))
-        if status:
-            i = done.value
-            _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
-        return q
 
     def ik_nearest(self, x: ArrayLike, q_prev: ArrayLike, /) -> FloatArray:
         xs, batch = as_rows(x, "x")

@@ -291,7 +291,7 @@ class Model:
             raise BadInputError(f"posture must be shoulder='front'|'back' and elbow='up'|'down', "
                                 f"got {shoulder!r}, {elbow!r}")
         path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
-        return self._k.ik_batch(x, SHOULDER[shoulder], ELBOW[elbow], path)
+        return self._k.ik_branch(x, SHOULDER[shoulder], ELBOW[elbow], path)
 
     def ik_branches(self, x: ArrayLike) -> list[tuple[str, str]]:
         """The (shoulder, elbow) names of the solutions :meth:`ik` returns, in the same order."""
