@@ -8,10 +8,12 @@ Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk``
 against the Robotics Toolbox's batch ``rne`` and against librrr's ``rrr_inverse_dynamics`` in a
 plain C loop (bench/batch_floor.c, built with the system C compiler against the package's librrr.so:
 the floor of the scalar batch); the batch's vector kernels (``simd="auto"``: AVX-512 or AVX2 where
-the CPU has them) against its scalar path; one state of ``Model.inverse_dynamics`` against MuJoCo's
-``mj_inverse`` and Drake's ``CalcInverseDynamics`` (both on the robot read from our URDF, with the
-rotor inertias as MuJoCo's armature and added as J_m qdd to Drake's result, gravity ours); and, for
-the record, one state of ``inverse_dynamics`` through the ctypes binding the extension replaced.
+the CPU has them) against its scalar path, and so for the regressor, FK, forward dynamics and
+IK (``Model.ik(x, "front", "up")`` of the FK of the batch's angles); one state of
+``Model.inverse_dynamics`` against MuJoCo's ``mj_inverse`` and Drake's ``CalcInverseDynamics``
+(both on the robot read from our URDF, with the rotor inertias as MuJoCo's armature and added as
+J_m qdd to Drake's result, gravity ours); and, for the record, one state of
+``inverse_dynamics`` through the ctypes binding the extension replaced.
 
 Interleaved: each repeat times a block of ours and a block of the reference on the same inputs
 back to back (the order alternating between repeats), so both see the same machine load; each
@@ -239,11 +241,13 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
              1, per=nb, agreement=f"{simd_diff:.1e} (within 1e-13: "
                                   f"{'yes' if simd_diff <= 1e-13 else 'NO'})"),
     ]
-    # the other batch kernels (regressor, FK, forward dynamics): vector against scalar
+    # the other batch kernels (regressor, FK, forward dynamics, IK): vector against scalar
+    bx = model.fk(bq, simd="scalar")[0]  # reachable targets, IK on the front / up branch
     for label, method, inputs in (
             ("regressor R(q, qd, qdd)", model.regressor, (bq, bqd, bqdd)),
             ("FK (x and R)", model.fk, (bq,)),
-            ("forward dynamics", model.forward_dynamics, (bq, bqd, batch_scalar))):
+            ("forward dynamics", model.forward_dynamics, (bq, bqd, batch_scalar)),
+            ("IK (front / up)", model.ik, (bx, "front", "up"))):
         vec, sca = method(*inputs), method(*inputs, simd="scalar")
         pairs_out = zip(vec, sca, strict=True) if isinstance(vec, tuple) else [(vec, sca)]
         diff = max(float(np.abs(np.asarray(a) - np.asarray(b)).max()) for a, b in pairs_out)

@@ -1225,14 +1225,19 @@ MAP_METHOD(voltage_from_torque, S_VOLTAGE_FROM_TORQUE)
 MAP_METHOD(torque_from_voltage, S_TORQUE_FROM_VOLTAGE)
 MAP_METHOD(plant_jacobian, S_PLANT_JACOBIAN)
 
-/* ik_branch(x, shoulder, elbow): shoulder 0 front / 1 back, elbow 0 up / 1 down. */
+/* ik_branch(x, shoulder, elbow[, path]): shoulder 0 front / 1 back, elbow 0 up / 1 down; one
+ * target, or rows by the row loop of rrr_ik_branch (without path, or with RRR_SIMD_SCALAR), or
+ * by rrr_ik_batch on `path` (an rrr_simd value); the first row that fails raises its error, as
+ * in the other batch methods. */
 static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (check_nargs("ik_branch", nargs, 3) != 0) {
+    if (nargs != 3 && nargs != 4) {
+        PyErr_Format(PyExc_TypeError, "ik_branch() takes 3 or 4 arguments (%zd given)", nargs);
         return NULL;
     }
     const long shoulder = PyLong_AsLong(args[1]);
     const long elbow = PyLong_AsLong(args[2]);
+    const long path = nargs == 4 ? PyLong_AsLong(args[3]) : RRR_SIMD_SCALAR;
     if (PyErr_Occurred()) {
         return NULL;
     }
@@ -1240,9 +1245,45 @@ static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t n
         PyErr_Format(g_bad_input, "posture indices must be 0 or 1, got %ld, %ld", shoulder, elbow);
         return NULL;
     }
+    if (path < RRR_SIMD_AUTO || path > RRR_SIMD_AVX512 ||
+        (path > RRR_SIMD_SCALAR && !rrr_simd_available((rrr_simd)path))) {
+        PyErr_Format(PyExc_ValueError, "ik_branch: batch path %ld is not available here "
+                     "(rrr_simd_available)", path);
+        return NULL;
+    }
     const posture p = {shoulder ? RRR_SHOULDER_BACK : RRR_SHOULDER_FRONT,
                        elbow ? RRR_ELBOW_DOWN : RRR_ELBOW_UP};
-    return map_rows(MODEL(self), &S_IK_BRANCH, &p, args);
+    if (path == RRR_SIMD_SCALAR) {
+        return map_rows(MODEL(self), &S_IK_BRANCH, &p, args);
+    }
+    vec_arg x;
+    if (parse_arg(args[0], "x", &x) != 0) {
+        return NULL;
+    }
+    PyObject *result = NULL;
+    if (!x.batch || x.rows == 0) {
+        result = map_parsed(MODEL(self), &S_IK_BRANCH, &p, &x, x.rows, x.batch);
+    } else {
+        const Py_ssize_t dims[1] = {NJ};
+        double *q;
+        PyObject *out = new_array(1, x.rows, 1, dims, &q);
+        if (out != NULL) {
+            size_t done = 0;
+            rrr_status st;
+            Py_BEGIN_ALLOW_THREADS
+            st = rrr_ik_batch(MODEL(self), (size_t)x.rows, x.data, p.shoulder, p.elbow, q, NULL,
+                              (rrr_simd)path, &done);
+            Py_END_ALLOW_THREADS
+            if (st != RRR_OK) {
+                raise_failed_row(&S_IK_BRANCH, &x, (Py_ssize_t)done, st);
+                Py_DECREF(out);
+            } else {
+                result = out;
+            }
+        }
+    }
+    arg_release(&x);
+    return result;
 }
 
 /* One target only: parse x and refuse a batch with the method's message. */
@@ -1286,7 +1327,9 @@ static int solve_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs, con
 static PyObject *K_ik(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
     rrr_ik_set sol;
-    if (solve_ik(self, args, nargs, "ik", "ik takes one target (3,); use ik_nearest for paths",
+    if (solve_ik(self, args, nargs, "ik",
+                 "ik without a posture takes one target (3,) (every branch); a batch (n, 3) "
+                 "needs a posture: ik(x, shoulder, elbow); ik_nearest follows a path",
                  &sol) != 0) {
         return NULL;
     }
@@ -1665,8 +1708,8 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(joint_motion, "joint_motion(q, xd, xdd) -> (qd, qdd)"),
     FASTCALL(ik, "ik(x) -> (k, 3) solutions"),
     FASTCALL(ik_branches, "ik_branches(x) -> [(shoulder, elbow), ...]"),
-    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow) -> q (shoulder 0 front / 1 back, "
-                        "elbow 0 up / 1 down)"),
+    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow[, path]) -> q (shoulder 0 front / 1 "
+                        "back, elbow 0 up / 1 down; rows by rrr_ik_batch on path)"),
     FASTCALL(ik_nearest, "ik_nearest(x, q_prev) -> q"),
     FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, "
                           "shoulder_margin, det_jacobian)"),

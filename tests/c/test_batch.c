@@ -1,13 +1,18 @@
 /* Batch calls (rrr_batch.h): every available path against the one-state call over random states
  * (multi-turn angles included), for inverse dynamics, the regressor, FK and forward dynamics:
  * the scalar path bit for bit, the vector kernels within 1e-13 absolute; rows the scalar call refuses give its status at the first such row, with the rows before
- * it written; unavailable paths and NULL are refused; the path names. */
+ * it written; unavailable paths and NULL are refused; the path names. IK (rrr_ik_batch): every
+ * path and posture against rrr_ik_branch row by row over reachable, boundary, singular,
+ * wrap-edge, unreachable and non-finite targets: the same status on every row, the scalar path
+ * bit for bit, the vector kernels within 1e-13 rad, failing rows NaN. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "rrr/rrr.h"
 #include "rrr_test.h"
+
+#define PI_ 3.14159265358979323846
 
 enum { N = 4099 }; /* not a multiple of a vector width: the loop's remainder is covered */
 
@@ -307,6 +312,161 @@ static void test_other_calls(const rrr_model *m)
                  RRR_BAD_INPUT);
 }
 
+/* IK targets: FK of random angles (a tenth multi-turn), with special rows written over some */
+static double ikx[3 * N], ikq[3 * N], ikref[3 * N];
+static rrr_status ikst[N], ikst_ref[N];
+
+static void ik_targets(const rrr_model *m)
+{
+    for (int k = 0; k < N; ++k) {
+        CHECK_STATUS(rrr_fk(m, &q[3 * k], &ikx[3 * k], NULL), RRR_OK);
+    }
+    const double e = m->d2 + m->d3;
+    int k = 10;
+    /* boundaries and singular sets: stretched and folded elbow, the shoulder cylinder, q1 at
+     * the wrap (+-pi), a target on the z axis side, signed zeros */
+    const double qs[][3] = {{0.3, 0.2, 0.0},   {0.3, 0.2, PI_},  {1.0, -0.4, -PI_},
+                            {PI_, 0.5, 1.0}, {-PI_, 0.5, -1.0}, {0.0, 0.0, 0.0},
+                            {0.2, PI_ / 2, 0.3}, {0.0, -PI_ / 2, 0.0}, {2.0, PI_, 0.5},
+                            {-0.7, 1.2, 1e-9}};
+    for (size_t i = 0; i < sizeof qs / sizeof qs[0]; ++i, k += 37) {
+        CHECK_STATUS(rrr_fk(m, qs[i], &ikx[3 * k], NULL), RRR_OK);
+    }
+    /* on the shoulder cylinder (r = 0) exactly and just inside the snapping tolerance */
+    ikx[3 * k] = 0.0, ikx[3 * k + 1] = -e, ikx[3 * k + 2] = m->d1 + 0.3, k += 37;
+    ikx[3 * k] = -e, ikx[3 * k + 1] = -0.0, ikx[3 * k + 2] = m->d1 - 0.2, k += 37;
+    ikx[3 * k] = 0.0, ikx[3 * k + 1] = e * (1.0 - 1e-14), ikx[3 * k + 2] = 0.4, k += 37;
+    /* unreachable: far out, inside the inner sphere, well inside the cylinder */
+    ikx[3 * k] = 5.0, ikx[3 * k + 1] = 1.0, ikx[3 * k + 2] = 0.0, k += 37;
+    ikx[3 * k] = 0.0, ikx[3 * k + 1] = 0.0, ikx[3 * k + 2] = m->d1, k += 37;
+    ikx[3 * k] = 1e-3, ikx[3 * k + 1] = 1e-3, ikx[3 * k + 2] = 0.9, k += 37;
+    ikx[3 * k] = 1e200, ikx[3 * k + 1] = 1.0, ikx[3 * k + 2] = 0.0, k += 37;
+    /* non-finite targets */
+    ikx[3 * k + 1] = (double)NAN, k += 37;
+    ikx[3 * k + 2] = (double)INFINITY, k += 37;
+    ikx[3 * k] = -(double)INFINITY, k += 37;
+    CHECK(k < N);
+    /* the outer sphere: targets pushed out by multiples of its snapping tolerance */
+    for (int j = 0; j < 8; ++j, k += 37) {
+        const double qq[3] = {0.1 * j, 0.3, 0.0};
+        CHECK_STATUS(rrr_fk(m, qq, &ikx[3 * k], NULL), RRR_OK);
+        const double grow = 1.0 + (j - 4) * 3e-13;
+        ikx[3 * k] *= grow, ikx[3 * k + 1] *= grow, ikx[3 * k + 2] = m->d1 + (ikx[3 * k + 2] - m->d1) * grow;
+    }
+    CHECK(k < N);
+}
+
+static void test_ik(const rrr_model *m)
+{
+    ik_targets(m);
+    int failed_rows = 0, vector_runs = 0;
+    double worst = 0.0, worst_fk = 0.0;
+    for (int s = 0; s < 2; ++s) {
+        for (int el = 0; el < 2; ++el) {
+            const rrr_shoulder sh = (rrr_shoulder)s;
+            const rrr_elbow eb = (rrr_elbow)el;
+            size_t first = N;
+            for (int k = 0; k < N; ++k) {
+                ikref[3 * k] = ikref[3 * k + 1] = ikref[3 * k + 2] = (double)NAN;
+                ikst_ref[k] = rrr_ik_branch(m, &ikx[3 * k], sh, eb, &ikref[3 * k]);
+                if (ikst_ref[k] != RRR_OK && first == N) {
+                    first = (size_t)k;
+                }
+            }
+            CHECK(first < N);
+            for (int p = RRR_SIMD_AUTO; p <= RRR_SIMD_AVX512; ++p) {
+                size_t done = 12345;
+                memset(ikq, 0, sizeof ikq);
+                if (!rrr_simd_available((rrr_simd)p)) {
+                    CHECK_STATUS(rrr_ik_batch(m, N, ikx, sh, eb, ikq, ikst, (rrr_simd)p, &done),
+                                 RRR_BAD_INPUT);
+                    CHECK(done == 0 && ikq[0] == 0.0);
+                    continue;
+                }
+                CHECK_STATUS(rrr_ik_batch(m, N, ikx, sh, eb, ikq, ikst, (rrr_simd)p, &done),
+                             ikst_ref[first]);
+                CHECK(done == first);
+                const rrr_simd used = p == RRR_SIMD_AUTO ? rrr_simd_best() : (rrr_simd)p;
+                vector_runs += used != RRR_SIMD_SCALAR;
+                for (int k = 0; k < N; ++k) {
+                    CHECK_STATUS(ikst[k], ikst_ref[k]);
+                    if (ikst_ref[k] != RRR_OK) {
+                        failed_rows += p == RRR_SIMD_SCALAR;
+                        CHECK(isnan(ikq[3 * k]) && isnan(ikq[3 * k + 1]) && isnan(ikq[3 * k + 2]));
+                    } else if (used == RRR_SIMD_SCALAR) {
+                        CHECK(memcmp(&ikq[3 * k], &ikref[3 * k], 3 * sizeof ikq[0]) == 0);
+                    } else {
+                        const double d = max_diff(&ikq[3 * k], &ikref[3 * k], 3);
+                        worst = fmax(worst, d);
+                        CHECK(d <= 1e-13);
+                        if (!(d <= 1e-13)) {
+                            printf("test_batch: ik %d%d %s row %d: x = %.17g %.17g %.17g: "
+                                   "diff %.3g\n", s, el, rrr_simd_name(used), k, ikx[3 * k],
+                                   ikx[3 * k + 1], ikx[3 * k + 2], d);
+                        }
+                        double xb[3];
+                        CHECK_STATUS(rrr_fk(m, &ikq[3 * k], xb, NULL), RRR_OK);
+                        worst_fk = fmax(worst_fk, max_diff(xb, &ikx[3 * k], 3));
+                    }
+                }
+                /* status NULL: the same angles, the same return and done */
+                static double ikq2[3 * N];
+                CHECK_STATUS(rrr_ik_batch(m, N, ikx, sh, eb, ikq2, NULL, (rrr_simd)p, &done),
+                             ikst_ref[first]);
+                CHECK(done == first && memcmp(ikq2, ikq, sizeof ikq) == 0);
+                /* the reachable rows before the first failing one only: RRR_OK, done = n */
+                CHECK_STATUS(rrr_ik_batch(m, first, ikx, sh, eb, ikq2, ikst, (rrr_simd)p, &done),
+                             RRR_OK);
+                CHECK(done == first);
+            }
+        }
+    }
+    printf("test_batch: ik: max |q - scalar| = %.3g rad (%d vector runs), max |fk(ik(x)) - x| = "
+           "%.3g m, %d failing rows per posture and path\n",
+           worst, vector_runs, worst_fk, failed_rows / 4);
+    CHECK(failed_rows / 4 >= 7);
+    CHECK(worst_fk <= 1e-12);
+    /* a model rrr_ik_branch refuses: every row RRR_BAD_INPUT on every path */
+    rrr_model broken = *m;
+    broken.a2 = -0.1;
+    for (int p = RRR_SIMD_AUTO; p <= RRR_SIMD_AVX512; ++p) {
+        if (rrr_simd_available((rrr_simd)p)) {
+            size_t done = 7;
+            CHECK_STATUS(rrr_ik_batch(&broken, N, ikx, RRR_SHOULDER_FRONT, RRR_ELBOW_UP, ikq,
+                                      ikst, (rrr_simd)p, &done),
+                         RRR_BAD_INPUT);
+            CHECK(done == 0 && ikst[N - 1] == RRR_BAD_INPUT && isnan(ikq[3 * N - 1]));
+            CHECK_STATUS(rrr_ik_batch(m, 0, NULL, RRR_SHOULDER_FRONT, RRR_ELBOW_UP, NULL, NULL,
+                                      (rrr_simd)p, &done),
+                         RRR_OK);
+            CHECK(done == 0);
+        }
+    }
+    /* refusals with nothing written */
+    size_t done = 3;
+    ikst[0] = RRR_NUMERIC;
+    CHECK_STATUS(rrr_ik_batch(NULL, N, ikx, RRR_SHOULDER_FRONT, RRR_ELBOW_UP, ikq, ikst,
+                              RRR_SIMD_AUTO, &done),
+                 RRR_BAD_INPUT);
+    CHECK(done == 0 && ikst[0] == RRR_NUMERIC);
+    CHECK_STATUS(rrr_ik_batch(m, N, NULL, RRR_SHOULDER_FRONT, RRR_ELBOW_UP, ikq, ikst,
+                              RRR_SIMD_AUTO, NULL),
+                 RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_ik_batch(m, N, ikx, RRR_SHOULDER_FRONT, RRR_ELBOW_UP, NULL, ikst,
+                              RRR_SIMD_SCALAR, NULL),
+                 RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_ik_batch(m, N, ikx, (rrr_shoulder)2, RRR_ELBOW_UP, ikq, ikst,
+                              RRR_SIMD_AUTO, NULL),
+                 RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_ik_batch(m, N, ikx, RRR_SHOULDER_BACK, (rrr_elbow)-1, ikq, ikst,
+                              RRR_SIMD_SCALAR, NULL),
+                 RRR_BAD_INPUT);
+    CHECK_STATUS(rrr_ik_batch(m, N, ikx, RRR_SHOULDER_BACK, RRR_ELBOW_UP, ikq, ikst,
+                              (rrr_simd)42, NULL),
+                 RRR_BAD_INPUT);
+    CHECK(ikst[0] == RRR_NUMERIC);
+}
+
 int main(void)
 {
     rrr_model m;
@@ -315,5 +475,6 @@ int main(void)
     test_paths(&m);
     test_refusals(&m);
     test_other_calls(&m);
+    test_ik(&m);
     return rrr_test_report("test_batch");
 }

@@ -1,4 +1,4 @@
-"""Batch inverse dynamics, regressor, FK and forward dynamics through librrr's batch kernels
+"""Batch inverse dynamics, regressor, FK, forward dynamics and IK through librrr's batch kernels
 (rrr_robot.core.batch): every path this machine runs against the one-state calls (the scalar path
 bit for bit, the vector kernels within 1e-13, multi-turn angles included), broadcasting as
 before, a bad row raising the one-state call's error, and bad paths refused."""
@@ -188,3 +188,101 @@ def test_both_bindings_call_the_same_other_batch_kernels(model, states, name: st
     with pytest.raises(rr.BadInputError) as ct_err:
         getattr(slow, name)(*bad, auto)
     assert str(ext_err.value) == str(ct_err.value) and "sample 321" in str(ct_err.value)
+
+
+# ---- IK: Model.ik(x, shoulder, elbow, simd) over (n, 3) targets (rrr_ik_batch) -------------
+POSTURES = [("front", "up"), ("front", "down"), ("back", "up"), ("back", "down")]
+
+
+@pytest.fixture(scope="module")
+def targets(model, states) -> np.ndarray:
+    """Reachable targets: FK of the states' angles, with singular and wrap-edge rows."""
+    q = states[0].copy()
+    q[3] = [0.3, 0.2, 0.0]       # stretched elbow (outer sphere)
+    q[4] = [0.3, 0.2, np.pi]     # folded elbow (inner sphere)
+    q[5] = [np.pi, 0.5, 1.0]     # q1 at the wrap
+    q[6] = [-np.pi, -np.pi, 0.4]
+    x = model.fk(q, simd="scalar")[0]
+    e = model.dh["d2"] + model.dh["d3"]
+    x[7] = [0.0, -e, model.dh["d1"] + 0.3]  # on the shoulder cylinder (r = 0)
+    return x
+
+
+@pytest.mark.parametrize("simd", ["auto", "scalar", "avx2", "avx512"])
+@pytest.mark.parametrize(("shoulder", "elbow"), POSTURES)
+def test_batch_ik_agrees_with_ik_branch_on_every_path(model, targets, simd: str, shoulder: str,
+                                                      elbow: str) -> None:
+    if simd not in batch.simd_available():
+        with pytest.raises(rr.BadInputError, match="not available here"):
+            model.ik(targets, shoulder, elbow, simd=simd)
+        return
+    ref = np.array([model.ik_branch(x, shoulder, elbow) for x in targets])
+    q = model.ik(targets, shoulder, elbow, simd=simd)
+    assert q.shape == targets.shape
+    used = batch.simd_best() if simd == "auto" else simd
+    if used == "scalar":
+        assert q.tobytes() == ref.tobytes()
+    else:
+        assert np.abs(q - ref).max() <= 1e-13
+    assert np.all((q > -np.pi) & (q <= np.pi))
+    assert np.abs(model.fk(q)[0] - targets).max() <= 1e-12  # FK(IK(x)) = x
+
+
+def test_batch_ik_auto_within_1e_13_of_scalar_and_both_bindings_agree(model, targets) -> None:
+    from rrr_robot.core import _ctypes_kernels
+
+    auto = model.ik(targets, "back", "down")
+    scalar = model.ik(targets, "back", "down", simd="scalar")
+    assert np.abs(auto - scalar).max() <= 1e-13
+    slow = _ctypes_kernels.Kernels(model.raw)
+    path = batch.PATHS_HERE["auto"]
+    assert slow.ik_branch(targets, 1, 1, path).tobytes() == auto.tobytes()
+    assert slow.ik_branch(targets, 1, 1, 1).tobytes() == scalar.tobytes()
+
+
+@pytest.mark.parametrize("simd", ["auto", "scalar"])
+def test_a_bad_ik_row_raises_its_error_naming_the_first_one(model, targets, simd: str) -> None:
+    from rrr_robot.core import _ctypes_kernels
+
+    slow = _ctypes_kernels.Kernels(model.raw)
+    x = targets.copy()
+    x[300] = [5.0, 1.0, 0.0]       # beyond the outer sphere
+    x[400, 2] = np.nan
+    with pytest.raises(rr.UnreachableError, match="sample 300") as err:
+        model.ik(x, "front", "up", simd=simd)
+    assert "rrr_ik_branch failed with RRR_UNREACHABLE" in str(err.value)
+    with pytest.raises(rr.UnreachableError) as ct_err:
+        slow.ik_branch(x, 0, 0, batch.PATHS_HERE[simd])
+    assert str(ct_err.value) == str(err.value)
+    x[300] = targets[300]
+    with pytest.raises(rr.BadInputError, match="sample 400") as nan_err:
+        model.ik(x, "front", "up", simd=simd)
+    with pytest.raises(rr.BadInputError) as one_err:
+        model.ik_branch(x, "front", "up")  # the row loop: the same message
+    assert str(nan_err.value) == str(one_err.value)
+    x[400] = [1e-3, 1e-3, 0.9]     # inside the shoulder cylinder
+    with pytest.raises(rr.UnreachableError, match="sample 400"):
+        model.ik(x, "back", "up", simd=simd)
+
+
+def test_ik_of_one_target_is_unchanged_and_postures_are_checked(model, targets) -> None:
+    x = targets[10]
+    sols = model.ik(x)  # every branch, as before
+    assert sols.ndim == 2 and sols.shape[1] == 3 and 1 <= len(sols) <= 4
+    for (sh, el), q in zip(model.ik_branches(x), sols, strict=True):
+        assert model.ik(x, sh, el).tobytes() == model.ik_branch(x, sh, el).tobytes()
+        assert q.tobytes() == model.ik_branch(x, sh, el).tobytes()
+    assert model.ik(x.tolist(), "back", "down", simd="scalar").shape == (3,)
+    with pytest.raises(rr.BadInputError, match="needs a posture"):
+        model.ik(targets)
+    with pytest.raises(rr.BadInputError, match="posture must be"):
+        model.ik(targets, "front")
+    with pytest.raises(rr.BadInputError, match="posture must be"):
+        model.ik(targets, elbow="up")
+    with pytest.raises(rr.BadInputError, match="posture must be"):
+        model.ik(targets, "left", "up")
+    with pytest.raises(rr.BadInputError, match="simd must be one of"):
+        model.ik(targets, "front", "up", simd="fast")
+    with pytest.raises(rr.UnreachableError):
+        model.ik([5.0, 0.0, 0.0])
+    assert model.ik(np.empty((0, 3)), "front", "up").shape == (0, 3)

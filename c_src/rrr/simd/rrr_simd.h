@@ -5,6 +5,7 @@
 
 #include <stddef.h>
 
+#include "rrr/rrr_kinematics.h"
 #include "rrr/rrr_model.h"
 
 /* tau rows of n states, every row computed (no checks: rrr_batch.c checks the rows after). */
@@ -24,5 +25,12 @@ void rrr_simd_forward_dynamics_avx2(const rrr_model *m, size_t n, const double *
                                     const double *qd, const double *tau, double *qdd);
 void rrr_simd_forward_dynamics_avx512(const rrr_model *m, size_t n, const double *q,
                                       const double *qd, const double *tau, double *qdd);
+
+/* rrr_ik_branch's angles of n targets on one posture; NaN in a row that is unreachable, has a
+ * non-finite target or an angle within 1e-12 rad of the (-pi, pi] wrap (the scalar call's). */
+void rrr_simd_ik_avx2(const rrr_model *m, size_t n, const double *x, rrr_shoulder shoulder,
+                      rrr_elbow elbow, double *q);
+void rrr_simd_ik_avx512(const rrr_model *m, size_t n, const double *x, rrr_shoulder shoulder,
+                        rrr_elbow elbow, double *q);
 
 #endif /* RRR_SIMD_H */

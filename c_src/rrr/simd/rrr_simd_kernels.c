@@ -161,3 +161,95 @@ void RRR_SIMD_CAT(rrr_simd_forward_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, 
         }
     }
 }
+
+/* The IK kernels compiled with -fno-trapping-math: GCC speculates no floating-point operation
+ * that might trap (the products of a snapped c3, the turn of a wrapped angle), so with trapping
+ * math it would not if-convert the loop, which then does not vectorise. The option changes no
+ * result (round to nearest, no signalling NaNs here), only which operations may be moved. */
+#pragma GCC push_options
+#pragma GCC optimize("no-trapping-math")
+
+/* glibc's vector atan2 (libmvec: _ZGVdN4vv_atan2, _ZGVeN8vv_atan2) */
+__attribute__((simd("notinbranch"))) double atan2(double, double);
+
+/* wrap_pi of rrr_kinematics.c, and NaN (the scalar call's row) for an angle within 1e-12 rad
+ * of +-pi, where the vector atan2's rounding could put it on the other side of the wrap. The
+ * turn is added whatever the side (a - 2 pi under a condition is not if-converted, as it may
+ * trap): a + 0.0 is a but for a = -0.0, which gives +0.0. */
+static inline __attribute__((always_inline)) double ik_wrap(double a)
+{
+    const double turn = a > RRR_PI ? -2.0 * RRR_PI : (a <= -RRR_PI ? 2.0 * RRR_PI : 0.0);
+    return fabs(fabs(a) - RRR_PI) < 1e-12 ? (double)NAN : a + turn;
+}
+
+/* ik_geometry and ik_solve_branch of rrr_kinematics.c without branches, on one posture: the
+ * same operations in the same order (librrr is compiled as ISO C, where GCC contracts nothing
+ * into FMA), so that rho2, c3 and the reachability are the scalar call's bit for bit and only
+ * atan2 rounds differently. An unreachable target gives NaN. */
+static inline __attribute__((always_inline)) void ik_rows(const rrr_model *mp, size_t n,
+                                                         const double *restrict x,
+                                                         double *restrict q, const int front,
+                                                         const int down)
+{
+    const rrr_model model = *mp;
+    const double a2 = model.a2, a3 = model.a3, e = model.d2 + model.d3, d1 = model.d1;
+    const double L = a2 + a3 + fabs(e);
+    const double rho2_min = -RRR_IK_BOUNDARY_TOL * L * L;
+    const double c3_max = 1.0 + RRR_IK_BOUNDARY_TOL;
+    const double two_a2a3 = 2.0 * a2 * a3;
+    const double a2sq = a2 * a2, a3sq = a3 * a3;
+    const double gamma_b0 = copysign(RRR_PI, e);
+    const double nan = (double)NAN;
+#pragma omp simd
+    for (size_t k = 0; k < n; ++k) {
+        const double x0 = x[3 * k], x1 = x[3 * k + 1], x2 = x[3 * k + 2];
+        double rho2 = x0 * x0 + x1 * x1 - e * e;
+        const int out_cyl = rho2 < rho2_min;
+        rho2 = rho2 < 0.0 ? 0.0 : rho2;
+        const double pwv = x2 - d1;
+        double c3 = (rho2 + pwv * pwv - a2sq - a3sq) / two_a2a3;
+        const int out_sph = fabs(c3) > c3_max;
+        /* c3 snapped onto +-1 beyond them, as ik_geometry does: 1 - c3^2 >= 0 for
+         * |c3| <= 1, so the scalar fmax(0, 1 - c3^2) is that, and 0 for a snapped c3; a3 c3
+         * of a snapped c3 is +-a3 exactly */
+        const int snap = fabs(c3) > 1.0;
+        const double s3sq = 1.0 - c3 * c3, a3c3 = a3 * c3;
+        const double s3abs = sqrt(snap ? 0.0 : s3sq);
+        const double a3c3s = snap ? copysign(a3, c3) : a3c3;
+        c3 = snap ? copysign(1.0, c3) : c3;
+        const double rabs = sqrt(rho2);
+        const double psi = atan2(x1, x0);
+        const double gamma_f = atan2(e, rabs);
+        const double phi_f = atan2(pwv, rabs);
+        const double beta_down = atan2(a3 * s3abs, a2 + a3c3s);
+        const double q3_down = atan2(s3abs, c3);
+        const double gamma = front ? gamma_f : gamma_b0 - gamma_f;
+        const double phi = front ? phi_f : copysign(RRR_PI, pwv) - phi_f;
+        const int out = out_cyl | out_sph;
+        const double q0 = ik_wrap(psi + gamma);
+        const double q1 = ik_wrap(phi - (down ? beta_down : -beta_down));
+        const double q2 = ik_wrap(down ? q3_down : -q3_down);
+        q[3 * k] = out ? nan : q0;
+        q[3 * k + 1] = out ? nan : q1;
+        q[3 * k + 2] = out ? nan : q2;
+    }
+}
+
+void RRR_SIMD_CAT(rrr_simd_ik, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
+                                            const double *restrict x, rrr_shoulder shoulder,
+                                            rrr_elbow elbow, double *restrict q)
+{
+    /* one loop per posture, the branch choices constants in each */
+    const int front = shoulder == RRR_SHOULDER_FRONT, down = elbow == RRR_ELBOW_DOWN;
+    if (front && down) {
+        ik_rows(mp, n, x, q, 1, 1);
+    } else if (front) {
+        ik_rows(mp, n, x, q, 1, 0);
+    } else if (down) {
+        ik_rows(mp, n, x, q, 0, 1);
+    } else {
+        ik_rows(mp, n, x, q, 0, 0);
+    }
+}
+
+#pragma GCC pop_options

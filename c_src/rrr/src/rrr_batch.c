@@ -294,3 +294,51 @@ rrr_status rrr_forward_dynamics_batch(const rrr_model *m, size_t n, const double
     }
     return st;
 }
+
+rrr_status rrr_ik_batch(const rrr_model *m, size_t n, const double x[], rrr_shoulder shoulder,
+                        rrr_elbow elbow, double q[], rrr_status status[], rrr_simd path,
+                        size_t *done)
+{
+    const void *ptrs[2] = {x, q};
+    if (batch_start(m, n, ptrs, 2, &path, done) != 0 ||
+        (shoulder != RRR_SHOULDER_FRONT && shoulder != RRR_SHOULDER_BACK) ||
+        (elbow != RRR_ELBOW_UP && elbow != RRR_ELBOW_DOWN)) {
+        return RRR_BAD_INPUT;
+    }
+    /* a model rrr_ik_branch refuses is refused on every row, by the scalar call */
+    const int vector = path != RRR_SIMD_SCALAR && n > 0 && rrr_kin_ok(m);
+#ifdef RRR_HAVE_SIMD_X86
+    if (vector) {
+        if (path == RRR_SIMD_AVX512) {
+            rrr_simd_ik_avx512(m, n, x, shoulder, elbow, q);
+        } else {
+            rrr_simd_ik_avx2(m, n, x, shoulder, elbow, q);
+        }
+    }
+#endif
+    /* the vector kernels leave NaN in a row they cannot vouch for (unreachable, near the wrap
+     * of an angle): such a row, or one with a non-finite target, is the scalar call's */
+    size_t first = n;
+    rrr_status st = RRR_OK;
+    for (size_t k = 0; k < n; ++k) {
+        rrr_status row = RRR_OK;
+        if (!vector || !row_finite(&x[3 * k], NULL, NULL, &q[3 * k], 3)) {
+            row = rrr_ik_branch(m, &x[3 * k], shoulder, elbow, &q[3 * k]);
+        }
+        if (row != RRR_OK) {
+            const double nan = (double)NAN;
+            q[3 * k] = q[3 * k + 1] = q[3 * k + 2] = nan;
+            if (first == n) {
+                first = k;
+                st = row;
+            }
+        }
+        if (status != NULL) {
+            status[k] = row;
+        }
+    }
+    if (done != NULL) {
+        *done = first;
+    }
+    return st;
+}

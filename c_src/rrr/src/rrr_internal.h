@@ -31,6 +31,17 @@ static inline int rrr_finite_n(const double *v, size_t n)
     return bad == 0u;
 }
 
+/** Relative tolerance under which an IK target on the workspace boundary is snapped onto it
+ *  (rrr_kinematics.c, and the batch IK kernels of c_src/rrr/simd/). */
+#define RRR_IK_BOUNDARY_TOL 1e-12
+
+/** 1 when the kinematic lengths of m are usable (finite d1, a2, a3, d2 + d3; a2, a3 > 0). */
+static inline int rrr_kin_ok(const rrr_model *m)
+{
+    const double k[4] = {m->d1, m->a2, m->a3, m->d2 + m->d3};
+    return rrr_finite_n(k, 4) && m->a2 > 0.0 && m->a3 > 0.0;
+}
+
 /** sin/cos of q2, q3 and q2 + q3, the only trigonometric inputs of the dynamics. */
 typedef struct rrr_trig {
     double s2, c2, s3, c3, s23, c23;

@@ -3,18 +3,12 @@
 
 #include "rrr_internal.h"
 
-/* Relative tolerance under which a target on the workspace boundary is snapped onto it. */
-#define RRR_IK_BOUNDARY_TOL 1e-12
-
-static int kin_ok(const rrr_model *m)
-{
-    const double k[4] = {m->d1, m->a2, m->a3, m->d2 + m->d3};
-    return rrr_finite_n(k, 4) && m->a2 > 0.0 && m->a3 > 0.0;
-}
+/* RRR_IK_BOUNDARY_TOL (the snapping onto the workspace boundary) is in rrr_internal.h: the
+ * batch IK kernels (c_src/rrr/simd/rrr_simd_kernels.c) decide reachability as ik_geometry does. */
 
 rrr_status rrr_fk(const rrr_model *m, const double q[3], double x[3], double R[3][3])
 {
-    if (m == NULL || q == NULL || x == NULL || !rrr_finite_n(q, 3) || !kin_ok(m)) {
+    if (m == NULL || q == NULL || x == NULL || !rrr_finite_n(q, 3) || !rrr_kin_ok(m)) {
         return RRR_BAD_INPUT;
     }
     const double s1 = sin(q[0]), c1 = cos(q[0]);
@@ -53,7 +47,7 @@ static void set_frame(double T[4][4], const double R[3][3], const double p[3])
 
 rrr_status rrr_fk_frames(const rrr_model *m, const double q[3], double T[RRR_NFRAMES][4][4])
 {
-    if (m == NULL || q == NULL || T == NULL || !rrr_finite_n(q, 3) || !kin_ok(m)) {
+    if (m == NULL || q == NULL || T == NULL || !rrr_finite_n(q, 3) || !rrr_kin_ok(m)) {
         return RRR_BAD_INPUT;
     }
     const double s1 = sin(q[0]), c1 = cos(q[0]);
@@ -80,7 +74,7 @@ rrr_status rrr_fk_frames(const rrr_model *m, const double q[3], double T[RRR_NFR
 
 rrr_status rrr_jacobian(const rrr_model *m, const double q[3], double J[3][3])
 {
-    if (m == NULL || q == NULL || J == NULL || !rrr_finite_n(q, 3) || !kin_ok(m)) {
+    if (m == NULL || q == NULL || J == NULL || !rrr_finite_n(q, 3) || !rrr_kin_ok(m)) {
         return RRR_BAD_INPUT;
     }
     const double s1 = sin(q[0]), c1 = cos(q[0]);
@@ -130,7 +124,7 @@ static void tip_motion(const rrr_model *m, const double q[3], const double qd[3]
 rrr_status rrr_tip_motion(const rrr_model *m, const double q[3], const double qd[3],
                           const double qdd[3], double xd[3], double xdd[3])
 {
-    if (m == NULL || q == NULL || qd == NULL || qdd == NULL || !kin_ok(m) ||
+    if (m == NULL || q == NULL || qd == NULL || qdd == NULL || !rrr_kin_ok(m) ||
         !rrr_finite_n(q, 3) || !rrr_finite_n(qd, 3) || !rrr_finite_n(qdd, 3)) {
         return RRR_BAD_INPUT;
     }
@@ -173,7 +167,7 @@ rrr_status rrr_joint_motion(const rrr_model *m, const double q[3], const double 
                             const double xdd[3], double qd[3], double qdd[3])
 {
     if (m == NULL || q == NULL || xd == NULL || xdd == NULL || qd == NULL || qdd == NULL ||
-        !kin_ok(m) || !rrr_finite_n(q, 3) || !rrr_finite_n(xd, 3) || !rrr_finite_n(xdd, 3)) {
+        !rrr_kin_ok(m) || !rrr_finite_n(q, 3) || !rrr_finite_n(xd, 3) || !rrr_finite_n(xdd, 3)) {
         return RRR_BAD_INPUT;
     }
     double J[3][3];
@@ -230,7 +224,7 @@ typedef struct ik_geom {
 
 static rrr_status ik_geometry(const rrr_model *m, const double x[3], ik_geom *g)
 {
-    if (m == NULL || x == NULL || !kin_ok(m) || !rrr_finite_n(x, 3)) {
+    if (m == NULL || x == NULL || !rrr_kin_ok(m) || !rrr_finite_n(x, 3)) {
         return RRR_BAD_INPUT;
     }
     const double a2 = m->a2, a3 = m->a3, e = m->d2 + m->d3;
@@ -361,7 +355,7 @@ rrr_status rrr_ik_nearest(const rrr_model *m, const double x[3], const double q_
 rrr_status rrr_singularity_classify(const rrr_model *m, const double q[3], double tol,
                                     rrr_singularity *s)
 {
-    if (m == NULL || q == NULL || s == NULL || !kin_ok(m) || !rrr_finite_n(q, 3) ||
+    if (m == NULL || q == NULL || s == NULL || !rrr_kin_ok(m) || !rrr_finite_n(q, 3) ||
         !isfinite(tol) || tol < 0.0) {
         return RRR_BAD_INPUT;
     }
@@ -385,7 +379,7 @@ rrr_status rrr_singularity_classify(const rrr_model *m, const double q[3], doubl
 rrr_status rrr_workspace_margin(const rrr_model *m, const double x[3], double *margin,
                                 unsigned *flags)
 {
-    if (m == NULL || x == NULL || margin == NULL || !kin_ok(m) || !rrr_finite_n(x, 3)) {
+    if (m == NULL || x == NULL || margin == NULL || !rrr_kin_ok(m) || !rrr_finite_n(x, 3)) {
         return RRR_BAD_INPUT;
     }
     const double e = fabs(m->d2 + m->d3);

@@ -30,6 +30,11 @@ def finite_scalar(value: object, name: str) -> float:
     return v
 
 
+#: what ``ik`` (all branches of one target) says to a batch
+IK_BATCH_REFUSAL = ("ik without a posture takes one target (3,) (every branch); a batch (n, 3) "
+                    "needs a posture: ik(x, shoulder, elbow); ik_nearest follows a path")
+
+
 class Kernels:
     """The librrr calls on ``raw`` (read in place), one ctypes call per row."""
 
@@ -76,18 +81,28 @@ class Kernels:
         return sol
 
     def ik(self, x: ArrayLike, /) -> FloatArray:
-        sol = self._ik_set(x, "ik takes one target (3,); use ik_nearest for paths")
+        sol = self._ik_set(x, IK_BATCH_REFUSAL)
         return np.array([sol.q[i][:] for i in range(sol.n)]).reshape(sol.n, 3)
 
     def ik_branches(self, x: ArrayLike, /) -> list[tuple[str, str]]:
         sol = self._ik_set(x, "ik_branches takes one target (3,), as ik does")
         return [_BRANCHES[sol.branch[i]] for i in range(sol.n)]
 
-    def ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, /) -> FloatArray:
+    def ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, path: int = 1, /
+                  ) -> FloatArray:
+        """Rows of rrr_ik_branch; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR) through
+        rrr_ik_batch. The first row that fails raises its error."""
         if shoulder not in (0, 1) or elbow not in (0, 1):
             raise BadInputError(f"posture indices must be 0 or 1, got {shoulder}, {elbow}")
         xs, batch = as_rows(x, "x")
         q = np.empty_like(xs)
+        if batch and path != 1 and xs.shape[0] > 0:
+            done = ct.c_size_t(0)
+            if status := _lib.FUNCS["rrr_ik_batch"](self._ref, xs.shape[0], ptr(xs), shoulder,
+                                                    elbow, ptr(q), None, path, ct.byref(done)):
+                i = done.value
+                _lib.raise_for("rrr_ik_branch", status, f"sample {i}: x = {xs[i].tolist()}")
+            return q
         fn = _lib.FUNCS["rrr_ik_branch"]
         (xb, xs_), (qb, qs_) = rows_of(xs), rows_of(q)
         for i in range(xs.shape[0]):

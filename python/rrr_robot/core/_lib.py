@@ -187,6 +187,8 @@ _SIGNATURES: dict[str, list[Any]] = {
     "rrr_fk_batch": [_M, ct.c_size_t, _D, _D, _D, ct.c_int, _P(ct.c_size_t)],
     "rrr_forward_dynamics_batch": [_M, ct.c_size_t, _D, _D, _D, _D, ct.c_int,
                                    _P(ct.c_size_t)],
+    "rrr_ik_batch": [_M, ct.c_size_t, _D, ct.c_int, ct.c_int, _D, _P(ct.c_int), ct.c_int,
+                     _P(ct.c_size_t)],
     "rrr_plant_rollout": [_M, _P(RawPlantIntegrator), ct.c_size_t, _D, ct.c_double,
                           _P(RawPlantState), _D, _D, _D, _P(ct.c_size_t), _P(RawPlantStats)],
     "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),

@@ -270,10 +270,28 @@ class Model:
         singular configuration)."""
         return self._k.joint_motion(q, xd, xdd)
 
-    def ik(self, x: ArrayLike) -> FloatArray:
-        """Every IK solution of one target, shape (k, 3) with k = 1..4, ordered by branch
-        (front/up, front/down, back/up, back/down). Raises UnreachableError if there is none."""
-        return self._k.ik(x)
+    def ik(self, x: ArrayLike, shoulder: str | None = None, elbow: str | None = None,
+           simd: str = "auto") -> FloatArray:
+        """Inverse kinematics (eq 6, valid in the whole workspace).
+
+        Without a posture: every solution of one target (3,), shape (k, 3) with k = 1..4,
+        ordered by branch (front/up, front/down, back/up, back/down); UnreachableError if there
+        is none (a batch is refused: it needs a posture).
+
+        With a posture (``shoulder`` 'front'|'back' and ``elbow`` 'up'|'down'): the solution on
+        that branch, (3,) for one target, (n, 3) for a batch of targets, which runs in one call
+        of librrr's batch kernels (``rrr_ik_batch``); ``simd`` as for
+        :meth:`inverse_dynamics` (``"auto"``: within 1e-13 rad of the scalar path, which is
+        :meth:`ik_branch` bit for bit). A row that is unreachable or not finite raises its error
+        (UnreachableError, BadInputError) naming the row, as the other batch methods do; screen
+        a batch with :meth:`workspace_margin` (> 0 reachable) first to keep the others."""
+        if shoulder is None and elbow is None:
+            return self._k.ik(x)
+        if shoulder not in SHOULDER or elbow not in ELBOW:
+            raise BadInputError(f"posture must be shoulder='front'|'back' and elbow='up'|'down', "
+                                f"got {shoulder!r}, {elbow!r}")
+        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
+        return self._k.ik_branch(x, SHOULDER[shoulder], ELBOW[elbow], path)
 
     def ik_branches(self, x: ArrayLike) -> list[tuple[str, str]]:
         """The (shoulder, elbow) names of the solutions :meth:`ik` returns, in the same order."""

@@ -9,7 +9,7 @@
  * their results are not bit-identical to the scalar path: they differ by rounding, within 1e-13
  * absolute for the default robot (torques of up to about 50 N m, regressor entries, tip
  * positions in m, accelerations; tests/c/test_batch.c checks each call over random states,
- * multi-turn angles included). A row the scalar call would refuse
+ * multi-turn angles included; IK joint angles in rad). A row the scalar call would refuse
  * (non-finite input, an invalid model) is handed to the scalar call, so statuses are the scalar
  * path's. The vector kernels exist in librrr built with GCC for x86-64 Linux (glibc); elsewhere
  * only RRR_SIMD_SCALAR is available and RRR_SIMD_AUTO means it.
@@ -23,6 +23,7 @@ extern "C" {
 
 #include <stddef.h>
 
+#include "rrr_kinematics.h"
 #include "rrr_model.h"
 
 /** @brief Which kernels a batch call uses. */
@@ -105,6 +106,35 @@ RRR_API rrr_status rrr_fk_batch(const rrr_model *m, size_t n, const double q[], 
 RRR_API rrr_status rrr_forward_dynamics_batch(const rrr_model *m, size_t n, const double q[],
                                               const double qd[], const double tau[],
                                               double qdd[], rrr_simd path, size_t *done);
+
+/**
+ * @brief rrr_ik_branch of n targets on one posture branch, with a status per row.
+ *
+ * Unlike the other batch calls it does not stop at a failing row: every row is solved, so that
+ * a batch with unreachable targets (a workspace sweep) gives the solutions of the others. The
+ * vector kernels decide reachability with the scalar call's operations (the same roundings:
+ * no contraction into FMA), so the per-row statuses are the scalar path's on every path; their
+ * angles differ from it by the rounding of libmvec's atan2 (within 1e-13 rad; a row whose angle
+ * falls within 1e-12 rad of the (-pi, pi] wrap, or is not finite, is the scalar call's).
+ * @param[in]  n        number of targets (0: nothing happens, RRR_OK)
+ * @param[in]  x        n rows of 3 (m)
+ * @param[in]  shoulder RRR_SHOULDER_FRONT or RRR_SHOULDER_BACK
+ * @param[in]  elbow    RRR_ELBOW_UP or RRR_ELBOW_DOWN
+ * @param[out] q        n rows of 3 (rad, each in (-pi, pi]); a row that fails is NaN (never
+ *                      without its status: see status and done)
+ * @param[out] status   NULL, or n statuses: what rrr_ik_branch gives each row (RRR_OK,
+ *                      RRR_BAD_INPUT for a non-finite target or a model it refuses,
+ *                      RRR_UNREACHABLE)
+ * @param[in]  path     the kernels (RRR_SIMD_AUTO: the best available)
+ * @param[out] done     if not NULL, the first row whose status is not RRR_OK (n when every row
+ *                      is): the rows before it are valid, as for the other batch calls
+ * @return RRR_BAD_INPUT with nothing written (NULL with n > 0, a posture that is not one of the
+ *         enums, a path that is not available here); otherwise RRR_OK when every row is solved,
+ *         else the status of row *done.
+ */
+RRR_API rrr_status rrr_ik_batch(const rrr_model *m, size_t n, const double x[],
+                                rrr_shoulder shoulder, rrr_elbow elbow, double q[],
+                                rrr_status status[], rrr_simd path, size_t *done);
 
 #ifdef __cplusplus
 }
