@@ -27,10 +27,16 @@ from numpy.typing import ArrayLike
 from ..errors import BadInputError
 from .outputs import atomic_open, atomic_path
 
+try:  # the C formatting (c_src/pyext/rrr_csv.c): the same bytes as format_rows' Python path
+    from . import _csvfmt
+except ImportError:  # not built (no Python headers)
+    _csvfmt = None  # type: ignore[assignment]
+
 __all__ = [
     "CSV_FLOAT_FORMAT",
     "TABLE_FORMATS",
     "check_table_format",
+    "format_rows",
     "read_csv_table",
     "read_table",
     "write_csv",
@@ -77,22 +83,39 @@ def _pyarrow() -> tuple[Any, Any]:
     return pa, pq
 
 
+def format_rows(data: np.ndarray, compiled: bool = True) -> str:
+    """The rows of a 2-D float64 array as CSV text: every value as :data:`CSV_FLOAT_FORMAT`
+    (NaN as ``nan``), ``,`` between values, a newline after each row. ``compiled``: the C
+    formatting (``rrr_robot.core._csvfmt``, about twice as fast) where it is built and the C
+    locale's decimal point is ``.``; the Python formatting otherwise, the same text."""
+    block = np.ascontiguousarray(data, dtype=np.float64)
+    if block.ndim != 2:
+        raise ValueError(f"format_rows: a 2-D array expected, got shape {block.shape}")
+    if compiled and _csvfmt is not None:
+        text = _csvfmt.format_rows(block)
+        if text is not None:
+            return str(text)
+    if block.size == 0:
+        return ""
+    row = ",".join([CSV_FLOAT_FORMAT] * block.shape[1]) + "\n"
+    # one format operation per block: tolist() gives Python floats, the fast path
+    return (row * block.shape[0]) % tuple(block.ravel().tolist())
+
+
 def write_csv(path: str | os.PathLike[str], columns: Mapping[str, ArrayLike],
               comment: str = "") -> Path:
     """Write ``columns`` (name -> 1-D values, all of one length) as CSV, atomically: ``# ``
-    lines of ``comment``, the header row, then the rows with :data:`CSV_FLOAT_FORMAT`."""
+    lines of ``comment``, the header row, then the rows with :data:`CSV_FLOAT_FORMAT`
+    (:func:`format_rows`)."""
     names, data = _stack(columns)
     header = io.StringIO()
     for line in comment.splitlines():
         header.write(f"# {line}\n")
     csv.writer(header, lineterminator="\n").writerow(names)
-    row = ",".join([CSV_FLOAT_FORMAT] * data.shape[1]) + "\n"
     with atomic_open(path, newline="") as fh:  # complete or not at all
         fh.write(header.getvalue())
         for start in range(0, data.shape[0], _BLOCK_ROWS):
-            block = data[start:start + _BLOCK_ROWS]
-            # one format operation per block: tolist() gives Python floats, the fast path
-            fh.write((row * block.shape[0]) % tuple(block.ravel().tolist()))
+            fh.write(format_rows(data[start:start + _BLOCK_ROWS]))
     return Path(path)
 
 
