@@ -99,7 +99,8 @@ def format_rows(data: np.ndarray, compiled: bool = True) -> str:
         return ""
     row = ",".join([CSV_FLOAT_FORMAT] * block.shape[1]) + "\n"
     # one format operation per block: tolist() gives Python floats, the fast path
-    return (row * block.shape[0]) % tuple(block.ravel().tolist())
+    rows: str = (row * block.shape[0]) % tuple(block.ravel().tolist())
+    return rows
 
 
 def write_csv(path: str | os.PathLike[str], columns: Mapping[str, ArrayLike],
