@@ -496,6 +496,7 @@ static void sdo_abort(rrr_co_node *n, uint16_t index, uint8_t sub, uint32_t code
 
 static void on_sdo(rrr_co_node *n, const rrr_hil_frame *f, rrr_co_out *out)
 {
+    n->sdo_idle_us = 0; /* a request of the client: the server's timeout starts again */
     const uint8_t *d = f->data;
     const uint16_t index = (uint16_t)(f->dlc >= 3 ? d[1] | (d[2] << 8) : 0);
     const uint8_t sub = f->dlc >= 4 ? d[3] : 0;
@@ -843,6 +844,17 @@ void rrr_co_advance(rrr_co_node *n, uint32_t dt_us, rrr_co_out *out)
 {
     if (n->nmt == RRR_CO_NMT_INIT) {
         return;
+    }
+    if (n->seg_active || n->dl_active) { /* the SDO server's timeout */
+        n->sdo_idle_us = dt_us > RRR_CO_SDO_TIMEOUT_US - n->sdo_idle_us
+                             ? RRR_CO_SDO_TIMEOUT_US + 1u
+                             : n->sdo_idle_us + dt_us;
+        if (n->sdo_idle_us > RRR_CO_SDO_TIMEOUT_US) {
+            const rrr_co_od_entry *e = &rrr_co_od[n->seg_slot];
+            n->err.sdo_timeouts++;
+            sdo_abort(n, e->index, e->subindex, RRR_CO_ABORT_TIMEOUT, out);
+            n->sdo_idle_us = 0;
+        }
     }
     const uint32_t hb_us = n->v[RRR_CO_OD_HB_PRODUCER] * 1000u;
     if (hb_us != 0) {

@@ -13,7 +13,9 @@
  *   bits 16..23, time in ms in bits 0..15): monitoring starts with the first heartbeat seen and
  *   its loss is a fault (EMCY 0x8130);
  * - SDO server (0x600 + id -> 0x580 + id, DLC 8): expedited and segmented upload and download,
- *   the standard abort codes (RRR_CO_ABORT_*); in pre-operational and operational only;
+ *   the standard abort codes (RRR_CO_ABORT_*); in pre-operational and operational only; a
+ *   segmented transfer whose client sends no request for RRR_CO_SDO_TIMEOUT_US (rrr_co_advance's
+ *   time) is aborted by the server with 0x05040000 (SDO protocol timed out, err.sdo_timeouts);
  * - SYNC consumer (0x1005): on each SYNC in operational, the RPDO received since the last SYNC
  *   is applied (transmission types 0..240; 254/255 apply at once); then rrr_co_transmit sends
  *   the TPDOs whose transmission type n divides the SYNC count, with the state sampled then (the
@@ -48,6 +50,9 @@
 
 /** SDO abort codes (CiA 301). */
 #define RRR_CO_ABORT_TOGGLE 0x05030000u        ///< toggle bit not alternated
+#define RRR_CO_ABORT_TIMEOUT 0x05040000u       ///< SDO protocol timed out
+/** The SDO server's timeout: a segmented transfer idle this long (us) is aborted. */
+#define RRR_CO_SDO_TIMEOUT_US 1000000u
 #define RRR_CO_ABORT_CS 0x05040001u            ///< command specifier not valid or unknown
 #define RRR_CO_ABORT_UNSUPPORTED 0x06010000u   ///< unsupported access to an object
 #define RRR_CO_ABORT_WRITE_ONLY 0x06010001u    ///< attempt to read a write-only object
@@ -134,6 +139,7 @@ typedef struct rrr_co_err {
     uint32_t rpdo_timeouts;   ///< RPDO timeouts
     uint32_t emcy_sent;       ///< EMCY frames sent
     uint32_t out_overflow;    ///< frames dropped: the rrr_co_out was full
+    uint32_t sdo_timeouts;    ///< segmented transfers aborted by the server's timeout
 } rrr_co_err;
 
 /** One node. Fields are read-only for the caller. */
@@ -158,6 +164,7 @@ typedef struct rrr_co_node {
     uint16_t seg_slot;              ///< its entry
     uint32_t seg_pos;               ///< bytes sent or received
     uint8_t dl_buf[4];              ///< a segmented download's data (writable entries: <= 4 bytes)
+    uint32_t sdo_idle_us;           ///< time since the segmented transfer's last request
     double q_rad, qd_rad_s;         ///< feedback set by the plant (sampled at SYNC)
     rrr_hil_latch latch;            ///< the safety policy: latched in FAULT (its code 0x603F);
                                     ///< fault_events: faults latched (one while in FAULT counts

@@ -717,13 +717,14 @@ static void co_summary(const plant *p, int rc)
                "\"error_code\": %u, \"faults\": %u, \"fault_resets\": %u, "
                "\"zero_periods\": %u, \"emcy\": %u, "
                "\"sdo_aborts\": %u, \"hb_lost\": %u, \"rpdo_timeouts\": %u, \"rpdo_short\": %u, "
-               "\"nmt_ignored\": %u, \"sync_bad\": %u, \"out_overflow\": %u}",
+               "\"nmt_ignored\": %u, \"sync_bad\": %u, \"out_overflow\": %u, "
+               "\"sdo_timeouts\": %u}",
                i ? ", " : "", (unsigned)n->cfg.node_id, (unsigned)n->nmt,
                rrr_co_402_str((rrr_co_402)n->s402), (unsigned)n->v[RRR_CO_OD_ERROR_REGISTER],
                (unsigned)n->v[RRR_CO_OD_ERROR_CODE], n->latch.fault_events, n->latch.resets,
                n->latch.zero_periods, e->emcy_sent,
                e->sdo_aborts, e->hb_lost, e->rpdo_timeouts, e->rpdo_short, e->nmt_ignored,
-               e->sync_bad, e->out_overflow);
+               e->sync_bad, e->out_overflow, e->sdo_timeouts);
     }
     printf("], ");
     rrr_hil_link_json(stdout, p->tr);

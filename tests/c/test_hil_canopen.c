@@ -322,6 +322,46 @@ static void test_segmented_upload(void)
     CHECK(sdo_reply(0x1008, 0, NULL) == RRR_CO_ABORT_TOGGLE && !n.seg_active);
 }
 
+/* The SDO server's timeout: a segmented transfer without a request for RRR_CO_SDO_TIMEOUT_US
+ * of rrr_co_advance's time is aborted with 0x05040000; every request restarts the time. */
+static void test_sdo_timeout(void)
+{
+    rrr_co_node n = booted();
+    CHECK(sdo_write(&n, 0x1017, 0, 0, 2) == 0); /* no heartbeat frames in out */
+    const uint8_t init[8] = {0x40, 0x08, 0x10, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, init);
+    CHECK(n.seg_active);
+    out.n = 0;
+    rrr_co_advance(&n, RRR_CO_SDO_TIMEOUT_US - 1u, &out);
+    CHECK(out.n == 0 && n.seg_active);
+    const uint8_t seg0[8] = {0x60, 0, 0, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, seg0); /* a request: the time starts again */
+    CHECK(out.n == 1 && n.seg_active);
+    out.n = 0;
+    rrr_co_advance(&n, RRR_CO_SDO_TIMEOUT_US / 2u, &out);
+    rrr_co_advance(&n, RRR_CO_SDO_TIMEOUT_US / 2u, &out); /* exactly the timeout: not beyond */
+    CHECK(out.n == 0 && n.seg_active && n.err.sdo_timeouts == 0);
+    const uint32_t aborts = n.err.sdo_aborts;
+    rrr_co_advance(&n, 1, &out);
+    CHECK(sdo_reply(0x1008, 0, NULL) == RRR_CO_ABORT_TIMEOUT);
+    CHECK(!n.seg_active && n.err.sdo_timeouts == 1 && n.err.sdo_aborts == aborts + 1u);
+    out.n = 0;
+    rrr_co_advance(&n, RRR_CO_SDO_TIMEOUT_US * 3u, &out); /* nothing in progress: nothing */
+    CHECK(out.n == 0 && n.err.sdo_timeouts == 1);
+    const uint8_t seg1[8] = {0x70, 0, 0, 0, 0, 0, 0, 0};
+    feed(&n, 0x602, 8, seg1); /* the transfer is gone: a segment is out of place */
+    CHECK(sdo_reply(0, 0, NULL) == RRR_CO_ABORT_CS);
+    /* a segmented download left hanging, and one huge step of time (no overflow) */
+    const uint8_t dl[8] = {0x21, 0x17, 0x10, 0, 2, 0, 0, 0};
+    feed(&n, 0x602, 8, dl);
+    CHECK(sdo_reply(0x1017, 0, NULL) == 0 && n.dl_active);
+    out.n = 0;
+    rrr_co_advance(&n, RRR_CO_SDO_TIMEOUT_US - 10u, &out);
+    rrr_co_advance(&n, UINT32_MAX, &out);
+    CHECK(sdo_reply(0x1017, 0, NULL) == RRR_CO_ABORT_TIMEOUT);
+    CHECK(!n.dl_active && n.err.sdo_timeouts == 2 && n.v[RRR_CO_OD_HB_PRODUCER] == 0);
+}
+
 static void test_402(void)
 {
     rrr_co_node n = booted();
@@ -852,6 +892,7 @@ int main(void)
     test_boot_and_nmt();
     test_sdo();
     test_segmented_upload();
+    test_sdo_timeout();
     test_402();
     test_pdo_on_sync();
     test_rpdo_timeout();

@@ -273,6 +273,40 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
     assert all(d["nmt_ignored"] == 2 and d["sync_bad"] == 1 for d in summary["drives"])
 
 
+def test_a_segmented_transfer_left_hanging_is_aborted_by_the_server(rig: Rig) -> None:
+    """A master that starts a segmented upload (the device name 0x1008) and asks for no
+    segment: after the server's timeout (1 s, wall-clock time of the plant) the drive aborts
+    it with 0x05040000 (SDO protocol timed out), counted; the next transfer works."""
+    import can
+
+    _boot_and_enable(rig)
+    answers: queue.Queue[tuple[float, bytes]] = queue.Queue()
+    rig.network.subscribe(0x582, lambda can_id, data, ts: answers.put((time.monotonic(),
+                                                                         bytes(data))))
+    start = time.monotonic()
+    rig.bus.send(can.Message(arbitration_id=0x602, data=bytes([0x40, 0x08, 0x10, 0, 0, 0, 0, 0]),
+                             is_extended_id=False))
+    _, init = answers.get(timeout=2)
+    assert init[0] == 0x41  # segmented upload, size indicated
+    when, abort = answers.get(timeout=5)
+    assert abort[0] == 0x80 and abort[1:4] == bytes([0x08, 0x10, 0x00]), abort.hex()
+    assert int.from_bytes(abort[4:8], "little") == 0x05040000
+    assert 0.9 <= when - start <= 3.0  # the 1 s timeout, within this shared VM's delays
+    node = rig.nodes[1]
+    assert node.sdo[0x1008].raw == "RRR simulated CiA 402 axis"  # the next transfer works
+    assert node.state == "OPERATION ENABLED"  # an SDO timeout is no drive fault
+    for n in rig.nodes:
+        n.sdo[0x6040].raw = 0
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    summary = rig.plant.wait(30)
+    assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
+    drive2 = summary["drives"][1]
+    assert drive2["sdo_timeouts"] == 1
+    assert all(d["sdo_timeouts"] == 0 for d in summary["drives"][::2])
+
+
 def _cycle(rig: Rig, torques: list[int], cws: list[int]) -> dict[int, bytes]:
     """One lockstep period with the controlword ``cws[j]`` of each drive: the RPDOs, one SYNC,
     the TPDOs of that SYNC (of the drives in NMT operational)."""
