@@ -47,8 +47,12 @@ def wc() -> cm.WritingController:
     return replace(w, ref=extend_reference(w.ref, SECONDS))
 
 
-def _run(w: cm.WritingController, work: Path, realtime: CanopenRealTime | None) -> cm.MasterRun:
+def _run(w: cm.WritingController, work: Path, realtime: CanopenRealTime | None,
+         kind: str = "python") -> cm.MasterRun:
     ref = w.ref
+    if kind == "c":
+        return cm.run_c_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model,
+                               w.controller_values, work, realtime=realtime)
     return cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model, w.gains,
                                  work, realtime=realtime)
 
@@ -57,14 +61,16 @@ def _ids(records: np.ndarray) -> np.ndarray:
     return np.asarray(records["id"] & 0x1FFFFFFF)
 
 
-def test_realtime_writing_task(wc: cm.WritingController, tmp_path: Path) -> None:
+@pytest.mark.parametrize("kind", ["python", "c"])
+def test_realtime_writing_task(kind: str, wc: cm.WritingController, tmp_path: Path) -> None:
+    """Either master: the Python one on the canopen package, the C node (rrr_hil_rt clock)."""
     n = wc.ref.t.shape[0]
     with ResultSet(tmp_path / "lock", kind="hil") as rs:
-        lock = cm.write_master_results(rs, wc, _run(wc, rs.staging, None), scenario="ctc",
+        lock = cm.write_master_results(rs, wc, _run(wc, rs.staging, None, kind), scenario="ctc",
                                        figures=False)
     t0 = time.monotonic()
     with ResultSet(tmp_path / "rt", kind="hil") as rs:
-        mrun = _run(wc, rs.staging, CanopenRealTime())
+        mrun = _run(wc, rs.staging, CanopenRealTime(), kind)
         summary = cm.write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
     wall = time.monotonic() - t0
     # real time: 3,001 SYNCs on a 1 ms clock take at least 3 s (lockstep takes about 1 s)
@@ -100,6 +106,10 @@ def test_realtime_writing_task(wc: cm.WritingController, tmp_path: Path) -> None
     assert {"p50_us", "p99_us", "p999_us", "max_us"} <= set(m["wake_up"])
     assert 0 <= m["rt_deadline_misses"] <= n and 0 <= m["late_tpdos"] <= n
     assert rt["master_heartbeat_ms"] == 20 and rt["drive_consumer_ms"] == CONSUMER_MS
+    if kind == "c":  # the C master's own account: one SYNC per period, its heartbeats
+        cs = mrun.run.controller_summary
+        assert cs["exit"] == 0 and cs["syncs"] == n and cs["heartbeats"] == hb.size, cs
+        assert "SCHED_FIFO 80: yes" in m["setup"], m
     saved = json.loads((tmp_path / "rt" / "summary.json").read_text())
     assert saved["realtime"] == json.loads(json.dumps(rt))
 
@@ -167,6 +177,9 @@ def test_period_clock_keeps_its_grid() -> None:
     (["--no-fifo"], "--no-fifo: an option of 'rrr hil canopen --realtime'"),
     (["--sync-source", "canopen"], "--sync-source: an option of 'rrr hil canopen --realtime'"),
     (["--realtime", "--node-ids", "1,2,127"], "node id 127 is the master's own"),
+    (["--realtime", "--master", "c", "--node-ids", "1,2,127"], "node id 127 is the master's own"),
+    (["--realtime", "--master", "c", "--sync-source", "canopen"],
+     "the canopen package's SYNC producer is the Python master's"),
 ])
 def test_realtime_options_are_checked(argv: list[str], message: str, tmp_path: Path,
                                       capsys: pytest.CaptureFixture[str]) -> None:

@@ -330,7 +330,8 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
                                        wc.controller_values, rs.staging, node_ids=ids,
                                        timeout=args.timeout,
                                        progress=bars.callback("CANopen master (C)"),
-                                       interface=args.interface, channel=args.channel)
+                                       interface=args.interface, channel=args.channel,
+                                       realtime=realtime)
             else:
                 mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd,
                                              wc.controller_model, wc.gains, rs.staging,
@@ -382,9 +383,6 @@ def _canopen_realtime(args: argparse.Namespace) -> Any:
             if given:
                 raise BadInputError(f"{option}: an option of 'rrr hil canopen --realtime'")
         return None
-    if args.master == "c":
-        raise BadInputError("--realtime with --master c: not supported yet (docs/canopen.md, "
-                            "Not done yet)")
     if args.master == "c" and args.sync_source == "canopen":
         raise BadInputError("--sync-source canopen: the canopen package's SYNC producer is the "
                             "Python master's (--master python)")

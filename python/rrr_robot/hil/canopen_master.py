@@ -30,7 +30,15 @@ from ..core.outputs import ResultSet
 from ..errors import BadInputError
 from ..writing.trajectory import Reference
 from .bench import BenchRun, LogProgress, boot_up_watch, wait_node
-from .canopen_rt import MASTER_ID, CanopenRealTime, RtRecord, realtime_process, run_periods
+from .canopen_rt import (
+    CONSUMER_MS,
+    HEARTBEAT_MS,
+    MASTER_ID,
+    CanopenRealTime,
+    RtRecord,
+    realtime_process,
+    run_periods,
+)
 from .cia402 import DEFAULT_NODE_IDS, EDS_PATH
 from .logspec import CONTROLLER_LOG, read_log
 from .nodes import (
@@ -514,13 +522,26 @@ def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: 
                  model: Model, controller_values: Mapping[str, float | bool], work: Path, *,
                  node_ids: Sequence[int] = DEFAULT_NODE_IDS, timeout: float = 5.0,
                  progress: Progress | None = None, interface: str = "socketcand",
-                 channel: str = "vcan0") -> MasterRun:
+                 channel: str = "vcan0", realtime: CanopenRealTime | None = None) -> MasterRun:
     """As :func:`run_canopen_master`, with the C controller node as the master
     (``rrr_hil_controller --profile canopen``: the same NMT, SDO and 402 sequence, the core's
     computed-torque law with the controller FMU's ``controller_values``, one SYNC per period).
     ``model`` is the same controller model (its k_t give the target torques of the log's u).
-    HilError when a node fails: the C master's exit status and its reason."""
+    HilError when a node fails: the C master's exit status and its reason. ``realtime``: the C
+    master's ``--realtime`` (its rrr_hil_rt clock, SCHED_FIFO ``realtime.fifo`` and mlockall
+    when permitted, the spin; the SYNC source is its clock, the heartbeat and consumer times are
+    the C master's RRR_COM_HEARTBEAT_MS / RRR_COM_CONSUMER_MS, the same 20 ms and 100 ms), and
+    the plant's."""
     _check_run(t, q_ref, node_ids, interface)
+    if realtime is not None and (realtime.sync_source != "clock"
+                                 or realtime.heartbeat_stop_at is not None
+                                 or (realtime.heartbeat_ms, realtime.consumer_ms)
+                                 != (HEARTBEAT_MS, CONSUMER_MS)):
+        raise BadInputError("the C master in real time: SYNC by its own clock, heartbeat "
+                            f"{HEARTBEAT_MS} ms and consumer {CONSUMER_MS} ms only")
+    if realtime is not None and MASTER_ID in node_ids:
+        raise BadInputError(f"node id {MASTER_ID} is the master's own (its heartbeat) in real "
+                            "time: give the drives others")
     n = t.shape[0]
     sc = interface == "socketcan"
     start = time.perf_counter()
@@ -530,13 +551,17 @@ def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: 
         with contextlib.ExitStack() as stack:
             boot = 0x700 + DEFAULT_NODE_IDS[0]  # the plant's first drive
             watch = stack.enter_context(boot_up_watch(channel, boot_id=boot)) if sc else None
-            plant = stack.enter_context(_start_drives(q_ref, qd_ref, Path(work),
-                                                      channel if sc else None))
+            plant = stack.enter_context(_start_drives(
+                q_ref, qd_ref, Path(work), channel if sc else None,
+                None if realtime is None else realtime.fifo))
             if watch is not None:
                 wait_for_boot_up(watch, plant, boot_id=boot)
             extra = ["--profile", "canopen", "--node-ids", ",".join(str(i) for i in node_ids),
                      "--timeout-ms", str(round(timeout * 1000)),
                      *controller_node_args(controller_values)]
+            if realtime is not None:
+                extra += ["--realtime", "--mlock", "--spin-us", str(realtime.spin_us),
+                          *(["--fifo", str(realtime.fifo)] if realtime.fifo else [])]
             ctrl = stack.enter_context(start_controller(
                 ref_csv, connect=f"127.0.0.1:{plant.port}", log_csv=ctrl_log, extra=extra,
                 socketcan=channel if sc else None))
@@ -560,7 +585,7 @@ def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: 
     run = BenchRun(t=t, q=c.group("q"), qd=c.group("qd"), u=u, plant_summary=ps,
                    controller_summary={**cs, "transport": interface, "master": "c"},
                    u_n=c.group("u_n"), u_c=c.group("u_c"), wall_time=time.perf_counter() - start)
-    return MasterRun(run, pm, drives, ps)
+    return MasterRun(run, pm, drives, ps, realtime)
 
 
 @dataclass(frozen=True)
@@ -632,7 +657,8 @@ def write_master_results(rs: ResultSet, wc: WritingController, mrun: MasterRun, 
 
         realtime = realtime_summary(mrun.realtime, mrun.rt_record,
                                     frame_log_timing(records, [d.node_id for d in mrun.drives]),
-                                    mrun.run.controller_summary.get("rt"),
+                                    mrun.run.controller_summary
+                                    if mrun.run.controller_summary.get("master") == "c" else None,
                                     mrun.plant_summary.get("rt_setup"))
         bus["sync_periods"] = realtime["drives"]["syncs"]
         wake = realtime.get("master", {}).get("wake_up")

@@ -218,8 +218,15 @@ def realtime_summary(rt: CanopenRealTime, rec: RtRecord | None, plant_view: dict
         if rec.latency_ns:
             master["wake_up"] = latency_stats(np.asarray(rec.latency_ns, dtype=float))
         out["master"] = master
-    elif c_master is not None:  # the C master's rrr_hil_rt report
-        out["master"] = dict(c_master)
+    elif c_master is not None:  # the C master's rrr_hil_rt report, in the same keys
+        rep = c_master.get("rt", {})
+        out["master"] = {
+            "setup": rep.get("rt_setup"), "rt_deadline_misses": rep.get("rt_deadline_misses"),
+            "late_tpdos": c_master.get("late_tpdos"), "skipped_releases": rep.get("rt_skipped"),
+            "work": {"max_us": rep.get("rt_work_max_us")},
+            "wake_up": {k: rep.get(f"rt_latency_{k}") for k in ("p50_us", "p99_us", "p999_us",
+                                                                "max_us")},
+            "heartbeats": c_master.get("heartbeats")}
     return out
 
 
