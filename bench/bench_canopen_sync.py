@@ -1,12 +1,13 @@
-"""The SYNC sources of ``rrr hil canopen --realtime`` compared: ``clock`` (the master's own timed
-loop, sleep then spin) and ``canopen`` (the package's SYNC producer, ``network.sync.start``).
+"""The SYNC sources of ``rrr hil canopen --realtime`` compared: ``clock`` (the Python master's own
+timed loop, sleep then spin) and ``canopen`` (the package's SYNC producer,
+``network.sync.start``), and beside them the C master (``--master c``: rrr_hil_rt's clock).
 
-Each run is a fresh ``rrr -q hil canopen --realtime --sync-source S --duration D`` process, the
-two sources interleaved (clock, canopen, clock, ...), so that a change of machine load affects
+Each run is a fresh ``rrr -q hil canopen --realtime ... --duration D`` process, the sources
+interleaved (clock, canopen, c, clock, ...), so that a change of machine load affects
 both alike. Read from each run's summary.json (``realtime.drives``: the plant node's frame log,
 the SYNC periods as the drives received them): the SYNC period's median and max and the
 jitter's p99 and max (us), the deadline misses at the drives (a SYNC before which a drive got no
-RPDO), and, for the clock, the master's wake-up latency p99 and its misses. A run that failed
+RPDO), and, for the clocks, the master's wake-up latency p99 and its misses. A run that failed
 (a drive's RPDO timeout, 3 SYNC periods without a command) is counted as failed, with its
 reason. Prints one row per source: runs, failed, min / median / max over the runs.
 
@@ -28,13 +29,15 @@ from typing import Any
 from _quick import add_quick, apply_quick
 from _timing import logger
 
-SOURCES = ("clock", "canopen")
+#: The rows: (name, the options of rrr hil canopen --realtime).
+SOURCES = {"clock": ["--sync-source", "clock"], "canopen": ["--sync-source", "canopen"],
+           "c": ["--master", "c"]}
 log = logger("canopen-sync")
 
 
 def _run(rrr: list[str], source: str, duration: float, out: Path) -> dict[str, Any] | str:
     """One run's realtime section, or the reason it failed."""
-    proc = subprocess.run([*rrr, "-q", "hil", "canopen", "--realtime", "--sync-source", source,
+    proc = subprocess.run([*rrr, "-q", "hil", "canopen", "--realtime", *SOURCES[source],
                            "--duration", f"{duration:g}", "--no-figures", "--out", str(out)],
                           capture_output=True, text=True)
     if proc.returncode != 0:
@@ -83,7 +86,7 @@ def main() -> int:
         rs = results[source]
         d = [r["drives"] for r in rs]
         m = [r.get("master", {}) for r in rs]
-        wake = [x["wake_up"]["p99_us"] for x in m if "wake_up" in x]
+        wake = [float(x["wake_up"]["p99_us"]) for x in m if "wake_up" in x]
         print(f"{source:8} {len(rs):>3} {len(failed[source]):>4}  "
               f"{_span([x['sync_period']['median_us'] for x in d]):>16}  "
               f"{_span([x['sync_period']['max_us'] for x in d]):>18}  "
