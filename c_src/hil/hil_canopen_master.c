@@ -27,6 +27,12 @@ void rrr_com_sync(rrr_hil_frame *f)
     frame(f, 0x080u, 0u);
 }
 
+void rrr_com_heartbeat(uint8_t node, uint8_t state, rrr_hil_frame *f)
+{
+    frame(f, 0x700u + (node & 0x7Fu), 1u);
+    f->data[0] = state;
+}
+
 static void sdo_head(rrr_hil_frame *f, uint8_t node, uint8_t cs, uint16_t index, uint8_t sub)
 {
     frame(f, 0x600u + node, 8u);

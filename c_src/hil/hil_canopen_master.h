@@ -31,6 +31,14 @@ extern "C" {
 void rrr_com_nmt(uint8_t command, uint8_t node, rrr_hil_frame *f);
 /** A SYNC without counter (DLC 0). */
 void rrr_com_sync(rrr_hil_frame *f);
+
+/** The master's own node id in real time (its heartbeat 0x700 + id), its heartbeat producer
+ *  period and the consumer time it writes to each drive's 0x1016 sub 1 (ms). */
+#define RRR_COM_MASTER_ID 0x7Fu
+#define RRR_COM_HEARTBEAT_MS 20u
+#define RRR_COM_CONSUMER_MS 100u
+/** A heartbeat of @p node (0x700 + node, DLC 1) in NMT state @p state (0x05: operational). */
+void rrr_com_heartbeat(uint8_t node, uint8_t state, rrr_hil_frame *f);
 /** An expedited SDO download of @p size (1, 2 or 4) bytes of @p value to node:index.sub.
  *  0, or -1 for a size other than 1, 2, 4 or a node outside 1..127. */
 int rrr_com_sdo_download(uint8_t node, uint16_t index, uint8_t sub, uint32_t value,

@@ -88,6 +88,9 @@ typedef struct ctrl {
     uint32_t syncs;          /* SYNCs sent */
     uint32_t sdo_transfers;  /* SDO transfers confirmed */
     int16_t pm_max[3];       /* largest |target torque| sent, per mille */
+    uint32_t late_tpdos;     /* real time: SYNCs whose TPDOs had not all come by the deadline */
+    uint32_t tpdo_n[3][2];   /* real time: TPDO1, TPDO2 of each drive received so far */
+    uint32_t heartbeats;     /* real time: the master's heartbeats sent */
 } ctrl;
 
 static void usage(void)
@@ -107,8 +110,9 @@ static void usage(void)
             "  real time: Sync is not sent (it is the lockstep time base)\n"
             "  --profile canopen: a CANopen master of three CiA 402 drives (node ids --node-ids,\n"
             "  default 1,2,3): NMT, SDO configuration (CST), the 402 state machine to\n"
-            "  OPERATION ENABLED, then one SYNC per period with the target torques (lockstep\n"
-            "  only; docs/canopen.md)\n"
+            "  OPERATION ENABLED, then one SYNC per period with the target torques (lockstep;\n"
+            "  with --realtime: SYNC on the clock every 1 ms, the master's heartbeat (node 127,\n"
+            "  20 ms) and each drive's consumer 0x1016 of it (100 ms); docs/canopen.md)\n"
             RRR_HIL_RT_USAGE
             "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault,\n"
             "  7 completed but the plant's safety policy fired (PlantStatus: a fault latched or\n"
@@ -187,9 +191,14 @@ static int parse_args(int argc, char **argv, opts *o)
         return -1;
     }
     if (o->canopen && o->realtime) {
-        fprintf(stderr, PROG ": --profile canopen runs in lockstep (one SYNC per period): "
-                             "--realtime is not supported with it\n");
-        return -1;
+        for (unsigned j = 0; j < 3u; ++j) {
+            if (o->node_ids[j] == RRR_COM_MASTER_ID) {
+                fprintf(stderr, PROG ": --profile canopen --realtime: node id %u is the master's "
+                                     "own (its heartbeat): give the drives others\n",
+                        (unsigned)RRR_COM_MASTER_ID);
+                return -1;
+            }
+        }
     }
     return 0;
 }
@@ -739,11 +748,171 @@ static int co_period(ctrl *c, const opts *o, const int16_t pm[3], uint32_t k)
     return 0;
 }
 
+/* us before the next release: the real-time master stops waiting for a SYNC's TPDOs, runs the
+ * law on the newest it has and sends the RPDOs (as the Python master's RPDO_GUARD_US). */
+#define CO_RPDO_GUARD_US 200
+
+static int64_t co_ns(const struct timespec *t)
+{
+    return (int64_t)t->tv_sec * 1000000000 + t->tv_nsec;
+}
+
+static int64_t co_now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return co_ns(&ts);
+}
+
+static int co_send_heartbeat(ctrl *c)
+{
+    rrr_hil_frame f;
+    rrr_com_heartbeat(RRR_COM_MASTER_ID, 0x05u, &f);
+    ++c->heartbeats;
+    return send_frame(c, &f, "send the master's heartbeat");
+}
+
+/* Each drive's heartbeat consumer 0x1016 sub 1 of the master (node id << 16 | ms; 0: off). */
+static int co_consumer(ctrl *c, const opts *o, uint32_t ms)
+{
+    int rc = 0;
+    for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
+        rc = co_write(c, o, o->node_ids[j], 0x1016u, 1u,
+                      ms ? ((uint32_t)RRR_COM_MASTER_ID << 16) | ms : 0u, 4u);
+    }
+    return rc;
+}
+
+static int co_tpdos_reach(const ctrl *c, uint32_t want)
+{
+    for (unsigned j = 0; j < 3u; ++j) {
+        if (c->tpdo_n[j][0] < want || c->tpdo_n[j][1] < want) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* The frames of the drives until every TPDO has come k + 1 times (those of SYNC k: a SYNC's
+ * TPDOs that come late are counted, so the next SYNC's are not mistaken for them) or
+ * @p deadline_ns: 1 complete, 0 not (the newest state stays), or an exit status (< 0 negated)
+ * with why set. */
+static int co_take(ctrl *c, const opts *o, int64_t deadline_ns, uint32_t k)
+{
+    while (!co_tpdos_reach(c, k + 1u)) {
+        if (rrr_hil_stop_requested()) {
+            return -interrupted(c);
+        }
+        const int64_t left_us = (deadline_ns - co_now_ns()) / 1000;
+        if (left_us <= 0) {
+            return 0;
+        }
+        rrr_hil_frame f;
+        const rrr_hil_io io = rrr_hil_recv(c->tr, &f, (int)(left_us < 100000 ? left_us : 100000));
+        if (io == RRR_HIL_IO_TIMEOUT) {
+            continue;
+        }
+        if (io != RRR_HIL_IO_OK) {
+            return -plant_lost(c, "receive", io);
+        }
+        uint16_t code = 0;
+        const uint8_t from = rrr_com_emcy(&f, &code);
+        if (from != 0u) {
+            return -end_run(c, RRR_HIL_EXIT_SAFETY, "SYNC %u: EMCY 0x%04X from drive %u",
+                            (unsigned)k, (unsigned)code, (unsigned)from);
+        }
+        for (unsigned j = 0; j < 3u; ++j) {
+            const int r = rrr_com_tpdo(&f, o->node_ids[j], &c->fb[j]);
+            if (r < 0) {
+                ++c->rx_bad[RRR_HIL_RX_BAD_DLC];
+            } else if (r > 0) {
+                ++c->tpdo_n[j][f.id == 0x180u + o->node_ids[j] ? 0 : 1];
+            }
+        }
+    }
+    for (unsigned j = 0; j < 3u; ++j) {
+        if ((c->fb[j].statusword & CO_SW_MASK) != 0x27u) {
+            return -end_run(c, RRR_HIL_EXIT_SAFETY, "SYNC %u: drive %u left OPERATION ENABLED "
+                            "(statusword 0x%04X)", (unsigned)k, (unsigned)o->node_ids[j],
+                            (unsigned)c->fb[j].statusword);
+        }
+        c->q[j] = rrr_com_inc_to_rad(c->fb[j].position_inc, c->increments[j]);
+        c->qd[j] = rrr_com_inc_to_rad(c->fb[j].velocity_inc, c->increments[j]);
+    }
+    ++c->states;
+    return 1;
+}
+
+/* Real time (--realtime): the master's heartbeat (RRR_COM_HEARTBEAT_MS) and the drives'
+ * consumer of it (RRR_COM_CONSUMER_MS); then per period on the rrr_hil_rt clock: the heartbeat
+ * when due, one SYNC at the release, the TPDOs of that SYNC until CO_RPDO_GUARD_US before the
+ * next release (later ones: a late SYNC, the law on the newest state), the law and the RPDOs. */
+static int co_run_realtime(ctrl *c, const opts *o, rrr_hil_rt *rt)
+{
+    int rc = co_send_heartbeat(c);
+    if (rc == 0) {
+        rc = co_consumer(c, o, RRR_COM_CONSUMER_MS);
+    }
+    const int16_t zero[3] = {0, 0, 0};
+    rrr_hil_frame f;
+    for (unsigned j = 0; rc == 0 && j < 3u; ++j) {
+        rrr_com_rpdo1(o->node_ids[j], 0x0Fu, zero[j], &f);
+        rc = send_frame(c, &f, "send RPDO1");
+    }
+    const int64_t period_ns = rt->period_ns;
+    for (size_t k = 0; k < c->ref.n && rc == 0; ++k) {
+        c->k = (uint32_t)k;
+        rrr_hil_rt_wait(rt);
+        const int64_t release = co_ns(&rt->next);
+        if (k % RRR_COM_HEARTBEAT_MS == 0u && k > 0u) {
+            rc = co_send_heartbeat(c);
+        }
+        if (rc == 0) {
+            rrr_com_sync(&f);
+            rc = send_frame(c, &f, "send SYNC");
+        }
+        if (rc != 0) {
+            break;
+        }
+        ++c->syncs;
+        const int got = co_take(c, o, k ? release + period_ns - CO_RPDO_GUARD_US * 1000
+                                        : release + (int64_t)o->timeout_ms * 1000000, (uint32_t)k);
+        if (got < 0) {
+            rc = -got;
+            break;
+        }
+        if (got == 0) {
+            if (k == 0u) {
+                rc = end_run(c, RRR_HIL_EXIT_PEER_LOST, "plant lost: no TPDOs of SYNC 0 within "
+                             "%d ms (--timeout-ms)", o->timeout_ms);
+                break;
+            }
+            ++c->late_tpdos;
+        }
+        rrr_hil_voltage_cmd cmd;
+        command(c, o, k, 1, &cmd);
+        for (unsigned j = 0; rc == 0 && j < 3u && k + 1u < c->ref.n; ++j) {
+            const int16_t pm = rrr_com_torque_pm(cmd.u_V[j], c->model.kt[j], c->rated_mNm[j]);
+            const int16_t a = (int16_t)(pm < 0 ? -pm : pm);
+            if (a > c->pm_max[j]) {
+                c->pm_max[j] = a;
+            }
+            rrr_com_rpdo1(o->node_ids[j], 0x0Fu, pm, &f);
+            rc = send_frame(c, &f, "send RPDO1");
+        }
+        rrr_hil_rt_done(rt);
+    }
+    if (rc == 0) { /* the consumers off before the heartbeat stops */
+        rc = co_consumer(c, o, 0u);
+    }
+    return rc;
+}
+
 /* As the Python master (rrr_robot.hil.canopen_master): boot, configure, enable; the first SYNC
  * gives the initial state (no step); then for k = 0 .. n-1: u_k = ctc(state of SYNC k), the
  * target torques k_t u_k in per mille and, for k < n-1, SYNC k+1. At the end: controlword 0
  * (disable voltage) by SDO and NMT stop; after a failed run NMT stop only, best effort. */
-static int run_canopen(ctrl *c, const opts *o)
+static int run_canopen(ctrl *c, const opts *o, rrr_hil_rt *rt)
 {
     int rc = co_boot(c, o);
     if (rc == 0) {
@@ -752,11 +921,15 @@ static int run_canopen(ctrl *c, const opts *o)
     if (rc == 0) {
         rc = co_enable(c, o);
     }
-    const int16_t zero[3] = {0, 0, 0};
-    if (rc == 0) {
+    if (rt != NULL) {
+        if (rc == 0) {
+            rc = co_run_realtime(c, o, rt);
+        }
+    } else if (rc == 0) {
+        const int16_t zero[3] = {0, 0, 0};
         rc = co_period(c, o, zero, 0u);
     }
-    for (size_t k = 0; k < c->ref.n && rc == 0; ++k) {
+    for (size_t k = 0; rt == NULL && k < c->ref.n && rc == 0; ++k) {
         c->k = (uint32_t)k;
         rrr_hil_voltage_cmd cmd;
         command(c, o, k, 1, &cmd);
@@ -795,11 +968,13 @@ static void co_summary(const ctrl *c, const opts *o, int rc)
            "\"node_ids\": [%u, %u, %u], \"syncs\": %u, \"states\": %u, \"sdo_transfers\": %u, "
            "\"tpdo_bad_length\": %u, \"ctc_failed\": %u, "
            "\"rated_torque_mNm\": [%u, %u, %u], \"increments_per_revolution\": [%u, %u, %u], "
-           "\"target_torque_per_mille_max_abs\": [%d, %d, %d], ",
+           "\"target_torque_per_mille_max_abs\": [%d, %d, %d], \"late_tpdos\": %u, "
+           "\"heartbeats\": %u, ",
            rc, (unsigned)o->node_ids[0], (unsigned)o->node_ids[1], (unsigned)o->node_ids[2],
            c->syncs, c->states, c->sdo_transfers, c->rx_bad[RRR_HIL_RX_BAD_DLC], c->ctc_failed,
            c->rated_mNm[0], c->rated_mNm[1], c->rated_mNm[2], c->increments[0], c->increments[1],
-           c->increments[2], c->pm_max[0], c->pm_max[1], c->pm_max[2]);
+           c->increments[2], c->pm_max[0], c->pm_max[1], c->pm_max[2], c->late_tpdos,
+           c->heartbeats);
     rrr_hil_link_json(stdout, c->tr);
     printf("}\n");
     fflush(stdout);
@@ -903,8 +1078,21 @@ int main(int argc, char **argv)
     if (rrr_hil_link_open(&o.link, &link, o.canopen ? co_ids : dbc_ids, o.canopen ? 15u : 5u,
                           PROG, &frames) == 0) {
         c.tr = &link.base;
-        if (o.canopen) {
-            rc = run_canopen(&c, &o);
+        if (o.canopen && o.realtime) {
+            static rrr_hil_rt rt;
+            if (rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, (uint32_t)c.ref.n, &o.rt, latency_log,
+                                PROG) != 0) {
+                rc = end_run(&c, RRR_HIL_EXIT_SETUP, "out of memory");
+            } else {
+                rc = run_canopen(&c, &o, &rt);
+                printf("RRR_HIL_RT {");
+                rrr_hil_rt_report(&rt, stdout, PROG);
+                printf("}\n");
+                rrr_hil_rt_free(&rt);
+            }
+            latency_log = NULL; /* the real-time loop owns it */
+        } else if (o.canopen) {
+            rc = run_canopen(&c, &o, NULL);
         } else {
             rc = safety_status(&c, o.realtime ? run_realtime(&c, &o, latency_log)
                                               : run_lockstep(&c, &o));

@@ -87,6 +87,7 @@ typedef struct plant {
     double kt[3];         /* torque constants of the plant (u = tau / k_t, eq 8) */
     int synced;           /* the first SYNC in operational was seen (it does not step) */
     uint32_t co_faults;   /* faults latched by the drives over the run */
+    const char *rt_setup; /* --realtime: what rrr_hil_rt_init applied (NULL: lockstep) */
 } plant;
 
 /* What handle() made of a frame. */
@@ -104,7 +105,9 @@ static void usage(void)
             "       [--node-ids a,b,c]\n"
             "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n"
             "  --profile canopen: the axes as three CiA 402 drives (CST) with node ids\n"
-            "  --node-ids (default 1,2,3), stepped by the master's SYNC (docs/canopen.md)\n"
+            "  --node-ids (default 1,2,3), stepped by the master's SYNC (docs/canopen.md);\n"
+            "  with --realtime: SCHED_FIFO, mlockall, the CPU (--fifo, --mlock, --cpu) applied,\n"
+            "  still stepped by each SYNC; the master's heartbeat consumer in wall-clock time\n"
             RRR_HIL_RT_USAGE
             "  exit: 0 end of run (the controller's StopCmd), 1 usage, 2 setup, 3 controller lost,\n"
             "  4 SIGINT/SIGTERM, 5 FMU failed, 6 the controller stopped early, 7 end of run but the\n"
@@ -200,12 +203,13 @@ static int parse_args(int argc, char **argv, opts *o)
         fprintf(stderr, PROG ": --fmu DIR is required\n");
         return -1;
     }
-    if (o->canopen && o->realtime) {
-        fprintf(stderr, PROG ": --profile canopen is stepped by the master's SYNC: --realtime is "
-                             "not supported with it yet\n");
+    if (o->canopen && o->realtime && (o->duration_s > 0.0 || o->rt.latency_log != NULL)) {
+        fprintf(stderr, PROG ": --profile canopen is stepped by the master's SYNC: with "
+                             "--realtime it takes --fifo, --mlock and --cpu only (no --duration, "
+                             "no --latency-log: the SYNC times are in the frame log)\n");
         return -1;
     }
-    if (o->realtime && o->duration_s <= 0.0) {
+    if (o->realtime && !o->canopen && o->duration_s <= 0.0) {
         fprintf(stderr, PROG ": --realtime needs --duration S\n");
         return -1;
     }
@@ -727,6 +731,9 @@ static void co_summary(const plant *p, int rc)
                e->sync_bad, e->out_overflow, e->sdo_timeouts);
     }
     printf("], ");
+    if (p->rt_setup != NULL) {
+        printf("\"rt_setup\": \"%s\", ", p->rt_setup);
+    }
     rrr_hil_link_json(stdout, p->tr);
     printf("}\n");
     fflush(stdout);
@@ -811,8 +818,14 @@ int main(int argc, char **argv)
     }
     p.tr = &link.base;
     if (o.canopen) {
+        static rrr_hil_rt rt; /* --realtime: the setup only (SCHED_FIFO, mlockall, CPU) */
+        if (o.realtime && rrr_hil_rt_init(&rt, RRR_HIL_PERIOD_S, 1u, &o.rt, NULL, PROG) != 0) {
+            return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "out of memory");
+        }
+        p.rt_setup = o.realtime ? rt.setup : NULL;
         p.last_rx_ms = now_ms();
         int rc = run_canopen(&p, &o);
+        rrr_hil_rt_free(&rt);
         if (rc == RRR_HIL_EXIT_OK && p.co_faults != 0u) {
             const size_t n = strlen(p.why);
             (void)snprintf(p.why + n, sizeof p.why - n,

@@ -49,6 +49,9 @@ static void test_frames(void)
     CHECK(f.id == 0u && f.dlc == 2u && f.data[0] == 1u && f.data[1] == 0u);
     rrr_com_sync(&f);
     CHECK(f.id == 0x080u && f.dlc == 0u);
+    rrr_com_heartbeat(RRR_COM_MASTER_ID, 0x05u, &f); /* the real-time master's heartbeat */
+    CHECK(f.id == 0x77Fu && f.dlc == 1u && f.data[0] == 0x05u && !f.extended);
+    CHECK(RRR_COM_HEARTBEAT_MS < RRR_COM_CONSUMER_MS && RRR_COM_CONSUMER_MS <= 0xFFFFu);
     CHECK(rrr_com_sdo_download(ID, 0x6040u, 0u, 0x0Fu, 2u, &f) == 0);
     CHECK(f.data[0] == 0x2Bu && f.data[1] == 0x40u && f.data[2] == 0x60u && f.data[4] == 0x0Fu);
     CHECK(rrr_com_sdo_download(ID, 0x6060u, 0u, 10u, 1u, &f) == 0 && f.data[0] == 0x2Fu);

@@ -200,7 +200,9 @@ def test_master_heartbeat_lost_then_reset_from_fault(rig: Rig) -> None:
     (["--profile", "canopen", "--node-ids", "1,2,128"], "--node-ids: expected three distinct"),
     (["--profile", "canopen", "--node-ids", "1,2.5,3"], "--node-ids: expected three distinct"),
     (["--profile", "canopen", "--realtime", "--duration", "1"],
-     "--realtime is not supported with it yet"),
+     "with --realtime it takes --fifo, --mlock and --cpu only (no --duration"),
+    (["--profile", "canopen", "--realtime", "--latency-log", "x.csv"],
+     "no --latency-log: the SYNC times are in the frame log"),
 ])
 def test_bad_canopen_options_are_refused(args: list[str], message: str) -> None:
     result = subprocess.run([str(node_executable("plant")), "--fmu", "unused",

@@ -312,6 +312,7 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     from ..hil import canopen_master as cm
     from ._progress import Bars, shown
 
+    realtime = _canopen_realtime(args)
     out = check_folder(args.out)
     wc = cm.writing_controller(args.text, args.scenario)
     if args.duration is not None:
@@ -329,18 +330,20 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
                                        wc.controller_values, rs.staging, node_ids=ids,
                                        timeout=args.timeout,
                                        progress=bars.callback("CANopen master (C)"),
-                                       interface=args.interface, channel=args.channel)
+                                       interface=args.interface, channel=args.channel,
+                                       realtime=realtime)
             else:
                 mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd,
                                              wc.controller_model, wc.gains, rs.staging,
                                              node_ids=ids, timeout=args.timeout,
                                              progress=bars.callback("CANopen master"),
-                                             interface=args.interface, channel=args.channel)
+                                             interface=args.interface, channel=args.channel,
+                                             realtime=realtime)
         s = cm.write_master_results(rs, wc, mrun, scenario=args.scenario,
                                     figures=not args.no_figures)
     b, unq = s["bench"], s["unquantised_cosim"]
     drives = ", ".join(str(d.node_id) for d in mrun.drives)
-    print(f"CANopen master ({args.master}; drives {drives}, lockstep, "
+    print(f"CANopen master ({args.master}; drives {drives}, {s['mode']}, "
           f"scenario {s['scenario']}): {s['reference']['periods']} SYNC periods in "
           f"{mrun.run.wall_time:.2f} s; tip error max {1e3 * b['tip_error_max']:.3f} mm, rms "
           f"{1e3 * b['tip_error_rms']:.3f} mm (unquantised {1e3 * unq['tip_error_max']:.3f} mm); "
@@ -348,9 +351,44 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     print(f"  drives: faults {s['faults'].get('faults')}, RPDO timeouts "
           f"{s['missed_commands']}; rated torque "
           f"{', '.join(str(d.rated_torque_mNm) for d in mrun.drives)} mN m")
+    rt = s.get("realtime")
+    if rt is not None:
+        d, sp, jit = rt["drives"], rt["drives"]["sync_period"], rt["drives"]["sync_jitter"]
+        print(f"  real time ({rt['sync_source']} SYNC every {rt['sync_period_ms']:g} ms, master "
+              f"heartbeat {rt['master_heartbeat_ms']} ms, drives' consumer "
+              f"{rt['drive_consumer_ms']} ms): SYNC period at the drives min "
+              f"{sp['min_us']:.1f} / median {sp['median_us']:.1f} / max {sp['max_us']:.1f} us "
+              f"(jitter p99 {jit['p99_us']:.1f}, max {jit['max_us']:.1f} us); "
+              f"{d['deadline_misses']} deadline misses (RPDO after the next SYNC)")
+        m = rt.get("master", {})
+        if "wake_up" in m:
+            w = m["wake_up"]
+            print(f"  master: wake-up latency p50 {w['p50_us']:.1f} us, p99 {w['p99_us']:.1f} "
+                  f"us, max {w['max_us']:.1f} us; {m['rt_deadline_misses']} deadline misses, "
+                  f"{m['late_tpdos']} SYNCs whose TPDOs came after the next; {m['setup']}")
     print(f"results in {out}/ (summary.json, plant.csv, controller.csv, frames.rrrcan, "
           f"frames.blf{'' if args.no_figures else ', figures'})")
     return 0
+
+
+def _canopen_realtime(args: argparse.Namespace) -> Any:
+    """The CanopenRealTime of ``rrr hil canopen --realtime`` (None: lockstep); its options
+    without --realtime are refused."""
+    from ..errors import BadInputError
+    from ..hil.canopen_rt import CanopenRealTime
+
+    if not args.realtime:
+        for option, given in (("--no-fifo", args.no_fifo), ("--spin-us", args.spin_us is not None),
+                              ("--sync-source", args.sync_source is not None)):
+            if given:
+                raise BadInputError(f"{option}: an option of 'rrr hil canopen --realtime'")
+        return None
+    if args.master == "c" and args.sync_source == "canopen":
+        raise BadInputError("--sync-source canopen: the canopen package's SYNC producer is the "
+                            "Python master's (--master python)")
+    return CanopenRealTime(sync_source=args.sync_source or "clock",
+                           fifo=0 if args.no_fifo else 80,
+                           spin_us=DEFAULT_SPIN_US if args.spin_us is None else args.spin_us)
 
 
 def _cmd_busload(args: argparse.Namespace) -> int:
@@ -542,11 +580,26 @@ def register_cli(subparsers: Any) -> None:
                  "configuration (mode CST, rated torque, encoder resolution), the PDO mapping read "
                  "back, BaseNode402 to OPERATION ENABLED, then the computed-torque law of eq 15 in "
                  "lockstep (one SYNC per period, target torques in RPDOs, position and velocity "
-                 "from TPDOs), NMT stop at the end; write summary.json, plant.csv, "
+                 "from TPDOs) or with --realtime (SYNC by the clock every 1 ms), NMT stop at "
+                 "the end; write summary.json, plant.csv, "
                  "controller.csv, the plant's frame log (frames.rrrcan, frames.blf) and the "
                  "figures into --out (docs/canopen.md).",
                  "rrr hil canopen --duration 2 --out results/hil-canopen")
     add_reference_arguments(co)
+    r = co.add_argument_group("real time")
+    r.add_argument("--realtime", action="store_true",
+                   help="SYNC by the clock every 1 ms (not lockstep), the master's heartbeat "
+                   "(20 ms) watched by each drive's consumer 0x1016 (100 ms), the law on the "
+                   "newest TPDOs and the RPDOs before the next SYNC; SCHED_FIFO 80 when "
+                   "permitted; SYNC period jitter and deadline misses in summary.json")
+    r.add_argument("--no-fifo", action="store_true",
+                   help="with --realtime: the default scheduler instead of SCHED_FIFO")
+    r.add_argument("--spin-us", type=spin_us, metavar="N",
+                   help=f"with --realtime: sleep until N us before each SYNC, then spin (0: "
+                   f"sleep only; default {DEFAULT_SPIN_US})")
+    r.add_argument("--sync-source", choices=("clock", "canopen"),
+                   help="with --realtime: clock (the default: the master's own timed loop) or "
+                   "canopen (the package's SYNC producer thread, network.sync.start)")
     g = co.add_argument_group("CANopen")
     g.add_argument("--node-ids", type=node_ids, metavar="A,B,C",
                    help="the drives' node ids, axes 1..3 (default 1,2,3: the plant's)")

@@ -30,6 +30,15 @@ from ..core.outputs import ResultSet
 from ..errors import BadInputError
 from ..writing.trajectory import Reference
 from .bench import BenchRun, LogProgress, boot_up_watch, wait_node
+from .canopen_rt import (
+    CONSUMER_MS,
+    HEARTBEAT_MS,
+    MASTER_ID,
+    CanopenRealTime,
+    RtRecord,
+    realtime_process,
+    run_periods,
+)
 from .cia402 import DEFAULT_NODE_IDS, EDS_PATH
 from .logspec import CONTROLLER_LOG, read_log
 from .nodes import (
@@ -132,6 +141,8 @@ class MasterRun:
     torque_pm: np.ndarray[Any, np.dtype[np.int64]]
     drives: list[DriveInfo]
     plant_summary: dict[str, Any]
+    realtime: CanopenRealTime | None = None  # None: lockstep
+    rt_record: RtRecord | None = None  # the Python master's own timing in real time
 
 
 def _sdo(what: str, node: Any, fn: Callable[[], Any]) -> Any:
@@ -192,6 +203,7 @@ class _Master:
 
         self.plant, self.timeout = plant, timeout
         self.bus = bus
+        self._hb: Any = None  # the master's heartbeat producer (real time)
         self.network = canopen.Network(self.bus)
         drive: Any = canopen.BaseNode402
         self.nodes: list[Any] = [drive(i, str(EDS_PATH)) for i in node_ids]
@@ -282,24 +294,63 @@ class _Master:
                 raise HilError(f"drive {node.id} did not reach OPERATION ENABLED ({exc}): "
                                f"statusword 0x{sw:04X}, error code 0x{code:04X}") from exc
 
-    def period(self, torques: Sequence[int], k: int) -> list[tuple[int, int, int]]:
-        """The RPDOs (controlword 0x0F, target torque), one SYNC, the six TPDOs: per drive
-        (statusword, position, velocity)."""
+    def _bus_failed(self, k: int, exc: Exception) -> HilError:
+        if self.plant is None:
+            return HilError(f"SYNC {k}: the bus failed ({' '.join(str(exc).split())})")
+        self.plant.died(1.0)  # a plant that was killed: give it the time to be reaped
+        lost = ("the plant node " + self.plant.how_it_ended() if not self.plant.running()
+                else "the bus failed")
+        return HilError(f"SYNC {k}: {lost} ({' '.join(str(exc).split())})")
+
+    def send_rpdos(self, torques: Sequence[int], k: int) -> None:
+        """RPDO1 of each drive: controlword 0x0F (enable operation), the target torque."""
         import can
 
         try:
             for node, t in zip(self.nodes, torques, strict=True):
                 node.rpdo[1]["Controlword"].raw = 0x0F
-                node.rpdo[1]["Target torque"].raw = t
+                node.rpdo[1]["Target torque"].raw = int(t)
                 node.rpdo[1].transmit()
+        except (can.CanError, OSError) as exc:
+            raise self._bus_failed(k, exc) from exc
+
+    def send_sync(self, k: int) -> None:
+        """One SYNC."""
+        import can
+
+        try:
             self.network.sync.transmit()
         except (can.CanError, OSError) as exc:
-            if self.plant is None:
-                raise HilError(f"SYNC {k}: the bus failed ({' '.join(str(exc).split())})") from exc
-            self.plant.died(1.0)  # a plant that was killed: give it the time to be reaped
-            lost = ("the plant node " + self.plant.how_it_ended() if not self.plant.running()
-                    else "the bus failed")
-            raise HilError(f"SYNC {k}: {lost} ({' '.join(str(exc).split())})") from exc
+            raise self._bus_failed(k, exc) from exc
+
+    def next_frame(self, timeout: float, what: str) -> tuple[int, bytes] | None:
+        """The next frame of the drives within ``timeout`` s (None after it)."""
+        return self._next(time.monotonic() + timeout, what)
+
+    def start_heartbeat(self, master_id: int, period_ms: int, consumer_ms: int) -> None:
+        """The master's heartbeat producer (0x700 + ``master_id``, NMT state operational, every
+        ``period_ms``) and each drive's consumer 0x1016 sub 1 of it (``consumer_ms``)."""
+        self._hb = self.network.send_periodic(0x700 + master_id, bytes([0x05]),
+                                              period_ms * 1e-3)
+        for node in self.nodes:
+            def put(node: Any = node) -> None:
+                node.sdo[0x1016][1].raw = (master_id << 16) | consumer_ms
+
+            _sdo(f"write 0x1016 sub 1 (consumer of node {master_id}, {consumer_ms} ms)", node,
+                 put)
+
+    def stop_heartbeat(self) -> None:
+        """The master's heartbeat stops (fault injection: the drives' consumer must fault)."""
+        hb = self._hb
+        if hb is not None:
+            hb.stop()
+            self._hb = None
+
+    def period(self, torques: Sequence[int], k: int) -> list[tuple[int, int, int]]:
+        """The RPDOs (controlword 0x0F, target torque), one SYNC, the six TPDOs: per drive
+        (statusword, position, velocity)."""
+        self.send_rpdos(torques, k)
+        self.send_sync(k)
         got: dict[int, bytes] = {}
         deadline = time.monotonic() + self.timeout
         while len(got) < 2 * len(self.nodes):
@@ -325,25 +376,38 @@ class _Master:
         return out
 
     def finish(self) -> None:
-        """Disable the drives (controlword 0 by SDO), NMT stop, hang up."""
+        """Disable the drives (controlword 0 by SDO); with the master's heartbeat running, the
+        drives' consumer 0x1016 off and then the heartbeat; NMT stop."""
         for node in self.nodes:
             _write(node, 0x6040, 0)  # disable voltage
+        if self._hb is not None:
+            for node in self.nodes:
+                def off(node: Any = node) -> None:
+                    node.sdo[0x1016][1].raw = 0
+
+                _sdo("write 0x1016 sub 1 = 0 (consumer off)", node, off)
+            self.stop_heartbeat()
         self.network.nmt.send_command(0x02)
         time.sleep(0.05)
 
     def close(self) -> None:
         with contextlib.suppress(Exception):
+            self.stop_heartbeat()
+        with contextlib.suppress(Exception):
             self.network.disconnect()
 
 
 def _start_drives(q_ref: FloatArray, qd_ref: FloatArray, work: Path,
-                  socketcan: str | None) -> NodeProcess:
+                  socketcan: str | None, fifo: int | None = None) -> NodeProcess:
     """``rrr_hil_plant --profile canopen`` at (q_ref[0], qd_ref[0]), logging ``work``/plant.csv
-    and NODE_FRAMES; on the SocketCAN interface ``socketcan``, or as socketcand server."""
+    and NODE_FRAMES; on the SocketCAN interface ``socketcan``, or as socketcand server.
+    ``fifo`` (real time): ``--realtime --mlock`` and SCHED_FIFO ``fifo`` (0: none)."""
     idle = ["--idle-timeout-ms", str(IDLE_MS_SOCKETCAN)] if socketcan else []
+    rt = [] if fifo is None else ["--realtime", "--mlock", *(["--fifo", str(fifo)] if fifo
+                                                             else [])]
     return start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=work / "plant.csv",
                        frame_log=work / NODE_FRAMES, socketcan=socketcan,
-                       extra=["--profile", "canopen", *idle])
+                       extra=["--profile", "canopen", *idle, *rt])
 
 
 def _check_run(t: FloatArray, q_ref: FloatArray, node_ids: Sequence[int], interface: str) -> None:
@@ -363,7 +427,8 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                        qdd_ref: FloatArray, model: Model, gains: CtcGains, work: Path, *,
                        node_ids: Sequence[int] = DEFAULT_NODE_IDS, timeout: float = 5.0,
                        progress: Progress | None = None, interface: str = "socketcand",
-                       channel: str = "vcan0") -> MasterRun:
+                       channel: str = "vcan0", realtime: CanopenRealTime | None = None,
+                       ) -> MasterRun:
     """Start ``rrr_hil_plant --profile canopen`` (logs ``work``/plant.csv and the frame log
     NODE_FRAMES, the arm at q_ref[0],
     qd_ref[0]) and master its drives ``node_ids`` along the reference with the computed-torque
@@ -372,8 +437,16 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     is the server on loopback TCP) or ``socketcan`` (both on the SocketCAN interface
     ``channel``, python-can's socketcan interface under ``canopen.Network``; the plant ends
     IDLE_MS_SOCKETCAN after the master's NMT stop). HilError when a drive does not boot or
-    enable, on an SDO abort, a lost plant or a timeout (``timeout`` s per wait)."""
+    enable, on an SDO abort, a lost plant or a timeout (``timeout`` s per wait).
+
+    ``realtime`` (canopen_rt): SYNC by the clock every period instead of lockstep, the master's
+    heartbeat watched by the drives (0x1016), the law on the newest TPDOs and the RPDOs before
+    the next SYNC; the run's timing in ``MasterRun.realtime``."""
     _check_run(t, q_ref, node_ids, interface)
+    if realtime is not None and MASTER_ID in node_ids:
+        raise BadInputError(f"node id {MASTER_ID} is the master's own (its heartbeat) in real "
+                            "time: give the drives others")
+    rec: RtRecord | None = None
     n = t.shape[0]
     kt = [float(v) for v in model.kt]
     q_rec, qd_rec, out = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 9))
@@ -383,21 +456,25 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     # SocketCAN: the master's socket first, so that the plant's power-on boot-ups reach it
     bus = open_bus("socketcan", channel=channel) if sc else None
     try:
-        plant = _start_drives(q_ref, qd_ref, Path(work), channel if sc else None)
+        plant = _start_drives(q_ref, qd_ref, Path(work), channel if sc else None,
+                              None if realtime is None else realtime.fifo)
     except BaseException:
         if bus is not None:
             bus.shutdown()
         raise
-    with plant:
+    # real time from here (after the plant's start): the master's threads
+    rec = None if realtime is None else RtRecord()
+    with plant, (contextlib.nullcontext() if rec is None or realtime is None
+                 else realtime_process(realtime, rec)):
         master = _Master(bus if sc else open_bus("socketcand", port=int(plant.port or 0)),
                          plant, node_ids, timeout)
         try:
             master.boot(power_on=sc)
             drives = master.configure()
             master.enable()
-            every = max(1, n // 100)
-            fb = master.period([0, 0, 0], 0)  # the first SYNC: the initial state, no step
-            for k in range(n):
+            def law(k: int, fb: list[tuple[int, int, int]]) -> list[int]:
+                """u_k of the newest TPDOs (SYNC k), the target torques in per mille; the
+                rows of SYNCs the master did not answer (real time) hold the last values."""
                 for j, d in enumerate(drives):
                     q_rec[k, j] = inc_to_rad(fb[j][1], d.increments)
                     qd_rec[k, j] = inc_to_rad(fb[j][2], d.increments)
@@ -406,10 +483,27 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                 out[k, 0:3], out[k, 3:6], out[k, 6:9] = u, u_n, u_c
                 pm[k] = [torque_per_mille(float(u[j]), kt[j], d.rated_torque_mNm)
                          for j, d in enumerate(drives)]
-                if k < n - 1:
-                    fb = master.period([int(v) for v in pm[k]], k + 1)
-                if progress is not None and (k % every == 0 or k == n - 1):
-                    progress(k + 1, n)
+                first = filled[0] + 1
+                if first < k:
+                    for a in (q_rec, qd_rec, out, pm):
+                        a[first:k] = a[first - 1] if first else a[k]
+                filled[0] = k
+                return [int(v) for v in pm[k]]
+
+            filled = [-1]
+            if realtime is None:
+                every = max(1, n // 100)
+                fb = master.period([0, 0, 0], 0)  # the first SYNC: the initial state, no step
+                for k in range(n):
+                    torques = law(k, fb)
+                    if k < n - 1:
+                        fb = master.period(torques, k + 1)
+                    if progress is not None and (k % every == 0 or k == n - 1):
+                        progress(k + 1, n)
+            else:
+                assert rec is not None
+                master.start_heartbeat(MASTER_ID, realtime.heartbeat_ms, realtime.consumer_ms)
+                run_periods(master, n, law, realtime, rec, progress)
             master.finish()
         finally:
             master.close()
@@ -421,20 +515,33 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
                    controller_summary={"exit": 0, "profile": "canopen", "transport": interface,
                                        "node_ids": list(node_ids)},
                    u_n=out[:, 3:6], u_c=out[:, 6:9], wall_time=time.perf_counter() - start)
-    return MasterRun(run, pm, drives, summary)
+    return MasterRun(run, pm, drives, summary, realtime, rec)
 
 
 def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
                  model: Model, controller_values: Mapping[str, float | bool], work: Path, *,
                  node_ids: Sequence[int] = DEFAULT_NODE_IDS, timeout: float = 5.0,
                  progress: Progress | None = None, interface: str = "socketcand",
-                 channel: str = "vcan0") -> MasterRun:
+                 channel: str = "vcan0", realtime: CanopenRealTime | None = None) -> MasterRun:
     """As :func:`run_canopen_master`, with the C controller node as the master
     (``rrr_hil_controller --profile canopen``: the same NMT, SDO and 402 sequence, the core's
     computed-torque law with the controller FMU's ``controller_values``, one SYNC per period).
     ``model`` is the same controller model (its k_t give the target torques of the log's u).
-    HilError when a node fails: the C master's exit status and its reason."""
+    HilError when a node fails: the C master's exit status and its reason. ``realtime``: the C
+    master's ``--realtime`` (its rrr_hil_rt clock, SCHED_FIFO ``realtime.fifo`` and mlockall
+    when permitted, the spin; the SYNC source is its clock, the heartbeat and consumer times are
+    the C master's RRR_COM_HEARTBEAT_MS / RRR_COM_CONSUMER_MS, the same 20 ms and 100 ms), and
+    the plant's."""
     _check_run(t, q_ref, node_ids, interface)
+    if realtime is not None and (realtime.sync_source != "clock"
+                                 or realtime.heartbeat_stop_at is not None
+                                 or (realtime.heartbeat_ms, realtime.consumer_ms)
+                                 != (HEARTBEAT_MS, CONSUMER_MS)):
+        raise BadInputError("the C master in real time: SYNC by its own clock, heartbeat "
+                            f"{HEARTBEAT_MS} ms and consumer {CONSUMER_MS} ms only")
+    if realtime is not None and MASTER_ID in node_ids:
+        raise BadInputError(f"node id {MASTER_ID} is the master's own (its heartbeat) in real "
+                            "time: give the drives others")
     n = t.shape[0]
     sc = interface == "socketcan"
     start = time.perf_counter()
@@ -444,13 +551,17 @@ def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: 
         with contextlib.ExitStack() as stack:
             boot = 0x700 + DEFAULT_NODE_IDS[0]  # the plant's first drive
             watch = stack.enter_context(boot_up_watch(channel, boot_id=boot)) if sc else None
-            plant = stack.enter_context(_start_drives(q_ref, qd_ref, Path(work),
-                                                      channel if sc else None))
+            plant = stack.enter_context(_start_drives(
+                q_ref, qd_ref, Path(work), channel if sc else None,
+                None if realtime is None else realtime.fifo))
             if watch is not None:
                 wait_for_boot_up(watch, plant, boot_id=boot)
             extra = ["--profile", "canopen", "--node-ids", ",".join(str(i) for i in node_ids),
                      "--timeout-ms", str(round(timeout * 1000)),
                      *controller_node_args(controller_values)]
+            if realtime is not None:
+                extra += ["--realtime", "--mlock", "--spin-us", str(realtime.spin_us),
+                          *(["--fifo", str(realtime.fifo)] if realtime.fifo else [])]
             ctrl = stack.enter_context(start_controller(
                 ref_csv, connect=f"127.0.0.1:{plant.port}", log_csv=ctrl_log, extra=extra,
                 socketcan=channel if sc else None))
@@ -474,7 +585,7 @@ def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: 
     run = BenchRun(t=t, q=c.group("q"), qd=c.group("qd"), u=u, plant_summary=ps,
                    controller_summary={**cs, "transport": interface, "master": "c"},
                    u_n=c.group("u_n"), u_c=c.group("u_c"), wall_time=time.perf_counter() - start)
-    return MasterRun(run, pm, drives, ps)
+    return MasterRun(run, pm, drives, ps, realtime)
 
 
 @dataclass(frozen=True)
@@ -540,11 +651,27 @@ def write_master_results(rs: ResultSet, wc: WritingController, mrun: MasterRun, 
     # the drives' faults and missed commands (RPDO timeouts), in the DBC plant's keys
     plant = {**mrun.plant_summary, "faults": mrun.plant_summary.get("drive_faults"),
              "cmd_missed": sum(int(d.get("rpdo_timeouts", 0)) for d in drives)}
-    summary = bench_summary(side="canopen", mode="lockstep", scenario=scenario, ref=wc.ref,
-                            bench=bench, unquantised=unq, plant=plant,
-                            controller=mrun.run.controller_summary, bus=bus)
+    realtime, latencies = None, None
+    if mrun.realtime is not None:
+        from .canopen_rt import frame_log_timing, realtime_summary
+
+        realtime = realtime_summary(mrun.realtime, mrun.rt_record,
+                                    frame_log_timing(records, [d.node_id for d in mrun.drives]),
+                                    mrun.run.controller_summary
+                                    if mrun.run.controller_summary.get("master") == "c" else None,
+                                    mrun.plant_summary.get("rt_setup"))
+        bus["sync_periods"] = realtime["drives"]["syncs"]
+        wake = realtime.get("master", {}).get("wake_up")
+        if mrun.rt_record is not None and mrun.rt_record.latency_ns:
+            latencies = {"master": np.asarray(mrun.rt_record.latency_ns, dtype=float)}
+    summary = bench_summary(side="canopen", mode="lockstep" if realtime is None else "realtime",
+                            scenario=scenario, ref=wc.ref, bench=bench, unquantised=unq,
+                            plant=plant, controller=mrun.run.controller_summary, bus=bus,
+                            realtime=realtime)
     if figures:
         from .figures import write_bench_figures
 
-        write_bench_figures(work, wc.ref, bench, unq, scenario=scenario)
+        write_bench_figures(work, wc.ref, bench, unq, latencies,
+                            {"master": wake} if latencies and wake else None,
+                            scenario=scenario)
     return write_summary(rs, summary)
