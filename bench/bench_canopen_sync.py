@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -27,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from _quick import add_quick, apply_quick
-from _timing import logger
+from _timing import logger, mmm
 
 #: The rows: (name, the options of rrr hil canopen --realtime).
 SOURCES = {"clock": ["--sync-source", "clock"], "canopen": ["--sync-source", "canopen"],
@@ -49,7 +48,7 @@ def _run(rrr: list[str], source: str, duration: float, out: Path) -> dict[str, A
 def _span(values: list[float]) -> str:
     if not values:
         return "-"
-    return f"{min(values):.0f} / {statistics.median(values):.0f} / {max(values):.0f}"
+    return mmm(values, ".0f")
 
 
 def main() -> int:
