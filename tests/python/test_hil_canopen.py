@@ -112,6 +112,16 @@ def _boot_and_enable(rig: Rig) -> None:
         rig.tpdos.get_nowait()
 
 
+def _shut_down(rig: Rig) -> dict[str, Any]:
+    """Disable voltage on every drive, NMT stop, hang up: the plant's summary."""
+    for node in rig.nodes:
+        node.sdo[0x6040].raw = 0x00
+    rig.network.nmt.state = "STOPPED"
+    time.sleep(0.1)
+    rig.network.disconnect()
+    return rig.plant.wait(30)
+
+
 def _period(rig: Rig, torques: list[int]) -> dict[int, bytes]:
     """One lockstep period: the RPDOs (controlword 0x0F, target torque), one SYNC, the six
     TPDOs of that SYNC."""
@@ -262,12 +272,7 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
     node.check_statusword()
     assert node.state == "OPERATION ENABLED"  # none of it is a fault
     _stop_cycle(rig)
-    for n in rig.nodes:
-        n.sdo[0x6040].raw = 0
-    rig.network.nmt.state = "STOPPED"
-    time.sleep(0.1)
-    rig.network.disconnect()
-    summary = rig.plant.wait(30)
+    summary = _shut_down(rig)
     assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
     drive1 = summary["drives"][0]
     assert drive1["nmt_ignored"] == 2 and drive1["sync_bad"] == 1 and drive1["rpdo_short"] == 1
@@ -297,12 +302,7 @@ def test_a_segmented_transfer_left_hanging_is_aborted_by_the_server(rig: Rig) ->
     node = rig.nodes[1]
     assert node.sdo[0x1008].raw == "RRR simulated CiA 402 axis"  # the next transfer works
     assert node.state == "OPERATION ENABLED"  # an SDO timeout is no drive fault
-    for n in rig.nodes:
-        n.sdo[0x6040].raw = 0
-    rig.network.nmt.state = "STOPPED"
-    time.sleep(0.1)
-    rig.network.disconnect()
-    summary = rig.plant.wait(30)
+    summary = _shut_down(rig)
     assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
     drive2 = summary["drives"][1]
     assert drive2["sdo_timeouts"] == 1
@@ -378,12 +378,7 @@ def test_a_drive_fault_latches_0_V_until_the_402_fault_reset(fault: str, rig: Ri
     assert any(e.code == 0x0000 for e in node.emcy.log)  # the error-reset EMCY
     for _ in range(3):
         _cycle(rig, t, on)
-    for n in rig.nodes:
-        n.sdo[0x6040].raw = 0x00
-    rig.network.nmt.state = "STOPPED"
-    time.sleep(0.1)
-    rig.network.disconnect()
-    summary = rig.plant.wait(30)
+    summary = _shut_down(rig)
     assert summary["exit"] == 7, rig.plant.stderr  # completed, but the safety policy fired
     d = summary["drives"][1]
     assert d["faults"] == 1 and d["fault_resets"] == 1 and summary["drive_faults"] == 1, d
@@ -413,12 +408,7 @@ def test_quick_stop_holds_0_V_until_enable_operation(rig: Rig) -> None:
     assert _sw(got, 3) & 0x6F == 0x27  # enable operation: back to OPERATION ENABLED
     _cycle(rig, t, [0x0F] * 3)
     assert not node.emcy.log
-    for n in rig.nodes:
-        n.sdo[0x6040].raw = 0x00
-    rig.network.nmt.state = "STOPPED"
-    time.sleep(0.1)
-    rig.network.disconnect()
-    summary = rig.plant.wait(30)
+    summary = _shut_down(rig)
     assert summary["exit"] == 0 and summary["drive_faults"] == 0, rig.plant.stderr
     log = np.loadtxt(rig.log_path, delimiter=",", skiprows=1, ndmin=2)
     u3 = log[-4:, 10]
@@ -478,12 +468,7 @@ def test_quick_stop_option_and_max_torque_written_by_sdo(rig: Rig) -> None:
     states = [_sw(_cycle(rig, t, [0x0F, cw, 0x0F]), 2) for cw in (0x80, 0x06, 0x07, 0x0F, 0x0F)]
     assert [s & 0x6F for s in states] == [0x40, 0x21, 0x23, 0x27, 0x27], [hex(s) for s in states]
     assert n2.sdo[0x1001].raw == 0 and [e.code for e in n2.emcy.log] == [0x6320, 0x0000]
-    for node in rig.nodes:
-        node.sdo[0x6040].raw = 0x00
-    rig.network.nmt.state = "STOPPED"
-    time.sleep(0.1)
-    rig.network.disconnect()
-    summary = rig.plant.wait(30)
+    summary = _shut_down(rig)
     assert summary["exit"] == 7, rig.plant.stderr  # drive 2 latched a fault
     d1, d2, d3 = summary["drives"]
     assert (d2["faults"], d2["fault_resets"], d2["zero_periods"]) == (1, 1, 4), d2  # B, below

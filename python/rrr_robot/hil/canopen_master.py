@@ -36,6 +36,7 @@ from .canopen_rt import (
     MASTER_ID,
     CanopenRealTime,
     RtRecord,
+    decode_feedback,
     realtime_process,
     run_periods,
 )
@@ -63,7 +64,6 @@ MODE_CST = 10
 EXPECTED_MAPPING = {"RPDO1": [(0x6040, 16), (0x6071, 16)],
                     "TPDO1": [(0x6041, 16), (0x6064, 32)],
                     "TPDO2": [(0x606C, 32), (0x6077, 16)]}
-_SW_MASK, _SW_ENABLED = 0x6F, 0x27  # statusword: OPERATION ENABLED
 #: The plant node's own frame log (hil_framelog.h: every frame it sent and received), and the
 #: standard frame log written from it.
 NODE_FRAMES = "frames.rrrcan"
@@ -364,16 +364,7 @@ class _Master:
                                f"from drive {cob - 0x80}")
             if (cob & 0x780) in (0x180, 0x280):
                 got[cob] = data
-        out = []
-        for node in self.nodes:
-            t1, t2 = got[0x180 + node.id], got[0x280 + node.id]
-            sw = int.from_bytes(t1[0:2], "little")
-            if sw & _SW_MASK != _SW_ENABLED:
-                raise HilError(f"SYNC {k}: drive {node.id} left OPERATION ENABLED (statusword "
-                               f"0x{sw:04X})")
-            out.append((sw, int.from_bytes(t1[2:6], "little", signed=True),
-                        int.from_bytes(t2[0:4], "little", signed=True)))
-        return out
+        return decode_feedback(k, [node.id for node in self.nodes], got)
 
     def finish(self) -> None:
         """Disable the drives (controlword 0 by SDO); with the master's heartbeat running, the

@@ -41,7 +41,25 @@ MASTER_ID = 0x7F
 #: 301 wants the consumer time above the producer's; 5 heartbeats may be lost before a fault.
 HEARTBEAT_MS = 20
 CONSUMER_MS = 100
-_SW_MASK, _SW_ENABLED = 0x6F, 0x27
+_SW_MASK, _SW_ENABLED = 0x6F, 0x27  # statusword: OPERATION ENABLED
+
+
+def decode_feedback(k: int, node_ids: Sequence[int], tpdos: dict[int, bytes]
+                    ) -> list[tuple[int, int, int]]:
+    """(statusword, position 0x6064, velocity 0x606C) of each drive from its TPDO1 and TPDO2
+    (``tpdos`` by COB-ID); HilError naming SYNC ``k`` if a drive left OPERATION ENABLED."""
+    out = []
+    for node in node_ids:
+        t1, t2 = tpdos[0x180 + node], tpdos[0x280 + node]
+        sw = int.from_bytes(t1[0:2], "little")
+        if sw & _SW_MASK != _SW_ENABLED:
+            raise HilError(f"SYNC {k}: drive {node} left OPERATION ENABLED (statusword "
+                           f"0x{sw:04X})")
+        out.append((sw, int.from_bytes(t1[2:6], "little", signed=True),
+                    int.from_bytes(t2[0:4], "little", signed=True)))
+    return out
+
+
 #: us before the next release: the clock's master stops waiting for a SYNC's TPDOs, runs the law
 #: on the newest there are and sends the RPDOs (they must reach the drives before the SYNC)
 RPDO_GUARD_US = 200
@@ -286,16 +304,7 @@ def run_periods(master: Any, n: int, law: Law, rt: CanopenRealTime, rec: RtRecor
         return True
 
     def feedback(k: int) -> list[tuple[int, int, int]]:
-        out = []
-        for node in nodes:
-            t1, t2 = newest[0x180 + node.id], newest[0x280 + node.id]
-            sw = int.from_bytes(t1[0:2], "little")
-            if sw & _SW_MASK != _SW_ENABLED:
-                raise HilError(f"SYNC {k}: drive {node.id} left OPERATION ENABLED (statusword "
-                               f"0x{sw:04X})")
-            out.append((sw, int.from_bytes(t1[2:6], "little", signed=True),
-                        int.from_bytes(t2[0:4], "little", signed=True)))
-        return out
+        return decode_feedback(k, [node.id for node in nodes], newest)
 
     def maybe_stop_heartbeat(k: int) -> None:
         if (rt.heartbeat_stop_at is not None and k >= rt.heartbeat_stop_at
