@@ -85,6 +85,15 @@ def spin_us(text: str) -> int:
     return value
 
 
+def _add_rt_tuning(group: argparse._ArgumentGroup, before: str) -> None:
+    """--no-fifo and --spin-us of a real-time run (the spin ends at each ``before``)."""
+    group.add_argument("--no-fifo", action="store_true",
+                       help="with --realtime: the default scheduler instead of SCHED_FIFO")
+    group.add_argument("--spin-us", type=spin_us, metavar="N",
+                       help=f"with --realtime: sleep until N us before each {before}, then spin "
+                       f"(0: sleep only; default {DEFAULT_SPIN_US})")
+
+
 def _writing_setup(text: str | None, scenario: str,
                    ) -> tuple[Reference, dict[str, float | bool], Model]:
     """The writing reference, the controller values of a scenario and the model (default
@@ -500,11 +509,7 @@ def add_realtime_arguments(p: argparse.ArgumentParser) -> None:
                    help="both C nodes in real time at 1 kHz (SCHED_FIFO 80, mlockall, one CPU "
                    "each, sleep-then-spin: each when permitted, with a warning and the "
                    "fallback otherwise); latency figures in summary.json (default: lockstep)")
-    g.add_argument("--no-fifo", action="store_true",
-                   help="with --realtime: the default scheduler instead of SCHED_FIFO")
-    g.add_argument("--spin-us", type=spin_us, metavar="N",
-                   help=f"with --realtime: sleep until N us before each release, then spin (0: "
-                   f"sleep only; default {DEFAULT_SPIN_US})")
+    _add_rt_tuning(g, "release")
 
 
 _RESULTS = ("summary.json (the writing task's metrics, the difference to the unquantised "
@@ -592,11 +597,7 @@ def register_cli(subparsers: Any) -> None:
                    "(20 ms) watched by each drive's consumer 0x1016 (100 ms), the law on the "
                    "newest TPDOs and the RPDOs before the next SYNC; SCHED_FIFO 80 when "
                    "permitted; SYNC period jitter and deadline misses in summary.json")
-    r.add_argument("--no-fifo", action="store_true",
-                   help="with --realtime: the default scheduler instead of SCHED_FIFO")
-    r.add_argument("--spin-us", type=spin_us, metavar="N",
-                   help=f"with --realtime: sleep until N us before each SYNC, then spin (0: "
-                   f"sleep only; default {DEFAULT_SPIN_US})")
+    _add_rt_tuning(r, "SYNC")
     r.add_argument("--sync-source", choices=("clock", "canopen"),
                    help="with --realtime: clock (the default: the master's own timed loop) or "
                    "canopen (the package's SYNC producer thread, network.sync.start)")
