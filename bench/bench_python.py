@@ -5,7 +5,9 @@ Pinocchio's and the Robotics Toolbox's Python APIs, on the same robot and the sa
 Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk`` against
 ``ets.eval``; ``Model.ik`` (every branch) against ``ets.ik_LM`` (one solution);
 ``Model.forward_dynamics`` against ``accel``; a batch of 1e5 states of ``Model.inverse_dynamics``
-against the Robotics Toolbox's batch ``rne`` and against librrr's ``rrr_inverse_dynamics`` in a
+against the Robotics Toolbox's batch ``rne``, written into a reused array (``out=``) and into a
+new one, with the minor page faults per call of ours (the first write of fresh memory), and
+against librrr's ``rrr_inverse_dynamics`` in a
 plain C loop (bench/batch_floor.c, built with the system C compiler against the package's librrr.so:
 the floor of the scalar batch); the batch's vector kernels (``simd="auto"``: AVX-512 or AVX2 where
 the CPU has them) against its scalar path, and so for the regressor, FK, forward dynamics and
@@ -36,6 +38,7 @@ import datetime as dt
 import json
 import os
 import platform
+import resource
 import shutil
 import subprocess
 import sys
@@ -76,13 +79,21 @@ class Pair:
     ref_ns: list[float] = field(default_factory=list)
     agreement: str = ""
     clock: Callable[[], int] = time.thread_time_ns
+    count_faults: bool = False  # report ours' minor page faults per call
+
+    ours_faults: list[float] = field(default_factory=list)
 
     def block(self, fn: Callable[[int], object]) -> float:
-        """ns per item of one block."""
+        """ns per item of one block (for ours, also the minor page faults per call)."""
+        f0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
         t0 = self.clock()
         for k in range(self.calls):
             fn(k)
-        return (self.clock() - t0) / (self.calls * self.per)
+        t1 = self.clock()
+        if fn is self.ours:
+            faults = resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0
+            self.ours_faults.append(faults / self.calls)
+        return (t1 - t0) / (self.calls * self.per)
 
     def run(self, repeats: int) -> None:
         for k in range(min(self.calls, 20)):  # warm-up
@@ -194,6 +205,10 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
     batch_scalar = model.inverse_dynamics(bq, bqd, bqdd, simd="scalar")
     simd_diff = float(np.abs(batch_ours - batch_scalar).max())
     batch_rne = np.asarray(robot.rne(bq, bqd, bqdd), dtype=float)
+    batch_out = np.empty_like(bq)
+    batch_into = model.inverse_dynamics(bq, bqd, bqdd, out=batch_out).copy()
+    if batch_into.tobytes() != batch_ours.tobytes():
+        sys.exit("bench_python: inverse_dynamics into out= differs from the new array's result")
     lm_err, lm_solved = 0.0, 0
     for k in range(min(n, 200)):
         sol = ik_lm(k)
@@ -228,12 +243,17 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
              lambda k: robot.accel(*fd_rows[k % n]), max(per_call // 20, 10),
              agreement=f"{np.abs(fd_accel - fd_ours[: len(fd_accel)]).max():.1e} (RTB), "
                        f"{np.abs(fd_ours - qdd).max():.1e} (qdd back)"),
-        Pair(f"tau = R p, batch of {nb:,} states (per state)",
-             f"Model.inverse_dynamics ({simd_best()})",
-             lambda k: model.inverse_dynamics(bq, bqd, bqdd), "RTB rne (batch)",
+        Pair(f"tau = R p, batch of {nb:,} states (per state), into out= (the result array "
+             "reused)", f"Model.inverse_dynamics ({simd_best()}, out=)",
+             lambda k: model.inverse_dynamics(bq, bqd, bqdd, out=batch_out), "RTB rne (batch)",
              lambda k: robot.rne(bq, bqd, bqdd), 1, per=nb,
              target="<= 15 ns and >= 5x", target_ratio=5.0, target_ns=15.0,
-             agreement=f"{np.abs(batch_ours - batch_rne).max():.1e}"),
+             agreement=f"{np.abs(batch_into - batch_rne).max():.1e}", count_faults=True),
+        Pair(f"tau = R p, batch of {nb:,} states (per state), a new result array",
+             f"Model.inverse_dynamics ({simd_best()})",
+             lambda k: model.inverse_dynamics(bq, bqd, bqdd), "RTB rne (batch)",
+             lambda k: robot.rne(bq, bqd, bqdd), 1, per=nb, target=">= 5x", target_ratio=5.0,
+             agreement=f"{np.abs(batch_ours - batch_rne).max():.1e}", count_faults=True),
         Pair(f"tau = R p, batch of {nb:,} states (per state): vector kernels against scalar",
              f"Model.inverse_dynamics ({simd_best()})",
              lambda k: model.inverse_dynamics(bq, bqd, bqdd), "Model.inverse_dynamics "
@@ -397,6 +417,9 @@ def main(argv: list[str] | None = None) -> int:
             log(f"{p.operation}: {args.repeats} interleaved repeats")
             p.clock = CLOCKS[args.clock]
             p.run(args.repeats)
+            if p.count_faults:
+                p.agreement += (f"; minor page faults per call of ours: "
+                                f"{mmm(p.ours_faults[-args.repeats:], lambda v: f'{v:,.0f}')}")
     load_end = " ".join(f"{v:.2f}" for v in os.getloadavg())
 
     print(f"Python API benchmark, {dt.datetime.now().isoformat(timespec='seconds')}, "

@@ -50,6 +50,13 @@
 #define NJ 3
 #define MAX_IN 5
 #define MAX_OUT 3
+
+/* The few helpers of every one-state call, inlined into it (GCC and Clang). */
+#if defined(__GNUC__)
+#define HOT_INLINE __attribute__((always_inline)) inline
+#else
+#define HOT_INLINE inline
+#endif
 /** Batches of at least this many rows release the GIL while they run. */
 #define RRR_EXT_NOGIL_ROWS 1000
 
@@ -102,6 +109,8 @@ static PyObject *g_status_names;  /* rrr_robot.core._status.STATUS_NAMES (tuple)
 static PyObject *g_status_errors; /* rrr_robot.core._status.ERRORS (dict: status -> class) */
 static PyObject *g_status_meaning;/* rrr_robot.core._status.MEANING (dict: status -> str) */
 static PyObject *g_branch_names;  /* tuple of the four (shoulder, elbow) name tuples */
+static PyObject *g_refuse;        /* rrr_robot.core.batch.refuse: the error of a bad simd= */
+static PyObject *g_simd_names[RRR_SIMD_AVX512 + 1]; /* interned "auto" ... "avx512" by value */
 
 static double *array_data(PyObject *arr)
 {
@@ -892,8 +901,46 @@ static PyObject *pack_outputs(PyObject **arrays, int n_out)
     return tuple;
 }
 
+/* Output arrays given by the caller (out=): held as buffer views while the call writes them. */
+typedef struct {
+    int given;
+    PyObject *obj[MAX_OUT];
+    Py_buffer view[MAX_OUT];
+    int held;
+} out_args;
+
+static void out_release(out_args *o)
+{
+    for (int j = 0; j < o->held; ++j) {
+        PyBuffer_Release(&o->view[j]);
+    }
+    o->held = 0;
+}
+
+/* The result objects of a call: the caller's out= arrays (o given), else new arrays, of which
+ * one state's number outputs (rank 0) stay NULL with outs[j] = &scalars[j]. -1 raised. */
+static HOT_INLINE int result_arrays(const map_spec *s, const out_args *o, Py_ssize_t n,
+                                    int batch, PyObject **arrays, double **outs,
+                                    double *scalars)
+{
+    for (int j = 0; j < s->n_out; ++j) {
+        if (o != NULL && o->given) {
+            arrays[j] = Py_NewRef(o->obj[j]);
+            outs[j] = (double *)o->view[j].buf;
+        } else if (!batch && s->out_nd[j] == 0) {
+            outs[j] = &scalars[j];
+        } else {
+            arrays[j] = new_array(batch, n, s->out_nd[j], s->out_dims[j], &outs[j]);
+            if (arrays[j] == NULL) {
+                return -1;
+            }
+        }
+    }
+    return 0;
+}
+
 static PyObject *map_parsed(const rrr_model *m, const map_spec *s, const void *ctx,
-                            const vec_arg *a, Py_ssize_t n, int batch)
+                            const vec_arg *a, Py_ssize_t n, int batch, const out_args *o)
 {
     PyObject *arrays[MAX_OUT] = {NULL};
     double *outs[MAX_OUT];
@@ -902,14 +949,9 @@ static PyObject *map_parsed(const rrr_model *m, const map_spec *s, const void *c
     PyObject *result = NULL;
     for (int j = 0; j < s->n_out; ++j) {
         sizes[j] = out_size(s, j);
-        if (!batch && s->out_nd[j] == 0) {
-            outs[j] = &scalars[j];
-        } else {
-            arrays[j] = new_array(batch, n, s->out_nd[j], s->out_dims[j], &outs[j]);
-            if (arrays[j] == NULL) {
-                goto done;
-            }
-        }
+    }
+    if (result_arrays(s, o, n, batch, arrays, outs, scalars) != 0) {
+        goto done;
     }
     rrr_status st = RRR_OK;
     const Py_ssize_t bad = run_rows(m, s, ctx, a, outs, sizes, n, &st);
@@ -944,7 +986,7 @@ static PyObject *map_rows(const rrr_model *m, const map_spec *s, const void *ctx
     int batch;
     PyObject *result = NULL;
     if (broadcast(a, s->n_in, s->in_names, &n, &batch) == 0) {
-        result = map_parsed(m, s, ctx, a, n, batch);
+        result = map_parsed(m, s, ctx, a, n, batch, NULL);
     }
     args_release(a, s->n_in);
     return result;
@@ -1078,42 +1120,225 @@ MAP_METHOD(tip_motion, S_TIP_MOTION)
 MAP_METHOD(joint_motion, S_JOINT_MOTION)
 MAP_METHOD(workspace_margin, S_WORKSPACE_MARGIN)
 /* ------------------------------------------------------------------------------------------ */
-/* Batch methods: name(inputs...[, path]) -> one state, or a batch through librrr's batch      */
-/* kernels (rrr_batch.h) on `path`, an rrr_simd value (without it, or with RRR_SIMD_SCALAR:     */
-/* the row loop, bit for bit the one-state call). Broadcast rows are expanded into a buffer of */
-/* this call's; a failing row raises as the row loop does.                                     */
+/* The path and out arguments of the batch methods                                            */
 /* ------------------------------------------------------------------------------------------ */
 
-typedef rrr_status (*batch_fn)(const rrr_model *m, size_t n, const double *const *in,
-                               double *const *out, rrr_simd path, size_t *done);
-
-static rrr_status batch_regressor(const rrr_model *m, size_t n, const double *const *in,
-                                  double *const *out, rrr_simd path, size_t *done)
+/* The rrr_simd of a path argument: a simd= name (Model passes its argument as it is: the
+ * default "auto" is found by identity, with no look-up) or an rrr_simd value (int). A name that
+ * is not a path here raises batch.refuse's BadInputError; an int that is not, ValueError. */
+static int path_of(PyObject *obj, const char *method, rrr_simd *path)
 {
+    for (int v = RRR_SIMD_AUTO; v <= RRR_SIMD_AVX512; ++v) {
+        if (obj == g_simd_names[v]) {
+            *path = (rrr_simd)v;
+            return v > RRR_SIMD_SCALAR && !rrr_simd_available(*path) ? -2 : 0;
+        }
+    }
+    if (PyUnicode_Check(obj)) {
+        for (int v = RRR_SIMD_AUTO; v <= RRR_SIMD_AVX512; ++v) {
+            if (PyUnicode_Compare(obj, g_simd_names[v]) == 0) {
+                *path = (rrr_simd)v;
+                return v > RRR_SIMD_SCALAR && !rrr_simd_available(*path) ? -2 : 0;
+            }
+        }
+        return -2;
+    }
+    if (!PyLong_Check(obj)) {
+        return -2;
+    }
+    const long v = PyLong_AsLong(obj);
+    if (v == -1 && PyErr_Occurred()) {
+        return -1;
+    }
+    if (v < RRR_SIMD_AUTO || v > RRR_SIMD_AVX512 ||
+        (v > RRR_SIMD_SCALAR && !rrr_simd_available((rrr_simd)v))) {
+        PyErr_Format(PyExc_ValueError, "%s: batch path %ld is not available here "
+                     "(rrr_simd_available)", method, v);
+        return -1;
+    }
+    *path = (rrr_simd)v;
+    return 0;
+}
+
+/* path_of, raising batch.refuse's error for what it refuses (-1). */
+static int parse_path(PyObject *obj, const char *method, rrr_simd *path)
+{
+    const int r = path_of(obj, method, path);
+    if (r == -2) {
+        PyObject *none = PyObject_CallOneArg(g_refuse, obj); /* raises */
+        Py_XDECREF(none);
+        if (!PyErr_Occurred()) {
+            PyErr_SetString(PyExc_SystemError, "batch.refuse returned");
+        }
+        return -1;
+    }
+    return r;
+}
+
+/* Whether [p, p + np) and [q, q + nq) (bytes) share a byte. */
+static int overlaps(const void *p, size_t np, const void *q, size_t nq)
+{
+    const uintptr_t a = (uintptr_t)p;
+    const uintptr_t b = (uintptr_t)q;
+    return np > 0 && nq > 0 && a < b + nq && b < a + np;
+}
+
+/* Parse out= of a call with n_in parsed inputs and n rows (batch: (n, ...) results): None, one
+ * array for one output, a tuple of n_out arrays for more. Each must be a writable, C-contiguous,
+ * aligned float64 buffer of exactly the result's shape, sharing no memory with an input or with
+ * another output. -1 (BadInputError) otherwise. */
+static int parse_out(PyObject *obj, const map_spec *s, const vec_arg *a, Py_ssize_t n, int batch,
+                     out_args *o)
+{
+    o->given = 0;
+    o->held = 0;
+    if (obj == Py_None) {
+        return 0;
+    }
+    o->given = 1;
+    if (s->n_out == 1) {
+        o->obj[0] = obj;
+    } else if (PyTuple_Check(obj) && PyTuple_GET_SIZE(obj) == s->n_out) {
+        for (int j = 0; j < s->n_out; ++j) {
+            o->obj[j] = PyTuple_GET_ITEM(obj, j);
+        }
+    } else {
+        PyErr_Format(g_bad_input, "%s: out must be a tuple of %d arrays, got %s", s->method,
+                     s->n_out, Py_TYPE(obj)->tp_name);
+        return -1;
+    }
+    for (int j = 0; j < s->n_out; ++j) {
+        Py_ssize_t shape[4];
+        int rank = 0;
+        if (batch) {
+            shape[rank++] = n;
+        }
+        for (int d = 0; d < s->out_nd[j]; ++d) {
+            shape[rank++] = s->out_dims[j][d];
+        }
+        char want[64];
+        int len = 0;
+        for (int d = 0; d < rank; ++d) {
+            len += snprintf(want + len, sizeof want - (size_t)len, d ? ", %zd" : "%zd", shape[d]);
+        }
+        if (rank == 1) {
+            snprintf(want + len, sizeof want - (size_t)len, ",");
+        }
+        Py_buffer *v = &o->view[j];
+        if (PyObject_GetBuffer(o->obj[j], v, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS |
+                               PyBUF_FORMAT) != 0) {
+            /* why the exporter refused (read-only, not contiguous, no buffer) */
+#if PY_VERSION_HEX >= 0x030C0000
+            PyObject *why = PyErr_GetRaisedException();
+#else
+            PyObject *why_type, *why, *why_tb;
+            PyErr_Fetch(&why_type, &why, &why_tb);
+            PyErr_NormalizeException(&why_type, &why, &why_tb);
+            Py_XDECREF(why_type);
+            Py_XDECREF(why_tb);
+#endif
+            PyErr_Format(g_bad_input, "%s: out must be writable, C-contiguous float64 arrays "
+                         "of shape (%s); %s: %S", s->method, want, Py_TYPE(o->obj[j])->tp_name,
+                         why);
+            Py_XDECREF(why);
+            out_release(o);
+            return -1;
+        }
+        o->held = j + 1;
+        int ok = v->itemsize == (Py_ssize_t)sizeof(double) && native_double_format(v->format) &&
+                 is_aligned(v->buf) && v->ndim == rank && v->shape != NULL;
+        for (int d = 0; ok && d < rank; ++d) {
+            ok = v->shape[d] == shape[d];
+        }
+        if (!ok) {
+            char got[64] = "";
+            int at = 0;
+            for (int d = 0; v->shape != NULL && d < v->ndim && at < (int)sizeof got - 24; ++d) {
+                at += snprintf(got + at, sizeof got - (size_t)at, d ? ", %zd" : "%zd",
+                               v->shape[d]);
+            }
+            PyErr_Format(g_bad_input, "%s: out must be a float64 array of shape (%s), "
+                         "C-contiguous and aligned; got shape (%s%s) of format '%s'", s->method,
+                         want, got, v->ndim == 1 ? "," : "", v->format ? v->format : "B");
+            out_release(o);
+            return -1;
+        }
+        for (int k = 0; k < s->n_in; ++k) {
+            const size_t in_len = (size_t)((a[k].rows - 1) * a[k].step + NJ) * sizeof(double);
+            if (overlaps(v->buf, (size_t)v->len, a[k].data, in_len)) {
+                PyErr_Format(g_bad_input, "%s: out shares memory with %s: the results would "
+                             "overwrite inputs still to be read", s->method, s->in_names[k]);
+                out_release(o);
+                return -1;
+            }
+        }
+        for (int i = 0; i < j; ++i) {
+            if (overlaps(v->buf, (size_t)v->len, o->view[i].buf, (size_t)o->view[i].len)) {
+                PyErr_Format(g_bad_input, "%s: the arrays of out share memory", s->method);
+                out_release(o);
+                return -1;
+            }
+        }
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Batch methods: name(inputs...[, path[, out]]) -> one state, or a batch through librrr's     */
+/* batch kernels (rrr_batch.h) on `path` (path_of; without it, or on the scalar path: the row  */
+/* loop, bit for bit the one-state call), into the caller's arrays `out` (parse_out) or new    */
+/* ones. Broadcast rows are expanded into a buffer of this call's; a failing row raises as the */
+/* row loop does (out then holds the rows before it; the rest is unspecified).                 */
+/* ------------------------------------------------------------------------------------------ */
+
+typedef rrr_status (*batch_fn)(const rrr_model *m, const void *ctx, size_t n,
+                               const double *const *in, double *const *out, rrr_simd path,
+                               size_t *done);
+
+static rrr_status batch_regressor(const rrr_model *m, const void *ctx, size_t n,
+                                  const double *const *in, double *const *out, rrr_simd path,
+                                  size_t *done)
+{
+    (void)ctx;
     return rrr_regressor_batch(m, n, in[0], in[1], in[2], out[0], path, done);
 }
 
-static rrr_status batch_inverse_dynamics(const rrr_model *m, size_t n, const double *const *in,
-                                         double *const *out, rrr_simd path, size_t *done)
+static rrr_status batch_inverse_dynamics(const rrr_model *m, const void *ctx, size_t n,
+                                         const double *const *in, double *const *out, rrr_simd path,
+                                         size_t *done)
 {
+    (void)ctx;
     return rrr_inverse_dynamics_batch(m, n, in[0], in[1], in[2], out[0], path, done);
 }
 
-static rrr_status batch_fk(const rrr_model *m, size_t n, const double *const *in,
-                           double *const *out, rrr_simd path, size_t *done)
+static rrr_status batch_fk(const rrr_model *m, const void *ctx, size_t n,
+                           const double *const *in, double *const *out, rrr_simd path,
+                           size_t *done)
 {
+    (void)ctx;
     return rrr_fk_batch(m, n, in[0], out[0], out[1], path, done);
 }
 
-static rrr_status batch_forward_dynamics(const rrr_model *m, size_t n, const double *const *in,
-                                         double *const *out, rrr_simd path, size_t *done)
+static rrr_status batch_forward_dynamics(const rrr_model *m, const void *ctx, size_t n,
+                                         const double *const *in, double *const *out, rrr_simd path,
+                                         size_t *done)
 {
+    (void)ctx;
     return rrr_forward_dynamics_batch(m, n, in[0], in[1], in[2], out[0], path, done);
+}
+
+static rrr_status batch_ik_branch(const rrr_model *m, const void *ctx, size_t n,
+                                  const double *const *in, double *const *out, rrr_simd path,
+                                  size_t *done)
+{
+    const posture *p = ctx;
+    return rrr_ik_batch(m, n, in[0], p->shoulder, p->elbow, out[0], NULL, path, done);
 }
 
 /* The outputs of a batch call on parsed and broadcast arguments with n > 0 rows. */
 static PyObject *batch_parsed(const rrr_model *m, const map_spec *s, batch_fn fn,
-                              const vec_arg *a, Py_ssize_t n, rrr_simd path)
+                              const void *ctx, const vec_arg *a, Py_ssize_t n, rrr_simd path,
+                              const out_args *o)
 {
     /* every input as n contiguous rows: broadcast ones copied into one buffer */
     const double *rows[MAX_IN];
@@ -1142,17 +1367,15 @@ static PyObject *batch_parsed(const rrr_model *m, const map_spec *s, batch_fn fn
     }
     PyObject *arrays[MAX_OUT] = {NULL};
     double *outs[MAX_OUT];
+    double scalars[MAX_OUT];
     PyObject *result = NULL;
-    for (int j = 0; j < s->n_out; ++j) {
-        arrays[j] = new_array(1, n, s->out_nd[j], s->out_dims[j], &outs[j]);
-        if (arrays[j] == NULL) {
-            goto done;
-        }
+    if (result_arrays(s, o, n, 1, arrays, outs, scalars) != 0) {
+        goto done;
     }
     size_t ok = 0;
     rrr_status st;
     Py_BEGIN_ALLOW_THREADS
-    st = fn(m, (size_t)n, rows, outs, path, &ok);
+    st = fn(m, ctx, (size_t)n, rows, outs, path, &ok);
     Py_END_ALLOW_THREADS
     if (st != RRR_OK) {
         raise_failed_row(s, a, (Py_ssize_t)ok, st);
@@ -1167,43 +1390,49 @@ done:
     return result;
 }
 
-static PyObject *batch_method(PyObject *self, const map_spec *s, batch_fn fn,
-                              PyObject *const *args, Py_ssize_t nargs)
+/* A batch method's call on the inputs in[0..n_in): path_obj NULL (the row loop) or a path
+ * (path_of), out_obj None or the caller's arrays (parse_out). One state, an empty batch and the
+ * scalar path run the row loop; a batch on another path fn. */
+static HOT_INLINE PyObject *batch_call(PyObject *self, const map_spec *s, batch_fn fn,
+                                       const void *ctx, PyObject *const *in,
+                                       PyObject *path_obj, PyObject *out_obj)
 {
-    if (nargs != s->n_in && nargs != s->n_in + 1) {
-        PyErr_Format(PyExc_TypeError, "%s() takes %d or %d arguments (%zd given)", s->method,
-                     s->n_in, s->n_in + 1, nargs);
+    rrr_simd path = RRR_SIMD_SCALAR;
+    if (path_obj != NULL && parse_path(path_obj, s->method, &path) != 0) {
         return NULL;
     }
-    long path = RRR_SIMD_SCALAR;
-    if (nargs == s->n_in + 1) {
-        path = PyLong_AsLong(args[s->n_in]);
-        if (path == -1 && PyErr_Occurred()) {
-            return NULL;
-        }
-        if (path < RRR_SIMD_AUTO || path > RRR_SIMD_AVX512 ||
-            (path > RRR_SIMD_SCALAR && !rrr_simd_available((rrr_simd)path))) {
-            PyErr_Format(PyExc_ValueError, "%s: batch path %ld is not available here "
-                         "(rrr_simd_available)", s->method, path);
-            return NULL;
-        }
-    }
     vec_arg a[MAX_IN];
-    if (parse_args(args, s->n_in, s->in_names, a) != 0) {
+    if (parse_args(in, s->n_in, s->in_names, a) != 0) {
         return NULL;
     }
     Py_ssize_t n;
     int batch;
+    out_args o;
     PyObject *result = NULL;
-    if (broadcast(a, s->n_in, s->in_names, &n, &batch) == 0) {
+    if (broadcast(a, s->n_in, s->in_names, &n, &batch) == 0 &&
+        parse_out(out_obj, s, a, n, batch, &o) == 0) {
         if (!batch || path == RRR_SIMD_SCALAR || n == 0) {
-            result = map_parsed(MODEL(self), s, NULL, a, n, batch);
+            result = map_parsed(MODEL(self), s, ctx, a, n, batch, &o);
         } else {
-            result = batch_parsed(MODEL(self), s, fn, a, n, (rrr_simd)path);
+            result = batch_parsed(MODEL(self), s, fn, ctx, a, n, path, &o);
         }
+        out_release(&o);
     }
     args_release(a, s->n_in);
     return result;
+}
+
+/* name(inputs...[, path[, out]]) */
+static PyObject *batch_method(PyObject *self, const map_spec *s, batch_fn fn,
+                              PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs < s->n_in || nargs > s->n_in + 2) {
+        PyErr_Format(PyExc_TypeError, "%s() takes %d to %d arguments (%zd given)", s->method,
+                     s->n_in, s->n_in + 2, nargs);
+        return NULL;
+    }
+    return batch_call(self, s, fn, NULL, args, nargs > s->n_in ? args[s->n_in] : NULL,
+                      nargs > s->n_in + 1 ? args[s->n_in + 1] : Py_None);
 }
 
 #define BATCH_METHOD(name, spec)                                                         \
@@ -1225,19 +1454,18 @@ MAP_METHOD(voltage_from_torque, S_VOLTAGE_FROM_TORQUE)
 MAP_METHOD(torque_from_voltage, S_TORQUE_FROM_VOLTAGE)
 MAP_METHOD(plant_jacobian, S_PLANT_JACOBIAN)
 
-/* ik_branch(x, shoulder, elbow[, path]): shoulder 0 front / 1 back, elbow 0 up / 1 down; one
- * target, or rows by the row loop of rrr_ik_branch (without path, or with RRR_SIMD_SCALAR), or
- * by rrr_ik_batch on `path` (an rrr_simd value); the first row that fails raises its error, as
- * in the other batch methods. */
+/* ik_branch(x, shoulder, elbow[, path[, out]]): shoulder 0 front / 1 back, elbow 0 up / 1 down;
+ * one target, or rows by the row loop of rrr_ik_branch (without path, or on the scalar path), or
+ * by rrr_ik_batch on `path`; the first row that fails raises its error, as in the other batch
+ * methods. */
 static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 3 && nargs != 4) {
-        PyErr_Format(PyExc_TypeError, "ik_branch() takes 3 or 4 arguments (%zd given)", nargs);
+    if (nargs < 3 || nargs > 5) {
+        PyErr_Format(PyExc_TypeError, "ik_branch() takes 3 to 5 arguments (%zd given)", nargs);
         return NULL;
     }
     const long shoulder = PyLong_AsLong(args[1]);
     const long elbow = PyLong_AsLong(args[2]);
-    const long path = nargs == 4 ? PyLong_AsLong(args[3]) : RRR_SIMD_SCALAR;
     if (PyErr_Occurred()) {
         return NULL;
     }
@@ -1245,45 +1473,10 @@ static PyObject *K_ik_branch(PyObject *self, PyObject *const *args, Py_ssize_t n
         PyErr_Format(g_bad_input, "posture indices must be 0 or 1, got %ld, %ld", shoulder, elbow);
         return NULL;
     }
-    if (path < RRR_SIMD_AUTO || path > RRR_SIMD_AVX512 ||
-        (path > RRR_SIMD_SCALAR && !rrr_simd_available((rrr_simd)path))) {
-        PyErr_Format(PyExc_ValueError, "ik_branch: batch path %ld is not available here "
-                     "(rrr_simd_available)", path);
-        return NULL;
-    }
     const posture p = {shoulder ? RRR_SHOULDER_BACK : RRR_SHOULDER_FRONT,
                        elbow ? RRR_ELBOW_DOWN : RRR_ELBOW_UP};
-    if (path == RRR_SIMD_SCALAR) {
-        return map_rows(MODEL(self), &S_IK_BRANCH, &p, args);
-    }
-    vec_arg x;
-    if (parse_arg(args[0], "x", &x) != 0) {
-        return NULL;
-    }
-    PyObject *result = NULL;
-    if (!x.batch || x.rows == 0) {
-        result = map_parsed(MODEL(self), &S_IK_BRANCH, &p, &x, x.rows, x.batch);
-    } else {
-        const Py_ssize_t dims[1] = {NJ};
-        double *q;
-        PyObject *out = new_array(1, x.rows, 1, dims, &q);
-        if (out != NULL) {
-            size_t done = 0;
-            rrr_status st;
-            Py_BEGIN_ALLOW_THREADS
-            st = rrr_ik_batch(MODEL(self), (size_t)x.rows, x.data, p.shoulder, p.elbow, q, NULL,
-                              (rrr_simd)path, &done);
-            Py_END_ALLOW_THREADS
-            if (st != RRR_OK) {
-                raise_failed_row(&S_IK_BRANCH, &x, (Py_ssize_t)done, st);
-                Py_DECREF(out);
-            } else {
-                result = out;
-            }
-        }
-    }
-    arg_release(&x);
-    return result;
+    return batch_call(self, &S_IK_BRANCH, batch_ik_branch, &p, args, nargs > 3 ? args[3] : NULL,
+                      nargs > 4 ? args[4] : Py_None);
 }
 
 /* One target only: parse x and refuse a batch with the method's message. */
@@ -1516,11 +1709,11 @@ static PyObject *K_nominal_voltage(PyObject *self, PyObject *const *args, Py_ssi
     int batch;
     PyObject *out = NULL;
     if (broadcast(a, 3, s->in_names, &n, &batch) == 0) {
-        PyObject *tau = map_parsed(MODEL(self), s, NULL, a, n, batch);
+        PyObject *tau = map_parsed(MODEL(self), s, NULL, a, n, batch, NULL);
         vec_arg b[2];
         if (tau != NULL && parse_arg(tau, "tau", &b[1]) == 0) {
             b[0] = a[1]; /* qd, as parsed (not released through b) */
-            out = map_parsed(MODEL(self), &S_VOLTAGE_FROM_TORQUE, NULL, b, n, batch);
+            out = map_parsed(MODEL(self), &S_VOLTAGE_FROM_TORQUE, NULL, b, n, batch, NULL);
             arg_release(&b[1]);
         }
         Py_XDECREF(tau);
@@ -1701,25 +1894,25 @@ static PyObject *K_plant_accel(PyObject *self, PyObject *const *args, Py_ssize_t
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))K_##name, METH_FASTCALL, doc}
 
 static PyMethodDef Kernels_methods[] = {
-    FASTCALL(fk, "fk(q[, path]) -> (x, R)"),
+    FASTCALL(fk, "fk(q[, path[, out]]) -> (x, R)"),
     FASTCALL(fk_frames, "fk_frames(q) -> T (4, 4, 4): DH frames 0..3 in frame 0"),
     FASTCALL(jacobian, "jacobian(q) -> J"),
     FASTCALL(tip_motion, "tip_motion(q, qd, qdd) -> (xd, xdd)"),
     FASTCALL(joint_motion, "joint_motion(q, xd, xdd) -> (qd, qdd)"),
     FASTCALL(ik, "ik(x) -> (k, 3) solutions"),
     FASTCALL(ik_branches, "ik_branches(x) -> [(shoulder, elbow), ...]"),
-    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow[, path]) -> q (shoulder 0 front / 1 "
-                        "back, elbow 0 up / 1 down; rows by rrr_ik_batch on path)"),
+    FASTCALL(ik_branch, "ik_branch(x, shoulder, elbow[, path[, out]]) -> q (shoulder 0 front / "
+                        "1 back, elbow 0 up / 1 down; rows by rrr_ik_batch on path)"),
     FASTCALL(ik_nearest, "ik_nearest(x, q_prev) -> q"),
     FASTCALL(singularity, "singularity(q, tol) -> (stretched, folded, shoulder, elbow_margin, "
                           "shoulder_margin, det_jacobian)"),
     FASTCALL(workspace_margin, "workspace_margin(x) -> margin"),
-    FASTCALL(regressor, "regressor(q, qd, qdd[, path]) -> R"),
-    FASTCALL(inverse_dynamics, "inverse_dynamics(q, qd, qdd[, path]) -> tau"),
+    FASTCALL(regressor, "regressor(q, qd, qdd[, path[, out]]) -> R"),
+    FASTCALL(inverse_dynamics, "inverse_dynamics(q, qd, qdd[, path[, out]]) -> tau"),
     FASTCALL(mass_matrix, "mass_matrix(q) -> D"),
     FASTCALL(coriolis, "coriolis(q, qd) -> c"),
     FASTCALL(gravity, "gravity(q) -> h"),
-    FASTCALL(forward_dynamics, "forward_dynamics(q, qd, tau[, path]) -> qdd"),
+    FASTCALL(forward_dynamics, "forward_dynamics(q, qd, tau[, path[, out]]) -> qdd"),
     FASTCALL(energy, "energy(q, qd) -> (kinetic, potential)"),
     FASTCALL(friction, "friction(qd) -> u_f"),
     FASTCALL(voltage_from_torque, "voltage_from_torque(qd, tau) -> u"),
@@ -1804,6 +1997,19 @@ static int import_dependencies(void)
         PyErr_SetString(PyExc_ImportError,
                         "rrr_robot.core._status: ERRORS and MEANING must be dicts");
         return -1;
+    }
+    g_refuse = attr_of("rrr_robot.core.batch", "refuse");
+    if (g_refuse == NULL) {
+        return -1;
+    }
+    static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
+    _Static_assert(sizeof simd_names / sizeof simd_names[0] == RRR_SIMD_AVX512 + 1,
+                   "a name for each rrr_simd value");
+    for (int v = RRR_SIMD_AUTO; v <= RRR_SIMD_AVX512; ++v) {
+        g_simd_names[v] = PyUnicode_InternFromString(simd_names[v]);
+        if (g_simd_names[v] == NULL) {
+            return -1;
+        }
     }
     /* branch index = shoulder * 2 + elbow (rrr_kinematics.h) */
     g_branch_names = Py_BuildValue("((ss)(ss)(ss)(ss))", "front", "up", "front", "down", "back",

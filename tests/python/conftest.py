@@ -30,7 +30,8 @@ atexit.register(shutil.rmtree, _PLAN_CACHE, ignore_errors=True)
 #: The modules of the fast subset: the model, its files and tables, the CLI's argument checks,
 #: the API and version checks (each a few seconds at most).
 FAST = frozenset({
-    "test_api_docs", "test_batch", "test_cli_help", "test_default_robot", "test_docs_map",
+    "test_api_docs", "test_batch", "test_batch_out", "test_cli_help", "test_default_robot",
+    "test_docs_map",
     "test_ext_binding",
     "test_fk_frames", "test_hil_codec", "test_identify_errors", "test_kinematics",
     "test_linearize", "test_model_api", "test_plant_api", "test_robot_file",

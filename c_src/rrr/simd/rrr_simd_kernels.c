@@ -27,35 +27,70 @@
 __attribute__((simd("notinbranch"))) double sin(double);
 __attribute__((simd("notinbranch"))) double cos(double);
 
-void RRR_SIMD_CAT(rrr_simd_inverse_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
-                                                          const double *restrict q,
-                                                          const double *restrict qd,
-                                                          const double *restrict qdd,
-                                                          double *restrict tau)
+/* The finiteness probe of the kernels: the sum of a[i] * 0.0, which is 0 when every a[i] is
+ * finite and NaN when one is not (Inf * 0 and NaN * 0 are NaN; no sum of zeros overflows).
+ * Summed over a kernel's inputs and outputs in its vector loop (a reduction), it tells
+ * rrr_batch.c in one number whether a row needs the scalar call, without a second pass over
+ * the rows. */
+static inline __attribute__((always_inline)) double probe(const double *a, int len)
+{
+    double z = 0.0;
+    for (int i = 0; i < len; ++i) {
+        z += a[i] * 0.0;
+    }
+    return z;
+}
+
+/* probe of a[0 .. len), a contiguous array: for the outputs of many numbers a row (R, Y), whose
+ * probe in the kernel's loop would be a gather per number */
+static double probe_span(const double *a, size_t len)
+{
+    double z = 0.0;
+#pragma omp simd reduction(+ : z)
+    for (size_t i = 0; i < len; ++i) {
+        z += a[i] * 0.0;
+    }
+    return z;
+}
+
+__attribute__((flatten)) /* the generated call inlined, so that the loop vectorises */
+int RRR_SIMD_CAT(rrr_simd_inverse_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
+                                                         const double *restrict q,
+                                                         const double *restrict qd,
+                                                         const double *restrict qdd,
+                                                         double *restrict tau)
 {
     const rrr_model model = *mp; /* a local copy: no store to tau can change it */
     const rrr_model *m = &model;
-#pragma omp simd
+    double z = 0.0;
+#pragma omp simd reduction(+ : z)
     for (size_t k = 0; k < n; ++k) {
         const rrr_trig t = rrr_trig_of(&q[3 * k]); /* inlined: vector sin, cos */
         rrr_gen_inverse_dynamics(m, &t, &qd[3 * k], &qdd[3 * k], &tau[3 * k]);
+        z += probe(&q[3 * k], 3) + probe(&qd[3 * k], 3) + probe(&qdd[3 * k], 3) +
+             probe(&tau[3 * k], 3);
     }
+    return z == 0.0;
 }
 
-void RRR_SIMD_CAT(rrr_simd_regressor, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
-                                                   const double *restrict q,
-                                                   const double *restrict qd,
-                                                   const double *restrict qdd,
-                                                   double *restrict Y)
+__attribute__((flatten)) /* the generated call inlined, so that the loop vectorises */
+int RRR_SIMD_CAT(rrr_simd_regressor, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
+                                                  const double *restrict q,
+                                                  const double *restrict qd,
+                                                  const double *restrict qdd,
+                                                  double *restrict Y)
 {
     const rrr_model model = *mp;
     const rrr_model *m = &model;
-#pragma omp simd
+    double z = 0.0;
+#pragma omp simd reduction(+ : z)
     for (size_t k = 0; k < n; ++k) {
         const rrr_trig t = rrr_trig_of(&q[3 * k]); /* inlined: vector sin, cos */
         rrr_gen_regressor(m, &t, &qd[3 * k], &qdd[3 * k],
                           (double(*)[RRR_NP])(void *)&Y[3 * RRR_NP * k]);
+        z += probe(&q[3 * k], 3) + probe(&qd[3 * k], 3) + probe(&qdd[3 * k], 3);
     }
+    return z + probe_span(Y, 3 * RRR_NP * n) == 0.0;
 }
 
 /* rrr_fk's formulas, written as rrr_kinematics.c writes them: the tip of row k, and the
@@ -83,23 +118,27 @@ static inline __attribute__((always_inline)) void fk_row(const rrr_model *m, con
     }
 }
 
-void RRR_SIMD_CAT(rrr_simd_fk, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
-                                            const double *restrict q, double *restrict x,
-                                            double *restrict R)
+int RRR_SIMD_CAT(rrr_simd_fk, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
+                                           const double *restrict q, double *restrict x,
+                                           double *restrict R)
 {
     const rrr_model model = *mp;
     const rrr_model *m = &model;
+    double z = 0.0;
     if (R == NULL) {
-#pragma omp simd
+#pragma omp simd reduction(+ : z)
         for (size_t k = 0; k < n; ++k) {
             fk_row(m, &q[3 * k], &x[3 * k], NULL);
+            z += probe(&q[3 * k], 3) + probe(&x[3 * k], 3);
         }
-        return;
+        return z == 0.0;
     }
-#pragma omp simd
+#pragma omp simd reduction(+ : z)
     for (size_t k = 0; k < n; ++k) {
         fk_row(m, &q[3 * k], &x[3 * k], &R[9 * k]);
+        z += probe(&q[3 * k], 3) + probe(&x[3 * k], 3);
     }
+    return z + probe_span(R, 9 * n) == 0.0;
 }
 
 /* rrr_fd_factorize_trig and rrr_fd_solve without their branches: a pivot that is not positive
@@ -117,29 +156,31 @@ typedef struct {
 } rrr_simd_fd_row;
 
 __attribute__((flatten)) /* the two generated calls inlined, so that the loop vectorises */
-void RRR_SIMD_CAT(rrr_simd_forward_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
-                                                          const double *restrict q,
-                                                          const double *restrict qd,
-                                                          const double *restrict tau,
-                                                          double *restrict qdd)
+int RRR_SIMD_CAT(rrr_simd_forward_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
+                                                         const double *restrict q,
+                                                         const double *restrict qd,
+                                                         const double *restrict tau,
+                                                         double *restrict qdd)
 {
     const rrr_model model = *mp;
     const rrr_model *m = &model;
     rrr_simd_fd_row buf[RRR_SIMD_FD_BLOCK];
+    double z = 0.0;
     for (size_t base = 0; base < n; base += RRR_SIMD_FD_BLOCK) {
         const size_t nb = n - base < RRR_SIMD_FD_BLOCK ? n - base : RRR_SIMD_FD_BLOCK;
         const double *restrict qb = &q[3 * base];
         const double *restrict qdb = &qd[3 * base];
-#pragma omp simd
+#pragma omp simd reduction(+ : z)
         for (size_t k = 0; k < nb; ++k) {
             const rrr_trig t = rrr_trig_of(&qb[3 * k]); /* inlined: vector sin, cos */
             rrr_gen_bias(m, &t, &qdb[3 * k], buf[k].bias);
             rrr_gen_mass_matrix(m, &t, buf[k].D);
             buf[k].pad[0] = buf[k].pad[1] = buf[k].pad[2] = buf[k].pad[3] = 0.0;
+            z += probe(&qb[3 * k], 3) + probe(&qdb[3 * k], 3);
         }
         const double *restrict taub = &tau[3 * base];
         double *restrict out = &qdd[3 * base];
-#pragma omp simd
+#pragma omp simd reduction(+ : z)
         for (size_t k = 0; k < nb; ++k) {
             const rrr_simd_fd_row *r = &buf[k];
             const double(*D)[3] = r->D;
@@ -155,11 +196,14 @@ void RRR_SIMD_CAT(rrr_simd_forward_dynamics, RRR_SIMD_ISA)(const rrr_model *mp, 
             const double y2 = (taub[3 * k + 2] - bias[2] - l20 * y0 - l21 * y1) / l22;
             const double x2 = y2 / l22;
             const double x1 = (y1 - l21 * x2) / l11;
+            const double x0 = (y0 - l10 * x1 - l20 * x2) / l00;
             out[3 * k + 2] = x2;
             out[3 * k + 1] = x1;
-            out[3 * k] = (y0 - l10 * x1 - l20 * x2) / l00;
+            out[3 * k] = x0;
+            z += probe(&taub[3 * k], 3) + (x0 * 0.0 + x1 * 0.0 + x2 * 0.0);
         }
     }
+    return z == 0.0;
 }
 
 /* The IK kernels compiled with -fno-trapping-math: GCC speculates no floating-point operation
@@ -186,10 +230,10 @@ static inline __attribute__((always_inline)) double ik_wrap(double a)
  * same operations in the same order (librrr is compiled as ISO C, where GCC contracts nothing
  * into FMA), so that rho2, c3 and the reachability are the scalar call's bit for bit and only
  * atan2 rounds differently. An unreachable target gives NaN. */
-static inline __attribute__((always_inline)) void ik_rows(const rrr_model *mp, size_t n,
-                                                         const double *restrict x,
-                                                         double *restrict q, const int front,
-                                                         const int down)
+static inline __attribute__((always_inline)) int ik_rows(const rrr_model *mp, size_t n,
+                                                        const double *restrict x,
+                                                        double *restrict q, const int front,
+                                                        const int down)
 {
     const rrr_model model = *mp;
     const double a2 = model.a2, a3 = model.a3, e = model.d2 + model.d3, d1 = model.d1;
@@ -200,7 +244,8 @@ static inline __attribute__((always_inline)) void ik_rows(const rrr_model *mp, s
     const double a2sq = a2 * a2, a3sq = a3 * a3;
     const double gamma_b0 = copysign(RRR_PI, e);
     const double nan = (double)NAN;
-#pragma omp simd
+    double z = 0.0;
+#pragma omp simd reduction(+ : z)
     for (size_t k = 0; k < n; ++k) {
         const double x0 = x[3 * k], x1 = x[3 * k + 1], x2 = x[3 * k + 2];
         double rho2 = x0 * x0 + x1 * x1 - e * e;
@@ -229,27 +274,31 @@ static inline __attribute__((always_inline)) void ik_rows(const rrr_model *mp, s
         const double q0 = ik_wrap(psi + gamma);
         const double q1 = ik_wrap(phi - (down ? beta_down : -beta_down));
         const double q2 = ik_wrap(down ? q3_down : -q3_down);
-        q[3 * k] = out ? nan : q0;
-        q[3 * k + 1] = out ? nan : q1;
-        q[3 * k + 2] = out ? nan : q2;
+        const double r0 = out ? nan : q0, r1 = out ? nan : q1, r2 = out ? nan : q2;
+        q[3 * k] = r0;
+        q[3 * k + 1] = r1;
+        q[3 * k + 2] = r2;
+        z += (x0 * 0.0 + x1 * 0.0 + x2 * 0.0) + (r0 * 0.0 + r1 * 0.0 + r2 * 0.0);
     }
+    return z == 0.0;
 }
 
-void RRR_SIMD_CAT(rrr_simd_ik, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
-                                            const double *restrict x, rrr_shoulder shoulder,
-                                            rrr_elbow elbow, double *restrict q)
+int RRR_SIMD_CAT(rrr_simd_ik, RRR_SIMD_ISA)(const rrr_model *mp, size_t n,
+                                           const double *restrict x, rrr_shoulder shoulder,
+                                           rrr_elbow elbow, double *restrict q)
 {
     /* one loop per posture, the branch choices constants in each */
     const int front = shoulder == RRR_SHOULDER_FRONT, down = elbow == RRR_ELBOW_DOWN;
     if (front && down) {
-        ik_rows(mp, n, x, q, 1, 1);
-    } else if (front) {
-        ik_rows(mp, n, x, q, 1, 0);
-    } else if (down) {
-        ik_rows(mp, n, x, q, 0, 1);
-    } else {
-        ik_rows(mp, n, x, q, 0, 0);
+        return ik_rows(mp, n, x, q, 1, 1);
     }
+    if (front) {
+        return ik_rows(mp, n, x, q, 1, 0);
+    }
+    if (down) {
+        return ik_rows(mp, n, x, q, 0, 1);
+    }
+    return ik_rows(mp, n, x, q, 0, 0);
 }
 
 #pragma GCC pop_options

@@ -95,17 +95,18 @@ rrr_status rrr_inverse_dynamics_batch(const rrr_model *m, size_t n, const double
     if (path == RRR_SIMD_SCALAR) {
         st = scalar_rows(m, 0, n, q, qd, qdd, tau, &ok);
     } else {
+        int clean = 0; /* every number finite: the kernel's probe (rrr_simd.h) */
 #ifdef RRR_HAVE_SIMD_X86
         if (path == RRR_SIMD_AVX512) {
-            rrr_simd_inverse_dynamics_avx512(m, n, q, qd, qdd, tau);
+            clean = rrr_simd_inverse_dynamics_avx512(m, n, q, qd, qdd, tau);
         } else {
-            rrr_simd_inverse_dynamics_avx2(m, n, q, qd, qdd, tau);
+            clean = rrr_simd_inverse_dynamics_avx2(m, n, q, qd, qdd, tau);
         }
 #endif
         /* a row with a non-finite input or result is the scalar call's to judge (it gives the
          * status, or recomputes a row that is fine after all) */
         ok = n;
-        for (size_t k = 0; k < n; ++k) {
+        for (size_t k = 0; !clean && k < n; ++k) {
             if (!rrr_finite_n(&q[3 * k], 3) || !rrr_finite_n(&qd[3 * k], 3) ||
                 !rrr_finite_n(&qdd[3 * k], 3) || !rrr_finite_n(&tau[3 * k], 3)) {
                 st = rrr_inverse_dynamics(m, &q[3 * k], &qd[3 * k], &qdd[3 * k], &tau[3 * k]);
@@ -171,14 +172,15 @@ rrr_status rrr_regressor_batch(const rrr_model *m, size_t n, const double q[],
         if (st != RRR_OK) {
             return st;
         }
+        int clean = 0; /* every number finite: the kernel's probe (rrr_simd.h) */
 #ifdef RRR_HAVE_SIMD_X86
         if (path == RRR_SIMD_AVX512) {
-            rrr_simd_regressor_avx512(m, n - 1, q + 3, qd + 3, qdd + 3, Y + NY);
+            clean = rrr_simd_regressor_avx512(m, n - 1, q + 3, qd + 3, qdd + 3, Y + NY);
         } else {
-            rrr_simd_regressor_avx2(m, n - 1, q + 3, qd + 3, qdd + 3, Y + NY);
+            clean = rrr_simd_regressor_avx2(m, n - 1, q + 3, qd + 3, qdd + 3, Y + NY);
         }
 #endif
-        for (k = 1; k < n; ++k) {
+        for (k = clean ? n : 1; k < n; ++k) {
             if (!row_finite(&q[3 * k], &qd[3 * k], &qdd[3 * k], &Y[NY * k], NY)) {
                 st = rrr_regressor(m, &q[3 * k], &qd[3 * k], &qdd[3 * k],
                                    (double(*)[RRR_NP])(void *)&Y[NY * k]);
@@ -217,14 +219,15 @@ rrr_status rrr_fk_batch(const rrr_model *m, size_t n, const double q[], double x
         if (st != RRR_OK) {
             return st;
         }
+        int clean = 0; /* every number finite: the kernel's probe (rrr_simd.h) */
 #ifdef RRR_HAVE_SIMD_X86
         if (path == RRR_SIMD_AVX512) {
-            rrr_simd_fk_avx512(m, n - 1, q + 3, x + 3, R != NULL ? R + 9 : NULL);
+            clean = rrr_simd_fk_avx512(m, n - 1, q + 3, x + 3, R != NULL ? R + 9 : NULL);
         } else {
-            rrr_simd_fk_avx2(m, n - 1, q + 3, x + 3, R != NULL ? R + 9 : NULL);
+            clean = rrr_simd_fk_avx2(m, n - 1, q + 3, x + 3, R != NULL ? R + 9 : NULL);
         }
 #endif
-        for (k = 1; k < n; ++k) {
+        for (k = clean ? n : 1; k < n; ++k) {
             if (!row_finite(&q[3 * k], NULL, NULL, &x[3 * k], 3) ||
                 (R != NULL && !rrr_finite_n(&R[9 * k], 9))) {
                 st = rrr_fk(m, &q[3 * k], &x[3 * k],
@@ -265,15 +268,16 @@ rrr_status rrr_forward_dynamics_batch(const rrr_model *m, size_t n, const double
         if (st != RRR_OK) {
             return st;
         }
+        int clean = 0; /* every number finite: the kernel's probe (rrr_simd.h) */
 #ifdef RRR_HAVE_SIMD_X86
         if (path == RRR_SIMD_AVX512) {
-            rrr_simd_forward_dynamics_avx512(m, n - 1, q + 3, qd + 3, tau + 3, qdd + 3);
+            clean = rrr_simd_forward_dynamics_avx512(m, n - 1, q + 3, qd + 3, tau + 3, qdd + 3);
         } else {
-            rrr_simd_forward_dynamics_avx2(m, n - 1, q + 3, qd + 3, tau + 3, qdd + 3);
+            clean = rrr_simd_forward_dynamics_avx2(m, n - 1, q + 3, qd + 3, tau + 3, qdd + 3);
         }
 #endif
         /* a D that is not positive definite shows as a non-finite row */
-        for (k = 1; k < n; ++k) {
+        for (k = clean ? n : 1; k < n; ++k) {
             if (!row_finite(&q[3 * k], &qd[3 * k], &tau[3 * k], &qdd[3 * k], 3)) {
                 st = rrr_forward_dynamics(m, &q[3 * k], &qd[3 * k], &tau[3 * k], &qdd[3 * k]);
                 if (st != RRR_OK) {
@@ -307,15 +311,25 @@ rrr_status rrr_ik_batch(const rrr_model *m, size_t n, const double x[], rrr_shou
     }
     /* a model rrr_ik_branch refuses is refused on every row, by the scalar call */
     const int vector = path != RRR_SIMD_SCALAR && n > 0 && rrr_kin_ok(m);
+    int clean = 0; /* every number finite: the kernel's probe (rrr_simd.h) */
 #ifdef RRR_HAVE_SIMD_X86
     if (vector) {
         if (path == RRR_SIMD_AVX512) {
-            rrr_simd_ik_avx512(m, n, x, shoulder, elbow, q);
+            clean = rrr_simd_ik_avx512(m, n, x, shoulder, elbow, q);
         } else {
-            rrr_simd_ik_avx2(m, n, x, shoulder, elbow, q);
+            clean = rrr_simd_ik_avx2(m, n, x, shoulder, elbow, q);
         }
     }
 #endif
+    if (clean) {
+        for (size_t k = 0; status != NULL && k < n; ++k) {
+            status[k] = RRR_OK;
+        }
+        if (done != NULL) {
+            *done = n;
+        }
+        return RRR_OK;
+    }
     /* the vector kernels leave NaN in a row they cannot vouch for (unreachable, near the wrap
      * of an angle): such a row, or one with a non-finite target, is the scalar call's */
     size_t first = n;

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import BadInputError
-from . import _lib
+from . import _lib, batch
 from ._arrays import FloatArray, as_rows, broadcast_rows, ptr, rows_of
 
 _BRANCHES = (("front", "up"), ("front", "down"), ("back", "up"), ("back", "down"))
@@ -35,6 +35,54 @@ IK_BATCH_REFUSAL = ("ik without a posture takes one target (3,) (every branch); 
                     "needs a posture: ik(x, shoulder, elbow); ik_nearest follows a path")
 
 
+def path_value(path: int | str) -> int:
+    """The rrr_simd value of a path argument: a ``simd=`` name (batch.refuse's BadInputError
+    when it is no path here) or an rrr_simd value, as the extension takes it."""
+    if isinstance(path, str):
+        try:
+            return batch.PATHS_HERE[path]
+        except KeyError:
+            batch.refuse(path)
+    if isinstance(path, bool) or not isinstance(path, int):
+        batch.refuse(path)
+    if path not in batch.PATHS_HERE.values():
+        raise ValueError(f"batch path {path} is not available here (rrr_simd_available)")
+    return path
+
+
+def _one_out(method: str, out: object, result: FloatArray, inputs: tuple[object, ...]
+             ) -> FloatArray:
+    want = ", ".join(str(d) for d in result.shape) + ("," if result.ndim == 1 else "")
+    if not (isinstance(out, np.ndarray) and out.dtype == np.float64 and out.shape == result.shape
+            and out.flags.c_contiguous and out.flags.aligned):
+        raise BadInputError(f"{method}: out must be a float64 array of shape ({want}), "
+                            f"C-contiguous and aligned; got {type(out).__name__}")
+    if not out.flags.writeable:
+        raise BadInputError(f"{method}: out must be writable, C-contiguous float64 arrays of "
+                            f"shape ({want}), got {type(out).__name__}")
+    for name, value in zip(("the inputs",) * len(inputs), inputs, strict=True):
+        if isinstance(value, np.ndarray) and np.may_share_memory(out, value):
+            raise BadInputError(f"{method}: out shares memory with {name}: the results would "
+                                "overwrite inputs still to be read")
+    out[...] = result
+    return out
+
+
+def into(method: str, out: object, result: Any, inputs: tuple[object, ...]) -> Any:
+    """``result`` written into the caller's ``out`` (one array, or a tuple for a tuple result),
+    checked as the extension checks it; ``result`` itself when ``out`` is None."""
+    if out is None:
+        return result
+    if isinstance(result, tuple):
+        if not (isinstance(out, tuple) and len(out) == len(result)):
+            raise BadInputError(f"{method}: out must be a tuple of {len(result)} arrays, got "
+                                f"{type(out).__name__}")
+        if any(np.may_share_memory(a, b) for i, a in enumerate(out) for b in out[:i]):
+            raise BadInputError(f"{method}: the arrays of out share memory")
+        return tuple(_one_out(method, o, r, inputs) for o, r in zip(out, result, strict=True))
+    return _one_out(method, out, result, inputs)
+
+
 class Kernels:
     """The librrr calls on ``raw`` (read in place), one ctypes call per row."""
 
@@ -43,9 +91,13 @@ class Kernels:
         self._ref = ct.byref(raw)
 
     # ---- kinematics -----------------------------------------------------------------------
-    def fk(self, q: ArrayLike, path: int = 1, /) -> tuple[FloatArray, FloatArray]:
-        """Rows of rrr_fk; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR) through
-        rrr_fk_batch (its failing row raised by the row loop)."""
+    def fk(self, q: ArrayLike, path: int | str = 1, out: object = None, /
+           ) -> tuple[FloatArray, FloatArray]:
+        """Rows of rrr_fk; a batch on a path other than 1 (RRR_SIMD_SCALAR) through
+        rrr_fk_batch (its failing row raised by the row loop); written into ``out`` if given."""
+        return into("fk", out, self._fk(q, path_value(path)), (q,))  # type: ignore[no-any-return]
+
+    def _fk(self, q: ArrayLike, path: int) -> tuple[FloatArray, FloatArray]:
         qs, batch = as_rows(q, "q")
         if batch and path != 1:
             outs = self._batch("rrr_fk_batch", [qs], [(3,), (3, 3)], path)
@@ -88,12 +140,17 @@ class Kernels:
         sol = self._ik_set(x, "ik_branches takes one target (3,), as ik does")
         return [_BRANCHES[sol.branch[i]] for i in range(sol.n)]
 
-    def ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, path: int = 1, /
-                  ) -> FloatArray:
-        """Rows of rrr_ik_branch; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR) through
-        rrr_ik_batch. The first row that fails raises its error."""
+    def ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, path: int | str = 1,
+                  out: object = None, /) -> FloatArray:
+        """Rows of rrr_ik_branch; a batch on a path other than 1 (RRR_SIMD_SCALAR) through
+        rrr_ik_batch. The first row that fails raises its error. Written into ``out`` if
+        given."""
         if shoulder not in (0, 1) or elbow not in (0, 1):
             raise BadInputError(f"posture indices must be 0 or 1, got {shoulder}, {elbow}")
+        result = self._ik_branch(x, shoulder, elbow, path_value(path))
+        return into("ik_branch", out, result, (x,))  # type: ignore[no-any-return]
+
+    def _ik_branch(self, x: ArrayLike, shoulder: int, elbow: int, path: int) -> FloatArray:
         xs, batch = as_rows(x, "x")
         q = np.empty_like(xs)
         if batch and path != 1 and xs.shape[0] > 0:
@@ -150,17 +207,21 @@ class Kernels:
         return out if batch else float(out[0])
 
     # ---- dynamics -------------------------------------------------------------------------
-    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, path: int = 1, /
-                  ) -> FloatArray:
-        """Rows of rrr_regressor; a batch with ``path`` other than 1 through
-        rrr_regressor_batch."""
-        return self._map3_batch("rrr_regressor", q, qd, qdd, (3, _lib.NP), path)
+    def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, path: int | str = 1,
+                  out: object = None, /) -> FloatArray:
+        """Rows of rrr_regressor; a batch on a path other than 1 through
+        rrr_regressor_batch; written into ``out`` if given."""
+        result = self._map3_batch("rrr_regressor", q, qd, qdd, (3, _lib.NP), path_value(path))
+        return into("regressor", out, result, (q, qd, qdd))  # type: ignore[no-any-return]
 
-    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike, path: int = 1, /
-                         ) -> FloatArray:
-        """Rows of rrr_inverse_dynamics; a batch with ``path`` other than 1 (RRR_SIMD_SCALAR)
-        through rrr_inverse_dynamics_batch (its failing row raised by the row loop)."""
-        return self._map3_batch("rrr_inverse_dynamics", q, qd, qdd, (3,), path)
+    def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
+                         path: int | str = 1, out: object = None, /) -> FloatArray:
+        """Rows of rrr_inverse_dynamics; a batch on a path other than 1 (RRR_SIMD_SCALAR)
+        through rrr_inverse_dynamics_batch (its failing row raised by the row loop); written
+        into ``out`` if given."""
+        result = self._map3_batch("rrr_inverse_dynamics", q, qd, qdd, (3,), path_value(path))
+        return into("inverse_dynamics", out, result,  # type: ignore[no-any-return]
+                    (q, qd, qdd))
 
     def mass_matrix(self, q: ArrayLike, /) -> FloatArray:
         return self._map1("rrr_mass_matrix", q, "q", (3, 3))
@@ -171,12 +232,14 @@ class Kernels:
     def gravity(self, q: ArrayLike, /) -> FloatArray:
         return self._map1("rrr_gravity", q, "q", (3,))
 
-    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, path: int = 1, /
-                         ) -> FloatArray:
-        """Rows of rrr_forward_dynamics; a batch with ``path`` other than 1 through
-        rrr_forward_dynamics_batch."""
-        return self._map3_batch("rrr_forward_dynamics", q, qd, tau, (3,), path,
-                                names=("q", "qd", "tau"))
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
+                         path: int | str = 1, out: object = None, /) -> FloatArray:
+        """Rows of rrr_forward_dynamics; a batch on a path other than 1 through
+        rrr_forward_dynamics_batch; written into ``out`` if given."""
+        result = self._map3_batch("rrr_forward_dynamics", q, qd, tau, (3,), path_value(path),
+                                  names=("q", "qd", "tau"))
+        return into("forward_dynamics", out, result,  # type: ignore[no-any-return]
+                    (q, qd, tau))
 
     def energy(self, q: ArrayLike, qd: ArrayLike, /) -> tuple[Any, Any]:
         (qs, qds), batch = broadcast_rows((q, "q"), (qd, "qd"))

@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import BadInputError, ModelError
-from . import _ctypes_kernels, _lib, batch
+from . import _ctypes_kernels, _lib
 from ._arrays import FloatArray, ptr
 from ._package import DATA_DIR
 from .control import CtcGains
@@ -50,17 +50,6 @@ SHOULDER = {"front": 0, "back": 1}
 ELBOW = {"up": 0, "down": 1}
 #: The packaged default robot file (``Model.default()`` reads it).
 DEFAULT_ROBOT_TOML = DATA_DIR / "default_robot.toml"
-
-
-_AUTO = batch.SIMD_PATHS["auto"]
-
-
-def _path(simd: str) -> int:
-    """The rrr_simd value of a ``simd=`` name; BadInputError when it is not a path here."""
-    try:
-        return batch.PATHS_HERE[simd]
-    except (KeyError, TypeError):
-        batch.refuse(simd)
 
 
 @dataclass(frozen=True)
@@ -238,13 +227,14 @@ class Model:
         write_toml(self.to_dict(), Path(path))
 
     # ---- kinematics -----------------------------------------------------------------------
-    def fk(self, q: ArrayLike, simd: str = "auto") -> tuple[FloatArray, FloatArray]:
+    def fk(self, q: ArrayLike, simd: str = "auto",
+           out: tuple[FloatArray, FloatArray] | None = None) -> tuple[FloatArray, FloatArray]:
         """Tip position (3,) and orientation (3, 3) (eqs 3-5); (n, 3), (n, 3, 3) for batches.
 
-        A batch runs in one call of librrr's batch kernels; ``simd`` as for
-        :meth:`inverse_dynamics` (``"auto"``: within 1e-13 m of the scalar path)."""
-        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
-        return self._k.fk(q, path)
+        A batch runs in one call of librrr's batch kernels; ``simd`` and ``out`` (here a pair
+        of arrays, x and R) as for :meth:`inverse_dynamics` (``"auto"``: within 1e-13 m of the
+        scalar path)."""
+        return self._k.fk(q, simd, out)
 
     def fk_frames(self, q: ArrayLike) -> FloatArray:
         """Every DH frame in frame 0 as 4 x 4 homogeneous transforms, shape (4, 4, 4) (frames
@@ -271,7 +261,7 @@ class Model:
         return self._k.joint_motion(q, xd, xdd)
 
     def ik(self, x: ArrayLike, shoulder: str | None = None, elbow: str | None = None,
-           simd: str = "auto") -> FloatArray:
+           simd: str = "auto", out: FloatArray | None = None) -> FloatArray:
         """Inverse kinematics (eq 6, valid in the whole workspace).
 
         Without a posture: every solution of one target (3,), shape (k, 3) with k = 1..4,
@@ -280,18 +270,20 @@ class Model:
 
         With a posture (``shoulder`` 'front'|'back' and ``elbow`` 'up'|'down'): the solution on
         that branch, (3,) for one target, (n, 3) for a batch of targets, which runs in one call
-        of librrr's batch kernels (``rrr_ik_batch``); ``simd`` as for
+        of librrr's batch kernels (``rrr_ik_batch``); ``simd`` and ``out`` as for
         :meth:`inverse_dynamics` (``"auto"``: within 1e-13 rad of the scalar path, which is
         :meth:`ik_branch` bit for bit). A row that is unreachable or not finite raises its error
         (UnreachableError, BadInputError) naming the row, as the other batch methods do; screen
         a batch with :meth:`workspace_margin` (> 0 reachable) first to keep the others."""
         if shoulder is None and elbow is None:
+            if out is not None:
+                raise BadInputError("ik: out needs a posture (shoulder and elbow): without one "
+                                    "the number of solutions is not known in advance")
             return self._k.ik(x)
         if shoulder not in SHOULDER or elbow not in ELBOW:
             raise BadInputError(f"posture must be shoulder='front'|'back' and elbow='up'|'down', "
                                 f"got {shoulder!r}, {elbow!r}")
-        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
-        return self._k.ik_branch(x, SHOULDER[shoulder], ELBOW[elbow], path)
+        return self._k.ik_branch(x, SHOULDER[shoulder], ELBOW[elbow], simd, out)
 
     def ik_branches(self, x: ArrayLike) -> list[tuple[str, str]]:
         """The (shoulder, elbow) names of the solutions :meth:`ik` returns, in the same order."""
@@ -319,25 +311,30 @@ class Model:
 
     # ---- dynamics -------------------------------------------------------------------------
     def regressor(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
-                  simd: str = "auto") -> FloatArray:
+                  simd: str = "auto", out: FloatArray | None = None) -> FloatArray:
         """R(q, qd, qdd) of eq 10, (3, 16) or (n, 3, 16): tau = R p.
 
-        A batch runs in one call of librrr's batch kernels; ``simd`` as for
+        A batch runs in one call of librrr's batch kernels; ``simd`` and ``out`` as for
         :meth:`inverse_dynamics` (``"auto"``: within 1e-13 of the scalar path)."""
-        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
-        return self._k.regressor(q, qd, qdd, path)
+        return self._k.regressor(q, qd, qdd, simd, out)
 
     def inverse_dynamics(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike,
-                         simd: str = "auto") -> FloatArray:
+                         simd: str = "auto", out: FloatArray | None = None) -> FloatArray:
         """Motor torque tau = R(q, qd, qdd) p (rigid body + rotor inertia), N m.
 
         A batch ((n, 3) rows) runs in one call of librrr's batch kernels
         (:mod:`rrr_robot.core.batch`): ``simd="auto"`` the widest this CPU runs (AVX-512, AVX2,
         else scalar), within 1e-13 N m of the scalar path; ``"scalar"`` bit for bit the
         one-state call on every row; ``"avx2"``, ``"avx512"`` those kernels (refused where they
-        are not available). One state is always the scalar call."""
-        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
-        return self._k.inverse_dynamics(q, qd, qdd, path)
+        are not available). One state is always the scalar call.
+
+        ``out``: an array to write the result into and return, instead of a new one: float64,
+        C-contiguous, writable, of exactly the result's shape ((3,) or (n, 3)), sharing no
+        memory with an input (BadInputError otherwise). A loop over batches of one size saves
+        the allocation and, on Linux, the page faults of first writing fresh memory (on this
+        project's VM about a third of a 1e5-state call: docs/performance.md). When a row fails,
+        its error is raised and ``out`` holds the rows before it; the rest is unspecified."""
+        return self._k.inverse_dynamics(q, qd, qdd, simd, out)
 
     def mass_matrix(self, q: ArrayLike) -> FloatArray:
         """D(q) of eq 7 (rotor inertias included), (3, 3) or (n, 3, 3)."""
@@ -352,15 +349,14 @@ class Model:
         return self._k.gravity(q)
 
     def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike,
-                         simd: str = "auto") -> FloatArray:
+                         simd: str = "auto", out: FloatArray | None = None) -> FloatArray:
         """qdd = D^-1 (tau - c - h), rad/s^2.
 
         A batch runs in one call of librrr's batch kernels (a branch-free Cholesky over the
-        states; a row whose D is not positive definite is the scalar call's); ``simd`` as for
-        :meth:`inverse_dynamics` (``"auto"``: within 1e-13 rad/s^2 of the scalar path for
-        the default robot)."""
-        path = _AUTO if simd == "auto" else _path(simd)  # the default: no look-up
-        return self._k.forward_dynamics(q, qd, tau, path)
+        states; a row whose D is not positive definite is the scalar call's); ``simd`` and
+        ``out`` as for :meth:`inverse_dynamics` (``"auto"``: within 1e-13 rad/s^2 of the
+        scalar path for the default robot)."""
+        return self._k.forward_dynamics(q, qd, tau, simd, out)
 
     def energy(self, q: ArrayLike, qd: ArrayLike) -> tuple[Any, Any]:
         """Kinetic and potential energy, J: two floats for one state, two (n,) arrays for a
