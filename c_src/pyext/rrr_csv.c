@@ -86,15 +86,21 @@ static size_t rrr_csv_fast(char *out, double v)
      * other miss: the result never depends on this estimate) */
     const int m = (e2 - 1) * 78913;
     int e = m >= 0 ? m >> 18 : -((-m + 262143) >> 18);
+    if (16 - e > 27 || 16 - e < -26) {
+        return 0; /* 10^(16 - e) and 10^(17 - e) or 10^(15 - e) must be in the table */
+    }
     long double y = rrr_csv_scaled(a, 16 - e);
     if (y < 1e16L) {
+        if (16 - e == 27) {
+            return 0;
+        }
         --e;
         y = rrr_csv_scaled(a, 16 - e);
     } else if (y >= 1e17L) {
         ++e;
         y = rrr_csv_scaled(a, 16 - e);
     }
-    if (16 - e > 27 || 16 - e < -27 || !(y >= 1e16L + 1.0L && y < 1e17L - 1.0L)) {
+    if (!(y >= 1e16L + 1.0L && y < 1e17L - 1.0L)) {
         return 0;
     }
     uint64_t n = (uint64_t)y; /* y > 0: its floor */
