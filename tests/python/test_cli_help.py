@@ -118,3 +118,40 @@ def test_quiet_and_verbose_before_or_after_the_command() -> None:
                                  (["hil", "bench", "-v"], False, True)):
         args = parser.parse_args(argv)
         assert (args.quiet, args.verbose) == (quiet, verbose), argv
+
+
+def test_the_command_table_is_the_parsers_list_of_commands() -> None:
+    from rrr_robot.cli.app import COMMANDS
+
+    top = [a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)]
+    assert tuple(top[0].choices) == COMMANDS
+
+
+@pytest.mark.parametrize("path", [" ".join(p) for p, _ in ALL])
+def test_the_parser_of_one_command_is_the_whole_parsers(
+        path: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """main() builds only the group of the command it is given (a faster start): its help, its
+    usage line and its errors are those of the whole parser, word for word."""
+    words = path.split()
+    one = build_parser(words[0])
+    whole = dict((" ".join(p), s) for p, s in ALL)[path]
+    mine = dict((" ".join(p), s) for p, s in commands(one))[path]
+    assert mine.format_help() == whole.format_help()
+    assert one.format_usage() == build_parser().format_usage()
+    messages = []
+    for parser in (one, build_parser()):
+        with pytest.raises(SystemExit):
+            parser.parse_args([*words, "--no-such-option"])
+        messages.append(capsys.readouterr().err)
+    assert messages[0] == messages[1] and "error:" in messages[0]
+
+
+def test_an_unknown_command_gets_the_whole_parser() -> None:
+    from rrr_robot.cli.app import _command_of
+
+    assert _command_of(["-q", "writing", "--out", "x"]) == "writing"
+    assert _command_of(["-v", "hil", "bench"]) == "hil"
+    assert _command_of(["--help"]) is None and _command_of([]) is None
+    assert _command_of(["bogus", "writing"]) is None and _command_of(["--", "fmus"]) is None
+    with pytest.raises(ValueError, match="unknown command"):
+        build_parser("bogus")

@@ -216,6 +216,26 @@ def test_compiled_rows_are_the_python_rows_byte_for_byte() -> None:
         "nan,nan,-0,0.10000000000000001\n"
 
 
+def test_compiled_fast_path_is_the_python_formatting_byte_for_byte() -> None:
+    """The values a signal table holds (1e-11 <= |v| < 1e43) take _csvfmt's path without printf
+    (rrr_csv.c): every decade, both signs, powers of ten and their neighbours, integers, times
+    on a millisecond grid, values next to a rounding tie at the 17th digit."""
+    if tables._csvfmt is None:
+        pytest.skip("rrr_robot.core._csvfmt not built (no Python headers)")  # see above
+    rng = np.random.default_rng(26)
+    decades = np.arange(-13, 45, dtype=np.float64)
+    mantissa = rng.uniform(1.0, 10.0, size=(4000, decades.size))
+    tens = 10.0 ** decades
+    ties = (rng.integers(10**15, 10**16, size=20_000) + 0.5).astype(np.float64)
+    values = np.concatenate([
+        (mantissa * tens).ravel(), -(mantissa * tens).ravel() / 3.0, tens,
+        np.nextafter(tens, 0.0), np.nextafter(tens, np.inf), ties, ties * 1e-9, ties * 1e12,
+        np.arange(100_000) * 1e-3, rng.integers(-(2**62), 2**62, size=20_000).astype(float),
+        rng.normal(size=50_000) * 1e-6])
+    for data in (values.reshape(-1, 1), values[: values.size // 31 * 31].reshape(-1, 31)):
+        assert tables.format_rows(data) == tables.format_rows(data, compiled=False)
+
+
 def test_format_rows_refuses_what_is_not_a_table() -> None:
     with pytest.raises(ValueError, match="2-D"):
         tables.format_rows(np.zeros(3))

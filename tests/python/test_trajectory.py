@@ -264,3 +264,25 @@ def test_pen_lifts_towards_the_robot(model: rr.Model) -> None:
 def test_unknown_font(model: rr.Model) -> None:
     with pytest.raises(rr.BadInputError, match="unknown Hershey font 'nope'"):
         tr.make_reference(model, tr.WritingSpec(latin_font="nope"))
+
+
+def test_singularities_of_a_path_equal_the_per_row_classification(
+        model: rr.Model, ref: tr.Reference) -> None:
+    """The reference's singular margins in one pass are librrr's row by row, bit for bit: along
+    the default reference and at random configurations (every quadrant, near the singular
+    sets too)."""
+    rng = np.random.default_rng(26)
+    q = np.vstack([ref.q, rng.uniform(-7.0, 7.0, (20_000, 3)),
+                   [[0.1, 0.2, 0.0], [0.0, np.pi / 2, np.pi], [1.0, -0.3, 1e-12]]])
+    elbow, shoulder, det = tr._singularities(model, q)
+    rows = [model.singularity(qi) for qi in q]
+    assert np.array_equal(elbow, [s.elbow_margin for s in rows])
+    assert np.array_equal(shoulder, [s.shoulder_margin for s in rows])
+    assert np.array_equal(det, [s.det_jacobian for s in rows])
+    assert ref.min_elbow_margin == float(elbow[: ref.t.size].min())
+
+
+@pytest.mark.parametrize("q", [np.zeros((4, 2)), np.array([[0.0, np.nan, 0.0]])])
+def test_singularities_refuse_bad_rows(model: rr.Model, q: np.ndarray) -> None:
+    with pytest.raises(rr.RrrError, match="_singularities"):
+        tr._singularities(model, q)

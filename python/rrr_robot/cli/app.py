@@ -5,25 +5,35 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import logging
 import signal
 import sys
 import threading
 from collections.abc import Iterator, Sequence
 from types import FrameType
+from typing import Any
 
 from .. import __version__
 from ..errors import RrrError
 from ._args import HelpFormatter, add_verbosity_arguments, command_parser, quiet
-from .hil import register_cli as register_hil
-from .identify import register_cli as register_identify
-from .ssp import register_cli as register_ssp
-from .sweep import register_cli as register_sweep
-from .urdf import register_cli as register_urdf
-from .view import register_cli as register_view
-from .writing import register_cli as register_writing
 
 log = logging.getLogger("rrr_robot")
+
+#: The command groups in the order of ``rrr --help``: the module (of this package) whose
+#: ``register_cli`` adds them, and the commands it adds ("" for ``rrr fmus``, added here).
+COMMAND_MODULES: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("", ("fmus",)),
+    (".writing", ("writing",)),
+    (".identify", ("identify", "identify-experiment")),
+    (".hil", ("hil",)),
+    (".urdf", ("urdf",)),
+    (".view", ("view",)),
+    (".ssp", ("ssp", "run-ssp")),
+    (".sweep", ("sweep",)),
+)
+#: Every command, as ``rrr --help`` lists them.
+COMMANDS: tuple[str, ...] = tuple(c for _, names in COMMAND_MODULES for c in names)
 
 
 def _cmd_fmus(_: argparse.Namespace) -> int:
@@ -37,9 +47,12 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of ``rrr`` with every subcommand (nothing heavy is imported: each command
-    imports its library when it runs)."""
+    imports its library when it runs). With ``command`` (one of :data:`COMMANDS`), only the
+    group that adds it is registered (and imported): the parser :func:`main` builds for a
+    command line naming it, which parses and reports it as the whole parser does (the list of
+    commands in the usage line is spelled out, so that it stays the whole list)."""
     parser = argparse.ArgumentParser(
         prog="rrr",
         description="Closed-form RRR robot models: FMUs, writing task, identification, CAN bench, "
@@ -54,7 +67,23 @@ def build_parser() -> argparse.ArgumentParser:
                         "bars (also after the command: rrr writing -q)")
     parser.add_argument("-v", "--verbose", action="store_true",
                         help="also log DEBUG lines (also after the command)")
-    sub = parser.add_subparsers(dest="command", required=True)
+    # one group only: its usage line lists every command all the same (what argparse writes
+    # for the whole parser; a metavar there would also rename the argument in its errors)
+    named = {} if command is None else {"metavar": "{" + ",".join(COMMANDS) + "}"}
+    sub = parser.add_subparsers(dest="command", required=True, **named)
+    groups = [(module, names) for module, names in COMMAND_MODULES
+              if command is None or command in names]
+    if not groups:
+        raise ValueError(f"build_parser: unknown command {command!r}")
+    for module, _ in groups:
+        if module:
+            importlib.import_module(module, __package__).register_cli(sub)
+        else:
+            _register_fmus(sub)
+    return parser
+
+
+def _register_fmus(sub: Any) -> None:
     p_fmus = command_parser(
         sub, "fmus", help="list the FMUs: plant, controller and reference, FMI 2.0 and 3.0 (and "
         "the FMI 2.0 archives for aarch64 Linux hosts)",
@@ -65,14 +94,17 @@ def build_parser() -> argparse.ArgumentParser:
         example="rrr fmus")
     add_verbosity_arguments(p_fmus, bars=False)
     p_fmus.set_defaults(func=_cmd_fmus)
-    register_writing(sub)
-    register_identify(sub)
-    register_hil(sub)
-    register_urdf(sub)
-    register_view(sub)
-    register_ssp(sub)
-    register_sweep(sub)
-    return parser
+
+
+def _command_of(argv: Sequence[str]) -> str | None:
+    """The command an ``rrr`` command line names: its first word that is not an option (the
+    options before the command take no value), if that is one of :data:`COMMANDS`."""
+    for word in argv:
+        if word == "--":
+            return None
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
 
 
 class _Terminated(BaseException):
@@ -146,8 +178,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
-        parser = build_parser()
-        args = parser.parse_args(argv)
+        words = sys.argv[1:] if argv is None else argv
+        parser = build_parser(_command_of(words))  # only the command's group: a faster start
+        args = parser.parse_args(words)
         with _logging(bool(getattr(args, "verbose", False)), quiet(args)):
             return int(args.func(args))
     except KeyboardInterrupt:

@@ -52,7 +52,6 @@ import logging
 import math
 import os
 import re
-import secrets
 import shutil
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -101,7 +100,7 @@ _OWN_TOKENS: set[str] = set()
 
 
 def _token() -> str:
-    token = secrets.token_hex(4)
+    token = os.urandom(4).hex()  # secrets.token_hex(4), without importing secrets (5 ms)
     _OWN_TOKENS.add(token)
     return token
 

@@ -86,7 +86,7 @@ def _pyarrow() -> tuple[Any, Any]:
 def format_rows(data: np.ndarray, compiled: bool = True) -> str:
     """The rows of a 2-D float64 array as CSV text: every value as ``CSV_FLOAT_FORMAT`` (``%.17g``)
     (NaN as ``nan``), ``,`` between values, a newline after each row. ``compiled``: the C
-    formatting (``rrr_robot.core._csvfmt``, about twice as fast) where it is built and the C
+    formatting (``rrr_robot.core._csvfmt``, about 6x faster) where it is built and the C
     locale's decimal point is ``.``; the Python formatting otherwise, the same text."""
     block = np.ascontiguousarray(data, dtype=np.float64)
     if block.ndim != 2:

@@ -17,7 +17,6 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import logging
-import multiprocessing
 import signal
 import sys
 from pathlib import Path
@@ -100,6 +99,8 @@ class ReferenceFigures:
         self._proc: Any = None
         self._conn: Any = None
         if start and sys.platform.startswith("linux"):
+            import multiprocessing  # here: a run without figures does not import it
+
             ctx = multiprocessing.get_context("fork")
             self._conn, child = ctx.Pipe(duplex=False)
             self._proc = ctx.Process(target=_worker, args=(child, *self._args), daemon=True,

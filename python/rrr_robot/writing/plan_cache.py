@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from ..core._arrays import FloatArray
+from ..core.cache import cache_dir
 
 __all__ = ["MAX_ENTRIES", "TipPlan", "cache_dir", "load", "plan_key", "store"]
 
@@ -70,16 +71,6 @@ class TipPlan:
     ws_x: FloatArray
     path_length: float
     letter_height: float  # the fitted spec's (:func:`fitted_spec`)
-
-
-def cache_dir() -> Path | None:
-    """The cache folder, or None when the cache is off (``RRR_NO_CACHE`` set and not 0)."""
-    if os.environ.get("RRR_NO_CACHE", "0") not in ("", "0"):
-        return None
-    if os.environ.get("RRR_CACHE_DIR"):
-        return Path(os.environ["RRR_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "rrr-robot"
 
 
 def _installed(module: str, dist: str) -> str:
