@@ -49,7 +49,7 @@ def _cmd_fmus(_: argparse.Namespace) -> int:
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The parser of ``rrr`` with every subcommand (nothing heavy is imported: each command
-    imports its library when it runs). With ``command`` (one of :data:`COMMANDS`), only the
+    imports its library when it runs). With ``command`` (one of ``COMMANDS``), only the
     group that adds it is registered (and imported): the parser :func:`main` builds for a
     command line naming it, which parses and reports it as the whole parser does (the list of
     commands in the usage line is spelled out, so that it stays the whole list)."""
@@ -98,7 +98,7 @@ def _register_fmus(sub: Any) -> None:
 
 def _command_of(argv: Sequence[str]) -> str | None:
     """The command an ``rrr`` command line names: its first word that is not an option (the
-    options before the command take no value), if that is one of :data:`COMMANDS`."""
+    options before the command take no value), if that is one of ``COMMANDS``."""
     for word in argv:
         if word == "--":
             return None
