@@ -100,3 +100,12 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 def model() -> rr.Model:
     """The default robot's model (immutable: shared by every test that reads it)."""
     return rr.Model.default()
+
+
+@pytest.fixture
+def cache_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """An empty cache folder of this test's own (RRR_CACHE_DIR, the cache not turned off)."""
+    folder = tmp_path / "cache"
+    monkeypatch.setenv("RRR_CACHE_DIR", str(folder))
+    monkeypatch.delenv("RRR_NO_CACHE", raising=False)
+    return folder

@@ -19,14 +19,6 @@ from rrr_robot.sim.fmu_slave import FmuSlave
 from rrr_robot.sim.fmus import fmu_path
 
 
-@pytest.fixture
-def cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    folder = tmp_path / "cache"
-    monkeypatch.setenv("RRR_CACHE_DIR", str(folder))
-    monkeypatch.delenv("RRR_NO_CACHE", raising=False)
-    return folder
-
-
 def _xml(which: str, version: int) -> bytes:
     with zipfile.ZipFile(fmu_path(which, version)) as z:
         return z.read("modelDescription.xml")
@@ -48,17 +40,17 @@ def _slave_facts(which: str, version: int) -> tuple[tuple[object, ...], str]:
 
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("which", ["controller", "plant"])
-def test_a_cached_description_is_fmpys(cache: Path, which: str, version: int) -> None:
+def test_a_cached_description_is_fmpys(cache_folder: Path, which: str, version: int) -> None:
     built, kind = _slave_facts(which, version)
     assert kind == "fmpy"  # the cache was empty
-    assert len(list(cache.glob("fmu-md-*.json"))) == 1
+    assert len(list(cache_folder.glob("fmu-md-*.json"))) == 1
     cached, kind = _slave_facts(which, version)
     assert kind == "cache"
     assert cached == built
 
 
 def test_a_cosimulation_from_the_cache_is_the_same_bit_for_bit(
-        cache: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        cache_folder: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     import rrr_robot as rr
     from rrr_robot.sim.fmu_slave import clear_pool
     from rrr_robot.writing.job import WritingJob, run_writing
@@ -66,10 +58,10 @@ def test_a_cosimulation_from_the_cache_is_the_same_bit_for_bit(
     runs = []
     for k in range(2):  # the first reads the descriptions with FMPy, the second from the cache
         clear_pool()
-        out = cache.parent / f"out{k}"
+        out = cache_folder.parent / f"out{k}"
         run_writing(WritingJob(out=out, scenarios=["ctc"], figures=False))
         runs.append(rr.read_table(out / "ctc.csv"))
-    assert len(list(cache.glob("fmu-md-*.json"))) == 2
+    assert len(list(cache_folder.glob("fmu-md-*.json"))) == 2
     assert runs[0].keys() == runs[1].keys()
     assert all(np.array_equal(runs[0][c], runs[1][c]) for c in runs[0])
 
@@ -90,10 +82,10 @@ def _damage(file: Path, how: str) -> None:
 
 @pytest.mark.parametrize("how", ["truncated", "value reference changed", "another key",
                                  "binary"])
-def test_a_damaged_entry_is_rebuilt_never_trusted(cache: Path, how: str) -> None:
+def test_a_damaged_entry_is_rebuilt_never_trusted(cache_folder: Path, how: str) -> None:
     xml = _xml("plant", 2)
     built, _ = _slave_facts("plant", 2)
-    (file,) = cache.glob("fmu-md-*.json")
+    (file,) = cache_folder.glob("fmu-md-*.json")
     _damage(file, how)
     assert _md_cache.load(xml) is None
     again, kind = _slave_facts("plant", 2)
@@ -101,10 +93,10 @@ def test_a_damaged_entry_is_rebuilt_never_trusted(cache: Path, how: str) -> None
     assert _md_cache.load(xml) is not None
 
 
-def test_no_cache_writes_nothing(cache: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_no_cache_writes_nothing(cache_folder: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("RRR_NO_CACHE", "1")
     _slave_facts("controller", 2)
-    assert not cache.exists() or not list(cache.glob("fmu-md-*"))
+    assert not cache_folder.exists() or not list(cache_folder.glob("fmu-md-*"))
     assert _md_cache.load(_xml("controller", 2)) is None
 
 
@@ -119,19 +111,19 @@ def test_an_unwritable_cache_does_not_fail_the_slave(tmp_path: Path,
     assert kind == "fmpy"  # nothing was stored
 
 
-def test_the_key_is_the_bytes(cache: Path) -> None:
+def test_the_key_is_the_bytes(cache_folder: Path) -> None:
     xml = _xml("plant", 2)
     assert _md_cache.key(xml) == _md_cache.key(bytes(xml))
     assert _md_cache.key(xml) != _md_cache.key(xml + b" ")
     assert _md_cache.key(xml) != _md_cache.key(_xml("plant", 3))
 
 
-def test_a_hit_imports_no_lxml(cache: Path, tmp_path: Path) -> None:
+def test_a_hit_imports_no_lxml(cache_folder: Path, tmp_path: Path) -> None:
     code = ("import sys\nfrom rrr_robot.sim.fmu_slave import FmuSlave\n"
             "from rrr_robot.sim.fmus import fmu_path\n"
             "with FmuSlave(fmu_path('plant', 2), 'plant'):\n    pass\n"
             "print('LXML' if 'lxml' in sys.modules else 'NO-LXML')\n")
-    env = {**os.environ, "RRR_CACHE_DIR": str(cache)}
+    env = {**os.environ, "RRR_CACHE_DIR": str(cache_folder)}
     first, second = (subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env,
                                     check=True, capture_output=True, text=True,
                                     timeout=120).stdout.split()[-1] for _ in range(2))

@@ -22,13 +22,6 @@ SPEC = tr.WritingSpec(text="ab")
 WIDE = tr.WritingSpec(text="abcdefghij")
 
 
-@pytest.fixture
-def cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    folder = tmp_path / "cache"
-    monkeypatch.setenv("RRR_CACHE_DIR", str(folder))
-    monkeypatch.delenv("RRR_NO_CACHE", raising=False)
-    return folder
-
 
 @pytest.fixture(scope="module")
 def model() -> rr.Model:
@@ -50,7 +43,7 @@ def _entries(folder: Path) -> list[Path]:
 
 
 @pytest.mark.parametrize("spec", [SPEC, WIDE], ids=["fits", "fitted"])
-def test_a_cached_reference_is_the_built_one_bit_for_bit(cache: Path, model: rr.Model,
+def test_a_cached_reference_is_the_built_one_bit_for_bit(cache_folder: Path, model: rr.Model,
                                                          monkeypatch: pytest.MonkeyPatch,
                                                          spec: tr.WritingSpec) -> None:
     built_laws = []
@@ -62,9 +55,9 @@ def test_a_cached_reference_is_the_built_one_bit_for_bit(cache: Path, model: rr.
 
     monkeypatch.setattr(tr, "timing_law", counted)
     built = tr.make_reference(model, spec, cache=False)
-    assert not cache.exists() and len(built_laws) == 1
+    assert not cache_folder.exists() and len(built_laws) == 1
     first = tr.make_reference(model, spec)          # a miss: builds and stores
-    assert len(_entries(cache)) == 1 and len(built_laws) == 2
+    assert len(_entries(cache_folder)) == 1 and len(built_laws) == 2
     _assert_same(built, first)
     fonts_read = []
     real_strokes = tr._strokes
@@ -90,7 +83,7 @@ def test_the_wide_text_is_fitted(model: rr.Model) -> None:
     assert tr.fitted_spec(WIDE).letter_height < WIDE.letter_height
 
 
-def test_the_key_follows_every_spec_field(cache: Path) -> None:
+def test_the_key_follows_every_spec_field(cache_folder: Path) -> None:
     keys = {plan_cache.plan_key(SPEC)}
     for change in ({"text": "ac"}, {"peak_speed": SPEC.peak_speed * (1 + 1e-15)},
                    {"x_range": (0.35, 0.650000001)}, {"dt": 2e-3}):
@@ -100,11 +93,11 @@ def test_the_key_follows_every_spec_field(cache: Path) -> None:
 
 
 @pytest.mark.parametrize("damage", ["truncated", "garbage", "other_key", "bad_shape", "nan"])
-def test_a_damaged_entry_is_rebuilt_not_trusted(cache: Path, model: rr.Model,
+def test_a_damaged_entry_is_rebuilt_not_trusted(cache_folder: Path, model: rr.Model,
                                                 damage: str) -> None:
     built = tr.make_reference(model, SPEC, cache=False)
     tr.make_reference(model, SPEC)
-    [entry] = _entries(cache)
+    [entry] = _entries(cache_folder)
     with np.load(entry) as z:
         arrays = {k: z[k] for k in z.files}
     if damage == "truncated":
@@ -135,23 +128,23 @@ def test_an_unwritable_cache_is_no_failure(tmp_path: Path, model: rr.Model,
     assert plan_cache.load(SPEC) is None
 
 
-def test_no_cache_env_turns_it_off(cache: Path, model: rr.Model,
+def test_no_cache_env_turns_it_off(cache_folder: Path, model: rr.Model,
                                    monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("RRR_NO_CACHE", "1")
     assert plan_cache.cache_dir() is None
     tr.make_reference(model, SPEC)
-    assert not cache.exists()
+    assert not cache_folder.exists()
     monkeypatch.setenv("RRR_NO_CACHE", "0")
-    assert plan_cache.cache_dir() == cache
+    assert plan_cache.cache_dir() == cache_folder
 
 
-def test_failures_are_not_cached(cache: Path, model: rr.Model) -> None:
+def test_failures_are_not_cached(cache_folder: Path, model: rr.Model) -> None:
     with pytest.raises(rr.BadInputError, match="outside the workspace"):
         tr.make_reference(model, tr.WritingSpec(x_range=(0.7, 1.0)))
-    assert _entries(cache) == []
+    assert _entries(cache_folder) == []
 
 
-def test_a_cached_plan_is_checked_against_each_robot(cache: Path, model: rr.Model,
+def test_a_cached_plan_is_checked_against_each_robot(cache_folder: Path, model: rr.Model,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     """A plan cached for one robot is still refused for a robot that cannot reach it."""
     tr.make_reference(model, SPEC)
@@ -165,20 +158,20 @@ def test_a_cached_plan_is_checked_against_each_robot(cache: Path, model: rr.Mode
         tr.make_reference(model, SPEC)
 
 
-def test_the_cache_keeps_at_most_max_entries(cache: Path, model: rr.Model,
+def test_the_cache_keeps_at_most_max_entries(cache_folder: Path, model: rr.Model,
                                              monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(plan_cache, "MAX_ENTRIES", 2)
     for text in ("a", "b", "c"):
         tr.make_reference(model, tr.WritingSpec(text=text))
-    entries = _entries(cache)
+    entries = _entries(cache_folder)
     assert len(entries) == 2
     kept = {e.name for e in entries}
     assert all(f"plan-{plan_cache.plan_key(tr.WritingSpec(text=t))[:40]}.npz"
                in kept for t in ("b", "c"))
-    assert not list(cache.glob(".plan-*"))  # no temporary file left behind
+    assert not list(cache_folder.glob(".plan-*"))  # no temporary file left behind
 
 
-def test_a_cached_writing_run_imports_no_scipy(cache: Path, tmp_path: Path) -> None:
+def test_a_cached_writing_run_imports_no_scipy(cache_folder: Path, tmp_path: Path) -> None:
     """`rrr writing --no-figures` with the plan cached never imports SciPy (about 0.4 s of a
     run): a first process builds the plan (a miss), a second one reads it (a hit)."""
     code = """
@@ -187,7 +180,7 @@ from rrr_robot.cli import main
 assert main(["writing", "--no-figures", "--scenario", "ctc", "--out", sys.argv[1]]) == 0
 print("SCIPY:" + json.dumps("scipy" in sys.modules))
 """
-    env = {**os.environ, "RRR_CACHE_DIR": str(cache)}
+    env = {**os.environ, "RRR_CACHE_DIR": str(cache_folder)}
     loaded = []
     for out in ("miss", "hit"):
         run = subprocess.run([sys.executable, "-c", code, str(tmp_path / out)], cwd=tmp_path,
