@@ -55,7 +55,7 @@ OLD_README = {
 TABLE_ROWS = [
     ("docs/performance.md", "| FK (position + orientation) | `rrr_fk` | 41.0 / 42.2 / 48.7"),
     ("docs/performance.md", "| IK, all branches (4 solutions) | `rrr_ik` | 85.8 / 90.9 / 122"),
-    ("docs/performance.md", "| tau = R p, one state | `Model.inverse_dynamics` | 363 / 401 / 444"),
+    ("docs/performance.md", "| tau = R p, one state | `Model.inverse_dynamics` | 324 / 326 / 370"),
     ("docs/performance.md", "| IK, all 4 branches (`rrr_ik`) | 46 flops"),
     ("docs/performance.md", "| open loop, 2 s | 1.83 / 2.24 / 4.90"),
     ("docs/performance.md", "| the three `<scenario>.csv` | 0.51 / 0.54 / 0.73"),
