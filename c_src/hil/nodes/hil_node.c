@@ -16,7 +16,7 @@
 #include <sys/mman.h>
 #include <sys/prctl.h>
 
-#include "hil_codec.h"
+#include "hil_common.h"
 #include "rrr_hil_logs.h"
 
 /* ---- command line ---------------------------------------------------------------------------- */
