@@ -118,7 +118,7 @@ for script in bench/bench_*.py; do
   echo "-- python $script --quick"
   python "$script" --quick
 done
-echo "== libFuzzer on the CAN frame decoders (short run; c_src/hil/README.md has the long one) =="
+echo "== libFuzzer on the CAN frame decoders (short run; docs/can-bench.md has the long one) =="
 fuzzer_ok() {
   command -v clang >/dev/null 2>&1 && [ -e "$(clang -print-file-name=libclang_rt.fuzzer-x86_64.a)" ]
 }

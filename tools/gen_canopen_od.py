@@ -1,8 +1,8 @@
 """The object dictionary of the simulated CiA 402 drive (one axis of the arm): one table, here,
 from which two files are generated and committed:
 
-- c_src/hil/gen/hil_canopen_od_table.[ch]: the C table the CANopen slave core (c_src/hil/
-  hil_canopen.c) serves;
+- c_src/hil/canopen/gen/hil_canopen_od_table.[ch]: the C table the CANopen slave core
+  (c_src/hil/canopen/hil_canopen.c) serves;
 - python/rrr_robot/data/rrr_cia402.eds: the EDS (CiA 306) a CANopen master loads (python's
   ``canopen.objectdictionary.import_od``, a PLC's configuration tool), shipped in the wheel and
   installed by CMake next to the DBC.
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-C_DIR = ROOT / "c_src" / "hil" / "gen"
+C_DIR = ROOT / "c_src" / "hil" / "canopen" / "gen"
 EDS_PATH = ROOT / "python" / "rrr_robot" / "data" / "rrr_cia402.eds"
 
 #: CiA 301 data types: code, size in bytes (0: variable), EDS name.

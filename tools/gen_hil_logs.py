@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Generate c_src/hil/gen/rrr_hil_logs.h, the CAN bench nodes' CSV log headers, from the one
-table of the logs' columns, rrr_robot.hil.logspec (names, units, meanings, order).
+"""Generate c_src/hil/nodes/gen/rrr_hil_logs.h, the CAN bench nodes' CSV log headers, from the
+one table of the logs' columns, rrr_robot.hil.logspec (names, units, meanings, order).
 
     python tools/gen_hil_logs.py           # write the header
     python tools/gen_hil_logs.py --check   # exit 1 if the committed header differs (the test)
@@ -18,7 +18,7 @@ from pathlib import Path
 
 from rrr_robot.hil.logspec import LOGS, LogSpec
 
-OUT = Path(__file__).resolve().parents[1] / "c_src" / "hil" / "gen" / "rrr_hil_logs.h"
+OUT = Path(__file__).resolve().parents[1] / "c_src" / "hil" / "nodes" / "gen" / "rrr_hil_logs.h"
 
 
 def _log(spec: LogSpec) -> list[str]:

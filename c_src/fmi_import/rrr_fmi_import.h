@@ -1,8 +1,9 @@
 /**
  * @file rrr_fmi_import.h
  * @brief The project's one small importer of its own FMUs (FMI 2.0 and 3.0), shared by the CAN
- *        bench's plant node (c_src/hil/hil_fmu.c), the portable run tool (tests/c/fmu_run) and
- *        the two FMU test harnesses. Not installed: an internal static library.
+ *        bench's plant node (c_src/hil/nodes/hil_fmu.c), the portable run tool
+ *        (tests/c/fmu_run) and the two FMU test harnesses. Not installed: an internal static
+ *        library.
  *
  * What it does:
  * - reads modelDescription.xml whole, with a size limit, refusing empty files and NUL bytes;

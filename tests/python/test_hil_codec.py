@@ -13,7 +13,7 @@ import pytest
 from rrr_robot.hil.protocol import DBC_PATH, FrameError, database, decode, encode
 
 REPO = Path(__file__).resolve().parents[2]
-GEN = REPO / "c_src" / "hil" / "gen"
+GEN = REPO / "c_src" / "hil" / "dbc" / "gen"
 
 
 def _strip_timestamp(text: str) -> list[str]:
@@ -27,7 +27,7 @@ def test_generated_c_code_is_up_to_date(tmp_path: Path) -> None:
         fresh = _strip_timestamp((tmp_path / name).read_text())
         committed = _strip_timestamp((GEN / name).read_text())
         assert fresh == committed, (
-            f"c_src/hil/gen/{name} is not what cantools generates from {DBC_PATH.name}: "
+            f"c_src/hil/dbc/gen/{name} is not what cantools generates from {DBC_PATH.name}: "
             "run 'cmake --build <build> --target rrr_hil_regen_codec'")
 
 

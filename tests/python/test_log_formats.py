@@ -98,14 +98,15 @@ def test_reading_a_reference_table_by_column_name(tmp_path: Path) -> None:
 
 
 def test_the_generated_header_is_the_spec() -> None:
-    header = (ROOT / "c_src" / "hil" / "gen" / "rrr_hil_logs.h").read_text()
+    header = (ROOT / "c_src" / "hil" / "nodes" / "gen" / "rrr_hil_logs.h").read_text()
     for spec in (CONTROLLER_LOG, PLANT_LOG, LATENCY_LOG):
         macro = f"RRR_HIL_{spec.name.upper()}_LOG"
         assert f'#define {macro}_HEADER "{spec.header}\\n"' in header
         assert f"#define {macro}_COLUMNS {len(spec.columns)}" in header
     # the C writers print the generated headers, not their own
-    for source in ("rrr_hil_controller.c", "rrr_hil_plant.c", "hil_node.c"):
-        text = (ROOT / "c_src" / "hil" / source).read_text()
+    for source in ("rrr_hil_controller.c", "hil_controller.c", "rrr_hil_plant.c", "hil_plant.c",
+                   "hil_node.c"):
+        text = (ROOT / "c_src" / "hil" / "nodes" / source).read_text()
         assert "rrr_hil_logs.h" in text and "\"k,t," not in text and "\"k,latency" not in text
 
 

@@ -53,6 +53,34 @@ int rrr_hil_report_exit(const char *prog, int code, uint32_t period, const char 
 #endif
     ;
 
+/* ---- how a run ends (both nodes, every profile) ---------------------------------------------- */
+
+/** How a node's run ends: the period it reached and why it ended, for the exit line. */
+typedef struct rrr_hil_run {
+    uint32_t k;    ///< the current period ("at period K" in the exit line)
+    char why[320]; ///< why the run ended (rrr_hil_run_end), "" until then
+} rrr_hil_run;
+
+/** Record why the run ends (printf format, into r->why); returns @p code. */
+int rrr_hil_run_end(rrr_hil_run *r, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+/** The run ends on SIGINT or SIGTERM: RRR_HIL_EXIT_INTERRUPTED, the signal's name as the reason. */
+int rrr_hil_run_interrupted(rrr_hil_run *r);
+/** A run that completed (@p rc is RRR_HIL_EXIT_OK) while the safety policy fired: "; " and the
+ *  text are appended to r->why and RRR_HIL_EXIT_SAFETY is returned; any other @p rc as it is. */
+int rrr_hil_run_safety(rrr_hil_run *r, int rc, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+/** The exit line of the run (rrr_hil_report_exit with r's period and reason); returns @p rc. */
+int rrr_hil_run_report(const char *prog, int rc, const rrr_hil_run *r);
+/** CLOCK_MONOTONIC, ms. */
+int64_t rrr_hil_now_ms(void);
+
 /* ---- transport from the command line --------------------------------------------------------- */
 
 /** Which transport, from --listen HOST:PORT, --connect HOST:PORT or --socketcan IF. */
@@ -89,11 +117,12 @@ const char *rrr_hil_stop_signal_name(void);
 int rrr_hil_parse_hostport(const char *s, char host[64], uint16_t *port);
 /** Parse "a,b,c" into three finite doubles. 0 or -1. */
 int rrr_hil_parse_vec3(const char *s, double v[3]);
-/** The options both nodes share for their CANopen profile: "--profile dbc|canopen" (into
- *  *canopen) and "--node-ids a,b,c" (three distinct node ids 1..127, into ids). @p a is the
- *  option, @p v its value. 1 consumed, 0 not one of them, -1 a bad value (message printed). */
-int rrr_hil_profile_arg(const char *a, const char *v, int *canopen, uint8_t ids[3],
-                        const char *prog);
+/** The options both nodes share for their bus profile: "--profile NAME" (one of the @p n_names
+ *  @p names, its index into *profile) and "--node-ids a,b,c" (the CANopen drives: three distinct
+ *  node ids 1..127, into ids). @p a is the option, @p v its value. 1 consumed, 0 not one of them,
+ *  -1 a bad value (message printed). */
+int rrr_hil_profile_arg(const char *a, const char *v, const char *const *names, unsigned n_names,
+                        int *profile, uint8_t ids[3], const char *prog);
 /** Apply "NAME=VALUE" to a model, NAME as the FMUs name the parameters: d1, a2, a3, d2, d3, g,
  *  u_max, p[1..16], kt[i], b[i], f[i,k], w[i,k] (i, k = 1..3). The value must be finite; the
  *  model is not validated here (call rrr_model_validate after the last one). 0, or -1 with a
@@ -192,6 +221,8 @@ void rrr_hil_rt_done(rrr_hil_rt *rt);
 /** Write the latency log (if any), then print p50/p99/p99.9/max latency and misses as text on
  *  stderr and as JSON members on out. */
 void rrr_hil_rt_report(rrr_hil_rt *rt, FILE *out, const char *prog);
+/** rrr_hil_rt_report as the one line "RRR_HIL_RT {...}" on stdout. */
+void rrr_hil_rt_print(rrr_hil_rt *rt, const char *prog);
 /** Free the statistics buffers (and close a latency log not written). */
 void rrr_hil_rt_free(rrr_hil_rt *rt);
 /** Percentile @p p (0..1) of n sorted values: the value of rank ceil(p n) (nearest rank). */

@@ -34,7 +34,7 @@
  *   without latching a fault. Once a stop is honoured the plant applies 0 V.
  * Every event is counted in err (counters only grow).
  *
- * The 0 V and the latch are rrr_hil_latch's (above): faults (its code), zero_applied (its zero)
+ * The 0 V and the latch are rrr_hil_latch's (hil_common.h): faults (its code), zero_applied (its zero)
  * and err.fault_events, err.resets, err.zero_periods (its counters) are that latch's storage,
  * loaded into an rrr_hil_latch and stored back around each call (hil_supervisor.c), so that the
  * layout the Python binding knows stays as it is.
@@ -50,53 +50,6 @@
 #include <stdint.h>
 
 #include "hil_codec.h"
-
-/**
- * @brief The safety policy's output stage, one piece of code for both bench profiles: the DBC
- *        supervisor below (rrr_hil_sup) and each CiA 402 drive of the CANopen profile
- *        (rrr_co_node, hil_canopen.h).
- *
- * - rrr_hil_latch_fault latches a fault with its code (a new fault while latched replaces the
- *   code and is counted too);
- * - while a fault is latched, or while the caller's stop input is set (a honoured StopCmd, the
- *   supervisor's command timeout, a 402 QUICK STOP ACTIVE), the output stage applies 0 V
- *   (rrr_hil_latch_output zeroes the outputs of the period and counts the period);
- * - nothing but rrr_hil_latch_reset, the explicit reset event, clears the latch: the DBC
- *   supervisor's completed fault-reset sequence, the 402 fault reset (rising edge of controlword
- *   bit 7 in FAULT). A reset while nothing is latched has no effect and is not counted.
- * What a fault is and what the reset event is stay with the caller (the protocol); what
- * happens to the voltage is decided here. Pure: no I/O, no allocation, no globals.
- */
-typedef struct rrr_hil_latch {
-    uint8_t latched;       ///< 1: a fault is latched (0 V until rrr_hil_latch_reset)
-    uint8_t zero;          ///< 0 V was forced over the last period (rrr_hil_latch_output)
-    uint16_t code;         ///< the latched fault's code (0 when none): the supervisor's
-                           ///< RRR_HIL_FAULT_* bits, a drive's EMCY error code
-    uint32_t fault_events; ///< faults latched (a fault while latched counts too)
-    uint32_t resets;       ///< latches cleared by rrr_hil_latch_reset
-    uint32_t zero_periods; ///< periods with 0 V forced by a latched fault or the stop input
-} rrr_hil_latch;
-
-/** Nothing latched, counters 0. */
-void rrr_hil_latch_init(rrr_hil_latch *l);
-
-/** Latch a fault with its code and count it. */
-void rrr_hil_latch_fault(rrr_hil_latch *l, uint16_t code);
-
-/** The explicit reset event: clears a latched fault (code 0) and counts it; returns 1 then,
- *  0 (and changes nothing) when nothing is latched. */
-int rrr_hil_latch_reset(rrr_hil_latch *l);
-
-/** 1 when the output stage forces 0 V now: a fault is latched or @p stop is set. */
-int rrr_hil_latch_blocks(const rrr_hil_latch *l, int stop);
-
-/**
- * @brief Close one period: the outputs u[0..n) stay as the caller computed them, or are set to
- *        0 when rrr_hil_latch_blocks(l, stop); such a period is counted in zero_periods and
- *        l->zero tells it until the next call.
- * @return 1 when 0 V was forced, else 0
- */
-int rrr_hil_latch_output(rrr_hil_latch *l, int stop, double *u, unsigned n);
 
 /** Valid enabling commands with consecutive alive counters that complete a fault reset. */
 #define RRR_HIL_RESET_ENABLE_FRAMES 3u

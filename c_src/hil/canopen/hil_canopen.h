@@ -31,8 +31,8 @@
  * (0x8130), RPDO timeout (no RPDO for 0x2001 SYNC periods in OPERATION ENABLED: 0x8250), NMT
  * state left operational in OPERATION ENABLED (0x8100), a target torque beyond the max torque
  * 0x6072 in an RPDO (0x6320), a simulated fault written to 0x2000 (its code), and
- * rrr_co_raise_fault. The latch and the 0 torque are the supervisor's rrr_hil_latch
- * (hil_supervisor.h), one per node: a fault latches it with its EMCY code, the 402 fault reset
+ * rrr_co_raise_fault. The latch and the 0 torque are the bench's rrr_hil_latch
+ * (hil_common.h), one per node: a fault latches it with its EMCY code, the 402 fault reset
  * (or a reset node, the application's restart) is its reset event, and rrr_co_torque_Nm is its
  * output stage (0 while latched or in QUICK STOP ACTIVE).
  *
@@ -44,9 +44,8 @@
 
 #include <stdint.h>
 
-#include "hil_codec.h"
 #include "hil_canopen_od_table.h"
-#include "hil_supervisor.h"
+#include "hil_common.h"
 
 /** SDO abort codes (CiA 301). */
 #define RRR_CO_ABORT_TOGGLE 0x05030000u        ///< toggle bit not alternated

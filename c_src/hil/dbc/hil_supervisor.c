@@ -14,51 +14,6 @@ _Static_assert(offsetof(rrr_hil_sup, cmd) == 16u && offsetof(rrr_hil_sup, u_hold
                "rrr_hil_sup fields moved: update the ctypes mirror");
 #endif
 
-/* ---- the latch: the safety policy's output stage (hil_supervisor.h) ------------------------- */
-
-void rrr_hil_latch_init(rrr_hil_latch *l)
-{
-    memset(l, 0, sizeof *l);
-}
-
-void rrr_hil_latch_fault(rrr_hil_latch *l, uint16_t code)
-{
-    l->latched = 1;
-    l->code = code;
-    ++l->fault_events;
-}
-
-int rrr_hil_latch_reset(rrr_hil_latch *l)
-{
-    if (!l->latched) {
-        return 0;
-    }
-    l->latched = 0;
-    l->code = 0;
-    ++l->resets;
-    return 1;
-}
-
-int rrr_hil_latch_blocks(const rrr_hil_latch *l, int stop)
-{
-    return l->latched || stop;
-}
-
-int rrr_hil_latch_output(rrr_hil_latch *l, int stop, double *u, unsigned n)
-{
-    const int zero = rrr_hil_latch_blocks(l, stop);
-    if (zero) {
-        for (unsigned i = 0; i < n; ++i) {
-            u[i] = 0.0;
-        }
-        ++l->zero_periods;
-    }
-    l->zero = (uint8_t)zero;
-    return zero;
-}
-
-/* ---- the DBC profile's supervisor ----------------------------------------------------------- */
-
 /* The supervisor's latch lives in the fields the Python binding mirrors (the ABI note in
  * hil_supervisor.h): loaded before and stored after each latch call. */
 static rrr_hil_latch load_latch(const rrr_hil_sup *s)

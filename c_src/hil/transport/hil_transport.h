@@ -18,7 +18,7 @@
 
 #include <stdint.h>
 
-#include "hil_codec.h"
+#include "hil_common.h"
 
 /** Outcome of a transport call. */
 typedef enum rrr_hil_io {

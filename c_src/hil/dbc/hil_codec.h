@@ -13,11 +13,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "rrr/rrr_control.h" /* RRR_SAMPLE_TIME_DEFAULT (a macro: nothing to link) */
+#include "hil_common.h" /* rrr_hil_frame, RRR_HIL_PERIOD_S */
 #include "rrr_bench.h"
 
-/** Period of the bench, s (GenMsgCycleTime 1 ms in the DBC). */
-#define RRR_HIL_PERIOD_S RRR_SAMPLE_TIME_DEFAULT
 /** Controller and plant heartbeat period, in periods. */
 #define RRR_HIL_HEARTBEAT_PERIODS 100u
 
@@ -60,14 +58,6 @@ typedef enum rrr_hil_stop_reason {
     RRR_HIL_STOP_PLANT_LOST = 3,  ///< no joint state from the plant in time
     RRR_HIL_STOP_REASON_COUNT
 } rrr_hil_stop_reason;
-
-/** A classical CAN frame as the transports carry it. */
-typedef struct rrr_hil_frame {
-    uint32_t id;      ///< 11-bit (or 29-bit when extended) identifier, without flag bits
-    uint8_t extended; ///< 1 for a 29-bit identifier
-    uint8_t dlc;      ///< data length, 0..8
-    uint8_t data[8];  ///< payload; bytes beyond dlc are 0
-} rrr_hil_frame;
 
 /** Kinds of bench messages. */
 typedef enum rrr_hil_kind {

@@ -11,7 +11,7 @@
 
 #include <stdint.h>
 
-#include "hil_codec.h"
+#include "hil_common.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -21,7 +21,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "hil_codec.h"
+#include "hil_common.h"
 
 #define RRR_HIL_FRAMELOG_MAGIC "RRRCAN1\n"
 #define RRR_HIL_FRAMELOG_RECORD 24u

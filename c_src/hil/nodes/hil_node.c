@@ -16,7 +16,7 @@
 #include <sys/mman.h>
 #include <sys/prctl.h>
 
-#include "hil_codec.h"
+#include "hil_common.h"
 #include "rrr_hil_logs.h"
 
 /* ---- command line ---------------------------------------------------------------------------- */
@@ -66,16 +66,22 @@ static int parse_node_ids(const char *s, uint8_t ids[3])
     return ok && ids[0] != ids[1] && ids[0] != ids[2] && ids[1] != ids[2] ? 0 : -1;
 }
 
-int rrr_hil_profile_arg(const char *a, const char *v, int *canopen, uint8_t ids[3],
-                        const char *prog)
+int rrr_hil_profile_arg(const char *a, const char *v, const char *const *names, unsigned n_names,
+                        int *profile, uint8_t ids[3], const char *prog)
 {
     if (strcmp(a, "--profile") == 0) {
-        if (strcmp(v, "dbc") != 0 && strcmp(v, "canopen") != 0) {
-            fprintf(stderr, "%s: --profile: expected 'dbc' or 'canopen', got '%s'\n", prog, v);
-            return -1;
+        for (unsigned i = 0; i < n_names; ++i) {
+            if (strcmp(v, names[i]) == 0) {
+                *profile = (int)i;
+                return 1;
+            }
         }
-        *canopen = strcmp(v, "canopen") == 0;
-        return 1;
+        fprintf(stderr, "%s: --profile: expected ", prog);
+        for (unsigned i = 0; i < n_names; ++i) {
+            fprintf(stderr, "%s'%s'", i == 0u ? "" : i + 1u == n_names ? " or " : ", ", names[i]);
+        }
+        fprintf(stderr, ", got '%s'\n", v);
+        return -1;
     }
     if (strcmp(a, "--node-ids") == 0) {
         if (parse_node_ids(v, ids) != 0) {
@@ -130,6 +136,49 @@ int rrr_hil_report_exit(const char *prog, int code, uint32_t period, const char 
             period, reason);
     fflush(stderr);
     return code;
+}
+
+/* ---- how a run ends ------------------------------------------------------------------------- */
+
+int rrr_hil_run_end(rrr_hil_run *r, int code, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(r->why, sizeof r->why, fmt, ap);
+    va_end(ap);
+    return code;
+}
+
+int rrr_hil_run_interrupted(rrr_hil_run *r)
+{
+    return rrr_hil_run_end(r, RRR_HIL_EXIT_INTERRUPTED, "%s", rrr_hil_stop_signal_name());
+}
+
+int rrr_hil_run_safety(rrr_hil_run *r, int rc, const char *fmt, ...)
+{
+    if (rc != RRR_HIL_EXIT_OK) {
+        return rc;
+    }
+    char text[sizeof r->why];
+    va_list ap;
+    va_start(ap, fmt);
+    (void)vsnprintf(text, sizeof text, fmt, ap);
+    va_end(ap);
+    const size_t n = strlen(r->why);
+    (void)snprintf(r->why + n, sizeof r->why - n, "; %s", text);
+    return RRR_HIL_EXIT_SAFETY;
+}
+
+int rrr_hil_run_report(const char *prog, int rc, const rrr_hil_run *r)
+{
+    return rrr_hil_report_exit(prog, rc, r->k, "%s", r->why);
+}
+
+int64_t rrr_hil_now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
 }
 
 /* The one piece of process state of a node: set from the signal handler (the signal number). */
@@ -614,6 +663,13 @@ static void write_latency_log(rrr_hil_rt *rt)
     }
     rt->latency_log_ok = (fclose(rt->latency_log) == 0) && ok;
     rt->latency_log = NULL;
+}
+
+void rrr_hil_rt_print(rrr_hil_rt *rt, const char *prog)
+{
+    printf("RRR_HIL_RT {");
+    rrr_hil_rt_report(rt, stdout, prog);
+    printf("}\n");
 }
 
 void rrr_hil_rt_report(rrr_hil_rt *rt, FILE *out, const char *prog)
