@@ -1,5 +1,5 @@
 """ctypes binding of the CAN bench's command supervisor and frame decoder (C, hil_supervisor.h and
-hil_codec.h), for the Python plant (:mod:`rrr_robot.hil.plant`).
+hil_codec.h), for the Python plant (:mod:`rrr_robot.hil.dbc.plant`).
 
 The safety policy (hold, timeout to 0 V, CRC / counter / range / DLC faults, latch, reset)
 exists once, in C: this module only mirrors the structures and forwards calls. The library is
@@ -18,8 +18,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from ..core._package import PACKAGE_DIR
-from ..errors import RrrError
+from ...core._package import PACKAGE_DIR
+from ...errors import RrrError
 
 LIB_NAME = "librrr_hil_supervisor.so"
 

@@ -18,9 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from ..core.outputs import atomic_path
-from ..errors import BadInputError
-from .protocol import HilError
+from ...core.outputs import atomic_path
+from ...errors import BadInputError, HilError
 
 __all__ = [
     "CAN_LOG_FORMATS",
