@@ -18,7 +18,7 @@ import sys
 import pytest
 from rrr_robot.errors import BadInputError
 from rrr_robot.hil import busload as bl
-from rrr_robot.hil.protocol import database
+from rrr_robot.hil.dbc.protocol import database
 
 
 @pytest.mark.parametrize(("n", "extended", "worst", "plain"), [
