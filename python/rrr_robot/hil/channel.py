@@ -2,7 +2,7 @@
 
 :data:`DEFAULT_CHANNEL` is the socketcand bus name the C nodes use without ``--channel``
 (c_src/hil/hil_node.c) and the Python side's default: ``rrr hil ... --channel``,
-:class:`rrr_robot.hil.sides.Connection` and :func:`rrr_robot.hil.nodes.open_bus`.
+:class:`rrr_robot.hil.dbc.sides.Connection` and :func:`rrr_robot.hil.nodes.open_bus`.
 """
 
 from __future__ import annotations

@@ -267,7 +267,7 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
     back in ``.port``), or on the SocketCAN interface ``socketcan`` (e.g. vcan0: then wait for
     its boot-up heartbeat with :func:`wait_for_boot_up` before starting a controller), on the
     plant FMU (default: the packaged one, unzipped to a temp dir); ``frame_log``: its log of
-    every frame (rrr_robot.hil.framelog)."""
+    every frame (rrr_robot.hil.logs.frames)."""
     from ..core.archives import extract_to_temp
 
     unzip = extract_to_temp(fmu or fmu_path("plant"), "FMU", prefix="rrr-fmu-")
