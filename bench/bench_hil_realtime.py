@@ -2,7 +2,7 @@
 without SCHED_FIFO, in alternating blocks.
 
 Each block runs the writing task (held at its last pose after 5.9 s) for --duration seconds on
-both C nodes in real time at 1 kHz over the socketcand transport (rrr_robot.hil.bench.run_c_bench
+both C nodes in real time at 1 kHz over the socketcand transport (rrr_robot.hil.dbc.bench.run_c_bench
 with RealTime), twice: once plain (the default scheduler, clock_nanosleep only: the nodes' old
 mode) and once tuned (SCHED_FIFO 80, mlockall, one CPU per node, sleep-then-spin --spin-us). It
 prints per configuration and node the wake-up latency p50 / p99 / p99.9 / max (us) and the
@@ -28,7 +28,7 @@ from typing import Any
 
 from _quick import add_quick, apply_quick
 from _timing import mmm
-from rrr_robot.hil.bench import RealTime, run_c_bench
+from rrr_robot.hil.dbc.bench import RealTime, run_c_bench
 from rrr_robot.hil.results import extend_reference
 from rrr_robot.writing.job import WritingJob, prepare
 

@@ -5,7 +5,11 @@ from __future__ import annotations
 __all__ = [
     "ArchiveError",
     "BadInputError",
+    "BusLost",
     "CosimError",
+    "EmcyError",
+    "FrameError",
+    "HilError",
     "ModelError",
     "NumericError",
     "RobotFileError",
@@ -85,3 +89,36 @@ class NumericError(RrrError, ArithmeticError):
 
 class CosimError(RrrError):
     """An FMU call failed during co-simulation (names the FMU and the time)."""
+
+
+# ---- the CAN bench (rrr hil) ----------------------------------------------------------------
+
+
+class HilError(RrrError):
+    """A bench node failed, or the bench protocol was violated (names the node and period)."""
+
+
+class FrameError(HilError, ValueError):
+    """Decoding: a frame that is not a valid bench frame; ``reason`` is 'unknown id', 'wrong
+    DLC' or 'E2E CRC mismatch'."""
+
+    def __init__(self, message: str, reason: str) -> None:
+        super().__init__(message)
+        self.reason = reason
+
+
+class BusLost(HilError):
+    """During a run: the bus failed, or the other node went silent, at ``period``."""
+
+    def __init__(self, message: str, period: int) -> None:
+        super().__init__(message)
+        self.period = period
+
+
+class EmcyError(HilError):
+    """During a run: a CANopen drive sent an EMCY (``node``, its error ``code``) at SYNC
+    ``sync``."""
+
+    def __init__(self, sync: int, node: int, code: int) -> None:
+        super().__init__(f"SYNC {sync}: EMCY 0x{code:04X} from drive {node}")
+        self.sync, self.node, self.code = sync, node, code

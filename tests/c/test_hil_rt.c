@@ -1,7 +1,7 @@
 /* The pieces of the bench nodes' real-time mode and frame log that need no peer: percentiles
  * (nearest rank), the real-time options (ranges), a short sleep-then-spin loop (latencies
  * recorded, none negative: not a timing test), its per-period latency log, and the frame log's
- * record layout and file (hil_framelog.h), which rrr_robot.hil.framelog reads; the reference
+ * record layout and file (hil_framelog.h), which rrr_robot.hil.logs.frames reads; the reference
  * table reader (the reference FMU's 19-column table, its columns found by name). */
 #define _GNU_SOURCE /* CPU_SETSIZE */
 

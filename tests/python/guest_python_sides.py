@@ -37,6 +37,7 @@ from typing import Any
 
 import can
 from rrr_robot.cli.app import main as rrr
+from rrr_robot.hil.dbc.protocol import frame_id
 from rrr_robot.hil.nodes import (
     NodeProcess,
     controller_node_args,
@@ -121,7 +122,7 @@ def main(argv: list[str]) -> int:
     with boot_up_bus(channel) as watch, \
             start_plant(q0=ref.q[0], qd0=ref.qd[0], log_csv=node / "plant.csv",
                         frame_log=node / "frames.rrrcan", socketcan=channel) as plant:
-        wait_for_boot_up(watch, plant)
+        wait_for_boot_up(watch, plant, frame_id("HeartbeatPlant"))
         rc = rrr(["hil", "controller", "--interface", "socketcan", "--channel", channel,
                   "--out", str(out / "controller"), "--no-figures", *common])
         ps = plant.wait(120)
@@ -139,7 +140,7 @@ def main(argv: list[str]) -> int:
         try:
             with boot_up_bus(channel) as bus:
                 ready.set()
-                wait_for_boot_up(bus, None, timeout=300)
+                wait_for_boot_up(bus, None, frame_id("HeartbeatPlant"), timeout=300)
             started["node"] = NodeProcess("rrr_hil_controller", [
                 str(node_executable("controller")), "--reference", str(node / "reference.csv"),
                 "--socketcan", channel, "--log", str(node / "controller.csv"),
@@ -168,7 +169,7 @@ def main(argv: list[str]) -> int:
     # the CANopen masters (CANOPEN_MASTERS) against the C plant's three CiA 402 drives on
     # CHANNEL, and the reference they ran (computed here: its last bits are this CPU's)
     import numpy as np
-    from rrr_robot.hil.canopen_master import writing_controller
+    from rrr_robot.hil.canopen.results import writing_controller
     from rrr_robot.hil.results import extend_reference
 
     ref = extend_reference(writing_controller(None, "ctc").ref, float(duration))

@@ -120,7 +120,7 @@ def test_the_objects_of_the_profile() -> None:
 
 
 def test_the_canopen_schedule_is_read_from_the_eds() -> None:
-    from rrr_robot.hil.cia402 import canopen_schedule
+    from rrr_robot.hil.canopen.drives import canopen_schedule
 
     frames = canopen_schedule()
     per_ms = [(f.frame_id, f.length) for f in frames if f.cycle_time == 1.0]
@@ -135,7 +135,8 @@ def test_the_canopen_schedule_is_read_from_the_eds() -> None:
 
 def test_canopen_bus_load(capsys: pytest.CaptureFixture[str]) -> None:
     from rrr_robot.cli import main
-    from rrr_robot.hil.busload import canopen_load, classical_bits
+    from rrr_robot.hil.busload import classical_bits
+    from rrr_robot.hil.canopen.drives import canopen_load
 
     # worst-case stuffing, classical CAN: per ms a SYNC, three 4-byte RPDOs and six 6-byte
     # TPDOs, plus four 1-byte heartbeats every 100 ms

@@ -69,7 +69,7 @@ HIL = {
                          "--verbose"},
     "canopen": {"--text", "--scenario", "--duration", "--out", "--node-ids", "--timeout",
                 "--interface", "--channel", "--master", "--no-figures", "--realtime", "--no-fifo",
-                "--spin-us", "--sync-source", "-q", "--quiet", "-v",
+                "--spin-us", "--consumer-ms", "--rpdo-timeout", "-q", "--quiet", "-v",
                 "--verbose"},
     "busload": {"--bitrate", "--fd", "--lockstep", "--dbc", "--profile", "--sync-period-ms",
                 "-q", "--quiet", "-v", "--verbose"},

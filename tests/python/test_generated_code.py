@@ -20,7 +20,7 @@ def test_regenerating_dynamics_gives_committed_files() -> None:
 
 def test_regenerating_the_hil_log_header_gives_the_committed_file() -> None:
     """c_src/hil/nodes/gen/rrr_hil_logs.h (the C nodes' CSV log headers) is tools/gen_hil_logs.py's
-    output from rrr_robot.hil.logspec, byte for byte."""
+    output from rrr_robot.hil.logs.specs, byte for byte."""
     script = ROOT / "tools" / "gen_hil_logs.py"
     result = subprocess.run([sys.executable, str(script), "--check"], capture_output=True,
                             text=True, timeout=120)

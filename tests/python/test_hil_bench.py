@@ -17,10 +17,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rrr_robot.core.param_names import model_fmu_values
-from rrr_robot.hil.bench import BenchRun, quantised_cosim, run_c_bench, run_fmu_controller
-from rrr_robot.hil.logspec import PLANT_LOG, read_log
+from rrr_robot.errors import HilError
+from rrr_robot.hil.dbc.bench import quantised_cosim, run_c_bench
+from rrr_robot.hil.dbc.controller import run_fmu_controller
+from rrr_robot.hil.logs.specs import PLANT_LOG, read_log
 from rrr_robot.hil.nodes import controller_node_args, open_bus, start_plant
-from rrr_robot.hil.protocol import HilError
+from rrr_robot.hil.results import BenchRun
 from rrr_robot.sim.cosim import CosimOptions, run_cosim
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
 

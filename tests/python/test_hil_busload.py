@@ -11,14 +11,16 @@ most floor((34 + 8 n - 1) / 4): 8 bytes 111 and 135 bits, 0 bytes 47 and 55; ext
 
 from __future__ import annotations
 
+import importlib
 import random
 import subprocess
 import sys
 
 import pytest
 from rrr_robot.errors import BadInputError
+from rrr_robot.hil import PROFILES
 from rrr_robot.hil import busload as bl
-from rrr_robot.hil.protocol import database
+from rrr_robot.hil.dbc.protocol import database
 
 
 @pytest.mark.parametrize(("n", "extended", "worst", "plain"), [
@@ -124,3 +126,15 @@ def test_measured_fd_load_counts_frames_bytes_and_bits() -> None:
         bl.measured_fd_load(frames, 1, 1_000_000, 500_000)
     with pytest.raises(BadInputError, match="CAN FD frame"):
         bl.measured_fd_load([(0x100, bytes(9), False)], 1)
+
+
+def test_each_registered_profile_is_a_package_of_hil() -> None:
+    """rrr_robot.hil.PROFILES (``rrr hil busload --profile`` offers them): each row names the
+    package of its profile, beside the others."""
+    assert {"dbc", "canopen"} <= set(PROFILES)
+    for name, module in PROFILES.items():
+        assert module == f"rrr_robot.hil.{name}", module
+        assert hasattr(importlib.import_module(module), "__path__"), module
+    got = subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "busload", "--profile",
+                          "nope"], capture_output=True, text=True, timeout=120)
+    assert got.returncode == 2 and all(name in got.stderr for name in PROFILES), got.stderr

@@ -18,45 +18,58 @@ import numpy as np
 import pytest
 from rrr_robot.cli.app import main
 from rrr_robot.core.outputs import ResultSet
-from rrr_robot.hil import canopen_master as cm
-from rrr_robot.hil.bench import run_c_bench
-from rrr_robot.hil.nodes import NodeProcess, start_plant
-from rrr_robot.hil.protocol import PERIOD, HilError
+from rrr_robot.errors import HilError
+from rrr_robot.hil.canopen import drives
+from rrr_robot.hil.canopen.c_master import run_c_master
+from rrr_robot.hil.canopen.drives import (
+    EXPECTED_MAPPING,
+    pdo_quantisation,
+    rad_to_inc,
+    torque_per_mille,
+)
+from rrr_robot.hil.canopen.master import MasterRun, run_canopen_master
+from rrr_robot.hil.canopen.results import (
+    WritingController,
+    write_master_results,
+    writing_controller,
+)
+from rrr_robot.hil.dbc.bench import run_c_bench
+from rrr_robot.hil.nodes import PERIOD, NodeProcess, start_plant
 from rrr_robot.hil.results import bench_result, read_plant_log, tracking
 from rrr_robot.sim.cosim import CosimOptions, run_cosim
 
 
 @pytest.fixture(scope="module")
-def wc() -> cm.WritingController:
+def wc() -> WritingController:
     """The whole writing task (5.9 s, 5,901 periods: about 2 s over socketcand here)."""
-    return cm.writing_controller(None, "ctc")
+    return writing_controller(None, "ctc")
 
 
 def test_rounding_is_the_drives() -> None:
-    assert cm.rad_to_inc(2 * math.pi, 1 << 20) == 1 << 20
-    assert cm.rad_to_inc(-0.5 * 2 * math.pi / (1 << 20), 1 << 20) == -1  # half away from 0
-    assert cm.rad_to_inc(1e9, 1 << 20) == 2**31 - 1 and cm.rad_to_inc(math.nan, 1 << 20) == 0
-    assert cm.torque_per_mille(10.0, 12.0, 120000) == 1000
-    assert cm.torque_per_mille(-0.005, 12.0, 120000) == -1  # -0.5 per mille: away from 0
-    assert cm.torque_per_mille(50.0, 12.0, 120000) == 1000  # within the range
+    assert rad_to_inc(2 * math.pi, 1 << 20) == 1 << 20
+    assert rad_to_inc(-0.5 * 2 * math.pi / (1 << 20), 1 << 20) == -1  # half away from 0
+    assert rad_to_inc(1e9, 1 << 20) == 2**31 - 1 and rad_to_inc(math.nan, 1 << 20) == 0
+    assert torque_per_mille(10.0, 12.0, 120000) == 1000
+    assert torque_per_mille(-0.005, 12.0, 120000) == -1  # -0.5 per mille: away from 0
+    assert torque_per_mille(50.0, 12.0, 120000) == 1000  # within the range
 
 
-def _master(kind: str, w: cm.WritingController, ref: Any, work: Path,
-            **kwargs: Any) -> cm.MasterRun:
+def _master(kind: str, w: WritingController, ref: Any, work: Path,
+            **kwargs: Any) -> MasterRun:
     """A lockstep run of the master ``kind`` (python: the canopen package's; c: the C node)."""
     if kind == "c":
-        return cm.run_c_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model,
-                               w.controller_values, work, **kwargs)
-    return cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model, w.gains,
-                                 work, **kwargs)
+        return run_c_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model,
+                            w.controller_values, work, **kwargs)
+    return run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, w.controller_model, w.gains,
+                              work, **kwargs)
 
 
 @pytest.mark.parametrize("kind", ["python", "c"])
-def test_writing_task_over_canopen(kind: str, wc: cm.WritingController, tmp_path: Path) -> None:
+def test_writing_task_over_canopen(kind: str, wc: WritingController, tmp_path: Path) -> None:
     ref, n = wc.ref, wc.ref.t.shape[0]
     with ResultSet(tmp_path / "out", kind="hil") as rs:
         mrun = _master(kind, wc, ref, rs.staging)
-        summary = cm.write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
+        summary = write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
     ps = mrun.plant_summary
     # every axis was OPERATION ENABLED in every period (the master checks each statusword),
     # then disabled and stopped by the master: exit 0, no fault
@@ -64,7 +77,7 @@ def test_writing_task_over_canopen(kind: str, wc: cm.WritingController, tmp_path
     assert [d["node_id"] for d in ps["drives"]] == [1, 2, 3]
     assert all(d["rpdo_timeouts"] == 0 and d["sdo_aborts"] == 0 for d in ps["drives"])
     assert [d.rated_torque_mNm for d in mrun.drives] == [120000, 110000, 47000]
-    assert all(d.mapping == cm.EXPECTED_MAPPING for d in mrun.drives)
+    assert all(d.mapping == EXPECTED_MAPPING for d in mrun.drives)
     out = tmp_path / "out"
     saved = json.loads((out / "summary.json").read_text())
     assert saved["side"] == "canopen" and saved["reference"]["periods"] == n
@@ -84,8 +97,8 @@ def test_writing_task_over_canopen(kind: str, wc: cm.WritingController, tmp_path
 
     # the co-simulation with the PDOs' quantisation: bit for bit
     kt = [float(v) for v in wc.controller_model.kt]
-    measure, actuate = cm.pdo_quantisation(kt, [float(v) for v in wc.model.kt],
-                                           [d.rated_torque_mNm for d in mrun.drives])
+    measure, actuate = pdo_quantisation(kt, [float(v) for v in wc.model.kt],
+                                        [d.rated_torque_mNm for d in mrun.drives])
     cosim = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
                       CosimOptions(step=PERIOD, controller_values=wc.controller_values,
                                    measure=measure, actuate=actuate))
@@ -121,18 +134,18 @@ def test_a_missing_drive_is_a_clear_error(kind: str, message: str, tmp_path: Pat
     assert not (tmp_path / "out" / "summary.json").exists()
 
 
-def test_library_errors(wc: cm.WritingController, tmp_path: Path) -> None:
+def test_library_errors(wc: WritingController, tmp_path: Path) -> None:
     ref = wc.ref
     with pytest.raises(HilError, match=r"drive\(s\) 5, 6 sent no boot-up"):
-        cm.run_canopen_master(ref.t[:10], ref.q[:10], ref.qd[:10], ref.qdd[:10],
-                              wc.controller_model, wc.gains, tmp_path, node_ids=(1, 5, 6),
-                              timeout=1.0)
+        run_canopen_master(ref.t[:10], ref.q[:10], ref.qd[:10], ref.qdd[:10],
+                           wc.controller_model, wc.gains, tmp_path, node_ids=(1, 5, 6),
+                           timeout=1.0)
 
 
 # python-can's receive thread (canopen's Notifier) ends with the broken socket: its exception is
 # reported by pytest as a warning of that thread, not the master's
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnhandledThreadExceptionWarning")
-def test_a_plant_killed_mid_run_is_named(wc: cm.WritingController, tmp_path: Path,
+def test_a_plant_killed_mid_run_is_named(wc: WritingController, tmp_path: Path,
                                          monkeypatch: pytest.MonkeyPatch) -> None:
     """The plant node killed at period 1000: the master stops with an error that says so
     (not a hang, not a traceback of the bus)."""
@@ -147,13 +160,13 @@ def test_a_plant_killed_mid_run_is_named(wc: cm.WritingController, tmp_path: Pat
         if k >= 1000 and started and started[0].running():
             os.kill(started[0].pid, signal.SIGKILL)
 
-    monkeypatch.setattr(cm, "start_plant", start)
+    monkeypatch.setattr(drives, "start_plant", start)
     ref = wc.ref
     # the kill is seen either while the master waits for the TPDOs or when it sends
     with pytest.raises(HilError, match=r"SYNC \d+: .*plant node (ended|was killed).*SIGKILL|"
                        r"plant node ended .* SYNC \d+: was killed by SIGKILL"):
-        cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model, wc.gains,
-                              tmp_path, timeout=5.0, progress=kill_at)
+        run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model, wc.gains,
+                           tmp_path, timeout=5.0, progress=kill_at)
 
 
 @pytest.mark.parametrize("kind", ["python", "c"])
@@ -163,13 +176,13 @@ def test_mismatch_scenario_equals_its_quantised_cosim(kind: str, tmp_path: Path)
     run still equals the co-simulation with the same quantisation, bit for bit (1 s of it)."""
     from rrr_robot.hil.results import extend_reference
 
-    w = cm.writing_controller(None, "mismatch")
+    w = writing_controller(None, "mismatch")
     assert not np.array_equal(w.controller_model.kt, w.model.kt)
     ref = extend_reference(w.ref, 1.0)
     mrun = _master(kind, w, ref, tmp_path)
-    measure, actuate = cm.pdo_quantisation([float(v) for v in w.controller_model.kt],
-                                           [float(v) for v in w.model.kt],
-                                           [d.rated_torque_mNm for d in mrun.drives])
+    measure, actuate = pdo_quantisation([float(v) for v in w.controller_model.kt],
+                                        [float(v) for v in w.model.kt],
+                                        [d.rated_torque_mNm for d in mrun.drives])
     cosim = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
                       CosimOptions(step=PERIOD, controller_values=w.controller_values,
                                    measure=measure, actuate=actuate))

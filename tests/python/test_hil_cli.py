@@ -9,7 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from rrr_robot.hil import framelog as fl
+from rrr_robot.hil.logs import frames as fl
 
 
 def run_hil(*args: str) -> subprocess.CompletedProcess[str]:

@@ -10,7 +10,8 @@ from pathlib import Path
 
 import can
 import pytest
-from rrr_robot.hil.protocol import DBC_PATH, FrameError, database, decode, encode
+from rrr_robot.errors import FrameError
+from rrr_robot.hil.dbc.protocol import DBC_PATH, database, decode, encode
 
 REPO = Path(__file__).resolve().parents[2]
 GEN = REPO / "c_src" / "hil" / "dbc" / "gen"

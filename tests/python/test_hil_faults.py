@@ -18,18 +18,9 @@ from typing import Any
 import can
 import numpy as np
 import pytest
-from rrr_robot.hil.logspec import PLANT_LOG, read_log
-from rrr_robot.hil.nodes import open_bus, start_plant
-from rrr_robot.hil.protocol import (
-    DATA_IDS,
-    EXIT_SAFETY,
-    FAULT_BITS,
-    NMT_OPERATIONAL,
-    NMT_STOPPED,
-    database,
-    decode,
-    encode,
-)
+from rrr_robot.hil.dbc.protocol import DATA_IDS, EXIT_SAFETY, FAULT_BITS, database, decode, encode
+from rrr_robot.hil.logs.specs import PLANT_LOG, read_log
+from rrr_robot.hil.nodes import NMT_OPERATIONAL, NMT_STOPPED, open_bus, start_plant
 
 Q0 = (0.2, 0.8, -1.2)
 U = (1.0, -0.5, 0.25)

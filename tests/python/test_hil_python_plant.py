@@ -1,4 +1,5 @@
-"""The plant side of the CAN bench from Python (rrr_robot.hil.plant) against the C controller node.
+"""The plant side of the CAN bench from Python (rrr_robot.hil.dbc.plant) against the C controller
+node.
 
 - The C controller (--listen, socketcand server) and the Python plant (plant FMU under FMPy,
   python-can socketcand client, the C supervisor through ctypes) in lockstep reproduce the
@@ -22,17 +23,12 @@ from typing import Any
 import can
 import numpy as np
 import pytest
-from rrr_robot.hil import _hil_lib
-from rrr_robot.hil.bench import quantised_cosim
+from rrr_robot.hil.dbc import _supervisor as _hil_lib
+from rrr_robot.hil.dbc.bench import quantised_cosim
+from rrr_robot.hil.dbc.plant import PythonPlant, RxFilter, drop_commands_from
+from rrr_robot.hil.dbc.protocol import EXIT_SAFETY, FAULT_BITS, frame_id
+from rrr_robot.hil.dbc.sides import Connection, run_plant_side
 from rrr_robot.hil.nodes import export_reference, open_bus, start_listening_controller
-from rrr_robot.hil.plant import (
-    VOLTAGE_CMD_ID,
-    PythonPlant,
-    RxFilter,
-    drop_commands_from,
-)
-from rrr_robot.hil.protocol import EXIT_SAFETY, FAULT_BITS
-from rrr_robot.hil.sides import Connection, run_plant_side
 from rrr_robot.writing.job import WritingJob, prepare
 
 K0 = 200  # first faulty period
@@ -76,7 +72,7 @@ def test_c_controller_python_plant_equals_quantised_fmpy_loop(ref, tmp_path: Pat
 
 def _corrupt_crc_at(k0: int) -> RxFilter:
     def rx_filter(k: int, msg: Any) -> Any:
-        if k == k0 and msg.arbitration_id == VOLTAGE_CMD_ID:
+        if k == k0 and msg.arbitration_id == frame_id("VoltageCmd"):
             data = bytearray(msg.data)
             data[3] ^= 0x01
             return can.Message(arbitration_id=msg.arbitration_id, data=data,

@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rrr_robot.cli import main
-from rrr_robot.hil import framelog as fl
-from rrr_robot.hil.bench import quantised_cosim_result
-from rrr_robot.hil.logspec import CONTROLLER_LOG, PLANT_LOG, read_log
-from rrr_robot.hil.protocol import EXIT_SAFETY
+from rrr_robot.hil.dbc.bench import quantised_cosim_result
+from rrr_robot.hil.dbc.protocol import EXIT_SAFETY
+from rrr_robot.hil.logs import frames as fl
+from rrr_robot.hil.logs.specs import CONTROLLER_LOG, PLANT_LOG, read_log
 from rrr_robot.hil.results import unquantised_cosim
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, metrics, prepare
 

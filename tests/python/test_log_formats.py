@@ -1,5 +1,5 @@
 """One format per file: the reference table the reference FMU and the bench read, the node logs'
-column spec (rrr_robot.hil.logspec) that the C writers' generated header and every Python
+column spec (rrr_robot.hil.logs.specs) that the C writers' generated header and every Python
 reader share, and the one builder of summary.json.
 
 The bus tests read the logs the C nodes wrote through the spec (test_hil_results.py,
@@ -15,11 +15,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rrr_robot.core.model import Model
-from rrr_robot.errors import BadInputError
-from rrr_robot.hil.bench import BenchRun, write_controller_log
-from rrr_robot.hil.logspec import CONTROLLER_LOG, LATENCY_LOG, PLANT_LOG, read_log, write_log
-from rrr_robot.hil.nodes import export_reference
-from rrr_robot.hil.protocol import PERIOD, HilError
+from rrr_robot.errors import BadInputError, HilError
+from rrr_robot.hil.logs.specs import CONTROLLER_LOG, LATENCY_LOG, PLANT_LOG, read_log, write_log
+from rrr_robot.hil.nodes import PERIOD, export_reference
+from rrr_robot.hil.results import BenchRun, write_controller_log
 from rrr_robot.ssp.table import TABLE_COLUMNS
 from rrr_robot.writing.reference_table import (
     JOINT_COLUMNS,

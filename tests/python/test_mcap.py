@@ -291,9 +291,9 @@ def bench_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_the_bench_mcap_holds_its_frames_decoded_signals_and_faults(bench_run) -> None:
-    from rrr_robot.hil.framelog import read_node_log
-    from rrr_robot.hil.logspec import PLANT_LOG, read_log
-    from rrr_robot.hil.protocol import database
+    from rrr_robot.hil.dbc.protocol import database
+    from rrr_robot.hil.logs.frames import read_node_log
+    from rrr_robot.hil.logs.specs import PLANT_LOG, read_log
 
     got, _ = rosbags_messages(bench_run / "bench.mcap")
     records = read_node_log(bench_run / "frames.rrrcan")

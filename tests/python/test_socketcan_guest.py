@@ -26,9 +26,10 @@ import numpy as np
 import pytest
 from can_guest import CanGuest, GuestError, GuestUnavailable, Result
 from guest_python_sides import CANOPEN_MASTERS
-from rrr_robot.hil import framelog
+from rrr_robot.hil.dbc.protocol import DBC_PATH, EXIT_SAFETY, FAULT_BITS
 from rrr_robot.hil.figures import FIGURES
-from rrr_robot.hil.logspec import CONTROLLER_LOG, PLANT_LOG, read_log
+from rrr_robot.hil.logs import frames as framelog
+from rrr_robot.hil.logs.specs import CONTROLLER_LOG, PLANT_LOG, read_log
 from rrr_robot.hil.nodes import (
     controller_node_args,
     export_reference,
@@ -36,7 +37,6 @@ from rrr_robot.hil.nodes import (
     start_controller,
     start_plant,
 )
-from rrr_robot.hil.protocol import DBC_PATH, EXIT_SAFETY, FAULT_BITS
 from rrr_robot.sim.fmus import fmu_path
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
 
@@ -405,7 +405,7 @@ def test_c_bench_fd_frames_and_busload(c_bench_fd: dict[str, Any], c_bench: dict
     is printed beside busload's figure."""
     from rrr_robot.cli.app import main as rrr
     from rrr_robot.hil.busload import measured_fd_load, schedule_load
-    from rrr_robot.hil.protocol import database
+    from rrr_robot.hil.dbc.protocol import database
 
     work = c_bench_fd["work"]
     assert "" == (work / "candump.err").read_text().strip()
@@ -718,10 +718,9 @@ def test_rrr_hil_bench_over_socketcan(python_sides: dict[str, Any],
 def figures_from_files(folder: Path, out: Path) -> list[Path]:
     """The figures of an ``rrr hil bench --duration PY_DURATION`` run (scenario ctc) drawn from
     the logs it wrote into ``folder`` (plant.csv, controller.csv), as rrr hil bench draws them
-    (rrr_robot.hil.results.write_results, figures.write_bench_figures); into ``out``."""
-    from rrr_robot.hil.bench import BenchRun
+    (rrr_robot.hil.dbc.results.write_results, figures.write_bench_figures); into ``out``."""
     from rrr_robot.hil.figures import write_bench_figures
-    from rrr_robot.hil.results import bench_result, extend_reference, unquantised_cosim
+    from rrr_robot.hil.results import BenchRun, bench_result, extend_reference, unquantised_cosim
 
     model, robot, scenarios, ref = prepare(WritingJob(out=out, scenarios=["ctc"]))
     values = controller_fmu_values(scenarios[0], model, robot.require_control())
@@ -820,10 +819,12 @@ def test_canopen_master_over_socketcan(python_sides: dict[str, Any], master: str
     from dataclasses import replace
 
     from rrr_robot.core.outputs import ResultSet
-    from rrr_robot.hil import canopen_master as cm
-    from rrr_robot.hil.bench import BenchRun
-    from rrr_robot.hil.protocol import PERIOD
-    from rrr_robot.hil.results import bench_result, extend_reference
+    from rrr_robot.hil.canopen.c_master import run_c_master
+    from rrr_robot.hil.canopen.drives import pdo_quantisation
+    from rrr_robot.hil.canopen.master import run_canopen_master
+    from rrr_robot.hil.canopen.results import write_master_results, writing_controller
+    from rrr_robot.hil.nodes import PERIOD
+    from rrr_robot.hil.results import BenchRun, bench_result, extend_reference
     from rrr_robot.sim.cosim import CosimOptions, run_cosim
 
     case, out = python_sides["cases"].get(f"canopen_{master}"), python_sides["out"]
@@ -839,25 +840,25 @@ def test_canopen_master_over_socketcan(python_sides: dict[str, Any], master: str
 
     # the same master over socketcand here, on the guest's reference
     z = np.load(out / "canopen_reference.npz")
-    wc = cm.writing_controller(None, "ctc")
+    wc = writing_controller(None, "ctc")
     ref = replace(extend_reference(wc.ref, float(PY_DURATION)), t=z["t"], q=z["q"], qd=z["qd"],
                   qdd=z["qdd"], x=z["x"])
     wc = replace(wc, ref=ref)
     with ResultSet(tmp_path / "host", kind="hil") as rs:
         if master == "c":
-            mrun = cm.run_c_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
-                                   wc.controller_values, rs.staging)
+            mrun = run_c_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
+                                wc.controller_values, rs.staging)
         else:
-            mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
-                                         wc.gains, rs.staging)
-        h = cm.write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
+            mrun = run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
+                                      wc.gains, rs.staging)
+        h = write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
     for name in ("plant.csv", "controller.csv"):
         assert read_csv(mine / name) == read_csv(tmp_path / "host" / name), name
 
     # the co-simulation with the PDOs' quantisation on that reference: bit for bit
-    measure, actuate = cm.pdo_quantisation([float(v) for v in wc.controller_model.kt],
-                                           [float(v) for v in wc.model.kt],
-                                           [d.rated_torque_mNm for d in mrun.drives])
+    measure, actuate = pdo_quantisation([float(v) for v in wc.controller_model.kt],
+                                        [float(v) for v in wc.model.kt],
+                                        [d.rated_torque_mNm for d in mrun.drives])
     cosim = run_cosim(ref.t, ref.q, ref.qd, ref.qdd, ref.x,
                       CosimOptions(step=PERIOD, controller_values=wc.controller_values,
                                    measure=measure, actuate=actuate))

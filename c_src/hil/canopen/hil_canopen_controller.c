@@ -446,7 +446,7 @@ static int co_run_realtime(co_master *m, const rrr_hil_ctrl_opts *o, rrr_hil_rt 
     return rc;
 }
 
-/* As the Python master (rrr_robot.hil.canopen_master): boot, configure, enable; the first SYNC
+/* As the Python master (rrr_robot.hil.canopen.master): boot, configure, enable; the first SYNC
  * gives the initial state (no step); then for k = 0 .. n-1: u_k = ctc(state of SYNC k), the
  * target torques k_t u_k in per mille and, for k < n-1, SYNC k+1. At the end: controlword 0
  * (disable voltage) by SDO and NMT stop; after a failed run NMT stop only, best effort. */

@@ -19,7 +19,7 @@ int rrr_hil_ctrl_law(rrr_hil_ctrl *c, const rrr_hil_ctrl_opts *o, size_t k, int 
     memcpy(u_V, out.u, sizeof out.u);
     /* k, t, q[3], qd[3], (u, u_n, u_c) per joint, enable (rrr_hil_logs.h) */
     _Static_assert(RRR_HIL_CONTROLLER_LOG_COLUMNS == 2 + 3 + 3 + 3 * 3 + 1,
-                   "the controller log's row (rrr_robot.hil.logspec)");
+                   "the controller log's row (rrr_robot.hil.logs.specs)");
     if (c->log != NULL) {
         fprintf(c->log, "%zu,%.17g", k, c->ref.t[k]);
         for (int i = 0; i < 3; ++i) {

@@ -86,7 +86,7 @@ int rrr_hil_plant_read_kt(rrr_hil_plant *p)
 
 /* The row below: k, t, q[3], qd[3], u[3], zero, faults, qdd[3], tip[3] (rrr_hil_logs.h). */
 _Static_assert(RRR_HIL_PLANT_LOG_COLUMNS == 2 + 6 + 3 + 2 + 6,
-               "log_row writes the plant log's columns (rrr_robot.hil.logspec)");
+               "log_row writes the plant log's columns (rrr_robot.hil.logs.specs)");
 
 void rrr_hil_plant_log_row(rrr_hil_plant *p)
 {

@@ -1,7 +1,7 @@
 /**
  * @file hil_framelog.h
  * @brief The frame log of a bench node: every frame its transport sent or received, with a
- *        timestamp, in a compact binary file that rrr_robot.hil.framelog converts to the
+ *        timestamp, in a compact binary file that rrr_robot.hil.logs.frames converts to the
  *        standard formats (Vector ASC and BLF through python-can).
  *
  * File: the 8 bytes "RRRCAN1\n", then one 24-byte record per frame, little-endian:

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..hil import PROFILES
 from ..hil.channel import DEFAULT_CHANNEL
 from ._args import (
     add_verbosity_arguments,
@@ -20,14 +21,15 @@ from ._args import (
     host_port,
     nonnegative_int,
     output_path,
+    positive_int,
     quiet,
 )
 
 if TYPE_CHECKING:
     from ..core.model import Model
     from ..core.outputs import ResultSet
-    from ..hil.bench import BenchRun
-    from ..hil.sides import SideRun
+    from ..hil.dbc.sides import SideRun
+    from ..hil.results import BenchRun
     from ..writing.trajectory import Reference
 
 
@@ -124,7 +126,7 @@ def _can_log_target(args: argparse.Namespace, out: Path) -> Path | None:
     """Where the standard frame log goes (None: --no-can-log); refused before the run when its
     format is not .asc/.blf or its folder cannot be written."""
     from ..errors import BadInputError
-    from ..hil.framelog import check_can_log_path
+    from ..hil.logs.frames import check_can_log_path
 
     if args.no_can_log:
         if args.can_log is not None:
@@ -177,10 +179,10 @@ def _cpus() -> tuple[int, int] | None:
 
 def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, float | bool],
               model: Model, rs: ResultSet, out: Path, can_log: Path | None) -> int:
-    """One side of ``rrr hil`` (rrr_robot.hil.sides), its files written into the result set
+    """One side of ``rrr hil`` (rrr_robot.hil.dbc.sides), its files written into the result set
     (they end up in ``out``)."""
-    from ..hil import sides
-    from ..hil.bench import RealTime
+    from ..hil.dbc import sides
+    from ..hil.dbc.bench import RealTime
     from ..hil.nodes import export_reference
     from ._progress import Bars, shown
 
@@ -227,7 +229,7 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
 
 def _status(rc: int) -> int:
     """The exit status of ``rrr hil`` (docs/can.md, "Exit statuses"), said when it is not 0."""
-    from ..hil.protocol import EXIT_SAFETY
+    from ..hil.dbc.protocol import EXIT_SAFETY
 
     if rc == EXIT_SAFETY:
         print(f"exit status {rc}: the run completed, but the safety policy fired (a fault "
@@ -257,7 +259,7 @@ def _results(args: argparse.Namespace, ref: Reference, run: BenchRun,
              ctrl_values: Mapping[str, float | bool], model: Model, rs: ResultSet,
              can_log: Path | None, nodes: Mapping[str, Mapping[str, Any]]) -> None:
     """summary.json, the figures and the standard frame log of a run, into the result set."""
-    from ..hil.results import RunInfo, write_results
+    from ..hil.dbc.results import RunInfo, write_results
 
     info = RunInfo(side=args.side,
                    mode="realtime" if getattr(args, "realtime", False) else "lockstep",
@@ -318,12 +320,15 @@ def node_ids(text: str) -> tuple[int, int, int]:
 def _cmd_canopen(args: argparse.Namespace) -> int:
     """``rrr hil canopen``: the Python CANopen master against the plant's three drives."""
     from ..core.outputs import ResultSet, check_folder
-    from ..hil import canopen_master as cm
+    from ..hil.canopen.c_master import run_c_master
+    from ..hil.canopen.drives import DEFAULT_NODE_IDS
+    from ..hil.canopen.master import run_canopen_master
+    from ..hil.canopen.results import write_master_results, writing_controller
     from ._progress import Bars, shown
 
     realtime = _canopen_realtime(args)
     out = check_folder(args.out)
-    wc = cm.writing_controller(args.text, args.scenario)
+    wc = writing_controller(args.text, args.scenario)
     if args.duration is not None:
         from dataclasses import replace
 
@@ -333,23 +338,23 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     ref = wc.ref
     with ResultSet(out, kind="hil") as rs:
         with Bars(shown(quiet(args)), unit="period") as bars:
-            ids = args.node_ids or cm.DEFAULT_NODE_IDS
+            ids = args.node_ids or DEFAULT_NODE_IDS
             if args.master == "c":
-                mrun = cm.run_c_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
-                                       wc.controller_values, rs.staging, node_ids=ids,
-                                       timeout=args.timeout,
-                                       progress=bars.callback("CANopen master (C)"),
-                                       interface=args.interface, channel=args.channel,
-                                       realtime=realtime)
+                mrun = run_c_master(ref.t, ref.q, ref.qd, ref.qdd, wc.controller_model,
+                                    wc.controller_values, rs.staging, node_ids=ids,
+                                    timeout=args.timeout,
+                                    progress=bars.callback("CANopen master (C)"),
+                                    interface=args.interface, channel=args.channel,
+                                    realtime=realtime)
             else:
-                mrun = cm.run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd,
-                                             wc.controller_model, wc.gains, rs.staging,
-                                             node_ids=ids, timeout=args.timeout,
-                                             progress=bars.callback("CANopen master"),
-                                             interface=args.interface, channel=args.channel,
-                                             realtime=realtime)
-        s = cm.write_master_results(rs, wc, mrun, scenario=args.scenario,
-                                    figures=not args.no_figures)
+                mrun = run_canopen_master(ref.t, ref.q, ref.qd, ref.qdd,
+                                          wc.controller_model, wc.gains, rs.staging,
+                                          node_ids=ids, timeout=args.timeout,
+                                          progress=bars.callback("CANopen master"),
+                                          interface=args.interface, channel=args.channel,
+                                          realtime=realtime)
+        s = write_master_results(rs, wc, mrun, scenario=args.scenario,
+                                 figures=not args.no_figures)
     b, unq = s["bench"], s["unquantised_cosim"]
     drives = ", ".join(str(d.node_id) for d in mrun.drives)
     print(f"CANopen master ({args.master}; drives {drives}, {s['mode']}, "
@@ -363,18 +368,23 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     rt = s.get("realtime")
     if rt is not None:
         d, sp, jit = rt["drives"], rt["drives"]["sync_period"], rt["drives"]["sync_jitter"]
+        rpdo = rt.get("drive_rpdo_timeout_syncs")
         print(f"  real time ({rt['sync_source']} SYNC every {rt['sync_period_ms']:g} ms, master "
               f"heartbeat {rt['master_heartbeat_ms']} ms, drives' consumer "
-              f"{rt['drive_consumer_ms']} ms): SYNC period at the drives min "
+              f"{rt['drive_consumer_ms']} ms"
+              f"{'' if rpdo is None else f', RPDO timeout {rpdo} SYNCs'}): SYNC period at the "
+              f"drives min "
               f"{sp['min_us']:.1f} / median {sp['median_us']:.1f} / max {sp['max_us']:.1f} us "
               f"(jitter p99 {jit['p99_us']:.1f}, max {jit['max_us']:.1f} us); "
               f"{d['deadline_misses']} deadline misses (RPDO after the next SYNC)")
         m = rt.get("master", {})
-        if "wake_up" in m:
+        if "wake_up" in m:  # the C master's clock
             w = m["wake_up"]
             print(f"  master: wake-up latency p50 {w['p50_us']:.1f} us, p99 {w['p99_us']:.1f} "
                   f"us, max {w['max_us']:.1f} us; {m['rt_deadline_misses']} deadline misses, "
                   f"{m['late_tpdos']} SYNCs whose TPDOs came after the next; {m['setup']}")
+        elif "setup" in m:
+            print(f"  master: {m['setup']}")
     print(f"results in {out}/ (summary.json, plant.csv, controller.csv, frames.rrrcan, "
           f"frames.blf{'' if args.no_figures else ', figures'})")
     return 0
@@ -382,35 +392,42 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
 
 def _canopen_realtime(args: argparse.Namespace) -> Any:
     """The CanopenRealTime of ``rrr hil canopen --realtime`` (None: lockstep); its options
-    without --realtime are refused."""
+    without --realtime, and those of the other master, are refused."""
     from ..errors import BadInputError
-    from ..hil.canopen_rt import CanopenRealTime
+    from ..hil.canopen.realtime import CONSUMER_MS, CanopenRealTime
 
+    given = {"--no-fifo": args.no_fifo, "--spin-us": args.spin_us is not None,
+             "--consumer-ms": args.consumer_ms is not None,
+             "--rpdo-timeout": args.rpdo_timeout is not None}
+    for option, refused in given.items():
+        if refused and not args.realtime:
+            raise BadInputError(f"{option}: an option of 'rrr hil canopen --realtime'")
+    if args.master == "c" and (given["--consumer-ms"] or given["--rpdo-timeout"]):
+        raise BadInputError("--consumer-ms, --rpdo-timeout: the Python master's (--master "
+                            "python); the C master writes its own consumer time and leaves the "
+                            "EDS's RPDO timeout")
+    if args.master == "python" and given["--spin-us"]:
+        raise BadInputError("--spin-us: the C master's clock (--master c); the Python master's "
+                            "SYNC comes from the canopen package's producer, which sleeps only")
     if not args.realtime:
-        for option, given in (("--no-fifo", args.no_fifo), ("--spin-us", args.spin_us is not None),
-                              ("--sync-source", args.sync_source is not None)):
-            if given:
-                raise BadInputError(f"{option}: an option of 'rrr hil canopen --realtime'")
         return None
-    if args.master == "c" and args.sync_source == "canopen":
-        raise BadInputError("--sync-source canopen: the canopen package's SYNC producer is the "
-                            "Python master's (--master python)")
-    return CanopenRealTime(sync_source=args.sync_source or "clock",
-                           fifo=0 if args.no_fifo else 80,
-                           spin_us=DEFAULT_SPIN_US if args.spin_us is None else args.spin_us)
+    return CanopenRealTime(fifo=0 if args.no_fifo else 80,
+                           spin_us=DEFAULT_SPIN_US if args.spin_us is None else args.spin_us,
+                           consumer_ms=CONSUMER_MS if args.consumer_ms is None
+                           else args.consumer_ms, rpdo_timeout=args.rpdo_timeout)
 
 
 def _cmd_busload(args: argparse.Namespace) -> int:
     import cantools
 
     from ..hil.busload import check_bitrates, format_report, schedule_load
-    from ..hil.protocol import DBC_PATH, database
+    from ..hil.dbc.protocol import DBC_PATH, database
 
     rate = args.bitrate if args.bitrate is not None else 1_000_000
     check_bitrates(rate, args.fd)  # before the DBC is read
     if args.profile == "canopen":
         from ..errors import BadInputError
-        from ..hil.busload import canopen_load
+        from ..hil.canopen.drives import canopen_load
 
         if args.dbc is not None or args.lockstep:
             raise BadInputError("--profile canopen: the schedule is the EDS's (SYNC always "
@@ -585,22 +602,27 @@ def register_cli(subparsers: Any) -> None:
                  "configuration (mode CST, rated torque, encoder resolution), the PDO mapping read "
                  "back, BaseNode402 to OPERATION ENABLED, then the computed-torque law of eq 15 in "
                  "lockstep (one SYNC per period, target torques in RPDOs, position and velocity "
-                 "from TPDOs) or with --realtime (SYNC by the clock every 1 ms), NMT stop at "
-                 "the end; write summary.json, plant.csv, "
+                 "from TPDOs) or with --realtime (a SYNC every 1 ms on the wall clock), NMT stop "
+                 "at the end; write summary.json, plant.csv, "
                  "controller.csv, the plant's frame log (frames.rrrcan, frames.blf) and the "
                  "figures into --out (docs/canopen.md).",
                  "rrr hil canopen --duration 2 --out results/hil-canopen")
     add_reference_arguments(co)
     r = co.add_argument_group("real time")
     r.add_argument("--realtime", action="store_true",
-                   help="SYNC by the clock every 1 ms (not lockstep), the master's heartbeat "
-                   "(20 ms) watched by each drive's consumer 0x1016 (100 ms), the law on the "
-                   "newest TPDOs and the RPDOs before the next SYNC; SCHED_FIFO 80 when "
-                   "permitted; SYNC period jitter and deadline misses in summary.json")
-    _add_rt_tuning(r, "SYNC")
-    r.add_argument("--sync-source", choices=("clock", "canopen"),
-                   help="with --realtime: clock (the default: the master's own timed loop) or "
-                   "canopen (the package's SYNC producer thread, network.sync.start)")
+                   help="a SYNC every 1 ms on the wall clock (not lockstep: the Python master's "
+                   "from the canopen package's producer, the C master's from its own clock), "
+                   "the master's heartbeat (20 ms) watched by each drive's consumer 0x1016, the "
+                   "law on the newest TPDOs; SCHED_FIFO 80 when permitted; SYNC period jitter "
+                   "and deadline misses in summary.json")
+    _add_rt_tuning(r, "SYNC of the C master")
+    r.add_argument("--consumer-ms", type=positive_int, metavar="MS",
+                   help="with --realtime, the Python master: each drive's heartbeat consumer "
+                   "time 0x1016, above the heartbeat's 20 ms (default 100)")
+    r.add_argument("--rpdo-timeout", type=positive_int, metavar="N",
+                   help="with --realtime, the Python master: each drive's RPDO timeout 0x2001, "
+                   "SYNC periods without an RPDO before it faults, 1..255 (default: the EDS's, "
+                   "3)")
     g = co.add_argument_group("CANopen")
     g.add_argument("--node-ids", type=node_ids, metavar="A,B,C",
                    help="the drives' node ids, axes 1..3 (default 1,2,3: the plant's)")
@@ -634,7 +656,7 @@ def register_cli(subparsers: Any) -> None:
                     help="include the lockstep-only frames (Sync)")
     bl.add_argument("--dbc", type=Path, metavar="FILE",
                     help="another DBC (default: the bench's rrr_bench.dbc)")
-    bl.add_argument("--profile", choices=("dbc", "canopen"), default="dbc",
+    bl.add_argument("--profile", choices=tuple(PROFILES), default="dbc",
                     help="canopen: the schedule of three CiA 402 drives of rrr_cia402.eds "
                          "(SYNC, RPDO, TPDOs every period; heartbeats) instead of the DBC's")
     bl.add_argument("--sync-period-ms", type=sync_period_ms, metavar="MS",

@@ -1,8 +1,32 @@
-"""The CAN bench (hardware in the loop) from Python, with python-can and cantools.
+"""The CAN bench (hardware in the loop) from Python, with python-can, cantools and canopen; the
+command line (``rrr hil``) is :mod:`rrr_robot.cli.hil`.
 
-protocol (the DBC, E2E-protected frames, encode / decode, the DBC's quantisation), nodes (the C
-nodes as processes, python-can buses), bench (runs: both C nodes, the controller FMU against the
-C plant node, the quantised co-simulation), plant (the plant FMU behind the C supervisor over
-python-can), _hil_lib (ctypes binding of the C supervisor and frame decoder). The command line
-(``rrr hil``) is in :mod:`rrr_robot.cli.hil`.
+One folder per CAN profile, each registered in :data:`PROFILES`:
+
+- ``dbc/``: the DBC profile (``rrr hil bench|controller|plant``): ``protocol`` (the DBC, its
+  E2E-protected frames, their codec and quantisation), ``bench`` (both C nodes; the quantised
+  co-simulation), ``controller`` and ``plant`` (the controller FMU and the plant FMU under FMPy
+  against the other C node; ``_supervisor``: the C supervisor the Python plant calls through
+  ctypes), ``sides`` (each side as one library call), ``results`` (its files);
+- ``canopen/``: the CANopen profile (``rrr hil canopen``): ``drives`` (the C plant node as
+  three CiA 402 drives: EDS, PDO units, schedule), ``master`` (the canopen package's master),
+  ``c_master`` (the C controller node as master), ``realtime``, ``results``.
+
+Shared by both: ``logs/`` (``frames``: the nodes' frame logs as ASC/BLF; ``specs``: the nodes'
+CSV logs, column by column; ``mcap``: a run as MCAP), ``nodes`` (the C nodes as processes,
+python-can buses, the bench's period), ``results`` (a run against its reference, summary.json),
+``figures``, ``busload`` (frame lengths and the load of a schedule) and ``channel`` (the default
+bus name). The errors are in :mod:`rrr_robot.errors` (``HilError`` and its subclasses).
 """
+
+from __future__ import annotations
+
+__all__ = ["PROFILES"]
+
+#: The CAN profiles (``rrr hil busload --profile``), by name: the package of each, imported when
+#: used. A new profile is a package beside these, a row here, its ``rrr hil`` action
+#: and a page of the manual.
+PROFILES: dict[str, str] = {
+    "dbc": "rrr_robot.hil.dbc",
+    "canopen": "rrr_robot.hil.canopen",
+}

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import BadInputError
-from .protocol import PERIOD
+from .nodes import PERIOD
 
 __all__ = [
     "FD_DATA_BITRATE",
@@ -42,7 +42,7 @@ __all__ = [
     "BusLoad",
     "FrameLoad",
     "can_crc15",
-    "canopen_load",
+    "check_bitrates",
     "classical_bits",
     "fd_bits",
     "format_report",
@@ -248,21 +248,6 @@ def schedule_load(db: Any, bitrate: int = MAX_NOMINAL_BITRATE, data_bitrate: int
         frames.append(FrameLoad(msg.frame_id, msg.name, msg.length, ext, float(msg.cycle_time),
                                 bit_counts[0], bit_counts[1], times[0], times[1]))
     return BusLoad(dbc_name, bitrate, data_bitrate, lockstep, tuple(frames), tuple(excluded))
-
-
-def canopen_load(bitrate: int = MAX_NOMINAL_BITRATE, data_bitrate: int | None = None,
-                 period_ms: float = 1.0) -> BusLoad:
-    """The load of the CANopen profile's schedule (three CiA 402 drives of the EDS, one SYNC
-    every ``period_ms``: :func:`rrr_robot.hil.cia402.canopen_schedule`)."""
-    from types import SimpleNamespace
-
-    from .cia402 import EDS_PATH, canopen_schedule
-
-    check_bitrates(bitrate, data_bitrate)
-    schedule = SimpleNamespace(messages=canopen_schedule(period_ms))
-    load = schedule_load(schedule, bitrate, data_bitrate, dbc_name=str(EDS_PATH))
-    return BusLoad(load.dbc, load.bitrate, load.data_bitrate, load.lockstep, load.frames,
-                   ("SDO, EMCY and NMT: sent on events",))
 
 
 def measured_load(frames: Sequence[tuple[int, bytes, bool]], periods: int,

@@ -1,13 +1,19 @@
-"""The C nodes of the CAN bench as processes, and the python-can buses that talk to them.
+"""The C nodes of the CAN bench as processes, and the python-can buses that talk to them (every
+profile: the DBC's and CANopen's).
 
 The C nodes (``rrr_hil_plant``, ``rrr_hil_controller``) are installed with the package in
 ``rrr_robot/bin`` (or found in ``$RRR_HIL_BIN_DIR``). The plant node is the socketcand server;
 python-can's built-in ``socketcand`` interface connects to it (``socketcan`` where the kernel has
-AF_CAN). The controller node can also listen (``--listen``) for the Python plant.
+AF_CAN). The controller node can also listen (``--listen``) for the Python plant. Over SocketCAN
+a bus opened before the plant starts (:func:`boot_up_watch`) sees its boot-up
+(:func:`wait_for_boot_up`); :func:`wait_node` reports a node's progress from its log
+(:class:`LogProgress`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import logging
 import os
@@ -17,7 +23,7 @@ import signal
 import subprocess
 import time
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -29,15 +35,22 @@ from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
 from ..core.outputs import STAGING_PREFIX, atomic_write_text
 from ..core.param_names import param_index
+from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..errors import HilError
 from ..sim.fmus import fmu_path
 from ..writing.reference_table import write_reference_table
 from .channel import DEFAULT_CHANNEL
-from .protocol import NMT_BOOT, PERIOD, HilError
 
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "NMT_BOOT",
+    "NMT_OPERATIONAL",
+    "NMT_STOPPED",
+    "PERIOD",
+    "LogProgress",
     "NodeProcess",
+    "boot_up_watch",
     "controller_node_args",
     "export_reference",
     "failure_folder",
@@ -48,10 +61,21 @@ __all__ = [
     "start_listening_controller",
     "start_plant",
     "wait_for_boot_up",
+    "wait_node",
 ]
 
-#: HeartbeatPlant's identifier (0x700 + node id 2, rrr_bench.dbc).
-_HEARTBEAT_PLANT = 0x702
+#: s: the period of the bench's C nodes, RRR_SAMPLE_TIME_DEFAULT (rrr_control.h, 1 ms), the
+#: package's default sample time; a reference for the bench must be sampled at it.
+PERIOD = DEFAULT_SAMPLE_TIME
+#: Heartbeat NMT state of a node that has booted (CANopen's NMT state numbers, which the DBC's
+#: heartbeats carry too).
+NMT_BOOT = 0
+#: Heartbeat NMT state of a stopped node.
+NMT_STOPPED = 4
+#: Heartbeat NMT state of an operational node.
+NMT_OPERATIONAL = 5
+#: Progress of a run: progress(periods done, periods in all).
+Progress = Callable[[int, int], None]
 
 
 def node_executable(which: str) -> Path:
@@ -243,7 +267,7 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
     back in ``.port``), or on the SocketCAN interface ``socketcan`` (e.g. vcan0: then wait for
     its boot-up heartbeat with :func:`wait_for_boot_up` before starting a controller), on the
     plant FMU (default: the packaged one, unzipped to a temp dir); ``frame_log``: its log of
-    every frame (rrr_robot.hil.framelog)."""
+    every frame (rrr_robot.hil.logs.frames)."""
     from ..core.archives import extract_to_temp
 
     unzip = extract_to_temp(fmu or fmu_path("plant"), "FMU", prefix="rrr-fmu-")
@@ -325,13 +349,13 @@ def open_bus(interface: str = "socketcand", *, host: str = "127.0.0.1", port: in
     raise ValueError(f"interface must be 'socketcand' or 'socketcan', got {interface!r}")
 
 
-def wait_for_boot_up(bus: Any, node: NodeProcess | None, timeout: float = 60.0,
-                     boot_id: int = _HEARTBEAT_PLANT) -> None:
-    """Wait for the plant's boot-up heartbeat (HeartbeatPlant, NMT state 0) on ``bus`` (a
-    python-can bus opened before the plant started): on SocketCAN a frame sent before a node
+def wait_for_boot_up(bus: Any, node: NodeProcess | None, boot_id: int,
+                     timeout: float = 60.0) -> None:
+    """Wait for the plant's boot-up heartbeat ``boot_id`` (NMT state 0; the DBC's
+    HeartbeatPlant, or the CANopen profile's boot-up of a drive, 0x700 + its node id) on ``bus``
+    (a python-can bus opened before the plant started): on SocketCAN a frame sent before a node
     has bound its socket is lost to it, and the plant listens once it has sent this. HilError
-    when ``node`` ends first or nothing comes within ``timeout`` s. ``boot_id``: the CANopen
-    profile's boot-up of a drive, 0x700 + its node id."""
+    when ``node`` ends first or nothing comes within ``timeout`` s."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         msg = bus.recv(timeout=0.2)
@@ -341,3 +365,61 @@ def wait_for_boot_up(bus: Any, node: NodeProcess | None, timeout: float = 60.0,
         if node is not None and not node.running():
             raise node.failure("the plant node ended before it was on the bus")
     raise HilError(f"no boot-up heartbeat of the plant node within {timeout:g} s")
+
+
+@contextlib.contextmanager
+def boot_up_watch(socketcan: str | None, boot_id: int, can_fd: bool = False) -> Iterator[Any]:
+    """A python-can bus on ``socketcan`` that receives only the plant's boot-up ``boot_id``
+    (:func:`wait_for_boot_up`; ``can_fd``: CAN FD frames too), opened before the plant starts
+    (None without SocketCAN)."""
+    if not socketcan:
+        yield None
+        return
+    import can
+
+    try:
+        bus = can.Bus(interface="socketcan", channel=socketcan, fd=can_fd,
+                      can_filters=[{"can_id": boot_id, "can_mask": 0x7FF, "extended": False}])
+    except (OSError, can.CanError) as exc:
+        hint = (" (this kernel has no AF_CAN: use the socketcand transport; docs/socketcan.md)"
+                if getattr(exc, "errno", None) == errno.EAFNOSUPPORT else "")
+        raise HilError(f"cannot open the SocketCAN interface {socketcan}: {exc}{hint}") from exc
+    try:
+        yield bus
+    finally:
+        bus.shutdown()
+
+
+class LogProgress:
+    """Reports the rows a node has written to its --log CSV (its periods done) while it runs:
+    ``poll()`` reads what was appended since the last call (up to the node's stdio buffer)."""
+
+    def __init__(self, path: Path, total: int, progress: Progress | None) -> None:
+        self.path, self.total, self.progress = Path(path), total, progress
+        self._offset = 0
+        self._rows = -1  # the header line
+
+    def poll(self) -> None:
+        if self.progress is None:
+            return
+        try:
+            with open(self.path, "rb") as fh:
+                fh.seek(self._offset)
+                chunk = fh.read()
+        except OSError:
+            return
+        self._offset += len(chunk)
+        self._rows += chunk.count(b"\n")
+        self.progress(max(0, min(self._rows, self.total)), self.total)
+
+
+def wait_node(node: NodeProcess, timeout: float, poll: LogProgress | None) -> dict[str, Any]:
+    """node.wait(timeout), reporting progress every 0.2 s."""
+    if poll is None or poll.progress is None:
+        return node.wait(timeout)
+    deadline = time.monotonic() + timeout
+    while node.running() and time.monotonic() < deadline:
+        poll.poll()
+        time.sleep(0.2)
+    poll.poll()
+    return node.wait(max(1.0, deadline - time.monotonic()))

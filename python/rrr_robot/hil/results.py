@@ -1,13 +1,15 @@
-"""Results of a CAN bench run like the writing task's: its signals as a co-simulation result,
-the writing task's metrics, the difference to the unquantised co-simulation of the same
-scenario, the faults, the bus traffic and, in real time, the wake-up latencies.
+"""Results of a CAN bench run like the writing task's (every profile): its signals
+(:class:`BenchRun`) as a co-simulation result, the writing task's metrics, the difference to the
+unquantised co-simulation of the same scenario, the faults, the bus traffic and, in real time,
+the wake-up latencies.
 
 :func:`bench_result` turns the plant's log (the plant FMU's q, qd, qdd and tip of every period,
 exact) and the controller's voltages into a :class:`~rrr_robot.sim.cosim.CosimResult`, so that
 :func:`rrr_robot.writing.job.metrics` and the writing task's figures apply unchanged.
-:func:`unquantised_cosim` runs the same scenario without the DBC's quantisation in the C closed
-loop (``rr.simulate``, bit-identical to the FMU co-simulation). :func:`bench_summary` is what
-``rrr hil bench|controller|plant`` write to summary.json.
+:func:`unquantised_cosim` runs the same scenario without the bench's quantisation in the C
+closed loop (``rr.simulate``, bit-identical to the FMU co-simulation). :func:`bench_summary` is
+what ``rrr hil`` writes to summary.json (each profile's files: ``hil.dbc.results``,
+``hil.canopen.results``).
 """
 
 from __future__ import annotations
@@ -22,20 +24,49 @@ import numpy as np
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.model import Model
-from ..core.outputs import ResultSet
 from ..core.param_names import model_fmu_values
-from ..core.summary import reference_section, write_summary
+from ..core.summary import reference_section
+from ..errors import HilError
 from ..sim.cosim import CosimOptions, CosimResult
 from ..sim.native import simulate
 from ..writing.job import metrics, scenario_summary
 from ..writing.trajectory import Reference
-from .bench import BenchRun
-from .logspec import LATENCY_LOG, PLANT_LOG, read_log
-from .protocol import PERIOD, HilError
+from .logs.specs import CONTROLLER_LOG, LATENCY_LOG, PLANT_LOG, read_log, write_log
+from .nodes import PERIOD
 
-__all__ = ["PLANT_LOG_COLUMNS", "RunInfo", "bench_result", "bench_summary", "comparison",
+__all__ = ["PLANT_LOG_COLUMNS", "BenchRun", "bench_result", "bench_summary", "comparison",
            "extend_reference", "latency_stats", "read_latency_log", "read_plant_log",
-           "unquantised_cosim", "write_results"]
+           "unquantised_cosim", "write_controller_log"]
+
+
+@dataclass(frozen=True)
+class BenchRun:
+    """Signals of a bench run, one row per period (the controller's view: measured q, qd)."""
+
+    t: FloatArray
+    q: FloatArray        # (n, 3) plant state (exact doubles for the C plant log)
+    qd: FloatArray
+    u: FloatArray        # (n, 3) commanded voltage
+    plant_summary: dict[str, Any]
+    controller_summary: dict[str, Any]
+    u_n: FloatArray | None = None   # (n, 3) model part of u (the controller's log)
+    u_c: FloatArray | None = None   # (n, 3) PD part of u
+    wall_time: float = float("nan")  # s from the nodes' start to their end
+
+
+def write_controller_log(run: BenchRun, path: Path) -> Path:
+    """The controller log of a run (specs.CONTROLLER_LOG: the C controller node's --log),
+    atomically."""
+    assert run.u_n is not None and run.u_c is not None
+    spec = CONTROLLER_LOG
+    rows = np.zeros((run.t.shape[0], len(spec.columns)))
+    rows[:, spec.index("k")] = np.arange(run.t.shape[0])
+    rows[:, spec.index("t")] = run.t
+    rows[:, spec.index("enable")] = 1.0
+    for group, values in (("q", run.q), ("qd", run.qd), ("u", run.u), ("u_n", run.u_n),
+                          ("u_c", run.u_c)):
+        rows[:, spec.indices(fv.joint_names(group))] = values
+    return write_log(path, spec, rows)
 
 
 def _span(first: str, n: int = 1) -> slice:
@@ -43,7 +74,7 @@ def _span(first: str, n: int = 1) -> slice:
     return slice(i, i + n)
 
 
-#: Columns of the plant log (logspec.PLANT_LOG: the C plant node's --log and the Python
+#: Columns of the plant log (specs.PLANT_LOG: the C plant node's --log and the Python
 #: plant's), by name.
 PLANT_LOG_COLUMNS: dict[str, slice] = {
     "t": _span("t"), **{g: _span(fv.names("plant", g)[0], 3) for g in ("q", "qd", "u", "qdd")},
@@ -51,7 +82,7 @@ PLANT_LOG_COLUMNS: dict[str, slice] = {
 
 
 def read_plant_log(path: Path) -> FloatArray:
-    """The rows of a plant log (HilError when it is not logspec.PLANT_LOG)."""
+    """The rows of a plant log (HilError when it is not specs.PLANT_LOG)."""
     return read_log(path, PLANT_LOG).rows
 
 
@@ -124,7 +155,7 @@ def comparison(bench: CosimResult, other: CosimResult) -> dict[str, Any]:
 
 
 def read_latency_log(path: Path) -> FloatArray:
-    """The (latency_ns, work_ns) rows of a node's --latency-log (logspec.LATENCY_LOG)."""
+    """The (latency_ns, work_ns) rows of a node's --latency-log (specs.LATENCY_LOG)."""
     return read_log(path, LATENCY_LOG).cols(["latency_ns", "work_ns"])
 
 
@@ -180,79 +211,3 @@ def bench_summary(*, side: str, mode: str, scenario: str, ref: Reference, bench:
     if realtime is not None:
         s["realtime"] = dict(realtime)
     return s
-
-
-@dataclass(frozen=True)
-class RunInfo:
-    """What a run was: its side (bench, controller, plant), mode (lockstep, realtime),
-    scenario, the node's frame log in the staging folder and whose view that log is."""
-
-    side: str
-    mode: str
-    scenario: str
-    node_log: str
-    view: str
-
-
-def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, model: Model,
-                  controller_values: Mapping[str, float | bool],
-                  nodes: Mapping[str, Mapping[str, Any]], *, can_log: Path | None,
-                  figures: bool = True, mcap: bool = False) -> dict[str, Any]:
-    """Evaluate a run whose logs (plant.csv, the node's frame log, in real time the latency
-    logs) are in the result set's staging folder: the unquantised co-simulation, the standard
-    frame log (``can_log``: in the output folder, or elsewhere, written atomically), the
-    figures, with ``mcap`` the run as ``bench.mcap`` (hil.mcap) and summary.json. Returns the
-    summary."""
-    from . import framelog as fl
-    from .busload import FD_DATA_BITRATE, measured_fd_load, measured_load, schedule_load
-    from .protocol import DBC_PATH, database
-
-    work = rs.staging
-    plant_log = read_plant_log(work / "plant.csv")
-    bench = bench_result(ref, run, plant_log)
-    if bench.t.shape[0] < 2:
-        raise HilError(f"the bench ran {bench.t.shape[0]} periods: nothing to evaluate")
-    ref_run = extend_reference(ref, float(bench.t[-1] - bench.t[0]))
-    unq = unquantised_cosim(ref_run, model, controller_values)
-    records = fl.read_node_log(work / info.node_log)
-    bus: dict[str, Any] = {"node_log": info.node_log, "view": info.view, **fl.rates(records)}
-    bus["measured_1mbit"] = measured_load(fl.frames(records), bench.t.shape[0])
-    bus["schedule_worst_percent_1mbit"] = schedule_load(
-        database(), lockstep=info.mode == "lockstep", dbc_name=str(DBC_PATH)).worst_percent
-    if any(n.get("transport") == "socketcan-fd" for n in nodes.values()):
-        # CAN FD frames on the bus (--fd): their load at 1 Mbit/s nominal, 5 Mbit/s data
-        bus["measured_fd"] = measured_fd_load(fl.frames(records), bench.t.shape[0])
-        bus["schedule_fd_worst_percent"] = schedule_load(
-            database(), data_bitrate=FD_DATA_BITRATE, lockstep=info.mode == "lockstep",
-            dbc_name=str(DBC_PATH)).worst_percent
-    if can_log is not None:
-        inside = can_log.parent.resolve() == rs.folder.resolve()
-        fl.write_can_log(records, rs.path(can_log.name) if inside else can_log)
-        bus["can_log"] = can_log.name if inside else str(can_log)
-    if mcap:
-        from ..core.robot import read_robot_file
-        from .mcap import write_bench_mcap
-
-        m = bench.t.shape[0]
-        write_bench_mcap(rs.path("bench.mcap"), bench.columns(), read_robot_file(), records,
-                         plant_log[:m, PLANT_LOG_COLUMNS["faults"]][:, 0],
-                         metadata={"side": info.side, "mode": info.mode,
-                                   "scenario": info.scenario, "view": info.view})
-    realtime: dict[str, Any] | None = None
-    latencies: dict[str, FloatArray] = {}
-    stats: dict[str, dict[str, Any]] = {}
-    if info.mode == "realtime":
-        for node in ("controller", "plant"):
-            lat = read_latency_log(work / f"latency_{node}.csv")
-            latencies[node] = lat[:, 0]
-            stats[node] = {**latency_stats(lat[:, 0]), **nodes[node].get("rt", {})}
-        realtime = {**stats, "goal_p99_us": 50.0}
-    summary = bench_summary(side=info.side, mode=info.mode, scenario=info.scenario, ref=ref_run,
-                            bench=bench, unquantised=unq, plant=nodes["plant"],
-                            controller=nodes["controller"], bus=bus, realtime=realtime)
-    if figures:
-        from .figures import write_bench_figures
-
-        write_bench_figures(work, ref_run, bench, unq, latencies or None, stats,
-                            scenario=info.scenario)
-    return write_summary(rs, summary)

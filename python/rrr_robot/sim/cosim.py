@@ -53,7 +53,7 @@ class CosimOptions:
     fmi_version: int = 2                                 # of the packaged FMUs: 2 or 3
     progress: Callable[[int, int], None] | None = None  # progress(k, n): sample k of n reached
     # what the controller measures of the plant's (q, qd) (6,), and what the plant receives of
-    # the controller's u (3,): e.g. the quantisation of a CAN bench (rrr_robot.hil.protocol);
+    # the controller's u (3,): e.g. the quantisation of a CAN bench (rrr_robot.hil.dbc.protocol);
     # identity when None
     measure: Callable[[FloatArray], FloatArray] | None = None
     actuate: Callable[[FloatArray], FloatArray] | None = None

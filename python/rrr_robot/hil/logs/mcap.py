@@ -4,13 +4,17 @@ writing task's topics of the bench's signals (:func:`rrr_robot.core.mcap_log.wri
 * ``/can/frames`` (``can_msgs/msg/Frame``): every frame of the node's frame log, its
   ``header.frame_id`` ``tx`` or ``rx`` (the logging node's direction);
 * ``/can/decoded/<Message>`` (``std_msgs/msg/Float64MultiArray``): the physical values of each
-  frame of a DBC message (cantools), one layout dimension per signal, labelled with its name;
+  frame of a message of the profile's database (cantools), one layout dimension per signal,
+  labelled with its name;
 * ``/bench/faults`` (``std_msgs/msg/UInt32``): the plant's latched fault bits of each period
-  (``PlantStatus.Faults``: timeout 1, crc 2, counter 4, range 8, format 16, sync 32, bus 64).
+  (the DBC profile's ``PlantStatus.Faults``: timeout 1, crc 2, counter 4, range 8, format 16,
+  sync 32, bus 64).
 
 Every time is on the simulation clock: a frame's is the start of the period it was logged in,
-the periods counted by the plant's ``JointState1`` frames (one per period; the frames before the
-first belong to period 0). The nodes' own clock times stay in the frame log (``.blf``/``.asc``).
+the periods counted by the frames of one identifier the plant sends once per period (the DBC
+profile's ``JointState1``; the frames before the first belong to period 0). The nodes' own clock
+times stay in the frame log (``.blf``/``.asc``). The profile comes in as arguments (its
+database, that identifier, its number of fault bits): this module knows none.
 """
 
 from __future__ import annotations
@@ -21,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from ..core._arrays import FloatArray
-from ..core.mcap_log import SCHEMAS, CdrLayout, Topic, write_mcap
-from ..core.robot import RobotFile
-from .protocol import FAULT_BITS, HilError, database
+from ...core._arrays import FloatArray
+from ...core.mcap_log import SCHEMAS, CdrLayout, Topic, write_mcap
+from ...core.robot import RobotFile
+from ...errors import HilError
 
 __all__ = ["FRAME_SCHEMA", "UINT32_SCHEMA", "bench_topics", "frame_periods", "write_bench_mcap"]
 
@@ -37,11 +41,10 @@ UINT32_SCHEMA = "uint32 data\n"
 _EXTENDED = 0x80000000
 
 
-def frame_periods(records: np.ndarray, periods: int) -> np.ndarray:
-    """The period index of each frame: the number of JointState1 frames up to it, less one
-    (clipped to 0 .. periods - 1)."""
-    first_state = database().get_message_by_name("JointState1").frame_id
-    is_state = (records["id"] & 0x1FFFFFFF) == first_state
+def frame_periods(records: np.ndarray, periods: int, period_id: int) -> np.ndarray:
+    """The period index of each frame: the number of frames of ``period_id`` (one per period)
+    up to it, less one (clipped to 0 .. periods - 1)."""
+    is_state = (records["id"] & 0x1FFFFFFF) == period_id
     period: np.ndarray = np.clip(np.cumsum(is_state) - 1, 0, max(0, periods - 1))
     return period
 
@@ -64,8 +67,7 @@ def _frames_topic(records: np.ndarray, ns: np.ndarray) -> Topic:
     return Topic("/can/frames", "can_msgs/msg/Frame", ns.astype(np.uint64), msgs, FRAME_SCHEMA)
 
 
-def _decoded_topics(records: np.ndarray, ns: np.ndarray) -> list[Topic]:
-    db = database()
+def _decoded_topics(records: np.ndarray, ns: np.ndarray, db: Any) -> list[Topic]:
     ids = records["id"] & 0x1FFFFFFF
     topics = []
     for msg in db.messages:
@@ -91,30 +93,34 @@ def _decoded_topics(records: np.ndarray, ns: np.ndarray) -> list[Topic]:
     return topics
 
 
-def bench_topics(records: np.ndarray, faults: FloatArray, t: FloatArray) -> list[Topic]:
+def bench_topics(records: np.ndarray, faults: FloatArray, t: FloatArray, db: Any, *,
+                 period_id: int, fault_bits: int) -> list[Topic]:
     """The bench's extra topics of a run with rows at times ``t``: its frames (``records`` of a
-    node's frame log), their decoded signals and the plant's fault bits (one per row)."""
+    node's frame log), their signals decoded with ``db`` (a cantools database), and the plant's
+    fault bits (one per row, each below 2 ** ``fault_bits``); ``period_id``: the identifier
+    the plant sends once per period (:func:`frame_periods`)."""
     row_ns = np.rint(np.asarray(t, dtype=np.float64) * 1e9).astype(np.int64)
-    ns = row_ns[frame_periods(records, row_ns.size)] if records.size else \
+    ns = row_ns[frame_periods(records, row_ns.size, period_id)] if records.size else \
         np.zeros(0, dtype=np.int64)
     bits = np.asarray(faults, dtype=np.float64)
     if bits.shape != row_ns.shape or not np.all(
             np.isfinite(bits) & (bits >= 0) & (bits == np.rint(bits))
-            & (bits < 2 ** len(FAULT_BITS))):
+            & (bits < 2 ** fault_bits)):
         raise HilError("the plant log's faults are not fault bits, one per period")
     fault = CdrLayout().field("data", "<u4").encode(row_ns.size, {"data": bits.astype(np.uint32)})
     topics = [Topic("/bench/faults", "std_msgs/msg/UInt32", row_ns.astype(np.uint64), fault,
                     UINT32_SCHEMA)]
     if records.size:
         topics.append(_frames_topic(records, ns))
-        topics.extend(_decoded_topics(records, ns))
+        topics.extend(_decoded_topics(records, ns, db))
     return topics
 
 
 def write_bench_mcap(path: Path, columns: dict[str, FloatArray], robot: RobotFile,
-                     records: np.ndarray, faults: FloatArray,
-                     metadata: dict[str, str] | None = None) -> Path:
+                     records: np.ndarray, faults: FloatArray, db: Any, *, period_id: int,
+                     fault_bits: int, metadata: dict[str, str] | None = None) -> Path:
     """The bench run's MCAP: the signal table's topics and :func:`bench_topics`."""
-    extra: Sequence[Topic] = bench_topics(records, faults, columns["t"])
+    extra: Sequence[Topic] = bench_topics(records, faults, columns["t"], db,
+                                          period_id=period_id, fault_bits=fault_bits)
     meta: dict[str, Any] = dict(metadata or {})
     return write_mcap(path, columns, robot, metadata=meta, extra=extra)

@@ -1,4 +1,4 @@
-"""The sides of a CAN bench run as library calls (``rrr hil bench|controller|plant``): each starts
+"""The sides of a DBC profile run as library calls (``rrr hil bench|controller|plant``): each starts
 what it needs (C nodes, a python-can bus), runs the writing reference and returns a
 :class:`SideRun` (the exit status, the run, the nodes' summaries). The command line only chooses a
 side and prints; the files go to a working folder (a result set's staging folder).
@@ -21,18 +21,12 @@ from typing import Any
 
 import numpy as np
 
-from ..writing.trajectory import Reference
-from .bench import (
-    BenchRun,
-    BusLost,
-    RealTime,
-    run_c_bench,
-    run_fmu_controller,
-    write_controller_log,
-)
-from .channel import DEFAULT_CHANNEL
-from .logspec import CONTROLLER_LOG, PLANT_LOG, NodeLog, read_log
-from .nodes import (
+from ...errors import BusLost, HilError
+from ...writing.trajectory import Reference
+from ..channel import DEFAULT_CHANNEL
+from ..logs.specs import CONTROLLER_LOG, PLANT_LOG, NodeLog, read_log
+from ..nodes import (
+    Progress,
     controller_node_args,
     export_reference,
     failure_folder,
@@ -40,15 +34,13 @@ from .nodes import (
     start_listening_controller,
     start_plant,
 )
+from ..results import BenchRun, write_controller_log
+from .bench import RealTime, run_c_bench
+from .controller import run_fmu_controller
 from .plant import PlantRun, PythonPlant, RxFilter, drop_commands_from
-from .protocol import HilError
 
 __all__ = ["Connection", "SideRun", "open_checked_bus", "run_bench", "run_controller_side",
            "run_plant_side"]
-
-Progress = Callable[[int, int], None]
-
-
 
 @dataclass(frozen=True)
 class Connection:

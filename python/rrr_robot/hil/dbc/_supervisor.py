@@ -1,5 +1,5 @@
 """ctypes binding of the CAN bench's command supervisor and frame decoder (C, hil_supervisor.h and
-hil_codec.h), for the Python plant (:mod:`rrr_robot.hil.plant`).
+hil_codec.h), for the Python plant (:mod:`rrr_robot.hil.dbc.plant`).
 
 The safety policy (hold, timeout to 0 V, CRC / counter / range / DLC faults, latch, reset)
 exists once, in C: this module only mirrors the structures and forwards calls. The library is
@@ -18,8 +18,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from ..core._package import PACKAGE_DIR
-from ..errors import RrrError
+from ...core._package import PACKAGE_DIR
+from ...errors import RrrError
 
 LIB_NAME = "librrr_hil_supervisor.so"
 
@@ -181,7 +181,7 @@ def frame_of(message: Any) -> Frame:
 
 
 class Supervisor:
-    """One ``rrr_hil_sup`` (C) with the calls rrr_hil_plant.c makes on it."""
+    """One ``rrr_hil_sup`` (C) with the calls the DBC plant loop (dbc/hil_dbc_plant.c) makes."""
 
     def __init__(self, max_missed: int = 3, max_delta_counter: int = 3) -> None:
         self._lib = library()
@@ -195,7 +195,7 @@ class Supervisor:
 
     def on_command_frame(self, message: Any) -> int:
         """Decode a frame with the VoltageCmd id in C (CRC, DLC, DBC range) and feed the result
-        to the supervisor, as rrr_hil_plant.c does; returns the ``RX_*`` result."""
+        to the supervisor, as hil_dbc_plant.c does; returns the ``RX_*`` result."""
         rx = int(self._lib.rrr_hil_decode(ct.byref(frame_of(message)), ct.byref(self._msg)))
         cmd = ct.byref(self._msg.u.cmd) if rx == RX_OK else None
         self._lib.rrr_hil_sup_on_command(ct.byref(self._s), rx, cmd)
@@ -203,7 +203,7 @@ class Supervisor:
 
     def on_stop_frame(self, message: Any) -> tuple[int, bool]:
         """Decode a frame with the StopCmd id in C and feed it to the supervisor, as
-        rrr_hil_plant.c does; returns the ``RX_*`` result and whether the stop is honoured
+        hil_dbc_plant.c does; returns the ``RX_*`` result and whether the stop is honoured
         (E2E-valid, counter 1..max_delta_counter above the last command's)."""
         rx = int(self._lib.rrr_hil_decode(ct.byref(frame_of(message)), ct.byref(self._msg)))
         stop = ct.byref(self._msg.u.stop) if rx == RX_OK else None

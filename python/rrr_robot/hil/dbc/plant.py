@@ -1,15 +1,15 @@
-"""The plant side of the CAN bench from Python (run by ``rrr hil plant``).
+"""The DBC profile's plant side from Python (run by ``rrr hil plant``).
 
 The plant FMU runs under FMPy (:class:`~rrr_robot.sim.fmu_slave.FmuSlave`) and speaks the lockstep
-protocol of ``c_src/hil/rrr_hil_plant.c`` over a python-can bus: ``socketcand`` as client of the
+protocol of ``c_src/hil/dbc/hil_dbc_plant.c`` over a python-can bus: ``socketcand`` as client of the
 C controller node started with ``--listen``, or ``socketcan`` where the kernel has AF_CAN.
 Outgoing frames (JointState1..3, PlantStatus, HeartbeatPlant) are encoded with cantools from the
 shipped DBC; Sync and HeartbeatCtrl are decoded with cantools.
 
 The safety policy is NOT implemented here: every VoltageCmd frame goes to the C decoder and the
-C supervisor (``hil_supervisor.c`` through :mod:`rrr_robot.hil._hil_lib`), exactly the calls the C
-plant node makes, so CRC, alive-counter, range and DLC checks, the hold / timeout / 0 V rule,
-the latch and the reset are the C code's. Python only moves frames and steps the FMU.
+C supervisor (``hil_supervisor.c`` through :mod:`rrr_robot.hil.dbc._supervisor`), exactly the
+calls the C plant node makes, so CRC, alive-counter, range and DLC checks, the hold / timeout /
+0 V rule, the latch and the reset are the C code's. Python only moves frames and steps the FMU.
 
 Lockstep only (deterministic): after the controller's first frame the plant publishes the state
 of period 0; each Sync(k) closes period k (the supervisor decides the voltage), the FMU advances
@@ -29,34 +29,25 @@ from typing import Any
 
 import numpy as np
 
-from ..core import fmu_vars as fv
-from ..core._arrays import FloatArray
-from ..sim.cosim import PLANT_IN, initial_state_values
-from ..sim.fmu_slave import FmuSlave
-from ..sim.fmus import fmu_path
-from . import _hil_lib as hl
-from .logspec import PLANT_LOG, NodeLog, write_log
-from .protocol import (
-    EXIT_SAFETY,
-    NMT_BOOT,
-    NMT_OPERATIONAL,
-    PERIOD,
-    FrameError,
-    HilError,
-    decode,
-    encode,
-)
+from ...core import fmu_vars as fv
+from ...core._arrays import FloatArray
+from ...errors import BusLost, FrameError
+from ...sim.cosim import PLANT_IN, initial_state_values
+from ...sim.fmu_slave import FmuSlave
+from ...sim.fmus import fmu_path
+from ..logs.specs import PLANT_LOG, NodeLog, write_log
+from ..nodes import NMT_BOOT, NMT_OPERATIONAL, PERIOD
+from . import _supervisor as hl
+from .protocol import EXIT_SAFETY, decode, encode, frame_id
 
 log = logging.getLogger(__name__)
 
 __all__ = ["LOG_HEADER", "PlantRun", "PythonPlant", "drop_commands_from"]
 
-VOLTAGE_CMD_ID = 0x100
-STOP_CMD_ID = 0x090
 HEARTBEAT_PERIODS = 100
 #: The plant FMU's state outputs (q, qd) sent in the JointState frames.
 STATE_OUTPUTS = fv.names("plant", "q") + fv.names("plant", "qd")
-#: Columns of the plant log (logspec.PLANT_LOG, the C plant node's --log): row 0 is the initial
+#: Columns of the plant log (specs.PLANT_LOG, the C plant node's --log): row 0 is the initial
 #: state, row k + 1 the state after period k with the voltage applied during period k.
 LOG_HEADER = list(PLANT_LOG.names)
 #: The FMU outputs logged beside the state (the last six columns).
@@ -71,8 +62,10 @@ def drop_commands_from(k0: int) -> RxFilter:
     """Fault injection: VoltageCmd frames of periods >= k0 never reach the plant (the controller
     "stops commanding" while Sync keeps the lockstep going)."""
 
+    voltage_cmd = frame_id("VoltageCmd")
+
     def rx_filter(k: int, msg: Any) -> Any | None:
-        return None if k >= k0 and msg.arbitration_id == VOLTAGE_CMD_ID else msg
+        return None if k >= k0 and msg.arbitration_id == voltage_cmd else msg
 
     return rx_filter
 
@@ -97,10 +90,6 @@ class PlantRun:
     def u(self) -> FloatArray:
         """Row k + 1: the voltage applied during period k."""
         return NodeLog(PLANT_LOG, self.log).group("u")
-
-
-class _BusLost(HilError):
-    """The controller is lost: a send or receive failed, or no frame within the timeout."""
 
 
 @dataclass
@@ -132,6 +121,7 @@ class PythonPlant:
         self.n = _Counters()
         self._hb = 0
         self._rows: list[list[float]] = []
+        self._voltage_cmd, self._stop_cmd = frame_id("VoltageCmd"), frame_id("StopCmd")
 
     # ---- frames ------------------------------------------------------------------------------
     def _send(self, name: str, signals: Mapping[str, float]) -> None:
@@ -140,7 +130,7 @@ class PythonPlant:
         try:
             self.bus.send(encode(name, signals))
         except (OSError, can.CanError) as exc:
-            raise _BusLost(f"send {name}: {exc}") from exc
+            raise BusLost(f"send {name}: {exc}", self.k) from exc
 
     def _heartbeat(self, nmt: int) -> None:
         self._send("HeartbeatPlant", {"NmtState": nmt, "Counter": self._hb & 0xFF})
@@ -162,13 +152,13 @@ class PythonPlant:
             self._heartbeat(NMT_OPERATIONAL)
 
     def _handle(self, msg: Any) -> bool:
-        """One received frame (rrr_hil_plant.c handle()); True for a Sync (advance a period).
+        """One received frame (hil_dbc_plant.c handle()); True for a Sync (advance a period).
         A StopCmd goes to the C supervisor, which honours it only with its E2E protection."""
-        if msg.arbitration_id == VOLTAGE_CMD_ID and not msg.is_extended_id:
+        if msg.arbitration_id == self._voltage_cmd and not msg.is_extended_id:
             self.n.rx[self.sup.on_command_frame(msg)] += 1
             self.started = True
             return False
-        if msg.arbitration_id == STOP_CMD_ID and not msg.is_extended_id:
+        if msg.arbitration_id == self._stop_cmd and not msg.is_extended_id:
             rx, _ = self.sup.on_stop_frame(msg)
             self.n.rx[rx] += 1
             self.started = True
@@ -199,14 +189,14 @@ class PythonPlant:
 
     def _recv(self, deadline: float) -> Any | None:
         """The next frame (after the fault-injection filter), or None past the deadline;
-        raises _BusLost when the bus fails."""
+        raises BusLost when the bus fails."""
         import can
 
         while time.monotonic() < deadline:
             try:
                 msg = self.bus.recv(timeout=min(0.2, max(0.0, deadline - time.monotonic())))
             except (OSError, can.CanError) as exc:
-                raise _BusLost(f"receive: {str(exc).splitlines()[0]}") from exc
+                raise BusLost(f"receive: {str(exc).splitlines()[0]}", self.k) from exc
             if msg is None:
                 continue
             if self.rx_filter is not None:
@@ -216,7 +206,7 @@ class PythonPlant:
         return None
 
     def _lockstep(self, slave: Any, p_in: Any, p_out: Any, y_out: Any) -> int:
-        """The loop of rrr_hil_plant.c run_lockstep(); raises _BusLost, HilError."""
+        """The loop of hil_dbc_plant.c run_lockstep(); raises BusLost, HilError."""
         x = slave.get_block(p_out).copy()
         self._record(slave.time, x, (0.0, 0.0, 0.0), slave.get_block(y_out))
         self._heartbeat(NMT_BOOT)
@@ -226,7 +216,7 @@ class PythonPlant:
             msg = self._recv(time.monotonic() + wait)
             if msg is None:
                 what = "the controller went silent" if self.started else "no controller"
-                raise _BusLost(f"{what} (no frame within {wait:.1f} s)")
+                raise BusLost(f"{what} (no frame within {wait:.1f} s)", self.k)
             sync = self._handle(msg)
             if self.started and not published0:
                 self._publish(x)
@@ -257,7 +247,7 @@ class PythonPlant:
             y_out = slave.real_block(LOGGED_OUTPUTS)
             try:
                 rc = self._lockstep(slave, p_in, p_out, y_out)
-            except _BusLost as exc:
+            except BusLost as exc:
                 log.error("python plant: period %d: %s", self.k, exc)
                 self.sup.raise_fault(hl.FAULT_BUS)
                 rc = 3

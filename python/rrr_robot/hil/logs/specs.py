@@ -1,13 +1,14 @@
 """The CSV logs of the CAN bench's nodes, specified once: every column's name, unit and meaning,
 in order, for the controller log (``rrr_hil_controller --log``, and the Python side's
-:func:`~rrr_robot.hil.bench.write_controller_log`), the plant log (``rrr_hil_plant --log`` and
-:class:`~rrr_robot.hil.plant.PythonPlant`) and the latency log (``--latency-log`` of both nodes).
+:func:`~rrr_robot.hil.results.write_controller_log`), the plant log (``rrr_hil_plant --log``
+and :class:`~rrr_robot.hil.dbc.plant.PythonPlant`) and the latency log (``--latency-log`` of
+both nodes).
 
-The C nodes write the headers of c_src/hil/gen/rrr_hil_logs.h, GENERATED from this table by
+The C nodes write the headers of c_src/hil/nodes/gen/rrr_hil_logs.h, GENERATED from this table by
 tools/gen_hil_logs.py (tests/python/test_generated_code.py proves that regenerating gives the
 committed header); every Python reader goes through :func:`read_log`, which checks the header
 against the table, so a column added, removed or moved on one side is an error on the other,
-not a silently shifted signal. (The frame log is binary: rrr_robot.hil.framelog.)
+not a silently shifted signal. (The frame log is binary: rrr_robot.hil.logs.frames.)
 
 A log is a header row, then one row of numbers per period, every double with 17 significant
 digits.
@@ -22,10 +23,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import fmu_vars as fv
-from ..core._arrays import FloatArray
-from ..core.outputs import atomic_open
-from .protocol import HilError
+from ...core import fmu_vars as fv
+from ...core._arrays import FloatArray
+from ...core.outputs import atomic_open
+from ...errors import HilError
 
 __all__ = [
     "CONTROLLER_LOG",
@@ -89,7 +90,8 @@ def _joints(group: str, unit: str, meaning: str) -> list[Column]:
 
 _K = Column("k", "", "control period, from 0")
 #: rrr_hil_controller --log (and write_controller_log): one row per period k.
-CONTROLLER_LOG = LogSpec("controller", "rrr_hil_controller --log; hil.bench.write_controller_log", (
+CONTROLLER_LOG = LogSpec("controller",
+                         "rrr_hil_controller --log; hil.results.write_controller_log", (
     _K,
     Column("t", "s", "reference time of the period"),
     *_joints("q", "rad", "measured joint angle (JointState)"),
@@ -103,7 +105,7 @@ CONTROLLER_LOG = LogSpec("controller", "rrr_hil_controller --log; hil.bench.writ
 ))
 #: rrr_hil_plant --log (and PythonPlant): row 0 is the initial state, row k + 1 the state after
 #: period k with the voltage applied during period k.
-PLANT_LOG = LogSpec("plant", "rrr_hil_plant --log; hil.plant.PythonPlant", (
+PLANT_LOG = LogSpec("plant", "rrr_hil_plant --log; hil.dbc.plant.PythonPlant", (
     _K,
     Column("t", "s", "plant FMU time"),
     *_joints("q", "rad", "joint angle"),
@@ -164,7 +166,7 @@ def parse_log(text: str, path: str | os.PathLike[str],
             want = f"'{spec.names[where]}'" if where < len(spec.names) else "nothing"
             raise HilError(f"the node log {path} is not a {spec.name} log: its column "
                            f"{where + 1} is {found}, the {spec.name} log has {want} there "
-                           f"(rrr_robot.hil.logspec: {spec.header})")
+                           f"(rrr_robot.hil.logs.specs: {spec.header})")
     body = lines[1:]
     if body and not text.endswith("\n"):
         raise HilError(f"the node log {path} is cut short (its last line is incomplete: the "

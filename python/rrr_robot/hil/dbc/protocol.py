@@ -1,15 +1,16 @@
-"""The CAN bench's protocol: the DBC, the E2E-protected frames, and their codec (cantools).
+"""The DBC profile's protocol: the DBC, the E2E-protected frames, and their codec (cantools).
 
 One DBC, ``data/rrr_bench.dbc``, describes every frame; the C nodes' pack/unpack is generated
-from the same file (``c_src/hil/gen``). Frames carry AUTOSAR E2E profile 2 protection: CRC-8/
+from the same file (``c_src/hil/dbc/gen``). Frames carry AUTOSAR E2E profile 2 protection: CRC-8/
 AUTOSAR over bytes 1..7 and the message's DataID in byte 0, a 4-bit alive counter in byte 1.
 
 Lockstep protocol (deterministic): the controller sends its heartbeat; the plant answers with the
 state of period 0; then per period k the controller sends VoltageCmd(k) and Sync(k), and the
 plant advances exactly one period and answers with the state of k + 1.
 
-:func:`encode` and :func:`decode` build and check frames; :func:`quantise_state` and
-:func:`quantise_command` are what the DBC's scaling does to the values a frame carries.
+:func:`encode` and :func:`decode` build and check frames, :func:`frame_id` reads a message's
+identifier from the DBC; :func:`quantise_state` and :func:`quantise_command` are what the DBC's
+scaling does to the values a frame carries.
 """
 
 from __future__ import annotations
@@ -20,35 +21,26 @@ from typing import Any
 
 import numpy as np
 
-from ..core._arrays import FloatArray
-from ..core._package import DATA_DIR
-from ..core.robot_file import DEFAULT_SAMPLE_TIME
-from ..errors import RrrError
+from ...core._arrays import FloatArray
+from ...core._package import DATA_DIR
+from ...errors import FrameError
 
 __all__ = [
     "DATA_IDS",
     "DBC_PATH",
     "EXIT_SAFETY",
     "FAULT_BITS",
-    "NMT_BOOT",
-    "NMT_OPERATIONAL",
-    "NMT_STOPPED",
-    "PERIOD",
-    "FrameError",
-    "HilError",
     "database",
     "decode",
     "encode",
+    "frame_id",
     "quantise_command",
     "quantise_state",
 ]
 
 #: The bench's CAN database (DBC) shipped with the package.
 DBC_PATH = DATA_DIR / "rrr_bench.dbc"
-#: s: the period of the bench's C nodes, RRR_SAMPLE_TIME_DEFAULT (rrr_control.h, 1 ms), the
-#: package's default sample time; a reference for the bench must be sampled at it.
-PERIOD = DEFAULT_SAMPLE_TIME
-#: E2E DataIDs (also in the DBC's comment and c_src/hil/hil_codec.h).
+#: E2E DataIDs (also in the DBC's comment and c_src/hil/dbc/hil_codec.h).
 DATA_IDS = {"VoltageCmd": 0x10, "StopCmd": 0x11, "JointState1": 0x21, "JointState2": 0x22,
             "JointState3": 0x23, "PlantStatus": 0x30}
 #: Exit status of a bench run that completed while the safety policy fired (a fault latched, even
@@ -58,25 +50,6 @@ EXIT_SAFETY = 7
 #: Latched fault bits of PlantStatus.Faults.
 FAULT_BITS = {"timeout": 1, "crc": 2, "counter": 4, "range": 8, "format": 16, "sync": 32,
               "bus": 64}
-#: Heartbeat NmtState of a node that has booted (CANopen's NMT state numbers).
-NMT_BOOT = 0
-#: Heartbeat NmtState of a stopped node.
-NMT_STOPPED = 4
-#: Heartbeat NmtState of an operational node.
-NMT_OPERATIONAL = 5
-
-
-class HilError(RrrError):
-    """A bench node failed, or the bench protocol was violated (names the node and period)."""
-
-
-class FrameError(HilError, ValueError):
-    """A frame that is not a valid bench frame; ``reason`` is 'unknown id', 'wrong DLC' or
-    'E2E CRC mismatch'."""
-
-    def __init__(self, message: str, reason: str) -> None:
-        super().__init__(message)
-        self.reason = reason
 
 
 # ---- codec ----------------------------------------------------------------------------------
@@ -88,6 +61,12 @@ def database() -> Any:
     import cantools
 
     return cantools.database.load_file(str(DBC_PATH))
+
+
+@functools.cache
+def frame_id(name: str) -> int:
+    """The identifier of the DBC's message ``name`` (KeyError for a name the DBC lacks)."""
+    return int(database().get_message_by_name(name).frame_id)
 
 
 def _crc(payload: bytes, name: str) -> int:

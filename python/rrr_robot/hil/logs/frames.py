@@ -1,8 +1,8 @@
 """Frame logs of the CAN bench: the C nodes' compact log read back, written as a standard CAN
 log (Vector ASC or BLF, through python-can's writers) and read back with ``can.LogReader``.
 
-A C node started with ``--frame-log FILE`` (``c_src/hil/hil_framelog.h``) records every frame
-its transport sent (Tx) and received (Rx), each with the CLOCK_REALTIME time at which the
+A C node started with ``--frame-log FILE`` (``c_src/hil/transport/hil_framelog.h``) records every
+frame its transport sent (Tx) and received (Rx), each with the CLOCK_REALTIME time at which the
 transport call returned, as 24-byte records after the magic ``RRRCAN1\\n``. The bench's view is
 that node's: the C controller's in ``rrr hil bench`` and ``rrr hil plant``, the C plant's in
 ``rrr hil controller``. :func:`read_node_log` reads such a file, :func:`write_can_log` converts it
@@ -18,9 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from ..core.outputs import atomic_path
-from ..errors import BadInputError
-from .protocol import HilError
+from ...core.outputs import atomic_path
+from ...errors import BadInputError, HilError
 
 __all__ = [
     "CAN_LOG_FORMATS",

@@ -1,0 +1,107 @@
+"""The files of a DBC profile run (``rrr hil bench|controller|plant``): summary.json with the
+bus traffic of the DBC's schedule, the standard frame log, the figures and, with ``--mcap``, the
+run as MCAP; on the shared evaluation of :mod:`rrr_robot.hil.results`."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ...core._arrays import FloatArray
+from ...core.model import Model
+from ...core.outputs import ResultSet
+from ...core.summary import write_summary
+from ...errors import HilError
+from ...writing.trajectory import Reference
+from ..results import (
+    PLANT_LOG_COLUMNS,
+    BenchRun,
+    bench_result,
+    bench_summary,
+    extend_reference,
+    latency_stats,
+    read_latency_log,
+    read_plant_log,
+    unquantised_cosim,
+)
+
+__all__ = ["RunInfo", "write_results"]
+
+
+@dataclass(frozen=True)
+class RunInfo:
+    """What a run was: its side (bench, controller, plant), mode (lockstep, realtime),
+    scenario, the node's frame log in the staging folder and whose view that log is."""
+
+    side: str
+    mode: str
+    scenario: str
+    node_log: str
+    view: str
+
+
+def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, model: Model,
+                  controller_values: Mapping[str, float | bool],
+                  nodes: Mapping[str, Mapping[str, Any]], *, can_log: Path | None,
+                  figures: bool = True, mcap: bool = False) -> dict[str, Any]:
+    """Evaluate a run whose logs (plant.csv, the node's frame log, in real time the latency
+    logs) are in the result set's staging folder: the unquantised co-simulation, the standard
+    frame log (``can_log``: in the output folder, or elsewhere, written atomically), the
+    figures, with ``mcap`` the run as ``bench.mcap`` (hil.logs.mcap) and summary.json. Returns
+    the summary."""
+    from ..busload import FD_DATA_BITRATE, measured_fd_load, measured_load, schedule_load
+    from ..logs import frames as fl
+    from .protocol import DBC_PATH, FAULT_BITS, database, frame_id
+
+    work = rs.staging
+    plant_log = read_plant_log(work / "plant.csv")
+    bench = bench_result(ref, run, plant_log)
+    if bench.t.shape[0] < 2:
+        raise HilError(f"the bench ran {bench.t.shape[0]} periods: nothing to evaluate")
+    ref_run = extend_reference(ref, float(bench.t[-1] - bench.t[0]))
+    unq = unquantised_cosim(ref_run, model, controller_values)
+    records = fl.read_node_log(work / info.node_log)
+    bus: dict[str, Any] = {"node_log": info.node_log, "view": info.view, **fl.rates(records)}
+    bus["measured_1mbit"] = measured_load(fl.frames(records), bench.t.shape[0])
+    bus["schedule_worst_percent_1mbit"] = schedule_load(
+        database(), lockstep=info.mode == "lockstep", dbc_name=str(DBC_PATH)).worst_percent
+    if any(n.get("transport") == "socketcan-fd" for n in nodes.values()):
+        # CAN FD frames on the bus (--fd): their load at 1 Mbit/s nominal, 5 Mbit/s data
+        bus["measured_fd"] = measured_fd_load(fl.frames(records), bench.t.shape[0])
+        bus["schedule_fd_worst_percent"] = schedule_load(
+            database(), data_bitrate=FD_DATA_BITRATE, lockstep=info.mode == "lockstep",
+            dbc_name=str(DBC_PATH)).worst_percent
+    if can_log is not None:
+        inside = can_log.parent.resolve() == rs.folder.resolve()
+        fl.write_can_log(records, rs.path(can_log.name) if inside else can_log)
+        bus["can_log"] = can_log.name if inside else str(can_log)
+    if mcap:
+        from ...core.robot import read_robot_file
+        from ..logs.mcap import write_bench_mcap
+
+        m = bench.t.shape[0]
+        write_bench_mcap(rs.path("bench.mcap"), bench.columns(), read_robot_file(), records,
+                         plant_log[:m, PLANT_LOG_COLUMNS["faults"]][:, 0], database(),
+                         period_id=frame_id("JointState1"), fault_bits=len(FAULT_BITS),
+                         metadata={"side": info.side, "mode": info.mode,
+                                   "scenario": info.scenario, "view": info.view})
+    realtime: dict[str, Any] | None = None
+    latencies: dict[str, FloatArray] = {}
+    stats: dict[str, dict[str, Any]] = {}
+    if info.mode == "realtime":
+        for node in ("controller", "plant"):
+            lat = read_latency_log(work / f"latency_{node}.csv")
+            latencies[node] = lat[:, 0]
+            stats[node] = {**latency_stats(lat[:, 0]), **nodes[node].get("rt", {})}
+        realtime = {**stats, "goal_p99_us": 50.0}
+    summary = bench_summary(side=info.side, mode=info.mode, scenario=info.scenario, ref=ref_run,
+                            bench=bench, unquantised=unq, plant=nodes["plant"],
+                            controller=nodes["controller"], bus=bus, realtime=realtime)
+    if figures:
+        from ..figures import write_bench_figures
+
+        write_bench_figures(work, ref_run, bench, unq, latencies or None, stats,
+                            scenario=info.scenario)
+    return write_summary(rs, summary)
