@@ -14,8 +14,7 @@ the CPU has them) against its scalar path, and so for the regressor, FK, forward
 IK (``Model.ik(x, "front", "up")`` of the FK of the batch's angles); one state of
 ``Model.inverse_dynamics`` against MuJoCo's ``mj_inverse`` and Drake's ``CalcInverseDynamics``
 (both on the robot read from our URDF, with the rotor inertias as MuJoCo's armature and added as
-J_m qdd to Drake's result, gravity ours); and, for the record, one state of
-``inverse_dynamics`` through the ctypes binding the extension replaced.
+J_m qdd to Drake's result, gravity ours).
 
 Interleaved: each repeat times a block of ours and a block of the reference on the same inputs
 back to back (the order alternating between repeats), so both see the same machine load; each
@@ -148,8 +147,7 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
     import pinocchio as pin
     import roboticstoolbox as rtb
     import rrr_robot as rr
-    from rrr_robot.core import _ctypes_kernels, _ext
-    from rrr_robot.core import model as model_module
+    from rrr_robot.core import _ext
     from rrr_robot.core.batch import simd_best
     from rrr_robot.writing.references import inertial_from_robot, pinocchio_model
 
@@ -190,7 +188,6 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
     nb = args.batch
     bq, bqd, bqdd = (rng.uniform(lo, hi, (nb, 3)) for lo, hi in
                      ((-np.pi, np.pi), (-3.0, 3.0), (-10.0, 10.0)))
-    ctypes_kernels = _ctypes_kernels.Kernels(model.raw)
     floor = batch_floor(workdir, Path(rr.__file__).parent)
 
     def ik_lm(k: int) -> Any:
@@ -220,7 +217,6 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
     fd_rows = [(q[k], qd[k], tau[k]) for k in range(n)]
     fd_accel = np.array([robot.accel(*fd_rows[k]) for k in range(min(n, 200))], dtype=float)
     fd_ours = model.forward_dynamics(q, qd, tau)
-    ct_tau = np.array([ctypes_kernels.inverse_dynamics(*rows[k]) for k in range(n)])
 
     per_call = args.calls
     pairs = [
@@ -296,16 +292,8 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
             "librrr in a C loop (bench/batch_floor.c)", c_floor, 1,
             per=nb, agreement=f"bit-identical: {out.tobytes() == batch_scalar.tobytes()}"))
     pairs += engine_pairs(robot_file, rows, tau, per_call, workdir)
-    pairs += [
-        Pair("tau = R p, one state: the binding before", "Model.inverse_dynamics",
-             lambda k: model.inverse_dynamics(*rows[k % n]), "ctypes (_ctypes_kernels)",
-             lambda k: ctypes_kernels.inverse_dynamics(*rows[k % n]), max(per_call // 10, 10),
-             agreement=f"{np.abs(tau - ct_tau).max():.1e} (bit-identical: "
-                       f"{tau.tobytes() == ct_tau.tobytes()})"),
-    ]
     info = {
-        "binding": f"{model_module.BINDING} (numpy in place: {_ext.NUMPY_IN_PLACE}, "
-                   f"numpy C API: {_ext.NUMPY_C_API}, GIL released from {_ext.NOGIL_ROWS} rows)",
+        "binding": f"{Path(_ext.__file__).name} (GIL released from {_ext.NOGIL_ROWS} rows)",
         "versions": f"Python {platform.python_version()}, numpy {np.__version__}, pin "
                     f"{pin.__version__}, roboticstoolbox-python {rtb.__version__}, mujoco "
                     f"{mujoco_version()}, drake {drake_version()}",

@@ -50,13 +50,6 @@ if ! aarch64_tools_ok; then
   fi
 fi
 # pkg-config: the installed-tree test (CTest install_tree) checks `pkg-config --libs rrr`
-# A locale whose decimal point is a comma (tests/python/test_tables.py compiles de_DE with
-# localedef into a temporary folder): its source comes with Debian's locales package.
-if [ ! -f /usr/share/i18n/locales/de_DE ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
-  echo "== installing locales (the locale sources for the CSV writer's locale test) =="
-  apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq locales >/dev/null
-fi
 if ! command -v pkg-config >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq pkg-config >/dev/null

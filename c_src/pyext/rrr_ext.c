@@ -1,41 +1,41 @@
 /*
- * rrr_robot.core._ext: the compiled CPython binding of librrr behind rrr_robot.core.model.Model.
+ * rrr_robot.core._ext: the compiled CPython binding of librrr, the one way Python reaches it.
  *
  * It converts arguments and loops over rows; every number comes from a librrr call (linked
  * statically from the same objects as the package's librrr.so), never from model maths here.
  *
- * - Kernels(raw): holds a ctypes RawModel (kept alive, its buffer exported for the Kernels' life)
- *   and reads the rrr_model in place, so the Model's parameters have one home.
+ * - Kernels(raw): holds a RawModel (a ctypes struct used as plain memory: kept alive, its buffer
+ *   exported for the Kernels' life) and reads the rrr_model in place, so the Model's parameters
+ *   have one home. Its methods are Model's calls and the plant step (rr.Plant).
+ * - Module functions: the rest of librrr that Python uses (defaults, validation, base
+ *   parameters, the parameter table, the integrator's check, the stiffness, the version, the
+ *   batch paths, the closed loop in parts), on the ctypes structs of rrr_robot.core._lib through
+ *   their buffers, checked by size (SIZES).
  * - Arguments are (3,) vectors or (n, 3) batches with the rules of rrr_robot.core._arrays:
- *   a float64 C-contiguous aligned ndarray is read in place (no copy), as is any other buffer
- *   of native doubles (array.array, memoryview, ctypes arrays); a list or tuple of three floats
- *   or ints is read directly; anything else goes through _arrays.as_rows, which converts it or
- *   raises the package's BadInputError with its message. Batches broadcast single rows like
- *   _arrays.broadcast_rows.
- * - Results are new float64 numpy arrays, written in place.
+ *   any buffer of C-contiguous aligned native doubles (a float64 ndarray, array.array,
+ *   memoryview, ctypes arrays) is read in place (no copy); a list or tuple of three floats or
+ *   ints is read directly; anything else goes through _arrays.as_rows, which converts it or
+ *   raises the package's BadInputError with its message. Batches broadcast single rows: an
+ *   argument of one row is repeated against (n, 3) others; other row counts are refused.
+ * - Results are new float64 numpy arrays, made by numpy.empty and written through the buffer
+ *   protocol. No numpy header or C API is used, and only CPython's limited API (3.11, where the
+ *   buffer protocol joined it): with Py_LIMITED_API the module is one abi3 binary for every
+ *   CPython from 3.11 on.
  * - Every row is checked by the status of its C call; a failure raises the exception class of
- *   rrr_robot.core._status for that status, with the message of the ctypes binding
+ *   rrr_robot.core._status for that status, with the row named
  *   ("rrr_fk failed with RRR_BAD_INPUT (...): sample 4: q = [0.1, nan, 0.3]").
  * - Batches of at least RRR_EXT_NOGIL_ROWS rows run without the GIL (the loop touches no Python
- *   object; a failing row is reported after the GIL is taken back).
- *
- * numpy without its headers (no build dependency on numpy): an ndarray is recognised by its type
- * and read through the leading fields of numpy's PyArrayObject_fields (data, nd, dimensions,
- * strides, base, descr, flags), the ABI that numpy's own PyArray_DATA/NDIM/... macros compile
- * to and that numpy 1.x and 2.x share; results are made by PyArray_New, taken from numpy's C API
- * table (the _ARRAY_API capsule that numpy's import_array() reads) for the two ABI versions that
- * have it in slot 93. Each is checked on arrays numpy made when the module is imported; if a
- * check fails, arrays are read through the buffer protocol and made by numpy.empty instead
- * (NUMPY_IN_PLACE, NUMPY_C_API tell which).
+ *   object; a failing row is reported after the GIL is taken back), as do the batch kernels,
+ *   the rollout and the closed loop.
  *
  * Adding a call of librrr: a row function with the row_fn signature and a map_spec naming its
  * inputs and outputs; map_rows() does the rest (parsing, broadcasting, the GIL, the error
  * message). ctc is the model for a call with a parameter block besides the rows.
  *
  * The closed loop: the control law (Kernels.ctc, Model.ctc; row_ctc is one sample of it) and
- * the plant step (Kernels.plant_step, plant_accel: rrr_plant_step and rrr_plant_accel on an
- * rrr_plant_state held in a ctypes struct that the call updates in place; Model.plant_step,
- * rrr_robot.core.plant.Plant). The whole loop in C is rrr_sim_closed_loop (rr.simulate).
+ * the plant step (Kernels.plant_step, plant_accel, plant_rollout: rrr_plant_step,
+ * rrr_plant_accel and rrr_plant_rollout on an rrr_plant_state held in a ctypes struct that the
+ * call updates; rr.Plant). The whole loop in C is sim_closed_loop_part (rr.simulate).
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -43,6 +43,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "rrr/rrr.h"
@@ -61,45 +62,10 @@
 #define RRR_EXT_NOGIL_ROWS 1000
 
 /* ------------------------------------------------------------------------------------------ */
-/* numpy, without its headers                                                                 */
+/* Results: numpy arrays through numpy.empty and the buffer protocol                           */
 /* ------------------------------------------------------------------------------------------ */
 
-/* The leading fields of numpy's PyArrayObject_fields (numpy/ndarraytypes.h). */
-typedef struct {
-    PyObject_HEAD
-    char *data;
-    int nd;
-    Py_ssize_t *dimensions;
-    Py_ssize_t *strides;
-    PyObject *base;
-    PyObject *descr;
-    int flags;
-} np_head;
-
-#define NP_C_CONTIGUOUS 0x0001
-#define NP_F_CONTIGUOUS 0x0002
-#define NP_ALIGNED 0x0100
-#define NP_WRITEABLE 0x0400
-
-/* numpy's C API table (the capsule numpy._core._multiarray_umath._ARRAY_API that numpy's
- * import_array() reads): slot 0 PyArray_GetNDArrayCVersion, slot 2 &PyArray_Type, slot 93
- * PyArray_New; NPY_DOUBLE is type number 12. The same slots and signatures in the ABI of numpy
- * 1.x (0x01000009) and 2.x (0x02000000), the only ABI versions used. */
-#define NP_SLOT_VERSION 0
-#define NP_SLOT_TYPE 2
-#define NP_SLOT_NEW 93
-#define NP_DOUBLE 12
-typedef unsigned int (*np_version_fn)(void);
-typedef PyObject *(*np_new_fn)(PyTypeObject *type, int nd, const Py_ssize_t *dims, int type_num,
-                               const Py_ssize_t *strides, void *data, int itemsize, int flags,
-                               PyObject *obj);
-_Static_assert(sizeof(np_new_fn) == sizeof(void *), "function pointers in the numpy API table");
-
-static PyTypeObject *g_ndarray;   /* numpy.ndarray */
 static PyObject *g_empty;         /* numpy.empty */
-static PyObject *g_float64;       /* numpy.dtype("float64") */
-static np_new_fn g_np_new;        /* numpy's PyArray_New, or NULL: numpy.empty creates arrays */
-static int g_np_layout_ok;        /* np_head verified at import: arrays are read in place */
 
 /* rrr_robot */
 static PyObject *g_as_rows;       /* rrr_robot.core._arrays.as_rows */
@@ -109,27 +75,39 @@ static PyObject *g_status_names;  /* rrr_robot.core._status.STATUS_NAMES (tuple)
 static PyObject *g_status_errors; /* rrr_robot.core._status.ERRORS (dict: status -> class) */
 static PyObject *g_status_meaning;/* rrr_robot.core._status.MEANING (dict: status -> str) */
 static PyObject *g_branch_names;  /* tuple of the four (shoulder, elbow) name tuples */
-static PyObject *g_refuse;        /* rrr_robot.core.batch.refuse: the error of a bad simd= */
 static PyObject *g_simd_names[RRR_SIMD_AVX512 + 1]; /* interned "auto" ... "avx512" by value */
 
+/* The arguments of numpy.empty for the shapes of one state's results, made once: (shape,). */
+#define SHAPE_CACHE 16
+static struct {
+    int rank;
+    Py_ssize_t dims[4];
+    PyObject *args;
+} g_shapes[SHAPE_CACHE];
+static int g_n_shapes;
+
+/* The data of a new array of ours (writable, C-contiguous): the pointer stays valid while the
+ * array lives, since it owns its memory. */
 static double *array_data(PyObject *arr)
 {
-    if (g_np_layout_ok) {
-        return (double *)(void *)((np_head *)arr)->data;
-    }
     Py_buffer view;
     if (PyObject_GetBuffer(arr, &view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) != 0) {
         return NULL;
     }
-    double *data = (double *)view.buf; /* the array is ours alone: the pointer stays valid */
+    double *data = (double *)view.buf;
     PyBuffer_Release(&view);
     return data;
 }
 
-static PyObject *empty_of_shape(int rank, const Py_ssize_t *shape)
+/* The argument tuple (shape,) of numpy.empty: new, or borrowed from the cache (*owned = 0). */
+static PyObject *shape_args(int rank, const Py_ssize_t *shape, int cache, int *owned)
 {
-    if (g_np_new != NULL) {
-        return g_np_new(g_ndarray, rank, shape, NP_DOUBLE, NULL, NULL, 0, 0, NULL);
+    for (int k = 0; cache && k < g_n_shapes; ++k) {
+        if (g_shapes[k].rank == rank &&
+            memcmp(g_shapes[k].dims, shape, (size_t)rank * sizeof *shape) == 0) {
+            *owned = 0;
+            return g_shapes[k].args;
+        }
     }
     PyObject *tuple = PyTuple_New(rank);
     if (tuple == NULL) {
@@ -137,15 +115,26 @@ static PyObject *empty_of_shape(int rank, const Py_ssize_t *shape)
     }
     for (int k = 0; k < rank; ++k) {
         PyObject *v = PyLong_FromSsize_t(shape[k]);
-        if (v == NULL) {
+        if (v == NULL || PyTuple_SetItem(tuple, k, v) != 0) { /* steals v */
             Py_DECREF(tuple);
             return NULL;
         }
-        PyTuple_SET_ITEM(tuple, k, v);
     }
-    PyObject *arr = PyObject_Vectorcall(g_empty, &tuple, 1, NULL);
+    PyObject *args = PyTuple_Pack(1, tuple);
     Py_DECREF(tuple);
-    return arr;
+    if (args == NULL) {
+        return NULL;
+    }
+    if (cache && g_n_shapes < SHAPE_CACHE) {
+        g_shapes[g_n_shapes].rank = rank;
+        memcpy(g_shapes[g_n_shapes].dims, shape, (size_t)rank * sizeof *shape);
+        g_shapes[g_n_shapes].args = args; /* the cache's reference */
+        ++g_n_shapes;
+        *owned = 0;
+        return args;
+    }
+    *owned = 1;
+    return args;
 }
 
 /* A new float64 array: (n, *dims) for a batch, dims for one state (nd = 0: a (n,) batch). */
@@ -160,7 +149,15 @@ static PyObject *new_array(int batch, Py_ssize_t n, int nd, const Py_ssize_t *di
     for (int d = 0; d < nd; ++d) {
         shape[rank++] = dims[d];
     }
-    PyObject *arr = empty_of_shape(rank, shape);
+    int owned;
+    PyObject *args = shape_args(rank, shape, !batch, &owned);
+    if (args == NULL) {
+        return NULL;
+    }
+    PyObject *arr = PyObject_Call(g_empty, args, NULL);
+    if (owned) {
+        Py_DECREF(args);
+    }
     if (arr == NULL) {
         return NULL;
     }
@@ -170,97 +167,6 @@ static PyObject *new_array(int batch, Py_ssize_t n, int nd, const Py_ssize_t *di
         return NULL;
     }
     return arr;
-}
-
-/* Whether a (2, 3) array made by empty_of_shape has the np_head layout numpy's own accessors
- * would read (checked against the buffer protocol and numpy's attributes), and its transpose
- * the flags of a non-C-contiguous view. -1 on a Python error. */
-static int np_layout_holds(void)
-{
-    const Py_ssize_t shape[2] = {2, NJ};
-    PyObject *a = empty_of_shape(2, shape);
-    if (a == NULL) {
-        return -1;
-    }
-    Py_buffer view;
-    if (PyObject_GetBuffer(a, &view, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) != 0) {
-        Py_DECREF(a);
-        return -1;
-    }
-    PyObject *t = PyObject_GetAttrString(a, "T");
-    PyObject *dtype = PyObject_GetAttrString(a, "dtype");
-    int ok = 0;
-    if (t != NULL && dtype != NULL && Py_IS_TYPE(a, g_ndarray) && Py_IS_TYPE(t, g_ndarray)) {
-        const np_head *h = (const np_head *)a;
-        const np_head *ht = (const np_head *)t;
-        const int want = NP_C_CONTIGUOUS | NP_ALIGNED | NP_WRITEABLE;
-        ok = h->data == (char *)view.buf && view.len == (Py_ssize_t)(2 * NJ * sizeof(double)) &&
-             strcmp(view.format, "d") == 0 && h->nd == 2 && h->dimensions[0] == 2 &&
-             h->dimensions[1] == NJ && h->strides[0] == (Py_ssize_t)(NJ * sizeof(double)) &&
-             h->strides[1] == (Py_ssize_t)sizeof(double) && h->descr == dtype &&
-             dtype == g_float64 && (h->flags & want) == want && h->base == NULL &&
-             ht->data == h->data && ht->nd == 2 && ht->dimensions[0] == NJ &&
-             (ht->flags & NP_C_CONTIGUOUS) == 0 && (ht->flags & NP_F_CONTIGUOUS) != 0 &&
-             ht->base == a;
-    }
-    PyBuffer_Release(&view);
-    Py_XDECREF(t);
-    Py_XDECREF(dtype);
-    Py_DECREF(a);
-    return PyErr_Occurred() ? -1 : ok;
-}
-
-/* PyArray_New from numpy's API capsule, or NULL when the capsule or its ABI is not the known
- * one. */
-static np_new_fn numpy_new_fn(void)
-{
-    PyObject *mod = PyImport_ImportModule("numpy._core._multiarray_umath");
-    if (mod == NULL) { /* numpy 1.x */
-        PyErr_Clear();
-        mod = PyImport_ImportModule("numpy.core._multiarray_umath");
-    }
-    PyObject *capsule = mod != NULL ? PyObject_GetAttrString(mod, "_ARRAY_API") : NULL;
-    Py_XDECREF(mod);
-    void **api = capsule != NULL && PyCapsule_CheckExact(capsule)
-                     ? PyCapsule_GetPointer(capsule, NULL) : NULL;
-    Py_XDECREF(capsule); /* the table is numpy's static data: it outlives the capsule object */
-    PyErr_Clear();
-    if (api == NULL || api[NP_SLOT_TYPE] != (void *)g_ndarray) {
-        return NULL;
-    }
-    np_version_fn version;
-    np_new_fn fn;
-    memcpy(&version, &api[NP_SLOT_VERSION], sizeof version);
-    memcpy(&fn, &api[NP_SLOT_NEW], sizeof fn);
-    const unsigned int abi = version();
-    return abi == 0x01000009u || abi == 0x02000000u ? fn : NULL;
-}
-
-/* Decide how arrays are made (PyArray_New, else numpy.empty) and read (np_head, else the buffer
- * protocol), each only after it was checked on arrays numpy made. */
-static int numpy_setup(void)
-{
-    g_np_layout_ok = 0; /* array_data reads through the buffer protocol during the checks */
-    g_np_new = NULL;
-    int ok = np_layout_holds();
-    if (ok < 0) {
-        return -1;
-    }
-    if (!ok) {
-        return 0; /* numpy.empty and the buffer protocol */
-    }
-    g_np_new = numpy_new_fn();
-    if (g_np_new != NULL) {
-        ok = np_layout_holds();
-        if (ok < 0) {
-            return -1;
-        }
-        if (!ok) {
-            g_np_new = NULL;
-        }
-    }
-    g_np_layout_ok = 1;
-    return 0;
 }
 
 /* ------------------------------------------------------------------------------------------ */
@@ -314,36 +220,21 @@ static int is_aligned(const void *p)
     return ((uintptr_t)p % _Alignof(double)) == 0;
 }
 
-/* A float64 ndarray, C-contiguous and aligned, of shape (3,) or (n, 3): read in place. */
-static int from_ndarray(PyObject *obj, vec_arg *a)
-{
-    if (!g_np_layout_ok || !PyObject_TypeCheck(obj, g_ndarray)) {
-        return 0;
-    }
-    const np_head *h = (const np_head *)obj;
-    const int want = NP_C_CONTIGUOUS | NP_ALIGNED;
-    if (h->descr != g_float64 || (h->flags & want) != want || !set_shape(a, h->nd, h->dimensions)) {
-        return 0;
-    }
-    a->data = (const double *)(const void *)h->data;
-    return 1;
-}
-
 /* A list or tuple of exactly three floats or ints (numpy would make the same doubles). */
 static int from_sequence(PyObject *obj, vec_arg *a)
 {
-    PyObject *const *items;
-    if (PyList_CheckExact(obj) && PyList_GET_SIZE(obj) == NJ) {
-        items = ((PyListObject *)obj)->ob_item;
-    } else if (PyTuple_CheckExact(obj) && PyTuple_GET_SIZE(obj) == NJ) {
-        items = ((PyTupleObject *)obj)->ob_item;
+    PyObject *(*item)(PyObject *, Py_ssize_t);
+    if (PyList_CheckExact(obj) && PyList_Size(obj) == NJ) {
+        item = PyList_GetItem;
+    } else if (PyTuple_CheckExact(obj) && PyTuple_Size(obj) == NJ) {
+        item = PyTuple_GetItem;
     } else {
         return 0;
     }
-    for (int k = 0; k < NJ; ++k) {
-        PyObject *it = items[k];
+    for (Py_ssize_t k = 0; k < NJ; ++k) {
+        PyObject *it = item(obj, k); /* borrowed */
         if (PyFloat_CheckExact(it)) {
-            a->small[k] = PyFloat_AS_DOUBLE(it);
+            a->small[k] = PyFloat_AsDouble(it);
         } else if (PyLong_CheckExact(it)) {
             const double v = PyLong_AsDouble(it);
             if (v == -1.0 && PyErr_Occurred()) {
@@ -413,13 +304,13 @@ static int from_as_rows(PyObject *obj, const char *name, vec_arg *a)
     if (res == NULL) {
         return -1;
     }
-    if (!PyTuple_Check(res) || PyTuple_GET_SIZE(res) != 2) {
+    if (!PyTuple_Check(res) || PyTuple_Size(res) != 2) {
         Py_DECREF(res);
         PyErr_SetString(PyExc_SystemError, "_arrays.as_rows returned no (array, batch) pair");
         return -1;
     }
-    const int batch = PyObject_IsTrue(PyTuple_GET_ITEM(res, 1));
-    a->keep = Py_NewRef(PyTuple_GET_ITEM(res, 0));
+    const int batch = PyObject_IsTrue(PyTuple_GetItem(res, 1));
+    a->keep = Py_NewRef(PyTuple_GetItem(res, 0));
     Py_DECREF(res);
     if (batch < 0) {
         return -1;
@@ -447,7 +338,7 @@ static int from_as_rows(PyObject *obj, const char *name, vec_arg *a)
 static int parse_arg(PyObject *obj, const char *name, vec_arg *a)
 {
     memset(a, 0, sizeof *a);
-    if (from_ndarray(obj, a) || from_sequence(obj, a) || from_buffer(obj, a)) {
+    if (from_buffer(obj, a) || from_sequence(obj, a)) {
         a->step = a->rows == 1 ? 0 : NJ;
         return 0;
     }
@@ -471,7 +362,7 @@ static int parse_args(PyObject *const *args, int k, const char *const *names, ve
     return 0;
 }
 
-/* The common row count of a batch (_arrays.broadcast_rows): 1-row arguments are repeated. */
+/* The common row count of a batch: 1-row arguments are repeated. */
 static int broadcast(vec_arg *a, int k, const char *const *names, Py_ssize_t *n, int *batch)
 {
     *batch = 0;
@@ -505,6 +396,36 @@ static int check_nargs(const char *method, Py_ssize_t nargs, int want)
     return 0;
 }
 
+/* The attribute `name` of the module `module` (imported), or NULL with an exception. */
+static PyObject *attr_of(const char *module, const char *name)
+{
+    PyObject *mod = PyImport_ImportModule(module);
+    if (mod == NULL) {
+        return NULL;
+    }
+    PyObject *value = PyObject_GetAttrString(mod, name);
+    Py_DECREF(mod);
+    return value;
+}
+
+/* The exception being raised, taken out of the error indicator (normalized), or NULL. */
+static PyObject *raised_exception(void)
+{
+#if defined(Py_LIMITED_API) ? Py_LIMITED_API >= 0x030C0000 : PY_VERSION_HEX >= 0x030C0000
+    return PyErr_GetRaisedException();
+#else
+    PyObject *type, *value, *tb;
+    PyErr_Fetch(&type, &value, &tb);
+    PyErr_NormalizeException(&type, &value, &tb);
+    if (value != NULL && tb != NULL) {
+        PyException_SetTraceback(value, tb);
+    }
+    Py_XDECREF(type);
+    Py_XDECREF(tb);
+    return value;
+#endif
+}
+
 /* ------------------------------------------------------------------------------------------ */
 /* Errors                                                                                     */
 /* ------------------------------------------------------------------------------------------ */
@@ -522,14 +443,14 @@ static PyObject *row_repr(const double *row)
             Py_DECREF(list);
             return NULL;
         }
-        PyList_SET_ITEM(list, k, v);
+        PyList_SetItem(list, k, v); /* steals v; cannot fail here */
     }
     PyObject *text = PyObject_Repr(list);
     Py_DECREF(list);
     return text;
 }
 
-/* "<names> = <row 0>, <row 1>, ..." (joined, the ctypes binding's rows) or, with names == NULL,
+/* "<names> = <row 0>, <row 1>, ..." (joined: the rows of a call) or, with names == NULL,
  * "<name 0> = <row 0>, <name 1> = <row 1>, ..." (energy's rows). */
 static PyObject *rows_text(const char *joined, const char *const *names, int k,
                            const double *const *rows)
@@ -578,8 +499,8 @@ static void raise_status(const char *fn, int status, PyObject *context)
                             : NULL;
     PyObject *sname = NULL;
     if (!PyErr_Occurred()) {
-        sname = status >= 0 && status < PyTuple_GET_SIZE(g_status_names)
-                    ? Py_NewRef(PyTuple_GET_ITEM(g_status_names, status))
+        sname = status >= 0 && status < PyTuple_Size(g_status_names)
+                    ? Py_NewRef(PyTuple_GetItem(g_status_names, status))
                     : PyObject_Str(key);
     }
     Py_DECREF(key);
@@ -589,7 +510,7 @@ static void raise_status(const char *fn, int status, PyObject *context)
     PyObject *text = meaning != NULL ? Py_NewRef(meaning) : PyUnicode_FromString("?");
     PyObject *msg = NULL;
     if (text != NULL) {
-        msg = context != NULL && PyUnicode_GET_LENGTH(context) > 0
+        msg = context != NULL && PyUnicode_GetLength(context) > 0
                   ? PyUnicode_FromFormat("%s failed with %U (%U): %U", fn, sname, text, context)
                   : PyUnicode_FromFormat("%s failed with %U (%U)", fn, sname, text);
         Py_DECREF(text);
@@ -894,7 +815,7 @@ static PyObject *pack_outputs(PyObject **arrays, int n_out)
     PyObject *tuple = PyTuple_New(n_out);
     if (tuple != NULL) {
         for (int j = 0; j < n_out; ++j) {
-            PyTuple_SET_ITEM(tuple, j, arrays[j]);
+            PyTuple_SetItem(tuple, j, arrays[j]); /* steals it */
             arrays[j] = NULL;
         }
     }
@@ -1021,7 +942,10 @@ static PyObject *Kernels_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
         PyBuffer_Release(&view);
         return NULL;
     }
-    KernelsObject *self = (KernelsObject *)type->tp_alloc(type, 0);
+    allocfunc alloc;
+    void *slot = PyType_GetSlot(type, Py_tp_alloc);
+    memcpy(&alloc, &slot, sizeof alloc); /* a function's address kept in a void * */
+    KernelsObject *self = (KernelsObject *)alloc(type, 0);
     if (self == NULL) {
         PyBuffer_Release(&view);
         return NULL;
@@ -1039,7 +963,12 @@ static void Kernels_dealloc(PyObject *op)
         PyBuffer_Release(&self->view);
         Py_CLEAR(self->owner);
     }
-    Py_TYPE(op)->tp_free(op);
+    PyTypeObject *type = Py_TYPE(op);
+    freefunc free_fn;
+    void *slot = PyType_GetSlot(type, Py_tp_free);
+    memcpy(&free_fn, &slot, sizeof free_fn); /* a function's address kept in a void * */
+    free_fn(op);
+    Py_DECREF(type); /* a heap type: its instances hold a reference */
 }
 
 #define MODEL(op) (((KernelsObject *)(op))->m)
@@ -1165,8 +1094,10 @@ static int parse_path(PyObject *obj, const char *method, rrr_simd *path)
 {
     const int r = path_of(obj, method, path);
     if (r == -2) {
-        PyObject *none = PyObject_CallOneArg(g_refuse, obj); /* raises */
-        Py_XDECREF(none);
+        PyObject *refuse = attr_of("rrr_robot.core.batch", "refuse"); /* imports _ext */
+        PyObject *none = refuse != NULL ? PyObject_CallFunctionObjArgs(refuse, obj, NULL) : NULL;
+        Py_XDECREF(refuse);
+        Py_XDECREF(none); /* refuse raises */
         if (!PyErr_Occurred()) {
             PyErr_SetString(PyExc_SystemError, "batch.refuse returned");
         }
@@ -1198,13 +1129,17 @@ static int parse_out(PyObject *obj, const map_spec *s, const vec_arg *a, Py_ssiz
     o->given = 1;
     if (s->n_out == 1) {
         o->obj[0] = obj;
-    } else if (PyTuple_Check(obj) && PyTuple_GET_SIZE(obj) == s->n_out) {
+    } else if (PyTuple_Check(obj) && PyTuple_Size(obj) == s->n_out) {
         for (int j = 0; j < s->n_out; ++j) {
-            o->obj[j] = PyTuple_GET_ITEM(obj, j);
+            o->obj[j] = PyTuple_GetItem(obj, j); /* borrowed */
         }
     } else {
-        PyErr_Format(g_bad_input, "%s: out must be a tuple of %d arrays, got %s", s->method,
-                     s->n_out, Py_TYPE(obj)->tp_name);
+        PyObject *tname = PyType_GetName(Py_TYPE(obj));
+        if (tname != NULL) {
+            PyErr_Format(g_bad_input, "%s: out must be a tuple of %d arrays, got %U", s->method,
+                         s->n_out, tname);
+            Py_DECREF(tname);
+        }
         return -1;
     }
     for (int j = 0; j < s->n_out; ++j) {
@@ -1228,18 +1163,13 @@ static int parse_out(PyObject *obj, const map_spec *s, const vec_arg *a, Py_ssiz
         if (PyObject_GetBuffer(o->obj[j], v, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS |
                                PyBUF_FORMAT) != 0) {
             /* why the exporter refused (read-only, not contiguous, no buffer) */
-#if PY_VERSION_HEX >= 0x030C0000
-            PyObject *why = PyErr_GetRaisedException();
-#else
-            PyObject *why_type, *why, *why_tb;
-            PyErr_Fetch(&why_type, &why, &why_tb);
-            PyErr_NormalizeException(&why_type, &why, &why_tb);
-            Py_XDECREF(why_type);
-            Py_XDECREF(why_tb);
-#endif
-            PyErr_Format(g_bad_input, "%s: out must be writable, C-contiguous float64 arrays "
-                         "of shape (%s); %s: %S", s->method, want, Py_TYPE(o->obj[j])->tp_name,
-                         why);
+            PyObject *why = raised_exception();
+            PyObject *tname = PyType_GetName(Py_TYPE(o->obj[j]));
+            if (tname != NULL) {
+                PyErr_Format(g_bad_input, "%s: out must be writable, C-contiguous float64 "
+                             "arrays of shape (%s); %U: %S", s->method, want, tname, why);
+                Py_DECREF(tname);
+            }
             Py_XDECREF(why);
             out_release(o);
             return -1;
@@ -1547,7 +1477,7 @@ static PyObject *K_ik_branches(PyObject *self, PyObject *const *args, Py_ssize_t
         return NULL;
     }
     for (int i = 0; i < sol.n; ++i) {
-        PyList_SET_ITEM(out, i, Py_NewRef(PyTuple_GET_ITEM(g_branch_names, sol.branch[i] & 3)));
+        PyList_SetItem(out, i, Py_NewRef(PyTuple_GetItem(g_branch_names, sol.branch[i] & 3)));
     }
     return out;
 }
@@ -1625,16 +1555,9 @@ static int finite_scalar(PyObject *value, const char *name, double *out)
         if (!PyErr_ExceptionMatches(PyExc_TypeError) && !PyErr_ExceptionMatches(PyExc_ValueError)) {
             return -1;
         }
-        PyObject *type, *cause, *tb;
-        PyErr_Fetch(&type, &cause, &tb);
-        PyErr_NormalizeException(&type, &cause, &tb);
-        if (tb != NULL) {
-            PyException_SetTraceback(cause, tb);
-        }
-        Py_XDECREF(type);
-        Py_XDECREF(tb);
+        PyObject *cause = raised_exception();
         PyObject *msg = PyUnicode_FromFormat("%s must be a finite number, got %R", name, value);
-        PyObject *exc = msg != NULL ? PyObject_CallOneArg(g_bad_input, msg) : NULL;
+        PyObject *exc = msg != NULL ? PyObject_CallFunctionObjArgs(g_bad_input, msg, NULL) : NULL;
         Py_XDECREF(msg);
         if (exc == NULL) {
             Py_XDECREF(cause);
@@ -1646,7 +1569,7 @@ static int finite_scalar(PyObject *value, const char *name, double *out)
         Py_DECREF(exc);
         return -1;
     }
-    const double v = PyFloat_AS_DOUBLE(f);
+    const double v = PyFloat_AsDouble(f);
     if (!isfinite(v)) {
         PyErr_Format(g_bad_input, "%s must be a finite number, got %R", name, f);
         Py_DECREF(f);
@@ -1891,6 +1814,103 @@ static PyObject *K_plant_accel(PyObject *self, PyObject *const *args, Py_ssize_t
     return out;
 }
 
+/* A C-contiguous, aligned buffer of native doubles, writable if asked, of `count` doubles
+ * (count < 0: a whole number of rows of `width`, the rows in *rows): held in *view. -1 raised
+ * (BadInputError naming fn and the argument) otherwise. */
+static double *doubles_of(PyObject *obj, Py_buffer *view, Py_ssize_t count, Py_ssize_t width,
+                          Py_ssize_t *rows, int writable, const char *fn, const char *name)
+{
+    const int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) != 0) {
+        PyObject *why = raised_exception();
+        PyErr_Format(g_bad_input, "%s: %s must be a%s C-contiguous float64 array: %S", fn, name,
+                     writable ? " writable" : "", why);
+        Py_XDECREF(why);
+        return NULL;
+    }
+    const Py_ssize_t n = view->len / (Py_ssize_t)sizeof(double);
+    int ok = view->itemsize == (Py_ssize_t)sizeof(double) && native_double_format(view->format) &&
+             is_aligned(view->buf);
+    if (ok && count >= 0) {
+        ok = n == count;
+    } else if (ok) {
+        ok = n % width == 0;
+        *rows = n / width;
+    }
+    if (!ok) {
+        PyBuffer_Release(view);
+        if (count >= 0) {
+            PyErr_Format(g_bad_input, "%s: %s must be a C-contiguous, aligned float64 array of "
+                         "%zd values", fn, name, count);
+        } else {
+            PyErr_Format(g_bad_input, "%s: %s must be a C-contiguous, aligned float64 array of "
+                         "rows of %zd values", fn, name, width);
+        }
+        return NULL;
+    }
+    return (double *)view->buf;
+}
+
+/* plant_rollout(integrator, u, h, state, q, qd, qdd, stats) -> (status, done): rrr_plant_rollout
+ * of the m rows of u (an (m, 3) float64 array) from the rrr_plant_state in the writable buffer
+ * `state` (updated to the state after the last step done), q, qd, qdd: writable (m, 3) float64
+ * arrays, stats: the rrr_plant_stats of the steps done. Without the GIL. rr.Plant.rollout raises
+ * for a status other than RRR_OK with its own message. */
+static PyObject *K_plant_rollout(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    rrr_plant_integrator integ;
+    double h;
+    if (check_nargs("plant_rollout", nargs, 8) != 0 ||
+        struct_from(args[0], &integ, sizeof integ, "plant_rollout",
+                    "rrr_plant_integrator (PlantIntegrator.packed)") != 0) {
+        return NULL;
+    }
+    h = PyFloat_AsDouble(args[2]); /* a bad h is rrr_plant_rollout's to refuse, at row 0 */
+    if (h == -1.0 && PyErr_Occurred()) {
+        return NULL;
+    }
+    static const char *const names[4] = {"u", "q", "qd", "qdd"};
+    static const int arg_of[4] = {1, 4, 5, 6};
+    Py_buffer views[4], sv, tv;
+    double *arrays[4];
+    Py_ssize_t m = 0;
+    int held = 0;
+    PyObject *out = NULL;
+    for (; held < 4; ++held) {
+        arrays[held] = doubles_of(args[arg_of[held]], &views[held], held == 0 ? -1 : m * NJ, NJ,
+                                  &m, held > 0, "plant_rollout", names[held]);
+        if (arrays[held] == NULL) {
+            goto done;
+        }
+    }
+    if (writable_struct(args[3], &sv, sizeof(rrr_plant_state), "plant_rollout",
+                        "rrr_plant_state (RawPlantState)") != 0) {
+        goto done;
+    }
+    if (writable_struct(args[7], &tv, sizeof(rrr_plant_stats), "plant_rollout",
+                        "rrr_plant_stats (RawPlantStats)") == 0) {
+        rrr_plant_state x;
+        rrr_plant_stats stats;
+        size_t n_done = 0;
+        rrr_status st;
+        memcpy(&x, sv.buf, sizeof x);
+        Py_BEGIN_ALLOW_THREADS
+        st = rrr_plant_rollout(MODEL(self), &integ, (size_t)m, arrays[0], h, &x, arrays[1],
+                               arrays[2], arrays[3], &n_done, &stats);
+        Py_END_ALLOW_THREADS
+        memcpy(sv.buf, &x, sizeof x);
+        memcpy(tv.buf, &stats, sizeof stats);
+        out = Py_BuildValue("(in)", (int)st, (Py_ssize_t)n_done);
+        PyBuffer_Release(&tv);
+    }
+    PyBuffer_Release(&sv);
+done:
+    for (int k = 0; k < held; ++k) {
+        PyBuffer_Release(&views[k]);
+    }
+    return out;
+}
+
 #define FASTCALL(name, doc) {#name, (PyCFunction)(void (*)(void))K_##name, METH_FASTCALL, doc}
 
 static PyMethodDef Kernels_methods[] = {
@@ -1922,6 +1942,8 @@ static PyMethodDef Kernels_methods[] = {
     FASTCALL(plant_step, "plant_step(integrator, u, h, state, stats) -> qdd (state and stats "
                          "updated in place)"),
     FASTCALL(plant_accel, "plant_accel(state, u) -> qdd"),
+    FASTCALL(plant_rollout, "plant_rollout(integrator, u, h, state, q, qd, qdd, stats) -> "
+                            "(status, done): rrr_plant_rollout of the rows of u"),
     FASTCALL(plant_jacobian, "plant_jacobian(q, qd, u) -> (qdd, J), J = d qdd / d(q, qd, u) "
                              "(3, 9)"),
     FASTCALL(ctc_jacobian, "ctc_jacobian(gains, q_ref, qd_ref, qdd_ref, q, qd) -> (u, du, du_n), "
@@ -1929,61 +1951,429 @@ static PyMethodDef Kernels_methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static PyTypeObject KernelsType = {
-    PyVarObject_HEAD_INIT(NULL, 0)
-    .tp_name = "rrr_robot.core._ext.Kernels",
-    .tp_basicsize = sizeof(KernelsObject),
-    .tp_dealloc = Kernels_dealloc,
-    .tp_flags = Py_TPFLAGS_DEFAULT,
-    .tp_doc = "Kernels(raw): the calls of librrr on the rrr_model in the buffer of raw (a ctypes "
-              "RawModel, read in place and kept alive). Arguments are (3,) vectors or (n, 3) "
-              "batches; every method mirrors the Model method of the same name.",
-    .tp_methods = Kernels_methods,
-    .tp_new = Kernels_new,
+/* A function's address as a type slot's void * (ISO C converts no function pointer to an object
+ * pointer; CPython's slots assume they have one representation, as on every platform it runs
+ * on). */
+static void *slot_fn(void (*fn)(void))
+{
+    void *p;
+    _Static_assert(sizeof p == sizeof fn, "function and object pointers of one size");
+    memcpy(&p, &fn, sizeof p);
+    return p;
+}
+
+static PyType_Slot Kernels_slots[] = {
+    {Py_tp_new, NULL},     /* Kernels_new, set by PyInit__ext */
+    {Py_tp_dealloc, NULL}, /* Kernels_dealloc, likewise */
+    {Py_tp_methods, Kernels_methods},
+    {Py_tp_doc, (void *)"Kernels(raw): the calls of librrr on the rrr_model in the buffer of "
+                        "raw (a ctypes RawModel, read in place and kept alive). Arguments are "
+                        "(3,) vectors or (n, 3) batches; every method mirrors the Model method "
+                        "of the same name."},
+    {0, NULL},
+};
+
+static PyType_Spec Kernels_spec = {
+    .name = "rrr_robot.core._ext.Kernels",
+    .basicsize = sizeof(KernelsObject),
+    .itemsize = 0,
+    .flags = Py_TPFLAGS_DEFAULT,
+    .slots = Kernels_slots,
+};
+
+/* ------------------------------------------------------------------------------------------ */
+/* Module functions: the rest of librrr, on the ctypes structs of rrr_robot.core._lib           */
+/* ------------------------------------------------------------------------------------------ */
+
+/* A C struct of `size` bytes copied in from a buffer (struct_from), called on, copied back. */
+#define STRUCT_IN(obj, var, fn, what) struct_from((obj), &(var), sizeof(var), (fn), (what))
+
+/* The result of a call that fills a struct: raise its status, else None. */
+static PyObject *status_result(const char *fn, rrr_status st)
+{
+    if (st != RRR_OK) {
+        raise_status(fn, (int)st, NULL);
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
+/* Fill the writable buffer `obj` (exactly `size` bytes) by `fill` on a local copy. */
+#define FILL_FUNCTION(name, type, what)                                                     \
+    static PyObject *E_##name(PyObject *mod, PyObject *obj)                                 \
+    {                                                                                       \
+        (void)mod;                                                                          \
+        Py_buffer view;                                                                     \
+        if (writable_struct(obj, &view, sizeof(type), #name, what) != 0) {                  \
+            return NULL;                                                                    \
+        }                                                                                   \
+        type value;                                                                         \
+        memset(&value, 0, sizeof value);                                                    \
+        const rrr_status st = rrr_##name(&value);                                           \
+        if (st == RRR_OK) {                                                                 \
+            memcpy(view.buf, &value, sizeof value);                                         \
+        }                                                                                   \
+        PyBuffer_Release(&view);                                                            \
+        return status_result("rrr_" #name, st);                                            \
+    }
+
+FILL_FUNCTION(model_default, rrr_model, "rrr_model (RawModel)")
+FILL_FUNCTION(ctc_gains_default, rrr_ctc_gains, "rrr_ctc_gains (RawCtcGains)")
+FILL_FUNCTION(plant_integrator_default, rrr_plant_integrator,
+              "rrr_plant_integrator (RawPlantIntegrator)")
+
+/* (status, field): a check's status and the field it names ("" when none). */
+static PyObject *check_result(rrr_status st, const char *field)
+{
+    return Py_BuildValue("(is)", (int)st, st != RRR_OK && field != NULL ? field : "");
+}
+
+/* model_validate(raw) -> (status, field) of rrr_model_validate */
+static PyObject *E_model_validate(PyObject *mod, PyObject *obj)
+{
+    (void)mod;
+    rrr_model m;
+    if (STRUCT_IN(obj, m, "model_validate", "rrr_model (RawModel)") != 0) {
+        return NULL;
+    }
+    const char *field = NULL;
+    const rrr_status st = rrr_model_validate(&m, &field);
+    return check_result(st, field);
+}
+
+/* plant_integrator_check(raw) -> (status, field) of rrr_plant_integrator_check */
+static PyObject *E_plant_integrator_check(PyObject *mod, PyObject *obj)
+{
+    (void)mod;
+    rrr_plant_integrator s;
+    if (STRUCT_IN(obj, s, "plant_integrator_check",
+                  "rrr_plant_integrator (RawPlantIntegrator)") != 0) {
+        return NULL;
+    }
+    const char *field = NULL;
+    const rrr_status st = rrr_plant_integrator_check(&s, &field);
+    return check_result(st, field);
+}
+
+/* plant_stiffness(raw) -> (status, lambda, field) of rrr_plant_stiffness */
+static PyObject *E_plant_stiffness(PyObject *mod, PyObject *obj)
+{
+    (void)mod;
+    rrr_model m;
+    if (STRUCT_IN(obj, m, "plant_stiffness", "rrr_model (RawModel)") != 0) {
+        return NULL;
+    }
+    double lambda = 0.0;
+    const char *field = NULL;
+    const rrr_status st = rrr_plant_stiffness(&m, &lambda, &field);
+    return Py_BuildValue("(ids)", (int)st, lambda, field != NULL ? field : "");
+}
+
+/* bps_from_inertia(raw, inertial, p): rrr_bps_from_inertia into p (a writable float64 buffer of
+ * RRR_NP values: an array, or RawModel.p) */
+static PyObject *E_bps_from_inertia(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)mod;
+    rrr_model m;
+    rrr_inertial in;
+    if (check_nargs("bps_from_inertia", nargs, 3) != 0 ||
+        STRUCT_IN(args[0], m, "bps_from_inertia", "rrr_model (RawModel)") != 0 ||
+        STRUCT_IN(args[1], in, "bps_from_inertia", "rrr_inertial (RawInertial)") != 0) {
+        return NULL;
+    }
+    Py_buffer view;
+    double *p = doubles_of(args[2], &view, RRR_NP, 1, NULL, 1, "bps_from_inertia", "p");
+    if (p == NULL) {
+        return NULL;
+    }
+    double out[RRR_NP];
+    const rrr_status st = rrr_bps_from_inertia(&m, &in, out);
+    if (st == RRR_OK) {
+        memcpy(p, out, sizeof out);
+    }
+    PyBuffer_Release(&view);
+    return status_result("rrr_bps_from_inertia", st);
+}
+
+/* plant_state_init(q0, qd0, state): rrr_plant_state_init into the writable RawPlantState */
+static PyObject *E_plant_state_init(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)mod;
+    if (check_nargs("plant_state_init", nargs, 3) != 0) {
+        return NULL;
+    }
+    vec_arg a[2];
+    static const char *const names[2] = {"q0", "qd0"};
+    if (parse_args(args, 2, names, a) != 0) {
+        return NULL;
+    }
+    PyObject *out = NULL;
+    Py_buffer view;
+    if (a[0].batch || a[1].batch) {
+        PyErr_SetString(g_bad_input, "plant_state_init takes one q0 (3,) and one qd0 (3,)");
+    } else if (writable_struct(args[2], &view, sizeof(rrr_plant_state), "plant_state_init",
+                               "rrr_plant_state (RawPlantState)") == 0) {
+        rrr_plant_state x;
+        memset(&x, 0, sizeof x);
+        const rrr_status st = rrr_plant_state_init(a[0].data, a[1].data, &x);
+        if (st == RRR_OK) {
+            memcpy(view.buf, &x, sizeof x);
+            out = Py_NewRef(Py_None);
+        } else {
+            const double *rows[2] = {a[0].data, a[1].data};
+            PyObject *context = rows_text(NULL, names, 2, rows);
+            if (context != NULL) {
+                raise_status("rrr_plant_state_init", (int)st, context);
+                Py_DECREF(context);
+            }
+        }
+        PyBuffer_Release(&view);
+    }
+    args_release(a, 2);
+    return out;
+}
+
+/* sim_closed_loop_part(plant, integrator, q0, qd0, ctrl, gains, step, ref, plant_out, ctrl_out,
+ * count, carry) -> (status, done): rrr_sim_closed_loop_part on the n rows of ref (n, 9), writing
+ * plant_out (n, 12) and ctrl_out (n, 9) and the writable RawSimCarry. Without the GIL. */
+static PyObject *E_sim_closed_loop_part(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)mod;
+    const char *fn = "sim_closed_loop_part";
+    rrr_model plant, ctrl;
+    rrr_plant_integrator integ;
+    rrr_ctc_gains gains;
+    double step;
+    if (check_nargs(fn, nargs, 12) != 0 ||
+        STRUCT_IN(args[0], plant, fn, "rrr_model (RawModel)") != 0 ||
+        STRUCT_IN(args[1], integ, fn, "rrr_plant_integrator (RawPlantIntegrator)") != 0 ||
+        STRUCT_IN(args[4], ctrl, fn, "rrr_model (RawModel)") != 0 ||
+        STRUCT_IN(args[5], gains, fn, "rrr_ctc_gains (RawCtcGains)") != 0 ||
+        finite_scalar(args[6], "step", &step) != 0) {
+        return NULL;
+    }
+    const Py_ssize_t count = PyLong_AsSsize_t(args[10]);
+    if (count == -1 && PyErr_Occurred()) {
+        return NULL;
+    }
+    if (count < 1) {
+        PyErr_Format(g_bad_input, "%s: count must be at least 1, got %zd", fn, count);
+        return NULL;
+    }
+    static const char *const names[5] = {"q0", "qd0", "ref", "plant_out", "ctrl_out"};
+    static const int arg_of[5] = {2, 3, 7, 8, 9};
+    Py_buffer views[5];
+    double *arrays[5];
+    Py_ssize_t n = 0;
+    int held = 0;
+    PyObject *out = NULL;
+    for (; held < 5; ++held) {
+        const Py_ssize_t want[5] = {NJ, NJ, -1, n * RRR_SIM_PLANT_COLS, n * RRR_SIM_CTRL_COLS};
+        arrays[held] = doubles_of(args[arg_of[held]], &views[held], want[held],
+                                  RRR_SIM_REF_COLS, &n, held >= 3, fn, names[held]);
+        if (arrays[held] == NULL) {
+            goto done;
+        }
+    }
+    Py_buffer cv;
+    if (writable_struct(args[11], &cv, sizeof(rrr_sim_carry), fn,
+                        "rrr_sim_carry (RawSimCarry)") == 0) {
+        rrr_sim_carry carry;
+        size_t n_done = 0;
+        rrr_status st;
+        memcpy(&carry, cv.buf, sizeof carry);
+        Py_BEGIN_ALLOW_THREADS
+        st = rrr_sim_closed_loop_part(&plant, &integ, arrays[0], arrays[1], &ctrl, &gains,
+                                      (size_t)n, step, arrays[2], arrays[3], arrays[4],
+                                      (size_t)count, &carry, &n_done);
+        Py_END_ALLOW_THREADS
+        memcpy(cv.buf, &carry, sizeof carry);
+        out = Py_BuildValue("(in)", (int)st, (Py_ssize_t)n_done);
+        PyBuffer_Release(&cv);
+    }
+done:
+    for (int k = 0; k < held; ++k) {
+        PyBuffer_Release(&views[k]);
+    }
+    return out;
+}
+
+/* The length of the text in a char array of `size` bytes (up to its NUL, if any). */
+static Py_ssize_t text_len(const char *text, size_t size)
+{
+    const char *end = memchr(text, '\0', size);
+    return end != NULL ? (Py_ssize_t)(end - text) : (Py_ssize_t)size;
+}
+
+/* param_table() -> ((name, unit, bound, description), ...): the rows of rrr_param_table */
+static PyObject *E_param_table(PyObject *mod, PyObject *unused)
+{
+    (void)mod;
+    (void)unused;
+    size_t n = 0;
+    const rrr_param_info *rows = rrr_param_table(&n);
+    PyObject *out = PyTuple_New((Py_ssize_t)n);
+    for (size_t i = 0; out != NULL && i < n; ++i) {
+        const rrr_param_info *r = &rows[i];
+        PyObject *row = Py_BuildValue("(s#s#is#)", r->name, text_len(r->name, sizeof r->name),
+                                      r->unit, text_len(r->unit, sizeof r->unit), (int)r->bound,
+                                      r->description,
+                                      text_len(r->description, sizeof r->description));
+        if (row == NULL) {
+            Py_CLEAR(out);
+        } else {
+            PyTuple_SetItem(out, (Py_ssize_t)i, row); /* steals row */
+        }
+    }
+    return out;
+}
+
+/* param_index(name) -> the row of name in rrr_param_table, -1 when there is none */
+static PyObject *E_param_index(PyObject *mod, PyObject *obj)
+{
+    (void)mod;
+    Py_ssize_t size;
+    const char *name = PyUnicode_AsUTF8AndSize(obj, &size);
+    if (name == NULL) {
+        return NULL;
+    }
+    if ((size_t)size != strlen(name)) {
+        return PyLong_FromLong(-1); /* an embedded NUL: no parameter's name */
+    }
+    return PyLong_FromLong(rrr_param_index(name));
+}
+
+/* A table row from a Python int: a negative one is out of range for librrr too. */
+static int row_of(PyObject *obj, size_t *row)
+{
+    const Py_ssize_t i = PyLong_AsSsize_t(obj);
+    if (i == -1 && PyErr_Occurred()) {
+        return -1;
+    }
+    *row = i < 0 ? SIZE_MAX : (size_t)i;
+    return 0;
+}
+
+/* param_get(raw, row) -> float: rrr_param_get (NaN for a row out of range) */
+static PyObject *E_param_get(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)mod;
+    rrr_model m;
+    size_t row;
+    if (check_nargs("param_get", nargs, 2) != 0 ||
+        STRUCT_IN(args[0], m, "param_get", "rrr_model (RawModel)") != 0 ||
+        row_of(args[1], &row) != 0) {
+        return NULL;
+    }
+    return PyFloat_FromDouble(rrr_param_get(&m, row));
+}
+
+/* param_set(raw, row, value) -> status of rrr_param_set on the writable RawModel */
+static PyObject *E_param_set(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)mod;
+    size_t row;
+    Py_buffer view;
+    if (check_nargs("param_set", nargs, 3) != 0 || row_of(args[1], &row) != 0) {
+        return NULL;
+    }
+    const double value = PyFloat_AsDouble(args[2]);
+    if (value == -1.0 && PyErr_Occurred()) {
+        return NULL;
+    }
+    if (writable_struct(args[0], &view, sizeof(rrr_model), "param_set",
+                        "rrr_model (RawModel)") != 0) {
+        return NULL;
+    }
+    rrr_model m;
+    memcpy(&m, view.buf, sizeof m);
+    const rrr_status st = rrr_param_set(&m, row, value);
+    if (st == RRR_OK) {
+        memcpy(view.buf, &m, sizeof m);
+    }
+    PyBuffer_Release(&view);
+    return PyLong_FromLong((long)st);
+}
+
+/* param_in_range(row, value) -> bool: rrr_param_in_range */
+static PyObject *E_param_in_range(PyObject *mod, PyObject *const *args, Py_ssize_t nargs)
+{
+    (void)mod;
+    size_t row;
+    if (check_nargs("param_in_range", nargs, 2) != 0 || row_of(args[0], &row) != 0) {
+        return NULL;
+    }
+    const double value = PyFloat_AsDouble(args[1]);
+    if (value == -1.0 && PyErr_Occurred()) {
+        return NULL;
+    }
+    return PyBool_FromLong(rrr_param_in_range(row, value));
+}
+
+/* simd_available(path) -> bool: rrr_simd_available for an rrr_simd value */
+static PyObject *E_simd_available(PyObject *mod, PyObject *obj)
+{
+    (void)mod;
+    const long v = PyLong_AsLong(obj);
+    if (v == -1 && PyErr_Occurred()) {
+        return NULL;
+    }
+    return PyBool_FromLong(v >= RRR_SIMD_AUTO && v <= RRR_SIMD_AVX512 &&
+                           rrr_simd_available((rrr_simd)v));
+}
+
+/* simd_best() -> the rrr_simd value "auto" means here */
+static PyObject *E_simd_best(PyObject *mod, PyObject *unused)
+{
+    (void)mod;
+    (void)unused;
+    return PyLong_FromLong((long)rrr_simd_best());
+}
+
+#define FAST(name, doc) {#name, (PyCFunction)(void (*)(void))E_##name, METH_FASTCALL, doc}
+#define ONE(name, doc) {#name, (PyCFunction)(void (*)(void))E_##name, METH_O, doc}
+#define NONE(name, doc) {#name, (PyCFunction)(void (*)(void))E_##name, METH_NOARGS, doc}
+
+static PyMethodDef ext_functions[] = {
+    ONE(model_default, "model_default(raw): rrr_model_default into a RawModel"),
+    ONE(ctc_gains_default, "ctc_gains_default(raw): rrr_ctc_gains_default into a RawCtcGains"),
+    ONE(plant_integrator_default, "plant_integrator_default(raw): rrr_plant_integrator_default "
+                                  "into a RawPlantIntegrator"),
+    ONE(model_validate, "model_validate(raw) -> (status, field) of rrr_model_validate"),
+    ONE(plant_integrator_check, "plant_integrator_check(raw) -> (status, field) of "
+                                "rrr_plant_integrator_check"),
+    ONE(plant_stiffness, "plant_stiffness(raw) -> (status, lambda, field) of "
+                         "rrr_plant_stiffness"),
+    FAST(bps_from_inertia, "bps_from_inertia(raw, inertial, p): rrr_bps_from_inertia into p"),
+    FAST(plant_state_init, "plant_state_init(q0, qd0, state): rrr_plant_state_init into a "
+                           "RawPlantState"),
+    FAST(sim_closed_loop_part, "sim_closed_loop_part(plant, integrator, q0, qd0, ctrl, gains, "
+                               "step, ref, plant_out, ctrl_out, count, carry) -> (status, "
+                               "done)"),
+    NONE(param_table, "param_table() -> ((name, unit, bound, description), ...)"),
+    ONE(param_index, "param_index(name) -> row, -1 when there is none"),
+    FAST(param_get, "param_get(raw, row) -> value"),
+    FAST(param_set, "param_set(raw, row, value) -> status"),
+    FAST(param_in_range, "param_in_range(row, value) -> bool"),
+    ONE(simd_available, "simd_available(path) -> bool"),
+    NONE(simd_best, "simd_best() -> the rrr_simd value of 'auto' here"),
+    {NULL, NULL, 0, NULL},
 };
 
 /* ------------------------------------------------------------------------------------------ */
 /* Module                                                                                     */
 /* ------------------------------------------------------------------------------------------ */
 
-static PyObject *attr_of(const char *module, const char *name)
-{
-    PyObject *mod = PyImport_ImportModule(module);
-    if (mod == NULL) {
-        return NULL;
-    }
-    PyObject *value = PyObject_GetAttrString(mod, name);
-    Py_DECREF(mod);
-    return value;
-}
-
 static int import_dependencies(void)
 {
-    PyObject *ndarray = attr_of("numpy", "ndarray");
-    if (ndarray == NULL) {
-        return -1;
-    }
-    if (!PyType_Check(ndarray)) {
-        Py_DECREF(ndarray);
-        PyErr_SetString(PyExc_ImportError, "numpy.ndarray is not a type");
-        return -1;
-    }
-    g_ndarray = (PyTypeObject *)ndarray;
     g_empty = attr_of("numpy", "empty");
-    PyObject *dtype = attr_of("numpy", "dtype");
-    if (g_empty == NULL || dtype == NULL) {
-        Py_XDECREF(dtype);
-        return -1;
-    }
-    g_float64 = PyObject_CallFunction(dtype, "s", "float64");
-    Py_DECREF(dtype);
     g_as_rows = attr_of("rrr_robot.core._arrays", "as_rows");
     g_rrr_error = attr_of("rrr_robot.errors", "RrrError");
     g_bad_input = attr_of("rrr_robot.errors", "BadInputError");
     PyObject *names = attr_of("rrr_robot.core._status", "STATUS_NAMES");
     g_status_errors = attr_of("rrr_robot.core._status", "ERRORS");
     g_status_meaning = attr_of("rrr_robot.core._status", "MEANING");
-    if (g_float64 == NULL || g_as_rows == NULL || g_rrr_error == NULL || g_bad_input == NULL ||
+    if (g_empty == NULL || g_as_rows == NULL || g_rrr_error == NULL || g_bad_input == NULL ||
         names == NULL || g_status_errors == NULL || g_status_meaning == NULL) {
         Py_XDECREF(names);
         return -1;
@@ -1998,10 +2388,6 @@ static int import_dependencies(void)
                         "rrr_robot.core._status: ERRORS and MEANING must be dicts");
         return -1;
     }
-    g_refuse = attr_of("rrr_robot.core.batch", "refuse");
-    if (g_refuse == NULL) {
-        return -1;
-    }
     static const char *const simd_names[] = {"auto", "scalar", "avx2", "avx512"};
     _Static_assert(sizeof simd_names / sizeof simd_names[0] == RRR_SIMD_AVX512 + 1,
                    "a name for each rrr_simd value");
@@ -2014,18 +2400,30 @@ static int import_dependencies(void)
     /* branch index = shoulder * 2 + elbow (rrr_kinematics.h) */
     g_branch_names = Py_BuildValue("((ss)(ss)(ss)(ss))", "front", "up", "front", "down", "back",
                                    "up", "back", "down");
-    if (g_branch_names == NULL) {
-        return -1;
-    }
-    return numpy_setup();
+    return g_branch_names != NULL ? 0 : -1;
 }
 
 static struct PyModuleDef ext_module = {
     PyModuleDef_HEAD_INIT,
     .m_name = "rrr_robot.core._ext",
-    .m_doc = "The compiled binding of librrr behind rrr_robot.core.model.Model (Kernels).",
+    .m_doc = "The compiled binding of librrr: Kernels (Model's calls) and the module functions "
+             "on the ctypes structs of rrr_robot.core._lib.",
     .m_size = -1,
+    .m_methods = ext_functions,
 };
+
+/* {struct name: sizeof}: what the ctypes mirrors of rrr_robot.core._lib must measure */
+static PyObject *struct_sizes(void)
+{
+    return Py_BuildValue(
+        "{snsnsnsnsnsnsnsnsn}", "rrr_model", (Py_ssize_t)sizeof(rrr_model), "rrr_inertial",
+        (Py_ssize_t)sizeof(rrr_inertial), "rrr_ik_set", (Py_ssize_t)sizeof(rrr_ik_set),
+        "rrr_ctc_gains", (Py_ssize_t)sizeof(rrr_ctc_gains), "rrr_plant_integrator",
+        (Py_ssize_t)sizeof(rrr_plant_integrator), "rrr_plant_state",
+        (Py_ssize_t)sizeof(rrr_plant_state), "rrr_plant_stats", (Py_ssize_t)sizeof(rrr_plant_stats),
+        "rrr_sim_carry", (Py_ssize_t)sizeof(rrr_sim_carry), "rrr_singularity",
+        (Py_ssize_t)sizeof(rrr_singularity));
+}
 
 PyMODINIT_FUNC PyInit__ext(void);
 
@@ -2034,19 +2432,28 @@ PyMODINIT_FUNC PyInit__ext(void)
     if (import_dependencies() != 0) {
         return NULL;
     }
-    if (PyType_Ready(&KernelsType) != 0) {
-        return NULL;
-    }
     PyObject *m = PyModule_Create(&ext_module);
     if (m == NULL) {
         return NULL;
     }
-    if (PyModule_AddObjectRef(m, "Kernels", (PyObject *)&KernelsType) != 0 ||
+    Kernels_slots[0].pfunc = slot_fn((void (*)(void))Kernels_new);
+    Kernels_slots[1].pfunc = slot_fn((void (*)(void))Kernels_dealloc);
+    PyObject *kernels = PyType_FromSpec(&Kernels_spec);
+    PyObject *sizes = struct_sizes();
+    PyObject *sample_time = PyFloat_FromDouble(rrr_sample_time_default());
+    const char *version = rrr_version();
+    const int failed =
+        kernels == NULL || sizes == NULL || sample_time == NULL ||
+        PyModule_AddObjectRef(m, "Kernels", kernels) != 0 ||
+        PyModule_AddObjectRef(m, "SIZES", sizes) != 0 ||
+        PyModule_AddObjectRef(m, "SAMPLE_TIME_DEFAULT", sample_time) != 0 ||
         PyModule_AddIntConstant(m, "NOGIL_ROWS", RRR_EXT_NOGIL_ROWS) != 0 ||
-        PyModule_AddIntConstant(m, "MODEL_SIZE", (long)sizeof(rrr_model)) != 0 ||
-        PyModule_AddIntConstant(m, "CTC_GAINS_SIZE", (long)sizeof(rrr_ctc_gains)) != 0 ||
-        PyModule_AddObjectRef(m, "NUMPY_IN_PLACE", g_np_layout_ok ? Py_True : Py_False) != 0 ||
-        PyModule_AddObjectRef(m, "NUMPY_C_API", g_np_new != NULL ? Py_True : Py_False) != 0) {
+        PyModule_AddIntConstant(m, "NP", RRR_NP) != 0 ||
+        PyModule_AddStringConstant(m, "VERSION", version != NULL ? version : "") != 0;
+    Py_XDECREF(kernels);
+    Py_XDECREF(sizes);
+    Py_XDECREF(sample_time);
+    if (failed) {
         Py_DECREF(m);
         return NULL;
     }

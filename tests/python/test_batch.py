@@ -70,21 +70,7 @@ def test_a_bad_row_raises_the_one_state_error_and_bad_paths_are_refused(model, s
         model.inverse_dynamics(q[:5], qd[:4], qdd[:5])
 
 
-def test_both_bindings_call_the_same_batch_kernels(model, states) -> None:
-    """The extension (the Model's binding) and the ctypes binding run the same librrr call:
-    bit for bit the same batch, broadcast rows included."""
-    from rrr_robot.core import _ctypes_kernels
-
-    slow = _ctypes_kernels.Kernels(model.raw)
-    auto = batch.PATHS_HERE["auto"]
-    assert model.inverse_dynamics(*states).tobytes() == slow.inverse_dynamics(
-        *states, auto).tobytes()
-    q, qd, qdd = states
-    assert model.inverse_dynamics(q, qd[0], qdd).tobytes() == slow.inverse_dynamics(
-        q, qd[0], qdd, auto).tobytes()
-
-
-# the other batch calls: Model method, its inputs from (q, qd, qdd), and the ctypes method
+# the other batch calls: Model method and its inputs from (q, qd, qdd)
 OTHER = {
     "regressor": lambda m, q, qd, qdd: (q, qd, qdd),
     "fk": lambda m, q, qd, qdd: (q,),
@@ -167,27 +153,22 @@ def test_a_mass_matrix_that_is_not_positive_definite_is_the_scalar_calls(model, 
 
 
 @pytest.mark.parametrize("name", sorted(OTHER))
-def test_both_bindings_call_the_same_other_batch_kernels(model, states, name: str) -> None:
-    """The ctypes binding's batch path is the same librrr call as the extension's: bit for bit,
-    broadcast rows included; a bad row raises the same error through both."""
-    from rrr_robot.core import _ctypes_kernels
-
-    slow = _ctypes_kernels.Kernels(model.raw)
-    auto = batch.PATHS_HERE["auto"]
+def test_a_bad_row_of_the_other_batch_kernels_is_named(model, states, name: str) -> None:
+    """A bad row raises the same error on the batch kernels' path as on the row loop, naming
+    the row; broadcast rows give the batch of the repeated rows, bit for bit."""
     args = OTHER[name](model, *states)
-    assert flat(getattr(model, name)(*args)).tobytes() == flat(
-        getattr(slow, name)(*args, auto)).tobytes()
     if len(args) > 1:
         b_args = (args[0], args[1][0], *args[2:])
+        full = (args[0], np.repeat(args[1][:1], len(args[0]), axis=0), *args[2:])
         assert flat(getattr(model, name)(*b_args)).tobytes() == flat(
-            getattr(slow, name)(*b_args, auto)).tobytes()
+            getattr(model, name)(*full)).tobytes()
     bad = [a.copy() for a in args]
     bad[-1][321, 0] = np.nan
-    with pytest.raises(rr.BadInputError) as ext_err:
+    with pytest.raises(rr.BadInputError) as vec_err:
         getattr(model, name)(*bad)
-    with pytest.raises(rr.BadInputError) as ct_err:
-        getattr(slow, name)(*bad, auto)
-    assert str(ext_err.value) == str(ct_err.value) and "sample 321" in str(ct_err.value)
+    with pytest.raises(rr.BadInputError) as row_err:
+        getattr(model, name)(*bad, simd="scalar")
+    assert str(vec_err.value) == str(row_err.value) and "sample 321" in str(row_err.value)
 
 
 # ---- IK: Model.ik(x, shoulder, elbow, simd) over (n, 3) targets (rrr_ik_batch) -------------
@@ -228,32 +209,24 @@ def test_batch_ik_agrees_with_ik_branch_on_every_path(model, targets, simd: str,
     assert np.abs(model.fk(q)[0] - targets).max() <= 1e-12  # FK(IK(x)) = x
 
 
-def test_batch_ik_auto_within_1e_13_of_scalar_and_both_bindings_agree(model, targets) -> None:
-    from rrr_robot.core import _ctypes_kernels
-
+def test_batch_ik_auto_within_1e_13_of_scalar(model, targets) -> None:
     auto = model.ik(targets, "back", "down")
     scalar = model.ik(targets, "back", "down", simd="scalar")
     assert np.abs(auto - scalar).max() <= 1e-13
-    slow = _ctypes_kernels.Kernels(model.raw)
-    path = batch.PATHS_HERE["auto"]
-    assert slow.ik_branch(targets, 1, 1, path).tobytes() == auto.tobytes()
-    assert slow.ik_branch(targets, 1, 1, 1).tobytes() == scalar.tobytes()
+    path = batch.PATHS_HERE["auto"]  # the binding takes the rrr_simd value as well
+    assert model._k.ik_branch(targets, 1, 1, path).tobytes() == auto.tobytes()
+    assert model._k.ik_branch(targets, 1, 1, 1).tobytes() == scalar.tobytes()
 
 
 @pytest.mark.parametrize("simd", ["auto", "scalar"])
 def test_a_bad_ik_row_raises_its_error_naming_the_first_one(model, targets, simd: str) -> None:
-    from rrr_robot.core import _ctypes_kernels
-
-    slow = _ctypes_kernels.Kernels(model.raw)
     x = targets.copy()
     x[300] = [5.0, 1.0, 0.0]       # beyond the outer sphere
     x[400, 2] = np.nan
     with pytest.raises(rr.UnreachableError, match="sample 300") as err:
         model.ik(x, "front", "up", simd=simd)
     assert "rrr_ik_branch failed with RRR_UNREACHABLE" in str(err.value)
-    with pytest.raises(rr.UnreachableError) as ct_err:
-        slow.ik_branch(x, 0, 0, batch.PATHS_HERE[simd])
-    assert str(ct_err.value) == str(err.value)
+    assert "sample 300: x = [5.0, 1.0, 0.0]" in str(err.value)
     x[300] = targets[300]
     with pytest.raises(rr.BadInputError, match="sample 400") as nan_err:
         model.ik(x, "front", "up", simd=simd)

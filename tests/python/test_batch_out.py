@@ -1,8 +1,8 @@
 """``out=`` of the batch methods (inverse dynamics, regressor, FK, forward dynamics, IK on a
 posture): the result written into the caller's array, bit for bit the new array's, on every path
-and through both bindings (the extension and ctypes); every kind of bad ``out`` refused with a
-BadInputError before anything is written; a failing row raising its error with the rows before
-it in ``out``; and the ``simd`` names the bindings take directly."""
+and through the binding's own methods; every kind of bad ``out`` refused with a BadInputError
+before anything is written; a failing row raising its error with the rows before it in ``out``;
+and the ``simd`` names the binding takes directly."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 import rrr_robot as rr
-from rrr_robot.core import _ctypes_kernels, batch
+from rrr_robot.core import batch
 
 N = 517  # not a multiple of a vector's 4 or 8 states
 
@@ -76,16 +76,15 @@ def test_out_holds_the_new_arrays_result_bit_for_bit(model, states, name: str, s
 
 
 @pytest.mark.parametrize("name", ["inverse_dynamics", "regressor", "forward_dynamics", "ik"])
-def test_both_bindings_write_the_same_out(model, states, name: str) -> None:
-    ext, slow = model._k, _ctypes_kernels.Kernels(model.raw)
+def test_the_binding_writes_the_new_arrays_bits_into_out(model, states, name: str) -> None:
+    ext = model._k
     args = calls(model, states)[name][1]
     post = (1, 1) if name == "ik" else ()  # ik_branch(x, shoulder, elbow, ...)
     method = "ik_branch" if name == "ik" else name
     want = getattr(ext, method)(*args, *post, "auto")
-    outs = [np.full_like(want, np.nan), np.full_like(want, np.nan)]
-    for kernels, out in zip((ext, slow), outs, strict=True):
-        assert getattr(kernels, method)(*args, *post, "auto", out) is out
-    assert outs[0].tobytes() == outs[1].tobytes() == want.tobytes()
+    out = np.full_like(want, np.nan)
+    assert getattr(ext, method)(*args, *post, "auto", out) is out
+    assert out.tobytes() == want.tobytes()
 
 
 def bad_outs(q: np.ndarray) -> dict[str, object]:
@@ -106,10 +105,9 @@ def bad_outs(q: np.ndarray) -> dict[str, object]:
     }
 
 
-@pytest.mark.parametrize("binding", ["extension", "ctypes"])
-def test_a_bad_out_is_refused_and_left_as_it_was(model, states, binding: str) -> None:
+def test_a_bad_out_is_refused_and_left_as_it_was(model, states) -> None:
     q, qd, qdd = states
-    kernels = model._k if binding == "extension" else _ctypes_kernels.Kernels(model.raw)
+    kernels = model._k
     for why, bad in bad_outs(q).items():
         before = np.array(bad, copy=True)
         with pytest.raises(rr.BadInputError, match="inverse_dynamics: out") as err:
@@ -141,9 +139,8 @@ def test_a_failing_row_raises_with_the_rows_before_it_in_out(model, states, simd
     assert out[:300].tobytes() == want[:300].tobytes()
 
 
-@pytest.mark.parametrize("binding", ["extension", "ctypes"])
-def test_the_bindings_take_simd_names_and_refuse_others(model, states, binding: str) -> None:
-    kernels = model._k if binding == "extension" else _ctypes_kernels.Kernels(model.raw)
+def test_the_binding_takes_simd_names_and_refuses_others(model, states) -> None:
+    kernels = model._k
     want = model.inverse_dynamics(*states, simd="scalar")
     # "auto" as a string that is not the interned literal finds the same path
     auto = "".join(["au", "to"])

@@ -1,8 +1,8 @@
 """rr.Plant: librrr's plant step from Python through the compiled binding (its steps equal the
-plant FMU's doStep bit for bit: test_plant_fmu.py). Snapshots make reruns bit-exact, the ctypes
-binding gives the same numbers and refusals, a closed loop written in Python with Model.ctc and
-Plant.step equals rr.simulate bit for bit, and hostile input is refused without changing the
-state."""
+plant FMU's doStep bit for bit: test_plant_fmu.py). Snapshots make reruns bit-exact, the
+binding's plant step refuses hostile input without writing the state, a closed loop written in
+Python with Model.ctc and Plant.step equals rr.simulate bit for bit, and hostile input is refused
+without changing the state."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import ctypes as ct
 import numpy as np
 import pytest
 import rrr_robot as rr
-from rrr_robot.core import _ctypes_kernels, _lib
+from rrr_robot.core import _ext, _lib
 from rrr_robot.core.param_names import model_fmu_values
 from rrr_robot.sim.cosim import CosimOptions
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, prepare
@@ -43,45 +43,38 @@ def _state_of(snap: rr.PlantSnapshot) -> _lib.RawPlantState:
     return _lib.RawPlantState.from_buffer_copy(snap.state)
 
 
-def test_the_ctypes_binding_gives_the_same_steps_and_refusals(model) -> None:
-    ext, slow = model._k, _ctypes_kernels.Kernels(model.raw)
+def test_the_binding_steps_in_place_and_refuses_without_writing(model) -> None:
+    ext = model._k
     packed = rr.PlantIntegrator().packed
-    states = [_lib.RawPlantState(), _lib.RawPlantState()]
-    for s in states:
-        _lib.call("rrr_plant_state_init", _arr(Q0), _arr(np.zeros(3)), ct.byref(s))
-    stats = [_lib.RawPlantStats(), _lib.RawPlantStats()]
-    for k in range(100):
+    state, stats = _lib.RawPlantState(), _lib.RawPlantStats()
+    _ext.plant_state_init(Q0, np.zeros(3), state)
+    plant = rr.Plant(model, q0=Q0)
+    for k in range(100):  # the binding's step on a state of ours: rr.Plant's steps, bit for bit
         u = U * np.cos(0.1 * k)
-        a = ext.plant_step(packed, u, H, states[0], stats[0])
-        b = slow.plant_step(packed, u, H, states[1], stats[1])
-        assert np.array_equal(a, b) and bytes(states[0]) == bytes(states[1])
-        assert bytes(stats[0]) == bytes(stats[1])
-        assert np.array_equal(ext.plant_accel(states[0], u), slow.plant_accel(states[1], u))
+        before = bytes(state)
+        qdd = ext.plant_step(packed, u, H, state, stats)
+        assert bytes(state) != before and stats.steps >= 1 and stats.evals >= stats.steps
+        assert qdd.tobytes() == plant.step(u, H).tobytes()
+        assert bytes(state) == plant.snapshot().state
+        assert ext.plant_accel(state, u).tobytes() == plant.accel(u).tobytes()
     hostile = [
-        ((packed, [np.nan, 0, 0], H), rr.BadInputError),
-        ((packed, np.zeros((2, 3)), H), rr.BadInputError),
-        ((packed, "abc", H), rr.BadInputError),
-        ((packed, U, 0.0), rr.BadInputError),
-        ((packed, U, -1e-3), rr.BadInputError),
-        ((packed, U, float("inf")), rr.BadInputError),
-        ((packed, U, "x"), rr.BadInputError),
-        ((b"short", U, H), TypeError),
+        ((packed, [np.nan, 0, 0], H), rr.BadInputError, "rrr_plant_step failed with "
+                                                         "RRR_BAD_INPUT"),
+        ((packed, np.zeros((2, 3)), H), rr.BadInputError, "one input voltage"),
+        ((packed, "abc", H), rr.BadInputError, "u must be an array of numbers"),
+        ((packed, U, 0.0), rr.BadInputError, "rrr_plant_step failed"),
+        ((packed, U, -1e-3), rr.BadInputError, "rrr_plant_step failed"),
+        ((packed, U, float("inf")), rr.BadInputError, "h must be a finite number"),
+        ((packed, U, "x"), rr.BadInputError, "h must be a finite number"),
+        ((b"short", U, H), TypeError, "plant_step needs the 40 bytes of an rrr_plant_integrator"),
     ]
-    for args, exc in hostile:
-        before = [bytes(s) for s in states]
-        with pytest.raises(exc) as e_ext:
-            ext.plant_step(*args, states[0], stats[0])
-        with pytest.raises(exc) as e_slow:
-            slow.plant_step(*args, states[1], stats[1])
-        assert str(e_ext.value) == str(e_slow.value)
-        assert [bytes(s) for s in states] == before  # nothing written on a refusal
-    for kernels in (ext, slow):
-        with pytest.raises(TypeError):
-            kernels.plant_step(packed, U, H, b"\0" * ct.sizeof(_lib.RawPlantState), stats[0])
-
-
-def _arr(v: np.ndarray) -> int:
-    return np.ascontiguousarray(v, dtype=np.float64).ctypes.data
+    for args, exc, message in hostile:
+        before = bytes(state)
+        with pytest.raises(exc, match=message):
+            ext.plant_step(*args, state, stats)
+        assert bytes(state) == before  # nothing written on a refusal
+    with pytest.raises(TypeError, match="writable rrr_plant_state"):
+        ext.plant_step(packed, U, H, b"\0" * ct.sizeof(_lib.RawPlantState), stats)
 
 
 def test_a_closed_loop_in_python_equals_rr_simulate(tmp_path) -> None:

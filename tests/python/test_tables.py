@@ -182,94 +182,19 @@ def test_rrr_writing_parquet_without_pyarrow_fails_before_running(
     assert not out.exists()
 
 
-# ---- the C number formatting (rrr_robot.core._csvfmt) against the Python one -------------------
+# ---- the text of the numbers (format_rows) -------------------------------------------------------
 
-HARD_VALUES = [0.0, -0.0, 1.0, -1.0, 0.1, 1 / 3, 2.0**-1074, -(2.0**-1074), 2.0**-1022,
-               np.nextafter(2.0**-1022, 0), sys.float_info.max, -sys.float_info.max,
-               sys.float_info.epsilon, 1e16, 1e17, 123456789012345678.0, 1e-5,
-               9.999999999999999e-5, 0.001, 5e-324, 1e300, -1e-300, np.inf, -np.inf, np.nan,
-               -np.nan,
-               np.frombuffer(b"\x01\x00\x00\x00\x00\x00\xf8\xff", dtype=np.float64)[0]]
-
-
-def test_the_compiled_formatting_is_built() -> None:
-    """An installed package has it (the wheel builds it with the binding; the ctypes fallback
-    is only for a build without Python headers, which also has no _ext)."""
-    from rrr_robot.core import model
-    assert (tables._csvfmt is not None) == (model.BINDING == "extension")
-
-
-def test_compiled_rows_are_the_python_rows_byte_for_byte() -> None:
-    if tables._csvfmt is None:
-        pytest.skip("rrr_robot.core._csvfmt not built (no Python headers)")  # see the test above
-    hard = np.array(HARD_VALUES, dtype=np.float64)
-    rng = np.random.default_rng(7)
-    bits = rng.integers(0, 2**63, size=20_000, dtype=np.uint64) * np.uint64(2) + \
-        rng.integers(0, 2, size=20_000, dtype=np.uint64)
-    random = bits.view(np.float64)       # every exponent, subnormals, NaN payloads, both signs
-    for data in (hard.reshape(-1, 1), np.tile(hard, (3, 1)), random.reshape(-1, 8),
-                 rng.normal(size=(1000, 31)), np.zeros((0, 4)), np.zeros((5, 0))):
-        c = tables.format_rows(data)
-        py = tables.format_rows(data, compiled=False)
-        assert c == py
-    assert tables.format_rows(np.array([[np.nan, -np.nan, -0.0, 0.1]])) == \
-        "nan,nan,-0,0.10000000000000001\n"
-
-
-def test_compiled_fast_path_is_the_python_formatting_byte_for_byte() -> None:
-    """The values a signal table holds (1e-11 <= |v| < 1e43) take _csvfmt's path without printf
-    (rrr_csv.c): every decade, both signs, powers of ten and their neighbours, integers, times
-    on a millisecond grid, values next to a rounding tie at the 17th digit."""
-    if tables._csvfmt is None:
-        pytest.skip("rrr_robot.core._csvfmt not built (no Python headers)")  # see above
-    rng = np.random.default_rng(26)
-    decades = np.arange(-13, 45, dtype=np.float64)
-    mantissa = rng.uniform(1.0, 10.0, size=(4000, decades.size))
-    tens = 10.0 ** decades
-    ties = (rng.integers(10**15, 10**16, size=20_000) + 0.5).astype(np.float64)
-    values = np.concatenate([
-        (mantissa * tens).ravel(), -(mantissa * tens).ravel() / 3.0, tens,
-        np.nextafter(tens, 0.0), np.nextafter(tens, np.inf), ties, ties * 1e-9, ties * 1e12,
-        np.arange(100_000) * 1e-3, rng.integers(-(2**62), 2**62, size=20_000).astype(float),
-        rng.normal(size=50_000) * 1e-6])
-    for data in (values.reshape(-1, 1), values[: values.size // 31 * 31].reshape(-1, 31)):
-        assert tables.format_rows(data) == tables.format_rows(data, compiled=False)
+def test_format_rows_writes_the_17_digit_text() -> None:
+    """The file format: ``%.17g`` of every value, NaN as ``nan`` whatever its sign bit (and
+    payload), ``-0`` kept, infinities as ``inf``; ``,`` between values, ``\\n`` after rows."""
+    nan_payload = np.frombuffer(b"\x01\x00\x00\x00\x00\x00\xf8\xff", dtype=np.float64)[0]
+    assert tables.format_rows(np.array([[np.nan, -np.nan, nan_payload, -0.0, 0.1],
+                                        [np.inf, -np.inf, 1e17, 5e-324, 1 / 3]])) == (
+        "nan,nan,nan,-0,0.10000000000000001\n"
+        "inf,-inf,1e+17,4.9406564584124654e-324,0.33333333333333331\n")
+    assert tables.format_rows(np.zeros((0, 4))) == tables.format_rows(np.zeros((5, 0))) == ""
 
 
 def test_format_rows_refuses_what_is_not_a_table() -> None:
     with pytest.raises(ValueError, match="2-D"):
         tables.format_rows(np.zeros(3))
-    if tables._csvfmt is not None:
-        with pytest.raises(TypeError, match="native doubles"):
-            tables._csvfmt.format_rows(np.zeros((2, 2), dtype=np.float32))
-        with pytest.raises(TypeError, match="native doubles"):
-            tables._csvfmt.format_rows(np.zeros((2, 2, 2)))
-        with pytest.raises((TypeError, ValueError), match="contiguous"):
-            tables._csvfmt.format_rows(np.zeros((4, 4))[:, ::2])
-        with pytest.raises(TypeError):
-            tables._csvfmt.format_rows("not a buffer")
-
-
-def test_a_comma_locale_falls_back_to_the_python_formatting(tmp_path: Path) -> None:
-    """Where a library set LC_NUMERIC to a locale with a decimal comma, printf would write
-    "0,5": the C formatting declines (None) and the text is the Python formatting's. The
-    locale is compiled with localedef into tmp_path (scripts/run_tests.sh installs the
-    locale sources) and used in a child process (LOCPATH)."""
-    import os
-    import subprocess
-    made = subprocess.run(
-        ["localedef", "-i", "de_DE", "-f", "UTF-8", str(tmp_path / "de_DE.UTF-8")],
-        capture_output=True, text=True, check=False)
-    assert (tmp_path / "de_DE.UTF-8").is_dir(), f"localedef failed: {made.stderr}"
-    code = """
-import locale, numpy as np
-from rrr_robot.core import tables
-locale.setlocale(locale.LC_NUMERIC, "de_DE.UTF-8")
-assert locale.localeconv()["decimal_point"] == ","
-if tables._csvfmt is not None:
-    assert tables._csvfmt.format_rows(np.array([[0.5]])) is None
-print(repr(tables.format_rows(np.array([[0.5, 1.25]]))))
-"""
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         env={**os.environ, "LOCPATH": str(tmp_path)}, check=True, timeout=120)
-    assert out.stdout.strip() == repr("0.5,1.25\n")

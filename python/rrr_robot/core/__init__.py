@@ -1,8 +1,8 @@
-"""The core: the bindings of librrr and the model built on it (the lowest layer).
+"""The core: the binding of librrr and the model built on it (the lowest layer).
 
-_ext (the compiled binding: Model's calls, rows looped in C; c_src/pyext/rrr_ext.c),
-_ctypes_kernels (the same calls through ctypes, where _ext was not built), _lib (the ctypes
-binding: structures, signatures, the parameter table), _status (statuses and their exceptions),
+_ext (the compiled binding, the one way to librrr: Model's calls with rows looped in C, and the
+rest of librrr's calls; c_src/pyext/rrr_ext.c), _lib (librrr's structs as ctypes Structures that
+_ext reads and writes, the parameter table), _status (statuses and their exceptions),
 _arrays (vector and batch shapes), model (:class:`Model` and its closed-form algorithms, all in
 C), control (:class:`CtcGains`, the gains of the computed-torque law), integrator
 (:class:`PlantIntegrator`, the plant's integrator settings), plant (:class:`Plant`, the plant

@@ -28,28 +28,3 @@ def as_rows(value: ArrayLike, name: str, width: int = 3) -> tuple[FloatArray, bo
     if arr.ndim == 2 and arr.shape[1] == width:
         return arr, True
     raise BadInputError(f"{name} must have shape ({width},) or (n, {width}), got {arr.shape}")
-
-
-def broadcast_rows(*pairs: tuple[ArrayLike, str]) -> tuple[list[FloatArray], bool]:
-    """Convert several (value, name) pairs to (n, 3) arrays of a common n."""
-    rows = [as_rows(v, name) for v, name in pairs]
-    if not any(b for _, b in rows):  # fast path: single vectors, nothing to broadcast
-        return [a for a, _ in rows], False
-    n = max(a.shape[0] for a, _ in rows)
-    out = []
-    for (a, _), (_, name) in zip(rows, pairs, strict=True):
-        if a.shape[0] not in (1, n):
-            raise BadInputError(f"{name} has {a.shape[0]} rows, expected {n}")
-        out.append(np.ascontiguousarray(np.broadcast_to(a, (n, a.shape[1]))))
-    return out, True
-
-
-def ptr(a: FloatArray) -> int:
-    """Address of the data of a C-contiguous float64 array (passed as a C double pointer)."""
-    return int(a.ctypes.data)
-
-
-def rows_of(a: FloatArray) -> tuple[int, int]:
-    """(address of row 0, bytes between rows) of a C-contiguous (n, ...) float64 array, so a loop
-    over rows passes ``base + i * stride`` without building ctypes objects per row."""
-    return int(a.ctypes.data), int(a.strides[0])

@@ -1,20 +1,33 @@
-"""Raw ctypes layer over librrr: structures and signatures declared once, one status check.
+"""The C structs of librrr as ctypes Structures, and the calls of librrr that are not Model's.
 
-Everything model-related is computed in C; this module only moves arrays across.
+The Structures are plain memory with named fields (no library is loaded through ctypes): the
+compiled binding :mod:`rrr_robot.core._ext` (c_src/pyext/rrr_ext.c), the one way Python reaches
+librrr, reads and writes them through their buffers, and checks every size against librrr's
+(``_ext.SIZES``) when this module is imported. Everything model-related is computed in C.
 """
 
 from __future__ import annotations
 
 import ctypes as ct
-import os
-from collections.abc import Callable
+import importlib.util
 from pathlib import Path
-from typing import Any
 
 from ..errors import RrrError
 from ._package import PACKAGE_DIR
 from ._status import STATUS_NAMES as STATUS_NAMES  # the status table lives in _status
-from ._status import raise_for as raise_for
+from ._status import raise_for as raise_for  # and the one status check
+
+try:
+    from . import _ext as _ext  # the binding, re-exported for the modules of core
+except ImportError:
+    if importlib.util.find_spec(f"{__package__}._ext") is not None:
+        raise  # the module is there but does not load: its own error says why
+    # a source tree on sys.path, or an install that lost it
+    raise ImportError(
+        "rrr_robot.core._ext, the compiled binding of librrr, is missing from "
+        f"{Path(__file__).parent}: install the package with 'pip install .' (it builds the "
+        "module, which needs a C compiler and the Python headers: Debian, Ubuntu: apt-get "
+        "install gcc python3-dev)") from None
 
 NP = 16
 D3 = ct.c_double * 3
@@ -123,176 +136,74 @@ class RawPlantStats(ct.Structure):
     _fields_ = [("steps", ct.c_long), ("rejected", ct.c_long), ("evals", ct.c_long)]
 
 
-class RawParamInfo(ct.Structure):
-    """Mirror of ``rrr_param_info`` (c_src/rrr/include/rrr/rrr_params.h): one row of the C
-    parameter table."""
-
-    _fields_ = [
-        ("name", ct.c_char * 8),
-        ("unit", ct.c_char * 8),
-        ("offset", ct.c_size_t),
-        ("bound", ct.c_int),          # enum rrr_param_bound
-        ("description", ct.c_char * 80),
-    ]
-
-
 #: ``rrr_param_bound`` values: the lower bound of a parameter (every value must be finite).
 PARAM_ANY, PARAM_NONNEG, PARAM_POS = 0, 1, 2
 
 
-_P = ct.POINTER
-_M = _P(RawModel)
-_D = ct.c_void_p  # double arrays travel as addresses (ints): numpy rows without ctypes objects
-
-# name -> argument types; every function returns rrr_status (int)
-_SIGNATURES: dict[str, list[Any]] = {
-    "rrr_model_default": [_M],
-    "rrr_inertial_default": [_P(RawInertial)],
-    "rrr_model_validate": [_M, _P(ct.c_char_p)],
-    "rrr_bps_from_inertia": [_M, _P(RawInertial), _D],
-    "rrr_fk": [_M, _D, _D, _D],
-    "rrr_fk_frames": [_M, _D, _D],
-    "rrr_jacobian": [_M, _D, _D],
-    "rrr_tip_motion": [_M, _D, _D, _D, _D, _D],
-    "rrr_joint_motion": [_M, _D, _D, _D, _D, _D],
-    "rrr_ik_branch": [_M, _D, ct.c_int, ct.c_int, _D],
-    "rrr_ik": [_M, _D, _P(RawIkSet)],
-    "rrr_ik_nearest": [_M, _D, _D, _D, _P(ct.c_int)],
-    "rrr_singularity_classify": [_M, _D, ct.c_double, _P(RawSingularity)],
-    "rrr_workspace_margin": [_M, _D, _D, _P(ct.c_uint)],
-    "rrr_regressor": [_M, _D, _D, _D, _D],
-    "rrr_inverse_dynamics": [_M, _D, _D, _D, _D],
-    "rrr_mass_matrix": [_M, _D, _D],
-    "rrr_coriolis": [_M, _D, _D, _D],
-    "rrr_gravity": [_M, _D, _D],
-    "rrr_forward_dynamics": [_M, _D, _D, _D, _D],
-    "rrr_energy": [_M, _D, _D, _D, _D],
-    "rrr_friction": [_M, _D, _D],
-    "rrr_voltage_from_torque": [_M, _D, _D, _D],
-    "rrr_torque_from_voltage": [_M, _D, _D, _D],
-    "rrr_ctc_gains_default": [_P(RawCtcGains)],
-    "rrr_ctc": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcOutput)],
-    "rrr_plant_integrator_default": [_P(RawPlantIntegrator)],
-    "rrr_plant_integrator_check": [_P(RawPlantIntegrator), _P(ct.c_char_p)],
-    "rrr_plant_state_init": [_D, _D, _P(RawPlantState)],
-    "rrr_plant_stiffness": [_M, _P(ct.c_double), _P(ct.c_char_p)],
-    "rrr_plant_accel": [_M, _P(RawPlantState), _D, _D],
-    "rrr_plant_jacobian": [_M, _P(RawPlantState), _D, _P(RawPlantDerivatives)],
-    "rrr_ctc_jacobian": [_M, _P(RawCtcGains), _D, _D, _D, _D, _D, _P(RawCtcDerivatives)],
-    "rrr_plant_step": [_M, _P(RawPlantIntegrator), _D, ct.c_double, _P(RawPlantState), _D,
-                       _P(RawPlantStats)],
-    "rrr_inverse_dynamics_batch": [_M, ct.c_size_t, _D, _D, _D, _D, ct.c_int,
-                                   _P(ct.c_size_t)],
-    "rrr_regressor_batch": [_M, ct.c_size_t, _D, _D, _D, _D, ct.c_int, _P(ct.c_size_t)],
-    "rrr_fk_batch": [_M, ct.c_size_t, _D, _D, _D, ct.c_int, _P(ct.c_size_t)],
-    "rrr_forward_dynamics_batch": [_M, ct.c_size_t, _D, _D, _D, _D, ct.c_int,
-                                   _P(ct.c_size_t)],
-    "rrr_ik_batch": [_M, ct.c_size_t, _D, ct.c_int, ct.c_int, _D, _P(ct.c_int), ct.c_int,
-                     _P(ct.c_size_t)],
-    "rrr_plant_rollout": [_M, _P(RawPlantIntegrator), ct.c_size_t, _D, ct.c_double,
-                          _P(RawPlantState), _D, _D, _D, _P(ct.c_size_t), _P(RawPlantStats)],
-    "rrr_sim_closed_loop": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
-                            ct.c_size_t, ct.c_double, _D, _D, _D, _P(ct.c_size_t)],
-    "rrr_sim_closed_loop_part": [_M, _P(RawPlantIntegrator), _D, _D, _M, _P(RawCtcGains),
-                                 ct.c_size_t, ct.c_double, _D, _D, _D, ct.c_size_t,
-                                 _P(RawSimCarry), _P(ct.c_size_t)],
-    "rrr_param_set": [_M, ct.c_size_t, ct.c_double],
+#: each Structure and the C struct it mirrors: their sizes are checked against librrr's below
+_MIRRORS: dict[str, type[ct.Structure]] = {
+    "rrr_model": RawModel,
+    "rrr_inertial": RawInertial,
+    "rrr_ik_set": RawIkSet,
+    "rrr_singularity": RawSingularity,
+    "rrr_ctc_gains": RawCtcGains,
+    "rrr_plant_integrator": RawPlantIntegrator,
+    "rrr_plant_state": RawPlantState,
+    "rrr_plant_stats": RawPlantStats,
+    "rrr_sim_carry": RawSimCarry,
 }
+_WRONG = [f"{name} ({_ext.SIZES[name]} bytes, its mirror {ct.sizeof(mirror)})"
+          for name, mirror in _MIRRORS.items() if _ext.SIZES[name] != ct.sizeof(mirror)]
+if _WRONG or _ext.NP != NP:
+    raise RrrError(f"librrr's structs differ from their mirrors in rrr_robot.core._lib: "
+                   f"{', '.join(_WRONG) or f'RRR_NP {_ext.NP}'}; reinstall the package")
 
-# the parameter table's functions that do not return a status: name -> (argtypes, restype)
-_TABLE_SIGNATURES: dict[str, tuple[list[Any], Any]] = {
-    "rrr_param_table": ([_P(ct.c_size_t)], _P(RawParamInfo)),
-    "rrr_param_index": ([ct.c_char_p], ct.c_int),
-    "rrr_param_get": ([_M, ct.c_size_t], ct.c_double),
-    "rrr_param_in_range": ([ct.c_size_t, ct.c_double], ct.c_int),
-    "rrr_sample_time_default": ([], ct.c_double),
-    "rrr_version": ([], ct.c_char_p),
-    "rrr_simd_available": ([ct.c_int], ct.c_int),
-    "rrr_simd_best": ([], ct.c_int),
-}
 
 def library_path() -> Path:
-    """Path of librrr: $RRR_LIBRARY if set, else the copy CMake installed in the package."""
-    env = os.environ.get("RRR_LIBRARY")
-    if env:
-        return Path(env)
+    """Path of the copy of librrr.so the package ships for C programs (Python does not load it:
+    the extension links librrr statically)."""
     return PACKAGE_DIR / "librrr.so"
-
-
-def _load() -> ct.CDLL:
-    path = library_path()
-    if not path.exists():
-        raise RrrError(
-            f"librrr not found at {path}: install the package with 'pip install .' "
-            "or point RRR_LIBRARY at a built librrr.so"
-        )
-    lib = ct.CDLL(str(path))
-    for name, argtypes in _SIGNATURES.items():
-        fn = getattr(lib, name)
-        fn.argtypes = argtypes
-        fn.restype = ct.c_int
-    for name, (argtypes, restype) in _TABLE_SIGNATURES.items():
-        fn = getattr(lib, name)
-        fn.argtypes = argtypes
-        fn.restype = restype
-    return lib
-
-
-LIB = _load()
-FUNCS: dict[str, Callable[..., int]] = {name: getattr(LIB, name) for name in _SIGNATURES}
 
 
 def sample_time_default() -> float:
     """RRR_SAMPLE_TIME_DEFAULT (rrr_control.h), s: the control period of the FMUs' default
     experiment, of the CAN bench and of a robot file without [control] sample_time."""
-    return float(LIB.rrr_sample_time_default())
+    return float(_ext.SAMPLE_TIME_DEFAULT)
 
 
 def library_version() -> str:
     """The version librrr reports (``rrr_version``: its RRR_VERSION_STRING), which equals
     ``rrr_robot.__version__`` for the library the package was built with."""
-    return bytes(LIB.rrr_version()).decode("ascii")
+    return str(_ext.VERSION)
 
 
-def param_table() -> list[RawParamInfo]:
-    """The rows of the C parameter table ``rrr_param_table`` (copies, in table order)."""
-    n = ct.c_size_t()
-    rows = LIB.rrr_param_table(ct.byref(n))
-    return [RawParamInfo.from_buffer_copy(rows[i]) for i in range(n.value)]
+def param_table() -> tuple[tuple[str, str, int, str], ...]:
+    """The rows of the C parameter table ``rrr_param_table``: (name, unit, bound, description),
+    in table order."""
+    return _ext.param_table()
 
 
 def param_index(name: str) -> int:
     """Row of the parameter called ``name`` in the C table (``rrr_param_index``), -1 if none."""
     try:
-        encoded = name.encode("ascii")
-    except UnicodeEncodeError:
+        return int(_ext.param_index(name))
+    except UnicodeEncodeError:  # a lone surrogate: no parameter's name
         return -1
-    return int(LIB.rrr_param_index(encoded))
 
 
 def param_get(raw: RawModel, row: int) -> float:
     """Value of row ``row`` of the table in ``raw`` (``rrr_param_get``)."""
-    return float(LIB.rrr_param_get(ct.byref(raw), row))
+    return float(_ext.param_get(raw, row))
 
 
 def param_set(raw: RawModel, row: int, value: float) -> None:
     """Set row ``row`` of the table in ``raw`` (``rrr_param_set``; BadInputError if value is
     not finite or the row does not exist)."""
-    call("rrr_param_set", ct.byref(raw), row, float(value),
-         context=lambda: f"row {row} = {value!r}")
+    status = _ext.param_set(raw, row, float(value))
+    if status != 0:
+        raise_for("rrr_param_set", status, f"row {row} = {value!r}")
 
 
 def param_in_range(row: int, value: float) -> bool:
     """Whether ``value`` satisfies row ``row``'s range (``rrr_param_in_range``)."""
-    return bool(LIB.rrr_param_in_range(row, float(value)))
-
-
-def call(name: str, *args: Any, context: str | Callable[[], str] = "") -> None:
-    """Call a librrr function and raise the typed error matching a non-OK status.
-
-    ``context`` (a string, or a callable building it only when the call fails) is appended to
-    the message.
-    """
-    status = FUNCS[name](*args)
-    if status != 0:
-        raise_for(name, status, context)
+    return bool(_ext.param_in_range(row, float(value)))

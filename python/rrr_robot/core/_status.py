@@ -1,7 +1,7 @@
 """The statuses of librrr (``rrr_status``, c_src/rrr/include/rrr/rrr_status.h) and the package's
-exception for each: one table for both bindings. The ctypes binding (``_lib``) raises through
-:func:`raise_for`; the compiled one (``_ext``) reads these tables when it is imported and builds
-the same exceptions with the same messages.
+exception for each: the compiled binding (``_ext``) reads these tables when it is imported and
+builds its exceptions from them; the Python callers of a status it returns (``_lib``, the plant's
+rollout, the closed loop in parts) raise through :func:`raise_for`, with the same messages.
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import NoReturn
 
 from ..errors import BadInputError
-from . import _lib
+from ._lib import _ext
 
 __all__ = ["PATHS_HERE", "SIMD_PATHS", "refuse", "simd_available", "simd_best"]
 
@@ -27,11 +27,11 @@ def simd_available() -> tuple[str, ...]:
 
 def simd_best() -> str:
     """The path "auto" means here: "avx512", "avx2" or "scalar"."""
-    return _NAMES[int(_lib.LIB.rrr_simd_best())]
+    return _NAMES[int(_ext.simd_best())]
 
 
 #: The paths this librrr and CPU run, by name (what ``simd=`` takes), computed once.
-PATHS_HERE = {name: v for name, v in SIMD_PATHS.items() if _lib.LIB.rrr_simd_available(v)}
+PATHS_HERE = {name: v for name, v in SIMD_PATHS.items() if _ext.simd_available(v)}
 
 
 def refuse(simd: object) -> NoReturn:

@@ -4,7 +4,6 @@ checked once and packed as the C struct ``rrr_ctc_gains`` that :meth:`Model.ctc`
 
 from __future__ import annotations
 
-import ctypes as ct
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,6 +11,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import BadInputError
 from . import _lib
+from ._lib import _ext
 from .robot_file import ControlGains
 
 Vec3 = tuple[float, float, float]
@@ -58,7 +58,7 @@ class CtcGains:
     def default(cls) -> CtcGains:
         """The default robot's gains (``rrr_ctc_gains_default``, feedforward on)."""
         raw = _lib.RawCtcGains()
-        _lib.call("rrr_ctc_gains_default", ct.byref(raw))
+        _ext.ctc_gains_default(raw)
         return cls(tuple(raw.kp), tuple(raw.kd), bool(raw.feedforward))
 
     @classmethod

@@ -5,7 +5,6 @@ c_src/rrr/include/rrr/rrr_plant.h), checked once by librrr and packed as the C s
 
 from __future__ import annotations
 
-import ctypes as ct
 import numbers
 from dataclasses import dataclass, field
 
@@ -13,11 +12,12 @@ import numpy as np
 
 from ..errors import BadInputError
 from . import _lib
+from ._lib import _ext
 
 
 def _default() -> _lib.RawPlantIntegrator:
     raw = _lib.RawPlantIntegrator()
-    _lib.call("rrr_plant_integrator_default", ct.byref(raw))
+    _ext.plant_integrator_default(raw)
     return raw
 
 
@@ -61,9 +61,9 @@ class PlantIntegrator:
             raise BadInputError(f"max_steps must be >= 1, got {steps}")
         object.__setattr__(self, "max_steps", int(steps))
         raw.max_steps = self.max_steps
-        bad = ct.c_char_p()
-        if _lib.FUNCS["rrr_plant_integrator_check"](ct.byref(raw), ct.byref(bad)) != 0:
-            name = (bad.value or b"?").decode()
+        status, name = _ext.plant_integrator_check(raw)
+        if status != 0:
+            name = name or "?"
             raise BadInputError(f"plant integrator: {name} out of range, got "
                                 f"{getattr(self, name, '?')!r} (rtol and atol in [1e-14, 1e-2], "
                                 "h_int > 0 and finite, max_steps >= 1)")

@@ -2,48 +2,29 @@
 
 No model mathematics is done here: each method hands its arguments to the compiled binding
 ``_ext.Kernels`` (c_src/pyext/rrr_ext.c), which converts them, loops over the rows in C and
-raises the package's exceptions. Where the extension module was not built (no Python headers on
-the build machine), ``_ctypes_kernels.Kernels`` does the same through ctypes (same results,
-slower per call); :data:`BINDING` says which one is in use.
+raises the package's exceptions.
 """
 
 from __future__ import annotations
 
 import copy
-import ctypes as ct
-import importlib.util
-import logging
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import BadInputError, ModelError
-from . import _ctypes_kernels, _lib
-from ._arrays import FloatArray, ptr
+from . import _lib
+from ._arrays import FloatArray
+from ._lib import _ext
 from ._package import DATA_DIR
 from .control import CtcGains
 from .robot_file import parse_robot, read_robot_data, write_toml
 
-# ``from . import _ext``: the compiled module is found where Python finds it, and lint-imports
-# (which sees no Python source for it) counts the import as one of rrr_robot.core
-if TYPE_CHECKING:
-    from . import _ext
-
-    Kernels = _ext.Kernels
-    BINDING: str
-elif importlib.util.find_spec(f"{__package__}._ext") is not None:
-    from . import _ext  # a module that is there but does not load raises here
-
-    Kernels, BINDING = _ext.Kernels, "extension"
-else:  # built without the Python headers: no _ext
-    Kernels, BINDING = _ctypes_kernels.Kernels, "ctypes"
-    logging.getLogger(__name__).warning(
-        "rrr_robot.core._ext is not installed (built without the Python headers): Model "
-        "uses ctypes, about 50x slower per call; install python3-dev and reinstall")
+Kernels = _ext.Kernels
 
 DH_KEYS = ("d1", "a2", "a3", "d2", "d3")
 SHOULDER = {"front": 0, "back": 1}
@@ -89,7 +70,7 @@ def bps_from_inertia(
     raw = _lib.RawModel()
     for k in DH_KEYS:
         if k in dh:
-            setattr(raw, k, _ctypes_kernels.finite_scalar(dh[k], f"dh[{k!r}]"))
+            setattr(raw, k, finite_scalar(dh[k], f"dh[{k!r}]"))
     inertial = _lib.RawInertial()
     for i in range(3):
         link = inertial.link[i]
@@ -100,7 +81,7 @@ def bps_from_inertia(
                 link.inertia_com[r][c] = float(i_arr[i, r, c])
         inertial.rotor_inertia[i] = float(j_arr[i])
     p = np.zeros(_lib.NP)
-    _lib.call("rrr_bps_from_inertia", ct.byref(raw), ct.byref(inertial), ptr(p))
+    _ext.bps_from_inertia(raw, inertial, p)
     return p
 
 
@@ -122,7 +103,7 @@ class Model:
     def default(cls) -> Model:
         """The default robot (C defaults; same numbers as data/default_robot.toml)."""
         raw = _lib.RawModel()
-        _lib.call("rrr_model_default", ct.byref(raw))
+        _ext.model_default(raw)
         return cls(raw)
 
     @classmethod
@@ -153,7 +134,7 @@ class Model:
         raw = copy.deepcopy(self._raw)
         for key, value in changes.items():
             if key in (*DH_KEYS, "g", "u_max"):
-                setattr(raw, key, _ctypes_kernels.finite_scalar(value, key))
+                setattr(raw, key, finite_scalar(value, key))
             elif key in ("p", "kt", "b", "f", "w"):
                 _set_array(raw, key, value)
             else:
@@ -162,10 +143,9 @@ class Model:
 
     def validate(self) -> None:
         """Raise ModelError naming the offending field if the parameters are unusable."""
-        field = ct.c_char_p()
-        status = _lib.LIB.rrr_model_validate(ct.byref(self._raw), ct.byref(field))
+        status, field = _ext.model_validate(self._raw)
         if status != 0:
-            name = (field.value or b"?").decode()
+            name = field or "?"
             raise ModelError(
                 f"invalid model parameter {name} ({_lib.STATUS_NAMES[status]})",
                 "rrr_model_validate",
@@ -414,6 +394,17 @@ class Model:
 
     def __repr__(self) -> str:
         return f"Model(dh={self.dh}, g={self.g}, kt={self.kt.tolist()})"
+
+
+def finite_scalar(value: object, name: str) -> float:
+    """A finite float from a number; BadInputError naming ``name`` otherwise."""
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise BadInputError(f"{name} must be a finite number, got {value!r}") from exc
+    if not np.isfinite(v):
+        raise BadInputError(f"{name} must be a finite number, got {v}")
+    return v
 
 
 def finite_array(value: ArrayLike, name: str, shape: tuple[int, ...]) -> FloatArray:

@@ -59,14 +59,12 @@ class ParamInfo:
 
 def _load() -> tuple[ParamInfo, ...]:
     rows = []
-    for i, raw in enumerate(_lib.param_table()):
-        name = raw.name.decode()
+    for i, (name, unit, bound, description) in enumerate(_lib.param_table()):
         m = _NAME.match(name)
         if m is None:  # a C table row this module cannot split: a build mismatch
             raise RrrError(f"librrr's parameter table has an unexpected name {name!r}")
         index = tuple(int(g) for g in m.groups()[1:] if g is not None)
-        rows.append(ParamInfo(i, name, raw.unit.decode(), int(raw.bound),
-                              raw.description.decode(), m.group(1), index))
+        rows.append(ParamInfo(i, name, unit, bound, description, m.group(1), index))
     return tuple(rows)
 
 

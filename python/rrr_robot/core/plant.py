@@ -14,7 +14,8 @@ from numpy.typing import ArrayLike
 
 from ..errors import BadInputError
 from . import _lib
-from ._arrays import FloatArray, as_rows, ptr
+from ._arrays import FloatArray, as_rows
+from ._lib import _ext
 from .integrator import PlantIntegrator
 from .model import Model
 
@@ -87,8 +88,7 @@ class Plant:
         self._packed = integrator.packed
         self._state = _lib.RawPlantState()
         q, qd = _vector(q0, "q0"), _vector(qd0, "qd0")
-        _lib.call("rrr_plant_state_init", ptr(q), ptr(qd), ct.byref(self._state),
-                  context=lambda: f"q0 = {q.tolist()}, qd0 = {qd.tolist()}")
+        _ext.plant_state_init(q, qd, self._state)
         self._stats = _lib.RawPlantStats()
         self._qdd = self._k.plant_accel(self._state, _ZERO)
         self._t = float(t0)
@@ -118,18 +118,15 @@ class Plant:
         n = rows.shape[0]
         q, qd, qdd = (np.empty((n, 3)) for _ in range(3))
         times = np.cumsum(np.concatenate(([self._t], np.full(n, h))))[1:]  # as t += h does
-        integ = _lib.RawPlantIntegrator.from_buffer_copy(self._packed)
-        model = ct.byref(self._model.raw)
-        fn = _lib.FUNCS["rrr_plant_rollout"]
-        done, part, total = ct.c_size_t(0), _lib.RawPlantStats(), [0, 0, 0]
+        part, total = _lib.RawPlantStats(), [0, 0, 0]
         state = _lib.RawPlantState.from_buffer_copy(self._state)  # self's until a part is done
         k = 0
         while k < n:
-            m = min(ROLLOUT_PART, n - k)
-            status = fn(model, ct.byref(integ), m, ptr(rows[k:]), h, ct.byref(state),
-                        ptr(q[k:]), ptr(qd[k:]), ptr(qdd[k:]), ct.byref(done), ct.byref(part))
+            end = k + min(ROLLOUT_PART, n - k)
+            status, done = self._k.plant_rollout(self._packed, rows[k:end], h, state, q[k:end],
+                                                 qd[k:end], qdd[k:end], part)
             total = [total[0] + part.steps, total[1] + part.rejected, total[2] + part.evals]
-            k += int(done.value)
+            k += done
             self._commit(state, qdd, times, k, total)
             if status != 0:
                 _lib.raise_for("rrr_plant_rollout", status,

@@ -21,7 +21,6 @@ rrr_robot.writing); [identification] (written by ``rrr identify``).
 
 from __future__ import annotations
 
-import ctypes as ct
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,6 +29,7 @@ from typing import Any
 
 from ..errors import RobotFileError, RrrError
 from . import _lib
+from ._lib import _ext
 from .checked import Document, Field, Flag, Matrix, Number, Text, Vector, load_toml, show
 from .param_names import PARAMS, ParamInfo, group_shape, param
 from .stiffness import Stiffness, stiffness
@@ -307,7 +307,7 @@ def _base_parameters_from_links(doc: Document, params: dict[str, float],
             inertial.link[i].inertia_com[r][r] = link.inertia_com[r]
         inertial.rotor_inertia[i] = rotor[i]
     try:
-        _lib.call("rrr_bps_from_inertia", ct.byref(raw), ct.byref(inertial), raw.p)
+        _ext.bps_from_inertia(raw, inertial, raw.p)
     except RrrError as exc:
         doc.fail("link1", "", f"the link tables ([link1..3] mass, com, inertia_com) and [motors] "
                  f"rotor_inertia give no finite base parameters ({exc})")
@@ -316,16 +316,15 @@ def _base_parameters_from_links(doc: Document, params: dict[str, float],
 
 def _validate(doc: Document, data: RobotData) -> None:
     """rrr_model_validate on the whole model; the error names the table and key."""
-    field = ct.c_char_p()
     raw = data.raw_model()
-    status = _lib.LIB.rrr_model_validate(ct.byref(raw), ct.byref(field))
+    status, field = _ext.model_validate(raw)
     if status == 0:
         try:
             stiffness(raw, data.params)
         except Stiffness as exc:
             doc.fail("friction", exc.field.split("[")[0], f"[friction] {exc}")
         return
-    name = (field.value or b"?").decode()
+    name = field or "?"
     status_name = _lib.STATUS_NAMES[status] if 0 <= status < len(_lib.STATUS_NAMES) else "?"
     if name == "p" and data.links is None:
         doc.fail("base_parameters", "p", "[base_parameters] p gives an inertia matrix D(q) that "

@@ -7,11 +7,11 @@ parameter set is refused at once with the numbers instead of running for hours."
 
 from __future__ import annotations
 
-import ctypes as ct
 from collections.abc import Mapping
 
 from ..errors import ModelError
 from . import _lib
+from ._lib import _ext
 
 __all__ = ["STIFFNESS_MAX", "Stiffness", "stiffness"]
 
@@ -34,15 +34,13 @@ def stiffness(raw: _lib.RawModel, params: Mapping[str, float] | None = None) -> 
     """The estimate in 1/s; :class:`Stiffness` (a ModelError) when it exceeds
     ``STIFFNESS_MAX``, naming the parameters (``params``: their values by name for the message,
     else read from ``raw``)."""
-    value = ct.c_double(0.0)
-    field = ct.c_char_p()
-    status = _lib.FUNCS["rrr_plant_stiffness"](ct.byref(raw), ct.byref(value), ct.byref(field))
+    status, value, field = _ext.plant_stiffness(raw)
     if status == _TOO_STIFF:
-        name = (field.value or b"?").decode()
-        raise Stiffness(_message(raw, name, float(value.value), params), name, float(value.value))
+        name = field or "?"
+        raise Stiffness(_message(raw, name, value, params), name, value)
     if status != 0:
         _lib.raise_for("rrr_plant_stiffness", status)
-    return float(value.value)
+    return float(value)
 
 
 def _message(raw: _lib.RawModel, name: str, value: float,

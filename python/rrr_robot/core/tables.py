@@ -1,9 +1,10 @@
 """Tables of numbers written fast and exactly, atomically (:mod:`rrr_robot.core.outputs`).
 
 - CSV: one header row of column names (optionally after ``# `` comment lines), then one row per
-  sample; every value is formatted by numpy-fed ``%``-formatting with ``%.17g`` (17 significant
-  digits: every float64 reads back bit for bit, ``nan`` and ``inf`` included), a block of rows
-  per format operation, so a table costs about half of what ``csv.writer`` took.
+  sample; every value is formatted by Python's ``%``-formatting with ``%.17g`` (17 significant
+  digits: every float64 reads back bit for bit, ``nan`` and ``inf`` included; the decimal point
+  is ``.`` whatever the locale), a block of rows per format operation, so a table costs about
+  half of what ``csv.writer`` took.
 - Parquet (``pip install 'rrr_robot[parquet]'``, pyarrow): the same columns, float64, a comment
   in the schema metadata (key ``comment``); for tools that read columnar files (pandas, polars,
   DuckDB, Arrow) without parsing text.
@@ -26,11 +27,6 @@ from numpy.typing import ArrayLike
 
 from ..errors import BadInputError
 from .outputs import atomic_open, atomic_path
-
-try:  # the C formatting (c_src/pyext/rrr_csv.c): the same bytes as format_rows' Python path
-    from . import _csvfmt
-except ImportError:  # not built (no Python headers)
-    _csvfmt = None  # type: ignore[assignment]
 
 __all__ = [
     "CSV_FLOAT_FORMAT",
@@ -83,18 +79,13 @@ def _pyarrow() -> tuple[Any, Any]:
     return pa, pq
 
 
-def format_rows(data: np.ndarray, compiled: bool = True) -> str:
+def format_rows(data: np.ndarray) -> str:
     """The rows of a 2-D float64 array as CSV text: every value as ``CSV_FLOAT_FORMAT`` (``%.17g``)
-    (NaN as ``nan``), ``,`` between values, a newline after each row. ``compiled``: the C
-    formatting (``rrr_robot.core._csvfmt``, about 6x faster) where it is built and the C
-    locale's decimal point is ``.``; the Python formatting otherwise, the same text."""
-    block = np.ascontiguousarray(data, dtype=np.float64)
+    (NaN as ``nan`` whatever its sign, infinities as ``inf`` and ``-inf``), ``,`` between values,
+    a newline after each row."""
+    block = np.asarray(data, dtype=np.float64)
     if block.ndim != 2:
         raise ValueError(f"format_rows: a 2-D array expected, got shape {block.shape}")
-    if compiled and _csvfmt is not None:
-        text = _csvfmt.format_rows(block)
-        if text is not None:
-            return str(text)
     if block.size == 0:
         return ""
     row = ",".join([CSV_FLOAT_FORMAT] * block.shape[1]) + "\n"

@@ -11,16 +11,15 @@ controller's ``kp``, ``kd``, ``feedforward``). An unknown name is refused, as an
 
 from __future__ import annotations
 
-import ctypes as ct
 import time
-from collections.abc import Mapping
-from typing import Any
+from collections.abc import Callable, Mapping
 
 import numpy as np
 
 from ..core import _lib
 from ..core import fmu_vars as fv
-from ..core._arrays import FloatArray, ptr
+from ..core._arrays import FloatArray
+from ..core._lib import _ext
 from ..core.control import CtcGains
 from ..core.integrator import PlantIntegrator
 from ..core.param_names import param_index, set_values
@@ -51,7 +50,7 @@ def _split(values: Mapping[str, float | bool], extra: set[str], who: str,
 
 def _model(changes: Mapping[str, float]) -> _lib.RawModel:
     raw = _lib.RawModel()
-    _lib.call("rrr_model_default", ct.byref(raw))
+    _ext.model_default(raw)
     return set_values(raw, changes)
 
 
@@ -92,20 +91,19 @@ _FIRST_PART = 256  # samples of the first call (its setup validates both models:
 _MAX_PART = 1 << 20
 
 
-def _run_in_parts(n: int, options: CosimOptions, args: tuple[Any, ...], t: FloatArray) -> None:
+def _run_in_parts(n: int, options: CosimOptions,
+                  part: Callable[[int, _lib.RawSimCarry], tuple[int, int]], t: FloatArray) -> None:
     """``rrr_sim_closed_loop_part`` until the n samples are written, each call about
     PART_SECONDS long: a signal handler (KeyboardInterrupt, the CLI's SIGTERM) runs between two
     calls, so a run ends within about that time; no allocation in C, the state between the calls
     is the caller's :class:`_lib.RawSimCarry`."""
     carry = _lib.RawSimCarry()
-    done = ct.c_size_t(0)
     count = _FIRST_PART
-    part = _lib.FUNCS["rrr_sim_closed_loop_part"]
     while carry.next < n:
         begin = time.perf_counter()
-        status = part(*args, count, ct.byref(carry), ct.byref(done))
+        status, k = part(count, carry)
         if status != 0:
-            k = int(done.value)  # 0 also when the setup (models, settings, initial state) failed
+            # k: 0 also when the setup (models, settings, initial state) failed
             where = (f"sample {k} (t = {t[min(k, n - 1)]:.6f} s)"
                      + (" or its setup" if k == 0 else ""))
             _lib.raise_for("rrr_sim_closed_loop", status, f"at {where}")
@@ -143,9 +141,11 @@ def simulate(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: Floa
     ctrl_rec = np.empty((n, 9))
     stiffness(plant)  # a plant too stiff to integrate: refused with the numbers, at once
     start, start_cpu = time.perf_counter(), time.thread_time()
-    _run_in_parts(n, options, (
-        ct.byref(plant), ct.byref(integ), ptr(q0), ptr(qd0), ct.byref(ctrl), ct.byref(gains),
-        n, float(options.step), ptr(ref), ptr(plant_rec), ptr(ctrl_rec)), t)
+    def part(count: int, carry: _lib.RawSimCarry) -> tuple[int, int]:
+        return _ext.sim_closed_loop_part(plant, integ, q0, qd0, ctrl, gains, float(options.step),
+                                         ref, plant_rec, ctrl_rec, count, carry)
+
+    _run_in_parts(n, options, part, t)
     wall, cpu = time.perf_counter() - start, time.thread_time() - start_cpu
     return CosimResult(
         t=t, q_ref=q_ref, qd_ref=qd_ref, x_ref=x_ref,
