@@ -23,8 +23,7 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from _quick import add_quick, apply_quick
-from _timing import Series, interleaved, mmm
+from _timing import Series, add_quick, apply_quick, interleaved, mmm
 
 
 def minor_faults() -> int:

@@ -26,8 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 import rrr_robot as rr
-from _quick import add_quick, apply_quick
-from _timing import CLOCKS_S
+from _timing import CLOCKS_S, add_quick, apply_quick
 from rrr_robot.sim.cosim import (
     CTRL_IN,
     CTRL_OUT,

@@ -16,7 +16,7 @@ import argparse
 import time
 
 import numpy as np
-from _quick import add_quick, apply_quick
+from _timing import add_quick, apply_quick
 from rrr_robot.sim import fmu_slave
 from rrr_robot.sim.cosim import CosimOptions, CosimResult, run_cosim
 

@@ -23,8 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from _quick import add_quick, apply_quick
-from _timing import Series, mmm, timed
+from _timing import Series, add_quick, apply_quick, mmm, timed
 from rrr_robot.core.model import Model
 from rrr_robot.identify import _threads
 from rrr_robot.identify import experiments as ex

@@ -42,8 +42,7 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
-from _quick import add_quick, apply_quick
-from _timing import logger
+from _timing import add_quick, apply_quick, logger
 
 ROOT = Path(__file__).resolve().parent.parent
 DRIVER = ROOT / "bench" / "bench_plant_step.c"

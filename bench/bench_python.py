@@ -50,8 +50,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from _quick import add_quick, apply_quick
-from _timing import CLOCKS, Series, interleaved, logger, mmm
+from _timing import CLOCKS, Series, add_quick, apply_quick, interleaved, logger, mmm
 
 ROOT = Path(__file__).resolve().parent.parent
 ALPHA = (np.pi / 2, 0.0, 0.0)

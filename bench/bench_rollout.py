@@ -34,8 +34,7 @@ from pathlib import Path
 
 import numpy as np
 import rrr_robot as rr
-from _quick import add_quick, apply_quick
-from _timing import interleaved, logger
+from _timing import add_quick, apply_quick, interleaved, logger
 
 DEFAULT_HOLD = 5e-3
 HOLD = DEFAULT_HOLD  # s: --hold-ms / 1e3 (set by main)

@@ -14,8 +14,7 @@ import tempfile
 import zipfile
 from pathlib import Path
 
-from _quick import add_quick, apply_quick
-from _timing import timed
+from _timing import add_quick, apply_quick, timed
 from rrr_robot.ssp.export import SspJob, export_ssp
 from rrr_robot.ssp.run import SspRun, run_ssp
 from rrr_robot.writing.job import WritingJob, run_writing

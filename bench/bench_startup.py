@@ -17,8 +17,7 @@ import shutil
 import subprocess
 import sys
 
-from _quick import add_quick, apply_quick
-from _timing import Series, timed
+from _timing import Series, add_quick, apply_quick, timed
 
 HEAVY = ("numpy", "scipy", "matplotlib", "fmpy", "cantools", "can", "pandas", "pyarrow")
 

@@ -18,7 +18,7 @@ import argparse
 import math
 import time
 
-from _quick import add_quick, apply_quick
+from _timing import add_quick, apply_quick
 from rrr_robot.core.model import Model
 from rrr_robot.core.plant import Plant
 from rrr_robot.core.stiffness import STIFFNESS_MAX, Stiffness, stiffness

@@ -20,8 +20,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from _quick import add_quick, apply_quick
-from _timing import Series, timed
+from _timing import Series, add_quick, apply_quick, timed
 
 
 def _run(cmd: list[str], env: dict[str, str]) -> float:
