@@ -7,9 +7,9 @@ Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk``
 ``Model.forward_dynamics`` against ``accel``; a batch of 1e5 states of ``Model.inverse_dynamics``
 against the Robotics Toolbox's batch ``rne``, written into a reused array (``out=``) and into a
 new one, with the minor page faults per call of ours (the first write of fresh memory), and
-against librrr's ``rrr_inverse_dynamics`` in a
-plain C loop (bench/batch_floor.c, built with the system C compiler against the package's librrr.so:
-the floor of the scalar batch); the batch's vector kernels (``simd="auto"``: AVX-512 or AVX2 where
+against librrr's ``rrr_inverse_dynamics`` in a plain C loop (``loops_inverse_dynamics`` of
+bench/core_loops.c, built with the system C compiler against the package's librrr.so: the floor
+of the scalar batch); the batch's vector kernels (``simd="auto"``: AVX-512 or AVX2 where
 the CPU has them) against its scalar path, and so for the regressor, FK, forward dynamics and
 IK (``Model.ik(x, "front", "up")`` of the FK of the batch's angles); and one state of
 ``Model.inverse_dynamics`` against MuJoCo's ``mj_inverse`` and Drake's ``CalcInverseDynamics``
@@ -135,21 +135,22 @@ def fmt_ratio(r: float) -> str:
 
 
 def batch_floor(workdir: Path, package: Path) -> Any:
-    """bench/batch_floor.c built against the package's librrr.so (None without a C compiler)."""
+    """``loops_inverse_dynamics`` of bench/core_loops.c (run_bench.py's C loops), built against
+    the package's librrr.so, as a function of one batch (None without a C compiler)."""
     cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         log("no C compiler: the librrr-in-C row is left out")
         return None
-    lib = workdir / "libbatchfloor.so"
+    lib = workdir / "libcoreloops.so"
     include = ROOT / "c_src" / "rrr" / "include"
     subprocess.run([cc, "-std=c11", "-O2", "-shared", "-fPIC", f"-I{include}",
-                    str(ROOT / "bench" / "batch_floor.c"), f"-L{package}", "-l:librrr.so",
+                    str(ROOT / "bench" / "core_loops.c"), f"-L{package}", "-l:librrr.so",
                     f"-Wl,-rpath,{package}", "-o", str(lib)], check=True)
     floor = ct.CDLL(str(lib))
-    fn = floor.batch_floor_inverse_dynamics
-    fn.argtypes = [ct.c_void_p] * 5 + [ct.c_long]
+    fn = floor.loops_inverse_dynamics
+    fn.argtypes = [ct.c_void_p] * 5 + [ct.c_long, ct.c_long]
     fn.restype = ct.c_long
-    return fn
+    return lambda *args: fn(*args, 1)  # one pass over the batch
 
 
 def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str, str]]:
@@ -289,7 +290,7 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
         addr = [a.ctypes.data for a in (bq, bqd, bqdd, out)]
         m_addr = ct.addressof(model.raw)
         if floor(m_addr, *addr, nb) != -1:
-            sys.exit("bench_python: batch_floor_inverse_dynamics failed")
+            sys.exit("bench_python: loops_inverse_dynamics failed")
 
         def c_floor(k: int, arrays: tuple[Any, ...] = (bq, bqd, bqdd, out)) -> Any:
             # the arrays ride along: the C loop writes into `out`, which must outlive build()
@@ -299,7 +300,7 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
             f"tau = R p, batch of {nb:,} states (per state): the scalar C floor",
             "Model.inverse_dynamics (simd='scalar')",
             lambda k: model.inverse_dynamics(bq, bqd, bqdd, simd="scalar"),
-            "librrr in a C loop (bench/batch_floor.c)", c_floor, 1,
+            "librrr in a C loop (bench/core_loops.c)", c_floor, 1,
             per=nb, agreement=f"bit-identical: {out.tobytes() == batch_scalar.tobytes()}"))
     pairs += engine_pairs(robot_file, rows, tau, per_call, workdir)
     info = {
