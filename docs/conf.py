@@ -109,7 +109,7 @@ def _doxygen(app: Any) -> None:
     out = Path(app.doctreedir) / "doxygen"
     shutil.rmtree(out, ignore_errors=True)
     out.mkdir(parents=True)
-    config = (DOCS / "Doxyfile").read_text(encoding="utf-8") + f"\nOUTPUT_DIRECTORY = {out}\n"
+    config = (DOCS / "Doxyfile").read_text(encoding="utf-8") + f"\nOUTPUT_DIRECTORY = \"{out}\"\n"
     run = subprocess.run([doxygen, "-"], input=config, cwd=ROOT, capture_output=True, text=True)
     if run.returncode != 0:
         raise RuntimeError(f"doxygen failed ({run.returncode}): {run.stderr.strip()}")
