@@ -7,13 +7,16 @@ RK4 of ten substeps (the former default), interleaved in one process. A C driver
 loads the plant FMU binary, makes one instance per configuration, snapshots each after
 initialization, and then runs blocks: every block runs every configuration once over the same
 input sequence from its snapshot (the order reversed every other block), timing each fmi2DoStep
-call. The table gives the min / median / max over blocks of the mean cost per step, and of the
-ratio default / other within each block. Configurations: ``default`` (adaptive Dormand-Prince
+call, and checks that every block ends in the same state (determinism). The table gives the
+min / median / max over blocks of the mean cost per step, and of the ratio default / other
+within each block. Configurations: ``default`` (adaptive Dormand-Prince
 5(4), rtol and atol at their defaults) and ``fixed`` (adaptive = false, h_int = 1e-4 s) of the
 FMU under test, and with ``--baseline-ref REF`` (or ``--baseline-fmu FILE``) the plant FMU built
 from another revision, at its defaults (``today``). Inputs: ``open loop`` (u = [0.5, 1, 0.3] V
 from q0 = (0.1, 0.4, 1.0), 2 s) and ``writing`` (the voltages of the default writing task's ctc
-scenario, 5.91 s, recorded from a co-simulation with the FMU under test and replayed open loop).
+scenario, 5.91 s, recorded from a co-simulation with the FMU under test and replayed open loop:
+the configurations' end states drift apart, as open-loop replays do; the accuracy is checked in
+tests/c/test_plant.c and tests/python/test_plant_integrator.py).
 
 ``--part rollout``: ``rr.Plant.rollout`` (one C call along an input table) against a Python loop
 of ``rr.Plant.step`` and MuJoCo's ``rollout`` (RK4) at matched accuracy, interleaved. The robot:
