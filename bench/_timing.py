@@ -1,5 +1,7 @@
 """Timing and statistics shared by the bench scripts: the clocks, interleaved blocks, series of
-per-repeat values with their min / median / max, and the progress log on stderr.
+per-repeat values with their min / median / max, the progress log on stderr, and ``--quick``
+(the same script on small inputs, so that the test command runs each one end to end: it prints
+its tables; nothing about the figures is asserted).
 
 The machines these scripts run on are shared and noisy, so a figure is never one timing: each
 is a :class:`Series` over repeats, and a ratio is taken within a repeat of blocks that ran
@@ -8,13 +10,14 @@ alternately (:func:`interleaved`), so that a change of load affects both sides a
 
 from __future__ import annotations
 
+import argparse
 import gc
 import statistics
 import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import Any, TypeVar
 
 T = TypeVar("T")
 
@@ -99,3 +102,20 @@ def timed(fn: Callable[[], T], clock: Callable[[], float] = time.perf_counter
     start = clock()
     result = fn()
     return result, clock() - start
+
+
+def add_quick(parser: argparse.ArgumentParser) -> None:
+    """The ``--quick`` flag (its values: :func:`apply_quick`)."""
+    parser.add_argument("--quick", action="store_true",
+                        help="a smoke run on small inputs (what the test command runs): the "
+                        "same code and tables, numbers not worth reading")
+
+
+def apply_quick(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                values: dict[str, Any]) -> argparse.Namespace:
+    """With ``--quick``: ``values`` for every option left at its default."""
+    if args.quick:
+        for name, value in values.items():
+            if getattr(args, name) == parser.get_default(name):
+                setattr(args, name, value)
+    return args

@@ -26,8 +26,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from _quick import add_quick, apply_quick
-from _timing import mmm
+from _timing import add_quick, apply_quick, mmm
 from rrr_robot.hil.dbc.bench import RealTime, run_c_bench
 from rrr_robot.hil.results import extend_reference
 from rrr_robot.writing.job import WritingJob, prepare

@@ -7,11 +7,11 @@ Rows: one state of ``Model.inverse_dynamics`` against ``pin.rnea``; ``Model.fk``
 ``Model.forward_dynamics`` against ``accel``; a batch of 1e5 states of ``Model.inverse_dynamics``
 against the Robotics Toolbox's batch ``rne``, written into a reused array (``out=``) and into a
 new one, with the minor page faults per call of ours (the first write of fresh memory), and
-against librrr's ``rrr_inverse_dynamics`` in a
-plain C loop (bench/batch_floor.c, built with the system C compiler against the package's librrr.so:
-the floor of the scalar batch); the batch's vector kernels (``simd="auto"``: AVX-512 or AVX2 where
+against librrr's ``rrr_inverse_dynamics`` in a plain C loop (``loops_inverse_dynamics`` of
+bench/core_loops.c, built with the system C compiler against the package's librrr.so: the floor
+of the scalar batch); the batch's vector kernels (``simd="auto"``: AVX-512 or AVX2 where
 the CPU has them) against its scalar path, and so for the regressor, FK, forward dynamics and
-IK (``Model.ik(x, "front", "up")`` of the FK of the batch's angles); one state of
+IK (``Model.ik(x, "front", "up")`` of the FK of the batch's angles); and one state of
 ``Model.inverse_dynamics`` against MuJoCo's ``mj_inverse`` and Drake's ``CalcInverseDynamics``
 (both on the robot read from our URDF, with the rotor inertias as MuJoCo's armature and added as
 J_m qdd to Drake's result, gravity ours).
@@ -23,10 +23,20 @@ the per-repeat ratio reference / ours. The agreement of every pair is checked fi
 timed by the CPU time of the thread (``--clock wall``: the wall clock), so the time this process
 waits for a core on a loaded machine is not counted.
 
+``--part memory``: what the result's memory costs a batch call: ``Model.inverse_dynamics`` of
+``--batch`` states into a new array against into a reused one (``out=``), each call after
+another program's allocations and frees of large arrays (here twenty numpy arrays of the batch's
+size), after which glibc has given the memory back to the operating system, so that a new result
+array is fresh memory: its first write takes a page fault per 4 KiB page. Interleaved (new,
+out=, out=, new, ...), each call timed alone by the thread's CPU time (the kernel's page-fault
+handling included) with its minor page faults (getrusage): min / median / max of ns per state
+and the faults per call, and the cost per fault from the medians. The rows above are ``--part
+api`` (the default runs both).
+
 This is a measurement, not a test: nothing fails when a target is missed.
 
-Usage: python bench/bench_python.py [--repeats N] [--states N] [--batch N] [--seed N]
-                                    [--clock cpu|wall] [--json FILE]
+Usage: python bench/bench_python.py [--part api|memory] [--repeats N] [--states N] [--batch N]
+                                    [--seed N] [--clock cpu|wall] [--json FILE] [--quick]
 """
 
 from __future__ import annotations
@@ -49,8 +59,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from _quick import add_quick, apply_quick
-from _timing import CLOCKS, Series, interleaved, logger, mmm
+from _timing import CLOCKS, Series, add_quick, apply_quick, interleaved, logger, mmm
 
 ROOT = Path(__file__).resolve().parent.parent
 ALPHA = (np.pi / 2, 0.0, 0.0)
@@ -126,21 +135,22 @@ def fmt_ratio(r: float) -> str:
 
 
 def batch_floor(workdir: Path, package: Path) -> Any:
-    """bench/batch_floor.c built against the package's librrr.so (None without a C compiler)."""
+    """``loops_inverse_dynamics`` of bench/core_loops.c (run_bench.py's C loops), built against
+    the package's librrr.so, as a function of one batch (None without a C compiler)."""
     cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         log("no C compiler: the librrr-in-C row is left out")
         return None
-    lib = workdir / "libbatchfloor.so"
+    lib = workdir / "libcoreloops.so"
     include = ROOT / "c_src" / "rrr" / "include"
     subprocess.run([cc, "-std=c11", "-O2", "-shared", "-fPIC", f"-I{include}",
-                    str(ROOT / "bench" / "batch_floor.c"), f"-L{package}", "-l:librrr.so",
+                    str(ROOT / "bench" / "core_loops.c"), f"-L{package}", "-l:librrr.so",
                     f"-Wl,-rpath,{package}", "-o", str(lib)], check=True)
     floor = ct.CDLL(str(lib))
-    fn = floor.batch_floor_inverse_dynamics
-    fn.argtypes = [ct.c_void_p] * 5 + [ct.c_long]
+    fn = floor.loops_inverse_dynamics
+    fn.argtypes = [ct.c_void_p] * 5 + [ct.c_long, ct.c_long]
     fn.restype = ct.c_long
-    return fn
+    return lambda *args: fn(*args, 1)  # one pass over the batch
 
 
 def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str, str]]:
@@ -279,7 +289,7 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
         addr = [a.ctypes.data for a in (bq, bqd, bqdd, out)]
         m_addr = ct.addressof(model.raw)
         if floor(m_addr, *addr, nb) != -1:
-            sys.exit("bench_python: batch_floor_inverse_dynamics failed")
+            sys.exit("bench_python: loops_inverse_dynamics failed")
 
         def c_floor(k: int, arrays: tuple[Any, ...] = (bq, bqd, bqdd, out)) -> Any:
             # the arrays ride along: the C loop writes into `out`, which must outlive build()
@@ -289,7 +299,7 @@ def build(args: argparse.Namespace, workdir: Path) -> tuple[list[Pair], dict[str
             f"tau = R p, batch of {nb:,} states (per state): the scalar C floor",
             "Model.inverse_dynamics (simd='scalar')",
             lambda k: model.inverse_dynamics(bq, bqd, bqdd, simd="scalar"),
-            "librrr in a C loop (bench/batch_floor.c)", c_floor, 1,
+            "librrr in a C loop (bench/core_loops.c)", c_floor, 1,
             per=nb, agreement=f"bit-identical: {out.tobytes() == batch_scalar.tobytes()}"))
     pairs += engine_pairs(robot_file, rows, tau, per_call, workdir)
     info = {
@@ -381,23 +391,63 @@ def cpu_model() -> str:
     return platform.processor() or "unknown"
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--repeats", type=int, default=7, help="interleaved repeats per row")
-    parser.add_argument("--states", type=int, default=1000, help="single-state inputs")
-    parser.add_argument("--calls", type=int, default=2000,
-                        help="calls per block of a single-state row (IK LM, accel: 1/20 of it)")
-    parser.add_argument("--batch", type=int, default=100_000, help="states of the batch row")
-    parser.add_argument("--ik-tol", type=float, default=1e-12, help="ets.ik_LM tol")
-    parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
-                        help="time blocks by the CPU time of the thread (default) or the wall "
-                             "clock")
-    parser.add_argument("--json", type=Path, help="also write the raw timings to this file")
-    add_quick(parser)
-    args = apply_quick(parser, parser.parse_args(argv),
-                       {"repeats": 2, "states": 40, "calls": 80, "batch": 2000})
+def minor_faults() -> int:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 
+
+def memory_part(args: argparse.Namespace) -> None:
+    """A batch's result memory: a new array against out=, after the churn of large arrays."""
+    import rrr_robot as rr
+    from rrr_robot.core.batch import simd_best
+
+    m = rr.Model.default()
+    n = args.batch
+    rng = np.random.default_rng(args.seed)
+    q, qd, qdd = (rng.uniform(lo, hi, (n, 3)) for lo, hi in
+                  ((-np.pi, np.pi), (-5.0, 5.0), (-20.0, 20.0)))
+    out = np.empty((n, 3))
+    if m.inverse_dynamics(q, qd, qdd, out=out).tobytes() != m.inverse_dynamics(
+            q, qd, qdd).tobytes():
+        sys.exit("bench_python: the result into out= differs from the new array's")
+
+    def churn() -> float:
+        arrays = [np.ones((n, 3)) for _ in range(20)]
+        return float(sum(a[0, 0] for a in arrays))
+
+    faults: dict[str, list[float]] = {"new": [], "out": []}
+
+    def block(name: str, call: Callable[[], object]) -> Callable[[], float]:
+        def run() -> float:
+            churn()
+            f0, t0 = minor_faults(), time.thread_time_ns()
+            call()
+            t1, f1 = time.thread_time_ns(), minor_faults()
+            faults[name].append(f1 - f0)
+            return (t1 - t0) / n
+        return run
+
+    load = " ".join(f"{v:.2f}" for v in os.getloadavg())
+    new, into = interleaved([block("new", lambda: m.inverse_dynamics(q, qd, qdd)),
+                             block("out", lambda: m.inverse_dynamics(q, qd, qdd, out=out))],
+                            args.repeats)
+    print(f"\n## A batch's result memory: Model.inverse_dynamics of {n:,} states "
+          f"({simd_best()}), {args.repeats} interleaved repeats, each call after the churn of "
+          f"20 arrays of the batch's size; load average {load}; min / median / max\n")
+    print("| result | ns per state | minor page faults per call |")
+    print("|---|---:|---:|")
+    rows = (("a new array", new, faults["new"][1:]), ("into out= (reused)", into,
+                                                       faults["out"][1:]))
+    for label, series, counts in rows:
+        print(f"| {label} | {series.format('.1f')} | {mmm(counts, '.0f')} |")
+    extra = (new.median - into.median) * n
+    per = Series.of(faults["new"][1:]).median
+    if per > 0:
+        print(f"\nmedian difference {extra / 1e3:,.0f} us a call, {per:,.0f} faults: about "
+              f"{extra / per / 1e3:.2f} us a fault")
+
+
+def api_part(args: argparse.Namespace) -> None:
+    """The Python API against the references' Python APIs: the table of rows."""
     load_start = " ".join(f"{v:.2f}" for v in os.getloadavg())
     with tempfile.TemporaryDirectory(prefix="rrr-bench-") as tmp:
         pairs, info = build(args, Path(tmp))
@@ -410,7 +460,7 @@ def main(argv: list[str] | None = None) -> int:
                                 f"{mmm(p.ours_faults[-args.repeats:], lambda v: f'{v:,.0f}')}")
     load_end = " ".join(f"{v:.2f}" for v in os.getloadavg())
 
-    print(f"Python API benchmark, {dt.datetime.now().isoformat(timespec='seconds')}, "
+    print(f"## Python API benchmark, {dt.datetime.now().isoformat(timespec='seconds')}, "
           f"{cpu_model()}, {os.cpu_count()} CPUs, load average {load_start} (start) / "
           f"{load_end} (end)")
     print(f"{info['versions']}; binding: {info['binding']}")
@@ -430,8 +480,33 @@ def main(argv: list[str] | None = None) -> int:
             "rows": [{"operation": p.operation, "ours_ns": p.ours_ns, "ref_ns": p.ref_ns,
                       "reference": p.ref_name, "agreement": p.agreement} for p in pairs],
         }, indent=1), encoding="utf-8")
-    return 0
 
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--part", action="append", choices=("api", "memory"),
+                        help="what to measure (repeatable; default: both)")
+    parser.add_argument("--repeats", type=int,
+                        help="interleaved repeats per row (default: 7 for api, 15 for memory)")
+    parser.add_argument("--states", type=int, default=1000, help="single-state inputs")
+    parser.add_argument("--calls", type=int, default=2000,
+                        help="calls per block of a single-state row (IK LM, accel: 1/20 of it)")
+    parser.add_argument("--batch", type=int, default=100_000, help="states of the batch rows")
+    parser.add_argument("--ik-tol", type=float, default=1e-12, help="ets.ik_LM tol")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--clock", choices=sorted(CLOCKS), default="cpu",
+                        help="time blocks by the CPU time of the thread (default) or the wall "
+                             "clock")
+    parser.add_argument("--json", type=Path, help="also write the api rows' raw timings here")
+    add_quick(parser)
+    args = apply_quick(parser, parser.parse_args(argv),
+                       {"repeats": 2, "states": 40, "calls": 80, "batch": 2000})
+    for part in args.part or ("api", "memory"):
+        if part == "api":
+            api_part(argparse.Namespace(**{**vars(args), "repeats": args.repeats or 7}))
+        else:
+            memory_part(argparse.Namespace(**{**vars(args), "repeats": args.repeats or 15}))
+    return 0
 
 if __name__ == "__main__":
     sys.exit(main())

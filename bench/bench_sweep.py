@@ -39,8 +39,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-from _quick import add_quick, apply_quick
-from _timing import mmm
+from _timing import add_quick, apply_quick, mmm
 from rrr_robot.sweep.execution import batch_size, batches, dask_client, execute, worker_threads
 from rrr_robot.sweep.job import make_plan
 from rrr_robot.sweep.results import schema, write_part

@@ -34,8 +34,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _quick import add_quick, apply_quick
-from _timing import mmm
+from _timing import add_quick, apply_quick, mmm
 
 PHASES = r"""
 import json, pickle, sys, tempfile, time

@@ -2,7 +2,8 @@
  * Toolbox. Each function runs one call per input row over n rows, `reps` passes, and is called
  * once per timed block through ctypes, so the call overhead (about a microsecond) is spread over
  * thousands of librrr calls. Built by bench/CMakeLists.txt against the same librrr as
- * bench_core. Each returns the first failing row, or -1. */
+ * bench_core; bench_python.py builds it against the package's librrr.so for the floor of a
+ * batch (loops_inverse_dynamics, one pass). Each returns the first failing row, or -1. */
 #include <stddef.h>
 
 #include "rrr/rrr.h"

@@ -45,8 +45,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from _quick import add_quick, apply_quick
-from _timing import CLOCKS, Series, interleaved, logger, timed
+from _timing import CLOCKS, Series, add_quick, apply_quick, interleaved, logger, timed
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -1,17 +1,25 @@
 """Sphinx configuration of the rrr_robot manual (docs/).
 
 Build: ``sphinx-build -W --keep-going -n -b html docs build-docs`` (scripts/run_tests.sh runs
-exactly that; ``pip install '.[docs]'`` brings Sphinx, MyST and the theme). Sphinx, because the
-Python API page is generated from the docstrings by autodoc; the pages are MyST Markdown.
+exactly that; ``pip install '.[docs]'`` brings Sphinx, MyST, breathe and the theme, and the C API
+page needs Doxygen: Debian's ``doxygen``). Sphinx, because the Python API page is generated from
+the docstrings by autodoc; the pages are MyST Markdown. The C API page (api/c.md) is rendered by
+breathe from the XML that Doxygen writes from librrr's public headers (docs/Doxyfile) at the
+start of every build, into the build folder: nothing of it is committed.
 """
 
 from __future__ import annotations
 
 import re
+import shutil
+import subprocess
 from pathlib import Path
 from typing import Any
 
 DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+#: librrr's public headers: each has its ``doxygenfile`` on the C API page
+HEADERS = ROOT / "c_src" / "rrr" / "include" / "rrr"
 
 
 def _version() -> str:
@@ -30,6 +38,7 @@ release = version = _version()
 extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
+    "breathe",
 ]
 source_suffix = {".md": "markdown"}
 root_doc = "index"
@@ -54,6 +63,15 @@ nitpick_ignore_regex = [
     ("py:class", r"ArrayLike|Path|Mapping|Sequence|Callable|Iterator|Any|Progress"
                  r"|ScipyStateSpace|BSpline"),
 ]
+# the C API page: Doxygen's XML, written by _doxygen below; C's own types in signatures
+breathe_projects: dict[str, str] = {}
+breathe_default_project = "rrr"
+breathe_domain_by_extension = {"h": "c"}
+breathe_show_include = False
+breathe_show_define_initializer = True
+nitpick_ignore_regex += [
+    ("c:identifier", r"size_t|u?int(8|16|32|64)_t|bool"),
+]
 autodoc_typehints = "description"
 autodoc_member_order = "bysource"
 
@@ -77,6 +95,40 @@ def _drop_pending(app: Any, docname: str, source: list[str]) -> None:
         source[0] = text
 
 
+def _doxygen(app: Any) -> None:
+    """Doxygen's XML of the public headers into the build folder, for breathe; each warning of
+    Doxygen (an undocumented declaration, a broken comment) becomes a warning of the build, and
+    a header without its ``doxygenfile`` on api/c.md is one too."""
+    from sphinx.util import logging
+
+    log = logging.getLogger("rrr.c_api")
+    doxygen = shutil.which("doxygen")
+    if doxygen is None:
+        raise RuntimeError("the C API page (docs/api/c.md) needs Doxygen: install it (Debian: "
+                           "apt-get install doxygen); docs/Doxyfile says what it reads")
+    out = Path(app.doctreedir) / "doxygen"
+    shutil.rmtree(out, ignore_errors=True)
+    out.mkdir(parents=True)
+    config = (DOCS / "Doxyfile").read_text(encoding="utf-8") + f"\nOUTPUT_DIRECTORY = \"{out}\"\n"
+    run = subprocess.run([doxygen, "-"], input=config, cwd=ROOT, capture_output=True, text=True)
+    if run.returncode != 0:
+        raise RuntimeError(f"doxygen failed ({run.returncode}): {run.stderr.strip()}")
+    warnings: list[str] = []
+    for line in run.stderr.splitlines():  # a warning's continuation lines are indented
+        if line.strip() and line[:1].isspace() and warnings:
+            warnings[-1] += " " + line.strip()
+        elif line.strip():
+            warnings.append(line.strip())
+    for warning in warnings:
+        log.warning("doxygen: %s", warning)
+    app.config.breathe_projects["rrr"] = str(out / "xml")
+    page = (DOCS / "api" / "c.md").read_text(encoding="utf-8")
+    for header in sorted(HEADERS.glob("*.h")):
+        if f"{{doxygenfile}} {header.name}\n" not in page:
+            log.warning("docs/api/c.md has no doxygenfile of the public header %s", header.name)
+
+
 def setup(app: Any) -> dict[str, Any]:
     app.connect("source-read", _drop_pending)
+    app.connect("builder-inited", _doxygen)
     return {"parallel_read_safe": True}

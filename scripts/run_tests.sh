@@ -66,6 +66,12 @@ if ! command -v chromium >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium >/dev/null
 fi
+# doxygen: the manual's C API page (docs/api/c.md) is Doxygen's reading of librrr's headers
+if ! command -v doxygen >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+  echo "== installing doxygen (the manual's C API page) =="
+  apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends doxygen >/dev/null
+fi
 # shellcheck disable=SC1091
 . scripts/setup_env.sh
 JOBS="$(nproc 2>/dev/null || echo 2)"

@@ -50,10 +50,10 @@ BUS = frozenset({
 VM = frozenset({"test_socketcan_guest"})
 #: Every other module is slow; these are named so that an unclassified new module is noticed.
 SLOW = frozenset({
-    "test_animation", "test_bench_extra", "test_c_api_docs", "test_cli_errors", "test_doc_blocks",
+    "test_animation", "test_bench_extra", "test_c_exports", "test_cli_errors", "test_doc_blocks",
     "test_dynamics_reference", "test_figures", "test_fmu_derivatives", "test_fmu_error_routing",
     "test_fmu_errors", "test_fmu_libcosim", "test_fmu_reuse", "test_fmu_loop", "test_fmu_package",
-    "test_fmu_md_cache", "test_fmu_reference", "test_fmu_start_values", "test_fmu_state",
+    "test_fmu_reference", "test_fmu_start_values", "test_fmu_state",
     "test_fmu_variants",
     "test_friction_methods", "test_generated_code", "test_hostile_archives",
     "test_hostile_sweeps", "test_identify_pipeline", "test_identify_threads",

@@ -50,25 +50,6 @@ OLD_README = {
                                           "Dependencies and what each is for"),
     "Verification": ("docs/verification.md", "Verification"),
 }
-#: The measured tables of the old README: (file, the start of a row of each table), so that no
-#: measurement is lost either.
-TABLE_ROWS = [
-    ("docs/performance.md", "| FK (position + orientation) | `rrr_fk` | 41.0 / 42.2 / 48.7"),
-    ("docs/performance.md", "| IK, all branches (4 solutions) | `rrr_ik` | 85.8 / 90.9 / 122"),
-    ("docs/performance.md", "| tau = R p, one state | `Model.inverse_dynamics` | 324 / 326 / 370"),
-    ("docs/performance.md", "| IK, all 4 branches (`rrr_ik`) | 46 flops"),
-    ("docs/performance.md", "| open loop, 2 s | 1.83 / 2.24 / 4.90"),
-    ("docs/performance.md", "| the three `<scenario>.csv` | 0.51 / 0.54 / 0.73"),
-    ("docs/performance.md", "| `rr.simulate`: the same loop in C (`rrr_sim_closed_loop`) | 549.6x"),
-    ("docs/performance.md", "| plain | controller | 27.8 / 32.0 / 33.1"),
-    ("docs/fmus.md", "| 2 s open loop, u = [0.5, 1, 0.3] V"),
-    ("docs/writing.md", "| `ctc` (PD + feedforward) | 0.099 mm | 0.039 mm"),
-    ("docs/can-bench.md", "| the same | CAN FD 1 / 2 Mbit/s (`--fd 2000000`) | 45.12 %"),
-    ("docs/getting-started.md", "| numpy, scipy | arrays, filtering and least squares"),
-    ("docs/c-library.md", "| `lib/pkgconfig/rrr.pc` |"),
-    ("docs/python.md", "| `core/` | `_ext` (the compiled binding"),
-    ("docs/layout.md", "| `c_src/hil/` | the CAN bench"),
-]
 
 
 def headings(path: Path) -> set[str]:
@@ -89,12 +70,6 @@ def headings(path: Path) -> set[str]:
 def test_old_readme_section_has_a_place(old: str) -> None:
     page, heading = OLD_README[old]
     assert heading in headings(ROOT / page), f"{old!r}: no heading {heading!r} in {page}"
-
-
-def test_table_rows_kept() -> None:
-    missing = [(page, row) for page, row in TABLE_ROWS
-               if row not in (ROOT / page).read_text(encoding="utf-8")]
-    assert not missing
 
 
 def test_readme_is_short() -> None:

@@ -1,5 +1,5 @@
-"""The package's cache folder: the writing task's tip plans (rrr_robot.writing.plan_cache) and
-the FMUs' model descriptions (rrr_robot.sim._md_cache) are kept there.
+"""The package's cache folder: the writing task's tip plans (rrr_robot.writing.plan_cache) are
+kept there.
 
 ``$RRR_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/rrr-robot``, else ``~/.cache/rrr-robot``;
 ``RRR_NO_CACHE=1`` turns every cache off. A cache can make a run faster, never wrong and never

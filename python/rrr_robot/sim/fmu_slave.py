@@ -34,7 +34,7 @@ from fmpy.fmi1 import FMICallException
 from ..core._arrays import FloatArray
 from ..core.archives import extract_to_temp
 from ..errors import ArchiveError, BadInputError, CosimError
-from . import _fmi_log, _md_cache
+from . import _fmi_log
 
 log = logging.getLogger(__name__)
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
@@ -269,15 +269,7 @@ class FmuSlave:
                              status="ERROR") from exc
 
     def _model_description(self) -> Any:
-        """The model description of the extracted FMU (FMI 2.0 or 3.0, Co-Simulation): FMPy's,
-        or what the slave needs of it from the cache (:mod:`._md_cache`, keyed by its bytes)."""
-        try:
-            xml = (Path(self._unzipdir) / "modelDescription.xml").read_bytes()
-        except OSError:
-            xml = None  # FMPy reports it below
-        cached = None if xml is None else _md_cache.load(xml)
-        if cached is not None:
-            return cached
+        """FMPy's model description of the extracted FMU (FMI 2.0 or 3.0, Co-Simulation)."""
         try:
             md = read_model_description(self._unzipdir)
         except Exception as exc:  # OSError, FMPy's validation errors (bare exceptions)
@@ -288,8 +280,6 @@ class FmuSlave:
         if md.fmiVersion not in _CALLS:
             raise CosimError(f"{self.path}: FMI version {md.fmiVersion} is not supported "
                              "(2.0 and 3.0 are)")
-        if xml is not None:
-            _md_cache.store(xml, md)
         return md
 
     @property

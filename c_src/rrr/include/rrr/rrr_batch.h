@@ -47,7 +47,9 @@ RRR_API const char *rrr_simd_name(rrr_simd path);
 /**
  * @brief rrr_inverse_dynamics of n states: row k of tau = R(q_k, qd_k, qdd_k) p.
  * @param[in]  n    number of states (0: nothing happens, RRR_OK)
- * @param[in]  q, qd, qdd  n rows of 3 each
+ * @param[in]  q    n rows of 3 joint positions
+ * @param[in]  qd   n rows of 3 joint velocities
+ * @param[in]  qdd  n rows of 3 joint accelerations
  * @param[out] tau  n rows of 3
  * @param[in]  path the kernels (RRR_SIMD_AUTO: the best available)
  * @param[out] done if not NULL, the rows written (n on RRR_OK; the first row whose scalar call
@@ -62,7 +64,9 @@ RRR_API rrr_status rrr_inverse_dynamics_batch(const rrr_model *m, size_t n, cons
 /**
  * @brief rrr_regressor of n states: row k of Y is R(q_k, qd_k, qdd_k), 3 x RRR_NP row-major.
  * @param[in]  n    number of states (0: nothing happens, RRR_OK)
- * @param[in]  q, qd, qdd  n rows of 3 each
+ * @param[in]  q    n rows of 3 joint positions
+ * @param[in]  qd   n rows of 3 joint velocities
+ * @param[in]  qdd  n rows of 3 joint accelerations
  * @param[out] Y    n blocks of 3 x RRR_NP (3 * RRR_NP numbers each)
  * @param[in]  path the kernels (RRR_SIMD_AUTO: the best available)
  * @param[out] done if not NULL, the rows written (n on RRR_OK; the first row whose scalar call
@@ -95,7 +99,9 @@ RRR_API rrr_status rrr_fk_batch(const rrr_model *m, size_t n, const double q[], 
  * The vector kernels factorise D by the same 3 x 3 Cholesky steps without branches; a row whose
  * D is not positive definite, or with a non-finite input or result, is the scalar call's.
  * @param[in]  n    number of states (0: nothing happens, RRR_OK)
- * @param[in]  q, qd, tau  n rows of 3 each
+ * @param[in]  q    n rows of 3 joint positions
+ * @param[in]  qd   n rows of 3 joint velocities
+ * @param[in]  tau  n rows of 3 motor torques
  * @param[out] qdd  n rows of 3
  * @param[in]  path the kernels (RRR_SIMD_AUTO: the best available)
  * @param[out] done if not NULL, the rows written (n on RRR_OK; the first row whose scalar call

@@ -51,9 +51,12 @@ RRR_API rrr_status rrr_ctc(const rrr_model *m, const rrr_ctc_gains *gains, const
  * The predictor of a sampled loop whose measurement arrives one sample late (a co-simulation
  * master that passes every output on only at the next step): with lead = one sample, the law
  * acts on the state at the time its output is applied. lead = 0 gives q and qd exactly.
- * @param q, qd, qdd measured position (rad), velocity (rad/s), acceleration (rad/s2)
+ * @param q          measured position, rad
+ * @param qd         measured velocity, rad/s
+ * @param qdd        measured acceleration, rad/s2
  * @param lead       s, finite and >= 0
- * @param[out] q_pred, qd_pred the predicted position and velocity (may alias q and qd)
+ * @param[out] q_pred  the predicted position (may alias q)
+ * @param[out] qd_pred the predicted velocity (may alias qd)
  * @return RRR_OK, RRR_BAD_INPUT (NULL, non-finite input, lead negative or not finite)
  */
 RRR_API rrr_status rrr_predict_state(const double q[3], const double qd[3], const double qdd[3],

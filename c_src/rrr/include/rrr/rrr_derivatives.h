@@ -42,7 +42,9 @@ extern "C" {
 /**
  * @brief Partial derivatives of the motor torque tau = R(q, qd, qdd) p (eqs 10, 13) at fixed
  *        qdd: d tau / d q and d tau / d qd (d tau / d qdd = D(q), rrr_mass_matrix).
- * @param[in]  q, qd, qdd joint position (rad), velocity (rad/s), acceleration (rad/s^2)
+ * @param[in]  q         joint position, rad
+ * @param[in]  qd        joint velocity, rad/s
+ * @param[in]  qdd       joint acceleration, rad/s^2
  * @param[out] dtau_dq   d tau_i / d q_j, N m / rad; column 0 is 0 (q1 does not enter)
  * @param[out] dtau_dqd  d tau_i / d qd_j, N m s / rad
  * @return RRR_OK, RRR_BAD_INPUT (NULL, non-finite input or model field), RRR_NUMERIC

@@ -28,6 +28,7 @@ typedef enum rrr_param_bound {
     RRR_PARAM_POS = 2              ///< > 0
 } rrr_param_bound;
 
+///@{
 /** Units of the table (the FMUs' unit names). */
 #define RRR_U_M "m"
 #define RRR_U_G "m/s2"
@@ -37,7 +38,9 @@ typedef enum rrr_param_bound {
 #define RRR_U_V "V"
 #define RRR_U_W "s/rad"
 #define RRR_U_B "V.s/rad"
+///@}
 
+///@{
 /** Helpers of RRR_MODEL_PARAMS: the rows of a 3-vector, of a 3 x 3 matrix (joint i, term k)
  *  and of base parameter p_i. */
 #define RRR_PARAMS_J(X, N, M, U, B, D)                                                        \
@@ -53,6 +56,7 @@ typedef enum rrr_param_bound {
     RRR_PARAMS_JK1(X, N, M, U, B, D, 2)                                                      \
     RRR_PARAMS_JK1(X, N, M, U, B, D, 3)
 #define RRR_PARAMS_P(X, i, U) X("p[" #i "]", p[i - 1], U, RRR_PARAM_ANY, "base parameter p" #i " of eq 12")
+///@}
 
 /**
  * @brief The table: X(NAME, MEMBER, UNIT, BOUND, DESCRIPTION) for each of the RRR_N_PARAMS

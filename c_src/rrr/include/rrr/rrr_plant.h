@@ -54,10 +54,12 @@ extern "C" {
 #define RRR_PLANT_RTOL_DEFAULT 1e-9
 /** Default absolute tolerance of the adaptive method (rad for q, rad/s for qd). */
 #define RRR_PLANT_ATOL_DEFAULT 1e-10
+///@{
 /** Range of rtol and of atol: [RRR_PLANT_TOL_MIN, RRR_PLANT_TOL_MAX]. Below 1e-14 the error
  *  estimate is round-off; above 1e-2 the result is not worth having. */
 #define RRR_PLANT_TOL_MIN 1e-14
 #define RRR_PLANT_TOL_MAX 1e-2
+///@}
 /** Default most internal steps one call may take (fixed step: substeps, refused before any work
  *  with RRR_BAD_INPUT; adaptive: attempted steps, accepted or rejected, RRR_NUMERIC when reached):
  *  a guard against an interval that would not finish. */

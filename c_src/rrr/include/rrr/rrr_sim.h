@@ -40,7 +40,8 @@ extern "C" {
  * @brief Run the closed loop over n samples at the communication step `step`.
  * @param[in]  plant      the plant's model (the plant FMU's parameters)
  * @param[in]  integ      the plant's integrator settings
- * @param[in]  q0, qd0    the plant's initial state
+ * @param[in]  q0         the plant's initial position
+ * @param[in]  qd0        the plant's initial velocity
  * @param[in]  ctrl       the controller's own model (may differ from the plant's)
  * @param[in]  gains      the controller's gains and feedforward switch
  * @param[in]  n          number of samples, >= 1
