@@ -1,14 +1,13 @@
 """Real-time mode of the CAN bench: wake-up latency and deadline misses of both C nodes, with and
 without SCHED_FIFO, in alternating blocks.
 
-Each block runs the writing task (held at its last pose after 5.9 s) for --duration seconds on
-both C nodes in real time at 1 kHz over the socketcand transport
-(rrr_robot.hil.dbc.bench.run_c_bench with RealTime), twice: once plain (the default scheduler,
-clock_nanosleep only: the nodes' old mode) and once tuned (SCHED_FIFO 80, mlockall, one CPU per node, sleep-then-spin --spin-us). It
-prints per configuration and node the wake-up latency p50 / p99 / p99.9 / max (us) and the
-deadline misses as min / median / max over the blocks, and the plant's latched faults (a stall
-longer than 3 periods makes the plant's supervisor apply 0 V and latch a timeout, as it
-should).
+Each block runs the writing task (held at its last pose after 5.9 s) for --duration seconds on both
+C nodes in real time at 1 kHz over the socketcand transport (rrr_robot.hil.dbc.bench.run_c_bench
+with RealTime), twice: once plain (the default scheduler, clock_nanosleep only: the nodes' old
+mode) and once tuned (SCHED_FIFO 80, mlockall, one CPU per node, sleep-then-spin --spin-us). It
+prints per configuration and node the wake-up latency p50 / p99 / p99.9 / max (us) and the deadline
+misses as min / median / max over the blocks, and the plant's latched faults (a stall longer than 3
+periods makes the plant's supervisor apply 0 V and latch a timeout, as it should).
 
     python bench/bench_hil_realtime.py [--blocks 3] [--duration 20] [--spin-us 100] [--json F]
 
