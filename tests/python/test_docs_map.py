@@ -103,7 +103,7 @@ def test_readme_is_short() -> None:
 
 
 def test_files_page_lists_every_key() -> None:
-    from rrr_robot.core.robot_file import (
+    from rrr_robot.core.robot import (
         CONTROL_FIELDS,
         IDENTIFICATION_FIELDS,
         LINK_FIELDS,

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core._package import DATA_DIR
-from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..core.robot import DEFAULT_SAMPLE_TIME
 from ..errors import RrrError
 
 __all__ = [
