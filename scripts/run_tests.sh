@@ -138,8 +138,8 @@ fi
 cmake -S . -B build-fuzz -DCMAKE_C_COMPILER=clang -DRRR_HIL_FUZZ=ON -DRRR_FMU_FUZZ=ON \
   -DRRR_BUILD_TESTS=OFF -DRRR_WERROR=ON -DRRR_FMU_WINDOWS=OFF -DRRR_FMU_AARCH64=OFF \
   -DCMAKE_BUILD_TYPE=Debug -DPython3_EXECUTABLE="$(command -v python)" >/dev/null
-cmake --build build-fuzz --target fuzz_hil_decode fuzz_fmu_state_plant fuzz_fmu_state_controller \
-  fuzz_fmu_state_reference fuzz_fmi_import fuzz_hil_canopen -j "$JOBS"
+cmake --build build-fuzz --target fuzz_hil_decode fuzz_fmu_state fuzz_fmi_import fuzz_hil_canopen \
+  -j "$JOBS"
 mkdir -p build-fuzz/corpus
 build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
   -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
@@ -148,15 +148,16 @@ mkdir -p build-fuzz/corpus_canopen
 build-fuzz/c_src/hil/fuzz_hil_canopen -max_total_time="${RRR_CANOPEN_FUZZ_SECONDS:-15}" \
   -max_len=600 -print_final_stats=1 build-fuzz/corpus_canopen 2>&1 | tail -n 4
 echo "== libFuzzer on forged FMU states with valid checksums (each FMU, FMI 2 and 3; short run) =="
-for model in plant controller reference; do
+for model in $(cat build-fuzz/fmus/fmu_names.txt); do  # the FMUs, as fmu/CMakeLists.txt lists them
   mkdir -p "build-fuzz/corpus_$model"
   build-fuzz/fmu/fuzz_fmu_state_$model -max_total_time="${RRR_FMU_FUZZ_SECONDS:-15}" -max_len=89 \
     -print_final_stats=1 "build-fuzz/corpus_$model" 2>&1 | tail -n 4
 done
 echo "== libFuzzer on the FMU importer's modelDescription scanner (c_src/fmi_import; short run) =="
 mkdir -p build-fuzz/corpus_fmi_import
-cp fmu/controller/modelDescription.xml build-fuzz/corpus_fmi_import/controller.xml
-cp fmu/reference/modelDescription.xml build-fuzz/corpus_fmi_import/reference.xml
+for xml in fmu/*/modelDescription.xml; do
+  cp "$xml" "build-fuzz/corpus_fmi_import/$(basename "$(dirname "$xml")").xml"
+done
 build-fuzz/c_src/fmi_import/fuzz_fmi_import -max_total_time="${RRR_FMI_FUZZ_SECONDS:-15}" \
   -max_len=65536 -print_final_stats=1 build-fuzz/corpus_fmi_import 2>&1 | tail -n 4
 echo "== all test stages passed (CTest twice, ruff, lint-imports, mypy, the manual, pytest, the" \

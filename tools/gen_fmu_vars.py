@@ -1,7 +1,9 @@
-"""Generate python/rrr_robot/core/_fmu_table.py: every variable of the three FMUs (name, value
+"""Generate python/rrr_robot/core/_fmu_table.py: every variable of each FMU (name, value
 reference, causality, variability, type, unit), read from the model descriptions of the FMI 2.0
 FMUs that the build packaged (``rrr_robot.sim.fmus.fmu_path``; $RRR_FMU_DIR names a build's
-``fmus/`` folder). Those model descriptions are generated from the C variable tables
+``fmus/`` folder), in the order of the build's list of the FMUs (``fmu_names.txt`` beside them,
+written from ``RRR_FMU_NAMES`` of fmu/CMakeLists.txt). Those model descriptions are generated
+from the C variable tables
 (fmu/*/config.h and model.c, fmu/common/rrr_model_vars.h) by fmu/common/fmu_xml.c, so the Python
 side's FMU variable names and value references come from the C tables and are spelled nowhere
 by hand (tests/python/test_fmu_vars.py proves regenerating gives the committed file).
@@ -18,7 +20,7 @@ import sys
 from pathlib import Path
 
 from fmpy import read_model_description
-from rrr_robot.sim.fmus import FMU_NAMES, fmu_path
+from rrr_robot.sim.fmus import fmu_dir
 
 REPO = Path(__file__).resolve().parents[1]
 TARGET = REPO / "python" / "rrr_robot" / "core" / "_fmu_table.py"
@@ -34,22 +36,30 @@ from __future__ import annotations
 #: One variable: (name, value reference, causality, variability, type, unit or "").
 Row = tuple[str, int, str, str, str, str]
 
-#: FMU ("controller", "plant", "reference") -> its variables, in model-description order.
+#: FMU (its name in fmu/CMakeLists.txt's RRR_FMU_NAMES, in that order) -> its variables, in
+#: model-description order.
 VARIABLES: dict[str, tuple[Row, ...]] = {
 '''
 
 
 def rows(which: str, fmi_version: int = 2) -> list[tuple[str, int, str, str, str, str]]:
-    """The variables of one packaged FMU, as the generated module lists them."""
-    md = read_model_description(str(fmu_path(which, fmi_version)))
+    """The variables of one packaged FMU, as the generated module lists them (its path as
+    fmu_path gives it; fmu_path knows only the FMUs of the committed table, not a new one)."""
+    folder = fmu_dir() if fmi_version == 2 else fmu_dir() / f"fmi{fmi_version}"
+    md = read_model_description(str(folder / f"rrr_{which}.fmu"))
     return [(v.name, int(v.valueReference), v.causality, v.variability, v.type, v.unit or "")
             for v in md.modelVariables]
+
+
+def fmu_names() -> list[str]:
+    """The names of the FMUs the build made, in the order of RRR_FMU_NAMES (fmu_names.txt)."""
+    return (fmu_dir() / "fmu_names.txt").read_text(encoding="utf-8").split()
 
 
 def render() -> str:
     """The text of the generated module."""
     out = [_HEAD]
-    for which in sorted(FMU_NAMES):
+    for which in fmu_names():
         out.append(f"    {json.dumps(which)}: (\n")
         out += [f"        ({', '.join(json.dumps(x) for x in row)}),\n" for row in rows(which)]
         out.append("    ),\n")

@@ -4,9 +4,9 @@
 # compiled with the flags of `pkg-config --cflags --libs rrr` (PKG_CONFIG_PATH) and run.
 # Arguments: -DBUILD=<this build> -DSOURCE=<source tree> -DWORK=<scratch folder> -DCC=<compiler>
 #            -DGENERATOR=<generator> -DPKG_CONFIG=<pkg-config> -DREADELF=<readelf>
-#            -DVERSION=<x.y.z> -DSOVERSION=<x>
+#            -DVERSION=<x.y.z> -DSOVERSION=<x> -DFMU_NAMES=<name>|<name>|... (RRR_FMU_NAMES)
 cmake_minimum_required(VERSION 3.16)
-foreach(v BUILD SOURCE WORK CC GENERATOR VERSION SOVERSION)
+foreach(v BUILD SOURCE WORK CC GENERATOR VERSION SOVERSION FMU_NAMES)
   if(NOT DEFINED ${v})
     message(FATAL_ERROR "test_install_tree.cmake: -D${v}=... missing")
   endif()
@@ -29,12 +29,16 @@ run(${CMAKE_COMMAND} --install "${BUILD}" --prefix "${prefix}")
 # what the prefix holds; the library's libdir is lib (GNUInstallDirs below /usr/local or another
 # prefix that is not /usr)
 set(libdir "${prefix}/lib")
+string(REPLACE "|" ";" fmu_names "${FMU_NAMES}")
+set(fmus share/rrr/fmus/fmu_names.txt)
+foreach(name IN LISTS fmu_names)
+  list(APPEND fmus share/rrr/fmus/rrr_${name}.fmu share/rrr/fmus/fmi3/rrr_${name}.fmu)
+endforeach()
+list(LENGTH fmu_names n_fmus)
 foreach(f include/rrr/rrr.h include/rrr/rrr_kinematics.h
           lib/librrr.a lib/librrr.so lib/librrr.so.${SOVERSION} lib/librrr.so.${VERSION}
           lib/cmake/rrr/rrrConfig.cmake lib/cmake/rrr/rrrConfigVersion.cmake
-          lib/cmake/rrr/rrrTargets.cmake lib/pkgconfig/rrr.pc
-          share/rrr/fmus/rrr_plant.fmu share/rrr/fmus/rrr_controller.fmu
-          share/rrr/fmus/fmi3/rrr_plant.fmu share/rrr/fmus/fmi3/rrr_controller.fmu
+          lib/cmake/rrr/rrrTargets.cmake lib/pkgconfig/rrr.pc ${fmus}
           share/rrr/rrr_bench.dbc share/rrr/rrr_cia402.eds bin/rrr_hil_plant bin/rrr_hil_controller)
   if(NOT EXISTS "${prefix}/${f}")
     message(FATAL_ERROR "cmake --install did not install ${f}")
@@ -55,7 +59,8 @@ if(NOT soname STREQUAL "librrr.so.${SOVERSION}")
   message(FATAL_ERROR "SONAME of librrr.so.${VERSION} is '${soname}', not librrr.so.${SOVERSION}")
 endif()
 message(STATUS "installed: librrr.so.${VERSION} (SONAME ${soname}), librrr.a, headers, "
-               "rrrConfig.cmake, rrr.pc, 4 FMUs, the CAN bench nodes and the DBC")
+               "rrrConfig.cmake, rrr.pc, ${n_fmus} FMUs (FMI 2.0 and 3.0) and their list "
+               "fmu_names.txt, the CAN bench nodes and the DBC")
 
 # the downstream CMake project
 set(consumer "${WORK}/consumer")

@@ -20,19 +20,22 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 from fmpy.model_description import ModelDescription
 from rrr_robot.sim._fmi_log import fmi2_callbacks
+from rrr_robot.sim.fmus import FMU_NAMES
 
-FMU_NAMES = ("plant", "controller")
+#: The FMUs that hold the robot model (its parameters, librrr's defaults).
+MODEL_FMUS = ("plant", "controller")
 REPO_ROOT = Path(__file__).resolve().parents[2]
+#: Each FMU's committed FMI 2.0 modelDescription.xml: fmu/<name>/, the plant's at the top level
+#: (fmu/CMakeLists.txt).
 COMMITTED_XML = {
-    "plant": REPO_ROOT / "modelDescription.xml",
-    "controller": REPO_ROOT / "fmu" / "controller" / "modelDescription.xml",
-    "reference": REPO_ROOT / "fmu" / "reference" / "modelDescription.xml",
+    which: REPO_ROOT / "modelDescription.xml" if which == "plant"
+    else REPO_ROOT / "fmu" / which / "modelDescription.xml" for which in FMU_NAMES
 }
-STEP = 1e-3  # DefaultExperiment stepSize of both FMUs, s
+STEP = 1e-3  # DefaultExperiment stepSize of every FMU, s
 
 
 def fmu_file(which: str) -> Path:
-    """Path of the 'plant' or 'controller' FMU (rrr_robot.fmu_path; fails if there is none)."""
+    """Path of one FMI 2.0 FMU of FMU_NAMES (rrr_robot.fmu_path; fails if there is none)."""
     import rrr_robot
 
     return Path(rrr_robot.fmu_path(which))
@@ -153,6 +156,7 @@ def joint(name: str) -> list[str]:
 __all__ = [
     "COMMITTED_XML",
     "FMU_NAMES",
+    "MODEL_FMUS",
     "STEP",
     "FMICallException",
     "LogRecord",

@@ -10,7 +10,7 @@ from rrr_robot.core.model import DEFAULT_ROBOT_TOML
 
 def test_toml_equals_c_defaults() -> None:
     from_c = rr.Model.default()
-    from_file = rr.Model.from_toml(DEFAULT_ROBOT_TOML)
+    from_file = rr.read_robot_file(DEFAULT_ROBOT_TOML).model
     assert from_c.dh == from_file.dh
     assert from_c.g == from_file.g
     np.testing.assert_allclose(from_file.p, from_c.p, rtol=1e-14, atol=1e-15)
@@ -25,7 +25,7 @@ def test_round_trip_through_toml(tmp_path) -> None:
     m = rr.Model.default().with_params(kt=[5.0, 11.0, 4.0])
     path = tmp_path / "robot.toml"
     m.to_toml(path)
-    back = rr.Model.from_toml(path)
+    back = rr.read_robot_file(path).model
     np.testing.assert_array_equal(back.p, m.p)
     np.testing.assert_array_equal(back.kt, m.kt)
     assert back.dh == m.dh
@@ -43,7 +43,7 @@ def test_bad_robot_files(tmp_path, text: str, message: str) -> None:
     path = tmp_path / "bad.toml"
     path.write_text(text)
     with pytest.raises(rr.ModelError, match=message.replace("[", r"\[").replace("]", r"\]")):
-        rr.Model.from_toml(path)
+        rr.read_robot_file(path)
 
 
 def test_bad_values_name_the_field(tmp_path) -> None:
@@ -63,9 +63,9 @@ def test_bad_values_name_the_field(tmp_path) -> None:
         path = tmp_path / "bad.toml"
         path.write_text(src.replace(old, new, 1))
         with pytest.raises(rr.ModelError, match=message):
-            rr.Model.from_toml(path)
+            rr.read_robot_file(path)
     with pytest.raises(rr.ModelError, match="does not exist"):
-        rr.Model.from_toml(tmp_path / "missing.toml")
+        rr.read_robot_file(tmp_path / "missing.toml")
 
 
 def test_with_params_validates() -> None:

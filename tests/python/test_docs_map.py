@@ -39,7 +39,7 @@ OLD_README = {
                                                   "URDF: Pinocchio, ROS and other URDF tools"),
     "The notebook": ("docs/python.md", "The notebook"),
     "Outputs and exit statuses": ("docs/outputs.md", "Outputs and exit statuses"),
-    "Known limits": ("docs/known-limits.md", "Known limits"),
+    "Known limits": ("docs/limits.md", "Known limits"),
     "Conventions (in full: `docs/conventions.md`)": ("docs/conventions.md", "In brief"),
     "Python": ("docs/python.md", "Using rrr_robot from Python"),
     "The closed loop from Python": ("docs/python.md", "The closed loop from Python"),
@@ -78,7 +78,7 @@ def test_readme_is_short() -> None:
 
 
 def test_files_page_lists_every_key() -> None:
-    from rrr_robot.core.robot_file import (
+    from rrr_robot.core.robot import (
         CONTROL_FIELDS,
         IDENTIFICATION_FIELDS,
         LINK_FIELDS,

@@ -1,7 +1,8 @@
-"""The two FMUs as files: fmpy validate, fmpy simulate, the model description (names, units,
+"""The FMUs as files: fmpy validate, fmpy simulate, the model description (names, units,
 causality, structure, GUID) and the one source of truth for value references: the committed
 modelDescription.xml files equal the ones the build generated from the C variable tables, and
-every start value in them is what the binary reports (and what librrr's defaults are).
+every start value in them is what the binary reports (and, in the plant and the controller,
+what librrr's defaults are).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import numpy as np
 import pytest
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
-from fmu_support import COMMITTED_XML, FMU_NAMES, STEP, Slave, fmu_file, joint
+from fmu_support import COMMITTED_XML, FMU_NAMES, MODEL_FMUS, STEP, Slave, fmu_file, joint
 
 MODEL_PARAMS = (
     [("d1", "m"), ("a2", "m"), ("a3", "m"), ("d2", "m"), ("d3", "m"), ("g", "m/s2")]
@@ -112,7 +113,7 @@ def test_committed_xml_equals_the_generated_one(which: str) -> None:
     assert f"binaries/linux64/rrr_{which}.so" in names
 
 
-@pytest.mark.parametrize("which", FMU_NAMES)
+@pytest.mark.parametrize("which", MODEL_FMUS)
 def test_model_description(which: str) -> None:
     with Slave(which) as s:
         md = s.md
@@ -211,7 +212,7 @@ def test_defaults_equal_the_core_defaults() -> None:
         for k in range(3):
             expected[f"f[{i + 1},{k + 1}]"] = float(m.f[i][k])
             expected[f"w[{i + 1},{k + 1}]"] = float(m.w[i][k])
-    for which in FMU_NAMES:
+    for which in MODEL_FMUS:
         with Slave(which).instantiate() as s:
             s.fmu.enterInitializationMode()
             got = dict(zip(expected, s.get(expected), strict=True))

@@ -1,13 +1,13 @@
 """Every variant of the FMUs: FMI 2.0 and 3.0, Model Exchange and Co-Simulation, rebuilt from
 the sources inside the archive, on an old glibc.
 
-Checks (the acceptance of the portable-FMU issue): fmpy validate finds no problem in any of the
-four FMUs and FMPy simulates each interface; FMI 3.0 Co-Simulation equals FMI 2.0 bit for bit
-(plant open loop; the writing task); the plant's Model Exchange under FMPy's CVode (rtol 1e-10)
-agrees with its Co-Simulation to 1e-6 rad over 2 s; a binary rebuilt by ``fmpy compile`` or by
-the README's plain compiler command from the archive's sources/ gives the shipped results within
-1e-10; the Linux binaries need no glibc symbol newer than 2.28; the documentation lists every
-variable.
+Checks (the acceptance of the portable-FMU issue): fmpy validate finds no problem in any FMU
+archive and FMPy simulates each interface of the plant and the controller; FMI 3.0 Co-Simulation
+equals FMI 2.0 bit for bit (plant open loop; the writing task); the plant's Model Exchange under
+FMPy's CVode (rtol 1e-10) agrees with its Co-Simulation to 1e-6 rad over 2 s; a binary rebuilt by
+``fmpy compile`` or by the README's plain compiler command from the archive's sources/ gives the
+shipped results within 1e-10; no FMU's Linux binaries need a glibc symbol newer than 2.28; each
+FMU's documentation lists every variable.
 """
 
 from __future__ import annotations
@@ -26,10 +26,10 @@ import rrr_robot as rr
 from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 from rrr_robot.sim.fmu_slave import FmuSlave
-from rrr_robot.sim.fmus import variants
+from rrr_robot.sim.fmus import FMU_NAMES, variants
 
 VERSIONS = (2, 3)
-NAMES = ("plant", "controller")
+NAMES = ("plant", "controller")  # the FMUs simulated here (their inputs and outputs below)
 J = (1, 2, 3)
 Q0 = {"q0[1]": 0.1, "q0[2]": 0.4, "q0[3]": 1.0}
 U = {"u[1]": 0.5, "u[2]": 1.0, "u[3]": 0.3}
@@ -62,7 +62,7 @@ def test_rrr_fmus_lists_every_variant() -> None:
     everything = variants()
     found = {(v.which, v.fmi_version): v for v in everything if not v.host}
     hosts = {v.which: v for v in everything if v.host}
-    assert set(found) == {(w, v) for w in (*NAMES, "reference") for v in VERSIONS}
+    assert set(found) == {(w, v) for w in FMU_NAMES for v in VERSIONS}
     for (_, version), v in found.items():
         assert v.interfaces == ("ModelExchange", "CoSimulation")
         assert LINUX[version] in v.platforms
@@ -74,7 +74,7 @@ def test_rrr_fmus_lists_every_variant() -> None:
     with_a64 = {k for k, v in found.items() if "aarch64-linux" in v.platforms}
     assert with_a64 in (set(), set(found)), with_a64
     if with_a64:
-        assert set(hosts) == {*NAMES, "reference"}
+        assert set(hosts) == set(FMU_NAMES)
         for which, v in hosts.items():
             assert v.host == "aarch64-linux" and v.fmi_version == 2
             assert v.platforms == ("linux64",) and v.linux_cpu == "aarch64"
@@ -90,15 +90,17 @@ def test_rrr_fmus_lists_every_variant() -> None:
     cli = subprocess.run([sys.executable, "-m", "rrr_robot", "fmus"], capture_output=True,
                          text=True, check=True)
     lines = cli.stdout.strip().splitlines()
-    assert len(lines) == 6 + len(hosts) and sum("FMI 3.0" in x for x in lines) == 3, cli.stdout
-    assert sum("linux64 (x86_64)" in x for x in lines) == 3, cli.stdout
+    n = len(FMU_NAMES)
+    assert len(lines) == 2 * n + len(hosts) and sum("FMI 3.0" in x for x in lines) == n, \
+        cli.stdout
+    assert sum("linux64 (x86_64)" in x for x in lines) == n, cli.stdout
     assert sum("linux64 (aarch64)" in x for x in lines) == len(hosts), cli.stdout
     if with_a64:
         assert all("aarch64-linux" in x for x in lines if "FMI 3.0" in x), cli.stdout
 
 
 @pytest.mark.parametrize("version", VERSIONS)
-@pytest.mark.parametrize("which", NAMES)
+@pytest.mark.parametrize("which", FMU_NAMES)
 def test_fmpy_validates(which: str, version: int) -> None:
     assert validate_fmu(str(fmu(which, version))) == []
     md = read_model_description(str(fmu(which, version)))
@@ -114,7 +116,7 @@ def test_fmpy_validates_the_aarch64_host_archives() -> None:
     everything = variants()
     hosts = [v for v in everything if v.host]
     with_a64 = any("aarch64-linux" in v.platforms for v in everything if v.fmi_version == 3)
-    assert len(hosts) == (3 if with_a64 else 0)
+    assert len(hosts) == (len(FMU_NAMES) if with_a64 else 0)
     for v in hosts:
         assert validate_fmu(str(v.path)) == [], v.path
         assert supported_platforms(str(v.path)) == ["c-code", "linux64"]
@@ -238,7 +240,7 @@ def glibc_versions(binary: Path) -> set[tuple[int, ...]]:
 
 
 @pytest.mark.parametrize("version", VERSIONS)
-@pytest.mark.parametrize("which", NAMES)
+@pytest.mark.parametrize("which", FMU_NAMES)
 def test_linux_binaries_load_on_glibc_2_28(tmp_path: Path, which: str, version: int) -> None:
     unzip = Path(extract(str(fmu(which, version)), str(tmp_path)))
     versions = glibc_versions(unzip / "binaries" / LINUX[version] / f"rrr_{which}.so")
@@ -248,7 +250,7 @@ def test_linux_binaries_load_on_glibc_2_28(tmp_path: Path, which: str, version: 
 
 
 @pytest.mark.parametrize("version", VERSIONS)
-@pytest.mark.parametrize("which", NAMES)
+@pytest.mark.parametrize("which", FMU_NAMES)
 def test_sources_and_documentation(tmp_path: Path, which: str, version: int) -> None:
     unzip = Path(extract(str(fmu(which, version)), str(tmp_path)))
     shipped_c = {p.name for p in (unzip / "sources").glob("*.c")}

@@ -190,14 +190,17 @@ def test_unknown_fmus_and_names_are_refused() -> None:
 
 def test_the_scalar_names_the_package_checks_are_the_fmus_parameters() -> None:
     """The scalars that keep their names in the modules (``lead``, ``h_int``, ...: they are
-    also Python attribute and scenario-file names) are exactly the FMUs' parameters outside the
-    C parameter table: the SSP bindings check each of them, and nothing else."""
+    also Python attribute and scenario-file names) are exactly the parameters outside the C
+    parameter table of the FMUs an SSP archive holds: the SSP bindings check each of them, and
+    nothing else."""
     from rrr_robot.core.param_names import PARAMS
     from rrr_robot.sim import native
     from rrr_robot.ssp.bindings import FIELDS
+    from rrr_robot.ssp.export import COMPONENTS
 
     model = {p.name for p in PARAMS}
-    for fmu in fv.FMUS:
+    assert set(FIELDS) == set(COMPONENTS)
+    for fmu in COMPONENTS:
         own = [v.name for v in fv.variables(fmu) if v.causality == "parameter"
                and v.name not in model]
         assert sorted(FIELDS[fmu]) == sorted(own), fmu

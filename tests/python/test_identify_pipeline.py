@@ -119,7 +119,7 @@ def test_cli_writes_robot_file(tmp_path: Path, noisy_logs) -> None:
                               "--friction-log", str(tmp_path / "friction.csv"),
                               "--out", str(out), "--report", str(tmp_path / "r.json")])
     assert args.func(args) == 0
-    model = Model.from_toml(out)
+    model = read_robot_file(out).model
     assert np.max(np.abs(model.p - TRUE.p)) < 0.05
     data = tomllib.loads(out.read_text())
     assert {"base_parameters", "friction", "control", "identification"} <= set(data)
@@ -155,4 +155,4 @@ def test_library_job_equals_the_cli_and_checks_outputs_first(tmp_path: Path, noi
 def test_write_robot_roundtrip(tmp_path: Path, ideal_logs) -> None:
     res = identify(ideal_logs[1], PRIOR, None, Settings(derivatives="log"))
     write_robot(res, tmp_path / "r.toml")
-    np.testing.assert_allclose(Model.from_toml(tmp_path / "r.toml").p, res.model.p)
+    np.testing.assert_allclose(read_robot_file(tmp_path / "r.toml").model.p, res.model.p)

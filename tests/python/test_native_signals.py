@@ -21,7 +21,7 @@ import pytest
 import rrr_robot as rr
 from rrr_robot.cli.app import main
 from rrr_robot.core import _lib
-from rrr_robot.core.robot_file import read_robot_data
+from rrr_robot.core.robot import read_robot_file
 from rrr_robot.core.stiffness import STIFFNESS_MAX, Stiffness, stiffness
 from rrr_robot.errors import RobotFileError
 from rrr_robot.sim.cosim import CosimOptions
@@ -65,7 +65,7 @@ def test_the_reporters_friction_is_refused_at_once_naming_it(tmp_path: Path,
 
 
 def test_stiffness_names_the_parameter_and_bounds() -> None:
-    raw = read_robot_data(DEFAULT_ROBOT).raw_model()
+    raw = read_robot_file(DEFAULT_ROBOT).data.raw_model()
     assert 100.0 < stiffness(raw) < STIFFNESS_MAX / 100
     raw.f[1][2] = 1e3
     raw.w[1][2] = 1e3
@@ -73,7 +73,7 @@ def test_stiffness_names_the_parameter_and_bounds() -> None:
         stiffness(raw)
     assert info.value.field == "w[2,3]" and info.value.value > STIFFNESS_MAX
     assert info.value.status == "RRR_TOO_STIFF"
-    raw = read_robot_data(DEFAULT_ROBOT).raw_model()
+    raw = read_robot_file(DEFAULT_ROBOT).data.raw_model()
     raw.b[0] = 1e6
     with pytest.raises(Stiffness, match=r"b\[1\] = 1e\+06 makes the plant too stiff"):
         stiffness(raw)
@@ -82,7 +82,7 @@ def test_stiffness_names_the_parameter_and_bounds() -> None:
 
 def test_a_robot_file_too_stiff_is_a_robot_file_error(tmp_path: Path) -> None:
     with pytest.raises(RobotFileError, match=r"\[friction\] f\[1,1\] = 5000 and w\[1,1\] = 2000"):
-        read_robot_data(_robot(tmp_path, 5000.0, 2000.0, joints=(1,)))
+        read_robot_file(_robot(tmp_path, 5000.0, 2000.0, joints=(1,)))
 
 
 def test_the_native_engine_refuses_a_stiff_plant_of_its_values() -> None:
@@ -153,7 +153,7 @@ def test_a_signal_ends_a_long_native_run_within_a_second(tmp_path: Path, sig: si
     (what the user waits for), not to the process exit, so that a loaded machine does not
     count the interpreter's shutdown."""
     robot = _robot(tmp_path, 40.0, 100.0)  # about 7e5 1/s: accepted, costly
-    assert 1e5 < stiffness(read_robot_data(robot).raw_model()) < STIFFNESS_MAX
+    assert 1e5 < stiffness(read_robot_file(robot).data.raw_model()) < STIFFNESS_MAX
     out = tmp_path / "out"
     proc = subprocess.Popen([sys.executable, "-m", "rrr_robot", "writing", "--engine", "native",
                              "--robot", str(robot), "--scenario", "ctc", "--no-figures",

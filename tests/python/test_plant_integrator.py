@@ -1,7 +1,7 @@
 """The plant FMU's integrator inside doStep: the adaptive Dormand-Prince 5(4) default against an
 independent tight-tolerance solution (SciPy's DOP853 at rtol 1e-13 on the FMU's own Model
 Exchange derivatives, which are librrr's rrr_plant_accel bit for bit), the fixed-step RK4 still
-selectable, the parameters doing what docs/fmu.md says, and the writing task's tip path equal to
+selectable, the parameters doing what docs/fmus.md says, and the writing task's tip path equal to
 the fixed-step one within 1e-9 m.
 """
 

@@ -1,4 +1,4 @@
-"""The one robot file reader (rrr_robot.core.robot_file / robot): every table checked once, the
+"""The one robot file reader (rrr_robot.core.robot): every table checked once, the
 errors name the file, the table and the key; hostile files give the package's error and nothing
 else; the default robot loads with the same numbers as the C defaults.
 
@@ -29,13 +29,13 @@ from hypothesis import strategies as st
 from rrr_robot.core import param_names
 from rrr_robot.core.checked import MAX_FILE_BYTES
 from rrr_robot.core.model import DEFAULT_ROBOT_TOML
-from rrr_robot.core.robot_file import (
+from rrr_robot.core.robot import (
     DEFAULT_SAMPLE_TIME,
     MAX_MAGNITUDE,
     PARAM_TABLES,
     WRITING_FIELDS,
     ControlGains,
-    parse_robot,
+    read_robot_file,
 )
 from rrr_robot.writing.trajectory import WritingSpec
 from toml_support import toml_document, values
@@ -85,22 +85,18 @@ def test_default_robot_loads_with_the_c_defaults_numbers() -> None:
 
 
 def test_the_same_reader_everywhere(tmp_path: Path) -> None:
-    """Model.from_toml, Model.from_dict and read_robot_file are one reader: same checks, same
-    numbers."""
-    m1 = rr.Model.from_toml(DEFAULT_ROBOT_TOML)
-    m2 = rr.Model.from_dict(DEFAULT)
-    m3 = rr.read_robot_file(DEFAULT_ROBOT_TOML).model
-    for m in (m2, m3):
-        np.testing.assert_array_equal(m.p, m1.p)
+    """read_robot_file reads a file and its parsed tables alike: same checks, same numbers."""
+    m1 = rr.read_robot_file(DEFAULT_ROBOT_TOML).model
+    m2 = rr.read_robot_file(DEFAULT).model
+    np.testing.assert_array_equal(m2.p, m1.p)
     bad = copy.deepcopy(DEFAULT)
     bad["control"]["kp"][1] = "abc"
     path = write(tmp_path, bad)
-    for read in (rr.Model.from_toml, rr.read_robot_file):
-        with pytest.raises(rr.RobotFileError, match=r'\[control\] kp\[2\] must be a finite '
-                           r'number >= 0.*got "abc"'):
-            read(path)
-    with pytest.raises(rr.RobotFileError, match=r"\[control\] kp\[2\]"):
-        rr.Model.from_dict(bad, "x.toml")
+    with pytest.raises(rr.RobotFileError, match=r'\[control\] kp\[2\] must be a finite '
+                       r'number >= 0.*got "abc"'):
+        rr.read_robot_file(path)
+    with pytest.raises(rr.RobotFileError, match=r"^x.toml: \[control\] kp\[2\]"):
+        rr.read_robot_file(bad, "x.toml")
 
 
 def test_no_module_of_the_package_parses_toml_itself() -> None:
@@ -388,9 +384,9 @@ def test_property_perturbed_base_parameter_robot(tmp_path: Path, case: Any) -> N
 @settings(max_examples=200, deadline=None)
 @given(data=values)
 def test_property_any_document_gives_the_packages_error(data: Any) -> None:
-    """Whatever the parsed tables are, parse_robot raises RobotFileError (or loads)."""
+    """Whatever the parsed tables are, read_robot_file raises RobotFileError (or loads)."""
     try:
-        parse_robot(data if isinstance(data, dict) else {"kinematics": data}, "doc")
+        read_robot_file(data if isinstance(data, dict) else {"kinematics": data}, "doc")
     except rr.RobotFileError as exc:
         assert str(exc).startswith("doc: ")
 

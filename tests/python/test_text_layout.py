@@ -17,7 +17,7 @@ import pytest
 import rrr_robot as rr
 from matplotlib.transforms import Bbox
 from rrr_robot.cli import writing as cli_writing
-from rrr_robot.core.robot_file import MAX_TEXT
+from rrr_robot.core.robot import MAX_TEXT
 from rrr_robot.sim.cosim import CosimResult
 from rrr_robot.writing import plots
 from rrr_robot.writing import trajectory as tr

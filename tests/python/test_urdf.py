@@ -26,7 +26,7 @@ import pytest
 import rrr_robot as rr
 import yourdfpy
 from rrr_robot.core.model import DEFAULT_ROBOT_TOML
-from rrr_robot.core.robot import RobotFile, robot_file_from_dict
+from rrr_robot.core.robot import RobotFile, read_robot_file
 from rrr_robot.core.urdf import robot_urdf, write_urdf
 
 DEFAULT = tomllib.loads(DEFAULT_ROBOT_TOML.read_text())
@@ -48,7 +48,7 @@ def random_robot(seed: int) -> RobotFile:
                            "inertia_com": [float(s[1] + s[2]), float(s[0] + s[2]),
                                            float(s[0] + s[1])]}
     doc["motors"]["rotor_inertia"] = rng.uniform(0.0, 0.05, 3).tolist()
-    return robot_file_from_dict(doc, f"random robot {seed}")
+    return read_robot_file(doc, f"random robot {seed}")
 
 
 def pinocchio_of(robot: RobotFile, tmp_path: Path, continuous: bool = False) -> pin.Model:

@@ -21,7 +21,7 @@ import rrr_robot as rr
 from fmu_support import COMMITTED_XML
 from rrr_robot.core import _lib
 from rrr_robot.core._version import header_version
-from rrr_robot.sim.fmus import fmu_path
+from rrr_robot.sim.fmus import FMU_NAMES, fmu_path
 
 REPO = Path(__file__).resolve().parents[2]
 HEADER = REPO / "c_src" / "rrr" / "include" / "rrr" / "rrr_version.h"
@@ -81,7 +81,7 @@ def test_cmake_reads_the_version_as_the_header_states_it(tmp_path):
     assert f"version={VERSION}" in out.stdout + out.stderr
 
 
-@pytest.mark.parametrize("which", ["plant", "controller", "reference"])
+@pytest.mark.parametrize("which", FMU_NAMES)
 @pytest.mark.parametrize("fmi", [2, 3])
 def test_every_fmu_reports_it(which, fmi):
     with zipfile.ZipFile(fmu_path(which, fmi)) as zf:

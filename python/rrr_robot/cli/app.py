@@ -84,13 +84,15 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def _register_fmus(sub: Any) -> None:
+    from ..core.fmu_vars import FMUS
+
     p_fmus = command_parser(
-        sub, "fmus", help="list the FMUs: plant, controller and reference, FMI 2.0 and 3.0 (and "
-        "the FMI 2.0 archives for aarch64 Linux hosts)",
-        description="List the FMUs the package ships: rrr_plant (voltages in, joint motion "
-        "out), rrr_controller (the computed-torque law of eq 15) and rrr_reference (the "
-        "writing reference played from a table), each for FMI 2.0 and FMI 3.0, with their "
-        "interfaces (Model Exchange, Co-Simulation), platforms, extras and paths.",
+        sub, "fmus", help=f"list the FMUs: {', '.join(FMUS)}, FMI 2.0 and 3.0 (and the FMI 2.0 "
+        "archives for aarch64 Linux hosts)",
+        description=f"List the FMUs the package ships: {', '.join(f'rrr_{w}' for w in FMUS)} "
+        "(what each one is: the description in its modelDescription.xml, and the manual's page "
+        "on the FMUs), each for FMI 2.0 and FMI 3.0, with their interfaces (Model Exchange, "
+        "Co-Simulation), platforms, extras and paths.",
         example="rrr fmus")
     add_verbosity_arguments(p_fmus, bars=False)
     p_fmus.set_defaults(func=_cmd_fmus)

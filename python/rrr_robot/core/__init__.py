@@ -9,8 +9,8 @@ C), control (:class:`CtcGains`, the gains of the computed-torque law), integrato
 stepped through librrr's rrr_plant_step), linearization (:func:`linearize`: the plant's and the
 closed loop's state-space matrices from librrr's exact partial derivatives), param_names (the C
 parameter table: the model's parameters under the FMUs' variable names), checked (checked
-reading of TOML files), robot_file (the one robot file reader: :class:`RobotData`), robot
-(:class:`RobotFile`: the checked file and its :class:`Model`).
+reading of TOML files), robot (the one robot file reader: :func:`read_robot_file` gives a
+:class:`RobotFile`, the checked file and its :class:`Model`).
 """
 
 from __future__ import annotations
@@ -25,8 +25,14 @@ if TYPE_CHECKING:
     from .model import DEFAULT_ROBOT_TOML, Model, Singularity, bps_from_inertia
     from .param_names import model_fmu_values
     from .plant import Plant, PlantSnapshot, PlantStats
-    from .robot import RobotFile, read_robot_file
-    from .robot_file import DEFAULT_SAMPLE_TIME, ControlGains, LinkInertia, RobotData
+    from .robot import (
+        DEFAULT_SAMPLE_TIME,
+        ControlGains,
+        LinkInertia,
+        RobotData,
+        RobotFile,
+        read_robot_file,
+    )
 
 #: Each re-exported name and its module, imported on first use: ``rrr_robot.core.outputs`` and
 #: ``rrr_robot.core._package`` (``rrr fmus``) do not load numpy or librrr.
@@ -45,10 +51,10 @@ _LAZY = {
     "model_fmu_values": ".param_names",
     "RobotFile": ".robot",
     "read_robot_file": ".robot",
-    "DEFAULT_SAMPLE_TIME": ".robot_file",
-    "ControlGains": ".robot_file",
-    "LinkInertia": ".robot_file",
-    "RobotData": ".robot_file",
+    "DEFAULT_SAMPLE_TIME": ".robot",
+    "ControlGains": ".robot",
+    "LinkInertia": ".robot",
+    "RobotData": ".robot",
 }
 
 

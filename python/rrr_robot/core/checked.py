@@ -1,6 +1,7 @@
-"""Checked reading of TOML files (robot files, scenario files): one loader and one set of field
-checks, so that every reader refuses the same things with the same kind of message, naming the
-file, the table and the key (and the index in an array), what was expected and what was found::
+"""Checked reading of TOML files (robot files, scenario files), and their writer: one loader and
+one set of field checks, so that every reader refuses the same things with the same kind of
+message, naming the file, the table and the key (and the index in an array), what was expected
+and what was found::
 
     robot.toml: [control] kp[2] must be a finite number >= 0 and <= 1e6, got "abc"
 
@@ -9,7 +10,7 @@ not TOML or nested deeper than the parser handles. :class:`Document` checks the 
 against a schema: unknown tables and keys are errors that name them and list the allowed ones,
 and each value passes a field check (:class:`Number`, :class:`Vector`, :class:`Matrix`,
 :class:`Text`, :class:`Flag`, :class:`ScalarOrArray`) that returns it converted (float, tuple of
-floats, str, bool).
+floats, str, bool). :func:`write_toml` writes tables of scalars and arrays back.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ __all__ = [
     "Vector",
     "load_toml",
     "show",
+    "write_toml",
 ]
 
 #: Largest robot or scenario file read, bytes (the default robot file has 4 kB).
@@ -384,3 +386,24 @@ class Document:
         except Invalid as exc:
             self.fail(table, key, f"[{table}] {key}{exc.index} {exc.requirement}, got "
                       f"{show(exc.value)}")
+
+
+def _fmt(value: Any) -> str:
+    if isinstance(value, list):
+        return "[" + ", ".join(_fmt(v) for v in value) + "]"
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float | int):
+        return repr(float(value))
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    raise TypeError(f"cannot write {type(value).__name__} to TOML")
+
+
+def write_toml(data: Mapping[str, Mapping[str, Any]], path: Path, header: str = "") -> None:
+    """Write a two-level mapping (tables of scalars and arrays) as TOML."""
+    lines = [f"# {line}" for line in header.splitlines()]
+    for table, entries in data.items():
+        lines.append(f"\n[{table}]")
+        lines.extend(f"{key} = {_fmt(value)}" for key, value in entries.items())
+    path.write_text("\n".join(lines).lstrip("\n") + "\n")

@@ -12,7 +12,6 @@ from numpy.typing import ArrayLike
 from ..errors import BadInputError
 from . import _lib
 from ._lib import _ext
-from .robot_file import ControlGains
 
 Vec3 = tuple[float, float, float]
 
@@ -60,8 +59,3 @@ class CtcGains:
         raw = _lib.RawCtcGains()
         _ext.ctc_gains_default(raw)
         return cls(tuple(raw.kp), tuple(raw.kd), bool(raw.feedforward))
-
-    @classmethod
-    def from_control(cls, control: ControlGains, feedforward: bool = True) -> CtcGains:
-        """The gains of a robot file's [control] table (``RobotFile.control``)."""
-        return cls(control.kp, control.kd, feedforward)

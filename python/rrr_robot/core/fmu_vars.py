@@ -67,13 +67,12 @@ def _row(row: tuple[str, int, str, str, str, str]) -> FmuVariable:
 _TABLE: dict[str, tuple[FmuVariable, ...]] = {
     fmu: tuple(_row(r) for r in rows) for fmu, rows in VARIABLES.items()}
 _BY_NAME = {fmu: {v.name: v for v in rows} for fmu, rows in _TABLE.items()}
-#: The FMUs, by role.
-FMUS = tuple(sorted(_TABLE))
+#: The FMUs, by role, in the order of fmu/CMakeLists.txt's RRR_FMU_NAMES (the one list).
+FMUS = tuple(_TABLE)
 
 
 def variables(fmu: str) -> tuple[FmuVariable, ...]:
-    """Every variable of the 'controller', 'plant' or 'reference' FMU, in model-description
-    order."""
+    """Every variable of one FMU (one of :data:`FMUS`), in model-description order."""
     try:
         return _TABLE[fmu]
     except KeyError:

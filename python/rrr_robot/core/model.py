@@ -21,8 +21,8 @@ from . import _lib
 from ._arrays import FloatArray
 from ._lib import _ext
 from ._package import DATA_DIR
+from .checked import write_toml
 from .control import CtcGains
-from .robot_file import parse_robot, read_robot_data, write_toml
 
 Kernels = _ext.Kernels
 
@@ -88,7 +88,8 @@ def bps_from_inertia(
 class Model:
     """Parameters of the RRR arm and its closed-form algorithms (all evaluated in C).
 
-    Build with :meth:`default`, :meth:`from_toml` or :meth:`from_dict`. Array arguments are
+    Build with :meth:`default`, or read a robot file with
+    :func:`~rrr_robot.core.robot.read_robot_file` (its ``model``). Array arguments are
     (3,) vectors or (n, 3) batches; results follow the shape of the input.
     """
 
@@ -105,24 +106,6 @@ class Model:
         raw = _lib.RawModel()
         _ext.model_default(raw)
         return cls(raw)
-
-    @classmethod
-    def from_toml(cls, path: str | Path) -> Model:
-        """Read a robot file in the format of data/default_robot.toml (every table checked once
-        by ``rrr_robot.core.robot_file.read_robot_data``; RobotFileError names the file, the
-        table and the key). :func:`rrr_robot.core.robot.read_robot_file` gives the other tables
-        as well."""
-        return cls(read_robot_data(path).raw_model(), validate=False)
-
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any], source: str = "robot data") -> Model:
-        """Build from the nested mapping of a robot TOML file (see data/default_robot.toml),
-        with the same checks as :meth:`from_toml`.
-
-        A ``[base_parameters] p = [...]`` table, if present, is used as is; otherwise p is
-        computed from ``[link1..3]`` and ``[motors] rotor_inertia`` by eq 12.
-        """
-        return cls(parse_robot(data, source).raw_model(), validate=False)
 
     def copy(self) -> Model:
         """An independent copy."""
@@ -203,7 +186,8 @@ class Model:
         }
 
     def to_toml(self, path: str | Path) -> None:
-        """Write the parameters as a robot TOML file readable by :meth:`from_toml`."""
+        """Write the parameters as a robot TOML file ([base_parameters]; read it with
+        :func:`rrr_robot.core.robot.read_robot_file`)."""
         write_toml(self.to_dict(), Path(path))
 
     # ---- kinematics -----------------------------------------------------------------------

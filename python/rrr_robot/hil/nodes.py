@@ -35,7 +35,7 @@ from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
 from ..core.outputs import STAGING_PREFIX, atomic_write_text
 from ..core.param_names import param_index
-from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..core.robot import DEFAULT_SAMPLE_TIME
 from ..errors import HilError
 from ..sim.fmus import fmu_path
 from ..writing.reference_table import write_reference_table

@@ -27,7 +27,7 @@ from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core.model import Model
 from ..core.param_names import model_fmu_values
-from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..core.robot import DEFAULT_SAMPLE_TIME
 from ..errors import BadInputError
 from ..sim.cosim import initial_state_values
 from ..sim.fmu_slave import pooled_slave

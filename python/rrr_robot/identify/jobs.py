@@ -18,8 +18,7 @@ import numpy as np
 
 from ..core.model import DEFAULT_ROBOT_TOML, Model
 from ..core.outputs import ResultSet, atomic_path, check_folder, strict_json
-from ..core.robot import read_robot_file
-from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..core.robot import DEFAULT_SAMPLE_TIME, read_robot_file
 from ..errors import BadInputError
 from . import experiments as ex
 from .excitation import design_excitation

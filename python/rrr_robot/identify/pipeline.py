@@ -2,7 +2,7 @@
 
 The prior robot file supplies what is not identified (kinematics, g, k_t, u_max, [control],
 [writing]); the written file has the identified ``[base_parameters] p`` and ``[friction]``
-tables, readable by Model.from_toml, the core and both FMUs (core.param_names.model_fmu_values),
+tables, readable by read_robot_file, the core and both FMUs (core.param_names.model_fmu_values),
 plus an ``[identification]`` table with the standard deviations and figures of merit.
 """
 
@@ -17,11 +17,11 @@ from typing import Any
 import numpy as np
 
 from ..core import fmu_vars as fv
+from ..core.checked import write_toml
 from ..core.model import Model
 from ..core.outputs import atomic_path
 from ..core.param_names import group_names
 from ..core.robot import RobotFile, read_robot_file
-from ..core.robot_file import write_toml
 from ..errors import BadInputError, ModelError
 from ._threads import one_blas_thread
 from .base_params import BaseParamResult, estimate_base_params

@@ -20,7 +20,7 @@ from fmpy.fmi1 import FMICallException
 
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
-from ..core.robot_file import DEFAULT_SAMPLE_TIME
+from ..core.robot import DEFAULT_SAMPLE_TIME
 from ..core.tables import write_table
 from ..errors import BadInputError
 from .fmu_slave import FmuSlave, pooled_slave

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from ..core._package import PACKAGE_DIR
 from ..core.archives import CheckedZip
+from ..core.fmu_vars import FMUS
 from ..errors import ArchiveError, BadInputError, RrrError
 
 __all__ = [
@@ -29,9 +30,8 @@ __all__ = [
     "variants",
 ]
 
-#: The packaged FMUs' files by role.
-FMU_NAMES = {"plant": "rrr_plant.fmu", "controller": "rrr_controller.fmu",
-             "reference": "rrr_reference.fmu"}
+#: The packaged FMUs' files by role (the roles of fmu/CMakeLists.txt's RRR_FMU_NAMES, in order).
+FMU_NAMES = {which: f"rrr_{which}.fmu" for which in FMUS}
 #: The FMI versions each FMU is built for.
 FMI_VERSIONS = (2, 3)
 #: fmus/<folder>/: FMI 2.0 archives for the hosts of another CPU, binaries/linux64 built for it.
@@ -47,7 +47,7 @@ def fmu_dir() -> Path:
 
 
 def fmu_path(which: str, fmi_version: int = 2) -> Path:
-    """Path of the 'plant', 'controller' or 'reference' FMU for FMI version 2 or 3.
+    """Path of an FMU (one of FMU_NAMES: 'plant', 'controller', ...) for FMI version 2 or 3.
 
     $RRR_FMU_DIR (e.g. a CMake build's ``fmus/`` folder) takes precedence over the copies
     installed with the package.
@@ -126,8 +126,8 @@ def describe(which: str, fmi_version: int, host: str = "") -> FmuVariant:
 
 
 def variants() -> list[FmuVariant]:
-    """Every FMU the package provides: plant, controller and reference, FMI 2.0 and 3.0, and
-    the FMI 2.0 archives for other hosts (HOST_VARIANTS) the build made."""
+    """Every FMU the package provides (FMU_NAMES), FMI 2.0 and 3.0, and the FMI 2.0 archives
+    for other hosts (HOST_VARIANTS) the build made."""
     found = [describe(which, v) for v in FMI_VERSIONS for which in FMU_NAMES]
     for host in HOST_VARIANTS:
         found += [describe(which, 2, host) for which in FMU_NAMES

@@ -28,7 +28,7 @@ from ..core.checked import Field, Flag, Invalid, Number, show
 from ..core.integrator import PlantIntegrator
 from ..core.model import Model
 from ..core.param_names import param_index, set_values
-from ..core.robot_file import GAIN, MAX_MAGNITUDE, param_check
+from ..core.robot import GAIN, MAX_MAGNITUDE, param_check
 from ..errors import BadInputError, ModelError
 
 __all__ = ["MAX_LEAD", "check_bindings"]

@@ -44,7 +44,7 @@ from ..core.outputs import atomic_path, check_folder
 from ..core.param_names import model_fmu_values
 from ..errors import BadInputError
 from ..sim.cosim import initial_state_values
-from ..sim.fmus import fmu_path
+from ..sim.fmus import FMU_NAMES, fmu_path
 from ..writing.job import WritingJob, controller_fmu_values, prepare
 from .ssd import Component, Connection, System, write_ssd
 from .table import TABLE_FILE, write_reference_table
@@ -59,9 +59,8 @@ def _ports(fmu: str, causality: str) -> dict[str, str]:
     return {v.name: v.unit for v in fv.variables(fmu) if v.causality == causality}
 
 
-#: Component name -> FMU file in the archive's resources/.
-COMPONENTS = {"reference": "rrr_reference.fmu", "controller": "rrr_controller.fmu",
-              "plant": "rrr_plant.fmu"}
+#: Component name (the FMU's) -> FMU file in the archive's resources/.
+COMPONENTS = {name: FMU_NAMES[name] for name in ("reference", "controller", "plant")}
 #: The components' connectors: name -> unit (the FMUs' inputs and outputs).
 REF_OUT = _ports("reference", "output")
 CTRL_IN = _ports("controller", "input")
@@ -171,7 +170,7 @@ def export_ssp(job: SspJob) -> dict[str, Any]:
     prepared = prepare(WritingJob(out=job.out.parent, text=job.text, scenarios=[job.scenario],
                                   robot=job.robot, scale=job.scale, figures=False))
     model, robot, (scn,), ref = prepared
-    fmus = {name: fmu_path(name, 2) for name in ("controller", "plant", "reference")}
+    fmus = {name: fmu_path(name, 2) for name in COMPONENTS}
     step = float(ref.t[1] - ref.t[0])
     plant_values = initial_state_values(ref.q[0], ref.qd[0])
     plant_values |= model_fmu_values(model)

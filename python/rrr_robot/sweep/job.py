@@ -50,7 +50,7 @@ from ..core.outputs import (
     make_folders,
     strict_json,
 )
-from ..core.robot import robot_file_from_dict
+from ..core.robot import read_robot_file
 from ..errors import BadInputError, RobotFileError, RrrError
 from ..writing.job import ENGINES, writing_spec
 from ..writing.scenarios import BUILTIN, read_scenario_file, scenario_from_dict
@@ -118,7 +118,7 @@ def make_plan(spec: SweepSpec, engine: str) -> SweepPlan:
     scenario = scenario_from_dict(base, base_source)
     robot_path = spec.resolve(spec.robot) if spec.robot else str(DEFAULT_ROBOT_TOML)
     robot_data = load_toml(robot_path, "robot file", RobotFileError)
-    robot = robot_file_from_dict(robot_data, robot_path)
+    robot = read_robot_file(robot_data, robot_path)
     robot.require_control()
     scenario.controller_model(robot.model)
     make_reference(robot.model, writing_spec(robot))

@@ -23,7 +23,7 @@ from functools import cache
 from typing import Any
 
 from ..core.checked import Field, Flag, Matrix, Number, ScalarOrArray, Text, Vector
-from ..core.robot_file import WRITING_FIELDS
+from ..core.robot import WRITING_FIELDS
 from ..writing.scenarios import SCHEMA
 
 __all__ = ["SCALE", "Target", "element_checks", "target", "targets"]

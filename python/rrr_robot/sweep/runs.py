@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from ..core import fmu_vars as fv
-from ..core.robot import RobotFile, robot_file_from_dict
+from ..core.robot import RobotFile, read_robot_file
 from ..writing.job import metrics, run_engine, scenario_options, scenario_summary, writing_spec
 from ..writing.scenarios import scenario_from_dict
 from ..writing.trajectory import Reference, make_reference
@@ -87,7 +87,7 @@ def _robot(plan: SweepPlan) -> RobotFile:
     with _lock:
         robot = _robots.get(plan.fingerprint)
     if robot is None:
-        robot = robot_file_from_dict(plan.robot, plan.robot_source)
+        robot = read_robot_file(plan.robot, plan.robot_source)
         robot.require_control()
         with _lock:
             _robots.clear()  # one sweep at a time per worker in practice

@@ -25,8 +25,7 @@ from ..core import fmu_vars as fv
 from ..core.model import DEFAULT_ROBOT_TOML, Model
 from ..core.outputs import ResultSet, check_folder, check_name, to_strict_json_value
 from ..core.param_names import model_fmu_values
-from ..core.robot import RobotFile, read_robot_file
-from ..core.robot_file import ControlGains
+from ..core.robot import ControlGains, RobotFile, read_robot_file
 from ..core.summary import reference_section, write_summary
 from ..core.tables import check_table_format
 from ..errors import BadInputError

@@ -44,7 +44,7 @@ from ..core.checked import (
 )
 from ..core.model import Model
 from ..core.param_names import GROUPS, PARAMS, ParamInfo, group_shape, set_values
-from ..core.robot_file import GAIN
+from ..core.robot import GAIN
 from ..errors import ModelError, ScenarioError
 
 __all__ = [

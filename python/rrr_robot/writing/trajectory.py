@@ -50,12 +50,12 @@ from numpy.typing import ArrayLike
 from ..core._arrays import FloatArray
 from ..core.checked import Invalid, show
 from ..core.model import Model
-from ..core.robot import RobotFile
-from ..core.robot_file import (
+from ..core.robot import (
     DEFAULT_SAMPLE_TIME,
     MAX_TEXT,
     SAMPLE_TIME,
     WRITING_FIELDS,
+    RobotFile,
     writing_values,
 )
 from ..errors import BadInputError, NumericError, RobotFileError
@@ -144,7 +144,7 @@ class WritingSpec:
     elbow: str = "up"
 
     def __post_init__(self) -> None:
-        # the checks of a robot file's [writing] table (rrr_robot.core.robot_file), and dt
+        # the checks of a robot file's [writing] table (rrr_robot.core.robot), and dt
         # those of [control] sample_time
         if isinstance(self.text, str) and len(self.text) > MAX_TEXT:
             raise BadInputError(
