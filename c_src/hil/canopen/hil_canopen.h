@@ -22,6 +22,8 @@
  *   caller first moves its plant by the period the SYNC closes: see rrr_co_transmit);
  * - PDO mapping readable and writable by SDO, in CiA 301's order (COB-ID bit 31 = 1, sub 0 = 0,
  *   the entries, sub 0 = n, COB-ID bit 31 = 0), checked (mappable, direction, length <= 64 bits);
+ *   the COB-IDs by CiA 301's rules (abort 0x06090030): no valid PDO on a restricted identifier
+ *   (rrr_co_restricted_id), the identifier changed only while the PDO is invalid, 11 bits only;
  * - the CiA 402 state machine on the controlword 0x6040 / statusword 0x6041 (shutdown, switch
  *   on, enable operation, disable operation, quick stop with the quick stop option code 0x605A,
  *   disable voltage, fault, fault reset on the rising edge of bit 7);
@@ -209,6 +211,12 @@ uint16_t rrr_co_statusword(rrr_co_402 s);
 
 /** Name of a 402 state as canopen.BaseNode402 spells it ("OPERATION ENABLED"). */
 const char *rrr_co_402_str(rrr_co_402 s);
+
+/** 1 if no PDO of these drives may be valid on the 11-bit CAN-ID @p can_id (an SDO write of such
+ *  a COB-ID is aborted with 0x06090030): CiA 301's restricted CAN-IDs (0x000, 0x001..0x07F,
+ *  0x101..0x180, 0x581..0x5FF, 0x601..0x67F, 0x6E0..0x6FF, 0x701..0x7FF) and the predefined
+ *  connection set's SYNC 0x080, EMCY 0x081..0x0FF and TIME 0x100; 1 for anything above 0x7FF. */
+int rrr_co_restricted_id(uint32_t can_id);
 
 /** Row of (index, sub) in rrr_co_od: >= 0; -1 no such object; -2 no such sub-index. */
 int rrr_co_od_find(uint16_t index, uint8_t sub);

@@ -8,7 +8,8 @@
  *  - FAULT has the error register's generic bit set; the error register is 0 outside FAULT
  *    (every fault goes to FAULT, only the fault reset clears it); the safety policy's latch
  *    (rrr_hil_latch) is set exactly in FAULT, with the code 0x603F;
- *  - the PDO mappings never exceed 64 bits nor RRR_CO_MAX_MAPPED entries.
+ *  - the PDO mappings never exceed 64 bits nor RRR_CO_MAX_MAPPED entries; a valid PDO's COB-ID
+ *    is never a restricted identifier (rrr_co_restricted_id) nor a 29-bit one.
  *
  * Input layout: byte 0: the node id (1..127, from byte 0 % 127 + 1); then 12-byte records: op,
  * id low, dlc, data[8], dt. op & 7 chooses the identifier's base (0 NMT, 1 SYNC, 2 SDO request,
@@ -70,7 +71,15 @@ static void check(const rrr_co_node *n, const rrr_co_out *out)
     }
     static const int maps[3] = {RRR_CO_OD_RPDO1_MAP_N, RRR_CO_OD_TPDO1_MAP_N,
                                 RRR_CO_OD_TPDO2_MAP_N};
+    static const int cobs[3] = {RRR_CO_OD_RPDO1_COBID, RRR_CO_OD_TPDO1_COBID,
+                                RRR_CO_OD_TPDO2_COBID};
     for (int m = 0; m < 3; ++m) {
+        /* a valid PDO is never on a restricted identifier; never a 29-bit one */
+        const uint32_t cob = n->v[cobs[m]];
+        if ((cob & 0x3FFFF800u) != 0u ||
+            (!(cob & 0x80000000u) && rrr_co_restricted_id(cob & 0x7FFu))) {
+            __builtin_trap();
+        }
         const uint32_t cnt = n->v[maps[m]];
         if (cnt > RRR_CO_MAX_MAPPED) {
             __builtin_trap();
