@@ -427,10 +427,11 @@ static void test_pdo_on_sync(void)
         CHECK(n.s402 == st[i]);
     }
     const rrr_hil_frame *t1 = find_out(0x182), *t2 = find_out(0x282);
-    CHECK(out.n == 2 && t1 && t2 && t1->dlc == 6 && t2->dlc == 6);
+    CHECK(out.n == 2 && t1 && t2 && t1->dlc == 7 && t2->dlc == 6);
     if (t1 && t2) {
         CHECK(le(t1->data, 2) == 0x0237u);
         CHECK(le(t1->data + 2, 4) == (1u << 19));            /* pi rad: half a revolution */
+        CHECK(t1->data[6] == RRR_CO_MODE_CST);               /* 0x6061: the mode displayed */
         CHECK((int32_t)le(t2->data, 4) == -(1 << 20));       /* -2 pi rad/s */
         CHECK(le(t2->data + 4, 2) == 0);
     }
@@ -646,6 +647,51 @@ static void test_cob_id_rules(void)
     /* the SYNC and EMCY identifiers are read-only */
     CHECK(sdo_write(&n, 0x1005, 0, 0x181u, 4) == RRR_CO_ABORT_READ_ONLY);
     CHECK(sdo_write(&n, 0x1014, 0, 0x181u, 4) == RRR_CO_ABORT_READ_ONLY);
+}
+
+/* What field masters read (ros2_canopen's CiA 402 driver): the mode display 0x6061 in TPDO1, the
+ * homing method 0x6098 = 0 (nothing else), the option codes 0x605A..0x605E within what the drive
+ * does, and the halt bit: 0 torque in OPERATION ENABLED while it is set, the state kept. */
+static void test_field_master_objects(void)
+{
+    rrr_co_node n = booted();
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x1A00, 0, &v) == 0 && v == 3);
+    CHECK(sdo_read(&n, 0x1A00, 3, &v) == 0 && v == 0x60610008u);
+    CHECK(sdo_read(&n, 0x6098, 0, &v) == 0 && v == 0);
+    CHECK(sdo_write(&n, 0x6098, 0, 35, 1) == RRR_CO_ABORT_TOO_HIGH); /* on current position */
+    CHECK(sdo_write(&n, 0x6098, 0, 0xFF, 1) == RRR_CO_ABORT_TOO_LOW); /* -1 */
+    CHECK(sdo_write(&n, 0x6098, 0, 0, 1) == 0);
+    static const struct {
+        uint16_t index;
+        int16_t def, lo, hi;
+    } codes[] = {{0x605B, 0, 0, 1}, {0x605C, 1, 0, 1}, {0x605D, 1, 1, 2}, {0x605E, 0, 0, 2}};
+    for (unsigned i = 0; i < sizeof codes / sizeof codes[0]; ++i) {
+        CHECK(sdo_read(&n, codes[i].index, 0, &v) == 0 && (int16_t)v == codes[i].def);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)(codes[i].hi + 1), 2) ==
+              RRR_CO_ABORT_TOO_HIGH);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)(codes[i].lo - 1), 2) ==
+              RRR_CO_ABORT_TOO_LOW);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)codes[i].lo, 2) == 0);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)codes[i].hi, 2) == 0);
+    }
+    CHECK(sdo_read(&n, 0x1200, 1, &v) == 0 && v == 0x600u + ID);
+    CHECK(sdo_read(&n, 0x1200, 2, &v) == 0 && v == 0x580u + ID);
+    CHECK(sdo_write(&n, 0x1200, 1, 0x601u, 4) == RRR_CO_ABORT_READ_ONLY);
+    /* halt: 0 torque while bit 8 is set, OPERATION ENABLED kept, 0x6077 says 0 */
+    rrr_co_node m = enabled();
+    CHECK(sdo_write(&m, 0x2001, 0, 0, 1) == 0);
+    rpdo(&m, 0x010F, 400);
+    sync(&m);
+    CHECK(m.s402 == RRR_CO_402_OPERATION_ENABLED && rrr_co_torque_Nm(&m) == 0.0);
+    const rrr_hil_frame *t2 = find_out(0x282);
+    CHECK(t2 && (int16_t)le(t2->data + 4, 2) == 0);
+    rpdo(&m, 0x000F, 400);
+    sync(&m);
+    CHECK_CLOSE(rrr_co_torque_Nm(&m), 400 * (RATED * 1e-6), 1e-9);
+    t2 = find_out(0x282);
+    CHECK(t2 && (int16_t)le(t2->data + 4, 2) == 400);
+    CHECK(m.latch.fault_events == 0 && m.latch.zero_periods == 0);
 }
 
 /* Random frames on the node's identifiers: never a crash, at most RRR_CO_MAX_OUT frames out,
@@ -961,6 +1007,7 @@ int main(void)
     test_heartbeat();
     test_mapping_by_sdo();
     test_cob_id_rules();
+    test_field_master_objects();
     test_hostile();
     test_fuzz_smoke(20000);
     return rrr_test_report("test_hil_canopen");

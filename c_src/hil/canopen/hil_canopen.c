@@ -903,8 +903,10 @@ void rrr_co_set_feedback(rrr_co_node *n, double q_rad, double qd_rad_s)
 
 double rrr_co_torque_Nm(const rrr_co_node *n)
 {
-    double tau = 0.0; /* the drive function: the target torque, in OPERATION ENABLED only */
-    if (n->nmt == RRR_CO_NMT_OPERATIONAL && n->s402 == RRR_CO_402_OPERATION_ENABLED) {
+    double tau = 0.0; /* the drive function: the target torque, in OPERATION ENABLED only, and
+                       * not while the halt bit (controlword bit 8, 0x605D: 0 torque at once) */
+    if (n->nmt == RRR_CO_NMT_OPERATIONAL && n->s402 == RRR_CO_402_OPERATION_ENABLED &&
+        !(n->v[RRR_CO_OD_CONTROLWORD] & RRR_CO_CW_HALT)) {
         const int16_t t = (int16_t)(uint16_t)n->v[RRR_CO_OD_TARGET_TORQUE];
         tau = (double)t * (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-6;
     }

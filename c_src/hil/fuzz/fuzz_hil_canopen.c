@@ -3,8 +3,8 @@
  * one booted node, with its invariants checked after every step (a violation traps):
  *  - a call never appends more than RRR_CO_MAX_OUT frames, none with a DLC above 8;
  *  - the statusword is that of the 402 state; the mode is CST;
- *  - torque only in NMT operational and OPERATION ENABLED, and never beyond the max torque
- *    0x6072 (per mille of the rated torque);
+ *  - torque only in NMT operational and OPERATION ENABLED without the halt bit, and never
+ *    beyond the max torque 0x6072 (per mille of the rated torque);
  *  - FAULT has the error register's generic bit set; the error register is 0 outside FAULT
  *    (every fault goes to FAULT, only the fault reset clears it); the safety policy's latch
  *    (rrr_hil_latch) is set exactly in FAULT, with the code 0x603F;
@@ -53,7 +53,8 @@ static void check(const rrr_co_node *n, const rrr_co_out *out)
     const double rated = (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-6 *
                          (double)n->v[RRR_CO_OD_MAX_TORQUE];
     if (tau != 0.0 && (n->nmt != RRR_CO_NMT_OPERATIONAL ||
-                       n->s402 != RRR_CO_402_OPERATION_ENABLED)) {
+                       n->s402 != RRR_CO_402_OPERATION_ENABLED ||
+                       (n->v[RRR_CO_OD_CONTROLWORD] & RRR_CO_CW_HALT))) {
         __builtin_trap();
     }
     if (!(fabs(tau) <= rated * (1.0 + 1e-12))) {
