@@ -427,10 +427,11 @@ static void test_pdo_on_sync(void)
         CHECK(n.s402 == st[i]);
     }
     const rrr_hil_frame *t1 = find_out(0x182), *t2 = find_out(0x282);
-    CHECK(out.n == 2 && t1 && t2 && t1->dlc == 6 && t2->dlc == 6);
+    CHECK(out.n == 2 && t1 && t2 && t1->dlc == 7 && t2->dlc == 6);
     if (t1 && t2) {
         CHECK(le(t1->data, 2) == 0x0237u);
         CHECK(le(t1->data + 2, 4) == (1u << 19));            /* pi rad: half a revolution */
+        CHECK(t1->data[6] == RRR_CO_MODE_CST);               /* 0x6061: the mode displayed */
         CHECK((int32_t)le(t2->data, 4) == -(1 << 20));       /* -2 pi rad/s */
         CHECK(le(t2->data + 4, 2) == 0);
     }
@@ -584,6 +585,113 @@ static void test_mapping_by_sdo(void)
     uint32_t v = 0;
     CHECK(sdo_read(&n, 0x1A00, 1, &v) == 0 && v == 0x60410010u);
     CHECK(sdo_read(&n, 0x1600, 0, &v) == 0 && v == 2);
+}
+
+/* CiA 301's restricted CAN-IDs and the predefined connection set's broadcast objects (SYNC,
+ * EMCY, TIME): no PDO may be valid on one of them. */
+static int restricted_id(uint32_t id)
+{
+    return id <= 0x180u || (id >= 0x581u && id <= 0x5FFu) || (id >= 0x601u && id <= 0x67Fu) ||
+           (id >= 0x6E0u && id <= 0x6FFu) || id >= 0x701u;
+}
+
+/* The COB-ID rules of every PDO (0x1400, 0x1800, 0x1801 sub 1), each an abort 0x06090030 that
+ * changes nothing: a valid PDO on a restricted identifier (every one of the 2048 is tried, as the
+ * conformance test does), a change of the identifier while the PDO is valid, a 29-bit identifier
+ * (bit 29) and bits 11..28 set; a restricted identifier is accepted while the PDO is invalid
+ * (bit 31), and never sent or received on. */
+static void test_cob_id_rules(void)
+{
+    static const uint16_t comm[3] = {0x1400u, 0x1800u, 0x1801u};
+    static const uint32_t cob[3] = {0x200u + ID, 0x180u + ID, 0x280u + ID};
+    for (unsigned p = 0; p < 3; ++p) {
+        rrr_co_node n = booted();
+        unsigned refused = 0;
+        for (uint32_t id = 0; id <= 0x7FFu; ++id) {
+            CHECK(sdo_write(&n, comm[p], 1, 0x80000000u | id, 4) == 0); /* invalid: any id */
+            const uint32_t ab = sdo_write(&n, comm[p], 1, id, 4);
+            if (restricted_id(id)) {
+                refused++;
+                CHECK(ab == RRR_CO_ABORT_VALUE);
+                uint32_t v = 0;
+                CHECK(sdo_read(&n, comm[p], 1, &v) == 0 && v == (0x80000000u | id));
+            } else {
+                CHECK(ab == 0);
+            }
+        }
+        CHECK(refused == 0x181u + 0x7Fu + 0x7Fu + 0x20u + 0xFFu); /* 926 identifiers */
+        CHECK(sdo_write(&n, comm[p], 1, 0x80000000u | cob[p], 4) == 0);
+        CHECK(sdo_write(&n, comm[p], 1, cob[p], 4) == 0);
+        /* the identifier changes only while the PDO is invalid */
+        CHECK(sdo_write(&n, comm[p], 1, cob[p] + 0x10u, 4) == RRR_CO_ABORT_VALUE);
+        /* 29-bit identifiers and bits 11..28: refused, valid or not */
+        CHECK(sdo_write(&n, comm[p], 1, 0x20000000u | cob[p], 4) == RRR_CO_ABORT_VALUE);
+        CHECK(sdo_write(&n, comm[p], 1, 0xA0000000u | cob[p], 4) == RRR_CO_ABORT_VALUE);
+        CHECK(sdo_write(&n, comm[p], 1, 0x00000800u | cob[p], 4) == RRR_CO_ABORT_VALUE);
+        CHECK(sdo_write(&n, comm[p], 1, 0x80100000u | cob[p], 4) == RRR_CO_ABORT_VALUE);
+        uint32_t v = 0;
+        CHECK(sdo_read(&n, comm[p], 1, &v) == 0 && v == cob[p]);
+    }
+    /* the identifiers of the acceptance, on TPDO1 */
+    static const uint32_t bad[] = {0x000u, 0x080u, 0x081u, 0x581u, 0x601u, 0x701u, 0x7E5u};
+    rrr_co_node n = booted();
+    CHECK(sdo_write(&n, 0x1800, 1, 0x80000000u | (0x180u + ID), 4) == 0);
+    for (unsigned i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        CHECK(sdo_write(&n, 0x1800, 1, bad[i], 4) == RRR_CO_ABORT_VALUE);
+    }
+    /* a restricted identifier while invalid is harmless: nothing is sent on it */
+    CHECK(sdo_write(&n, 0x1800, 1, 0x80000000u, 4) == 0); /* invalid, on 0x000 */
+    nmt(&n, 0x01, 0);
+    sync(&n);
+    CHECK(find_out(0x000) == NULL && find_out(0x282) != NULL);
+    /* the SYNC and EMCY identifiers are read-only */
+    CHECK(sdo_write(&n, 0x1005, 0, 0x181u, 4) == RRR_CO_ABORT_READ_ONLY);
+    CHECK(sdo_write(&n, 0x1014, 0, 0x181u, 4) == RRR_CO_ABORT_READ_ONLY);
+}
+
+/* What field masters read (ros2_canopen's CiA 402 driver): the mode display 0x6061 in TPDO1, the
+ * homing method 0x6098 = 0 (nothing else), the option codes 0x605A..0x605E within what the drive
+ * does, and the halt bit: 0 torque in OPERATION ENABLED while it is set, the state kept. */
+static void test_field_master_objects(void)
+{
+    rrr_co_node n = booted();
+    uint32_t v = 0;
+    CHECK(sdo_read(&n, 0x1A00, 0, &v) == 0 && v == 3);
+    CHECK(sdo_read(&n, 0x1A00, 3, &v) == 0 && v == 0x60610008u);
+    CHECK(sdo_read(&n, 0x6098, 0, &v) == 0 && v == 0);
+    CHECK(sdo_write(&n, 0x6098, 0, 35, 1) == RRR_CO_ABORT_TOO_HIGH); /* on current position */
+    CHECK(sdo_write(&n, 0x6098, 0, 0xFF, 1) == RRR_CO_ABORT_TOO_LOW); /* -1 */
+    CHECK(sdo_write(&n, 0x6098, 0, 0, 1) == 0);
+    static const struct {
+        uint16_t index;
+        int16_t def, lo, hi;
+    } codes[] = {{0x605B, 0, 0, 1}, {0x605C, 1, 0, 1}, {0x605D, 1, 1, 2}, {0x605E, 0, 0, 2}};
+    for (unsigned i = 0; i < sizeof codes / sizeof codes[0]; ++i) {
+        CHECK(sdo_read(&n, codes[i].index, 0, &v) == 0 && (int16_t)v == codes[i].def);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)(codes[i].hi + 1), 2) ==
+              RRR_CO_ABORT_TOO_HIGH);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)(codes[i].lo - 1), 2) ==
+              RRR_CO_ABORT_TOO_LOW);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)codes[i].lo, 2) == 0);
+        CHECK(sdo_write(&n, codes[i].index, 0, (uint16_t)codes[i].hi, 2) == 0);
+    }
+    CHECK(sdo_read(&n, 0x1200, 1, &v) == 0 && v == 0x600u + ID);
+    CHECK(sdo_read(&n, 0x1200, 2, &v) == 0 && v == 0x580u + ID);
+    CHECK(sdo_write(&n, 0x1200, 1, 0x601u, 4) == RRR_CO_ABORT_READ_ONLY);
+    /* halt: 0 torque while bit 8 is set, OPERATION ENABLED kept, 0x6077 says 0 */
+    rrr_co_node m = enabled();
+    CHECK(sdo_write(&m, 0x2001, 0, 0, 1) == 0);
+    rpdo(&m, 0x010F, 400);
+    sync(&m);
+    CHECK(m.s402 == RRR_CO_402_OPERATION_ENABLED && rrr_co_torque_Nm(&m) == 0.0);
+    const rrr_hil_frame *t2 = find_out(0x282);
+    CHECK(t2 && (int16_t)le(t2->data + 4, 2) == 0);
+    rpdo(&m, 0x000F, 400);
+    sync(&m);
+    CHECK_CLOSE(rrr_co_torque_Nm(&m), 400 * (RATED * 1e-6), 1e-9);
+    t2 = find_out(0x282);
+    CHECK(t2 && (int16_t)le(t2->data + 4, 2) == 400);
+    CHECK(m.latch.fault_events == 0 && m.latch.zero_periods == 0);
 }
 
 /* Random frames on the node's identifiers: never a crash, at most RRR_CO_MAX_OUT frames out,
@@ -898,6 +1006,8 @@ int main(void)
     test_rpdo_timeout();
     test_heartbeat();
     test_mapping_by_sdo();
+    test_cob_id_rules();
+    test_field_master_objects();
     test_hostile();
     test_fuzz_smoke(20000);
     return rrr_test_report("test_hil_canopen");

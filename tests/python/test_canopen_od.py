@@ -101,7 +101,7 @@ def test_the_objects_of_the_profile() -> None:
     tpdo1 = [od[0x1A00][i].default for i in range(1, od[0x1A00][0].default + 1)]
     tpdo2 = [od[0x1A01][i].default for i in range(1, od[0x1A01][0].default + 1)]
     assert rpdo == [0x60400010, 0x60710010]
-    assert tpdo1 == [0x60410010, 0x60640020]
+    assert tpdo1 == [0x60410010, 0x60640020, 0x60610008]  # with the mode display (ros2_canopen)
     assert tpdo2 == [0x606C0020, 0x60770010]
     for mapping in (rpdo, tpdo1, tpdo2):  # each fits a classical CAN frame, mappable objects
         assert sum(m & 0xFF for m in mapping) <= 64
@@ -119,13 +119,53 @@ def test_the_objects_of_the_profile() -> None:
     assert od[0x605A].data_type == canopen.objectdictionary.INTEGER16
 
 
+def test_what_field_masters_read() -> None:
+    """The objects a CiA 402 master in the field reads (ros2_canopen's driver, its fake slave):
+    the homing method 0x6098 = 0 (no homing, nothing else accepted), the option codes
+    0x605A..0x605E with the limits of what the drive does, the torque actual value 0x6077
+    mappable, and the SDO server's COB-IDs 0x1200."""
+    od = canopen.objectdictionary.import_od(str(EDS), node_id=3)
+    assert od[0x6098].default == 0 and (od[0x6098].min, od[0x6098].max) == (0, 0)
+    assert od[0x6098].data_type == canopen.objectdictionary.INTEGER8
+    codes = {0x605B: (0, 0, 1), 0x605C: (1, 0, 1), 0x605D: (1, 1, 2), 0x605E: (0, 0, 2)}
+    for index, (default, low, high) in codes.items():
+        var = od[index]
+        assert (var.default, var.min, var.max, var.access_type) == (default, low, high, "rw")
+        assert var.data_type == canopen.objectdictionary.INTEGER16
+    assert od[0x6077].pdo_mappable and od[0x6061].pdo_mappable
+    assert od[0x1200][1].default == 0x603 and od[0x1200][2].default == 0x583
+    assert od[0x6502].default & (1 << 5) == 0  # no homing mode (6): a master skips homing
+
+
+def test_an_independent_eds_checker_finds_nothing(tmp_path: Path) -> None:
+    """eds-utils (an EDS/DCF editor of its own, not the parser the other tests use) reads the
+    EDS without an error or an auto-fix: every section and entry CiA 306 has it look for, the
+    object lists, each mapping entry's format and size against the object it maps."""
+    from eds_utils.core.file_io.read_eds import read_eds
+
+    eds, errors = read_eds(str(EDS))
+    assert errors == []
+    assert sorted(eds.indexes) == sorted(o.index for o in _gen().OD)
+    proc = subprocess.run([sys.executable, "-c", "from eds_utils.eds_validate import "
+                           "eds_validate; eds_validate()", str(EDS)], capture_output=True,
+                          text=True, timeout=60)
+    assert (proc.returncode, proc.stdout, proc.stderr) == (0, "", "")
+    # and it does find a broken file: a mapping entry of the wrong size
+    broken = EDS.read_text().replace("DefaultValue=0x60610008", "DefaultValue=0x60610010")
+    assert broken != EDS.read_text()
+    path = tmp_path / "broken.eds"
+    path.write_text(broken)
+    _, errors = read_eds(str(path))
+    assert any("wrong mapped object size" in e for e in errors), errors
+
+
 def test_the_canopen_schedule_is_read_from_the_eds() -> None:
     from rrr_robot.hil.canopen.drives import canopen_schedule
 
     frames = canopen_schedule()
     per_ms = [(f.frame_id, f.length) for f in frames if f.cycle_time == 1.0]
     assert sorted(per_ms) == sorted([(0x080, 0)] + [(0x200 + i, 4) for i in (1, 2, 3)] +
-                                    [(0x180 + i, 6) for i in (1, 2, 3)] +
+                                    [(0x180 + i, 7) for i in (1, 2, 3)] +
                                     [(0x280 + i, 6) for i in (1, 2, 3)])
     heartbeats = [(f.frame_id, f.length, f.cycle_time) for f in frames if f.cycle_time != 1.0]
     assert sorted(heartbeats) == [(0x701, 1, 100.0), (0x702, 1, 100.0), (0x703, 1, 100.0),
@@ -138,21 +178,21 @@ def test_canopen_bus_load(capsys: pytest.CaptureFixture[str]) -> None:
     from rrr_robot.hil.busload import classical_bits
     from rrr_robot.hil.canopen.drives import canopen_load
 
-    # worst-case stuffing, classical CAN: per ms a SYNC, three 4-byte RPDOs and six 6-byte
-    # TPDOs, plus four 1-byte heartbeats every 100 ms
-    bits_per_ms = (classical_bits(0) + 3 * classical_bits(4) + 6 * classical_bits(6) +
-                   4 * classical_bits(1) / 100)
-    assert bits_per_ms == 1032.6
+    # worst-case stuffing, classical CAN: per ms a SYNC, three 4-byte RPDOs, three 7-byte TPDO1
+    # and three 6-byte TPDO2, plus four 1-byte heartbeats every 100 ms
+    bits_per_ms = (classical_bits(0) + 3 * classical_bits(4) + 3 * classical_bits(7) +
+                   3 * classical_bits(6) + 4 * classical_bits(1) / 100)
+    assert bits_per_ms == 1062.6
     load = canopen_load(1_000_000)
     assert load.worst_percent == pytest.approx(bits_per_ms / 10, rel=1e-12)  # over 1 Mbit/s
     assert canopen_load(1_000_000, 5_000_000).worst_percent < 70  # CAN FD at 5 Mbit/s fits
     assert main(["hil", "busload", "--profile", "canopen", "--bitrate", "1000000"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert out[0].startswith("schedule of rrr_cia402.eds, three CiA 402 drives, SYNC every 1 ms")
-    assert out[-1] == "worst-case bus load: 103.26 %"
+    assert out[-1] == "worst-case bus load: 106.26 %"
     assert main(["hil", "busload", "--profile", "canopen", "--sync-period-ms", "2"]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert "SYNC every 2 ms" in out[0] and out[-1] == "worst-case bus load: 51.76 %"
+    assert "SYNC every 2 ms" in out[0] and out[-1] == "worst-case bus load: 53.26 %"
     assert main(["hil", "busload", "--sync-period-ms", "2"]) == 2  # the DBC profile
     assert "--sync-period-ms applies to --profile canopen only" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:

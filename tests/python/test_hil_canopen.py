@@ -481,3 +481,92 @@ def test_quick_stop_option_and_max_torque_written_by_sdo(rig: Rig) -> None:
     assert len(b) == 4 and np.all(b[:, 9] == 0.0)  # 0 V to joint 2 while latched
     assert c[:, 9].tolist() == pytest.approx([0.0, 0.0, 0.0, 2.0, 2.0], abs=1e-12)
     assert np.all(np.abs(a[:, 9] - 2.4) < 1e-12) and np.all(c[:, 10] == 1.0)  # the other axes go on
+
+
+#: (communication, mapping, base COB-ID of cob_id "auto") of each PDO of the drives.
+PDOS = {("rpdo", 1): (0x1400, 0x1600, 0x200), ("tpdo", 1): (0x1800, 0x1A00, 0x180),
+        ("tpdo", 2): (0x1801, 0x1A01, 0x280)}
+
+
+def _bus_yml() -> dict[str, Any]:
+    """The ros2_canopen bus description of docs/canopen.md (its one yaml block that names the
+    CiA 402 driver)."""
+    import yaml
+    from doc_blocks import ROOT, blocks_of
+
+    blocks = [b for b in blocks_of(ROOT / "docs" / "canopen.md")
+              if b.lang == "yaml" and "Cia402Driver" in b.text]
+    assert len(blocks) == 1
+    conf: dict[str, Any] = yaml.safe_load(blocks[0].text)
+    return conf
+
+
+def _sdo_var(node: Any, index: int, sub: int) -> Any:
+    """The canopen package's SDO variable of (index, sub) (a VAR object is sub-index 0)."""
+    if isinstance(node.object_dictionary[index], canopen.objectdictionary.ODVariable):
+        assert sub == 0
+        return node.sdo[index]
+    return node.sdo[index][sub]
+
+
+def test_ros2_canopen_bus_yml_replayed(rig: Rig) -> None:
+    """The bus.yml of docs/canopen.md replayed as ros2_canopen's master configures the drives at
+    boot (each PDO in CiA 301's order, the heartbeat time, the SDO init list), with the canopen
+    package: every write accepted and read back; then the PDOs as configured on SYNC, and 0x6098
+    reading 0 (a master's homing completes at once)."""
+    conf = _bus_yml()
+    assert conf["master"]["node_id"] == MASTER_ID and conf["master"]["sync_period"] == 1000
+    drives = {n["node_id"]: {**conf["defaults"], **n} for n in conf["nodes"].values()}
+    assert sorted(drives) == list(IDS)
+    assert all(d["dcf"] == Path(EDS).name for d in drives.values())
+    booted: queue.Queue[int] = queue.Queue()
+    for i in IDS:
+        rig.network.subscribe(0x700 + i, lambda can_id, data, ts: booted.put(can_id)
+                              if bytes(data) == b"\0" else None)
+    rig.network.nmt.send_command(0x81)
+    assert sorted(booted.get(timeout=5) for _ in IDS) == [0x700 + i for i in IDS]
+    written = 0
+    for node in rig.nodes:
+        d = drives[node.id]
+        writes: list[tuple[int, int, int]] = []
+        for kind in ("rpdo", "tpdo"):
+            for number, pdo in d[kind].items():
+                comm, mapping, base = PDOS[(kind, int(number))]
+                cob = base + node.id if pdo["cob_id"] == "auto" else int(pdo["cob_id"])
+                entries = []
+                for e in pdo["mapping"]:
+                    var = _sdo_var(node, e["index"], e["sub_index"]).od
+                    entries.append(e["index"] << 16 | e["sub_index"] << 8
+                                   | 8 * len(var.encode_raw(0)))
+                writes += [(comm, 1, 0x80000000 | cob), (comm, 2, pdo["transmission"]),
+                           (mapping, 0, 0)]
+                writes += [(mapping, i, m) for i, m in enumerate(entries, 1)]
+                writes += [(mapping, 0, len(entries))]
+                if pdo["enabled"]:
+                    writes.append((comm, 1, cob))
+        writes.append((0x1017, 0, d["heartbeat_producer"]))
+        writes += [(e["index"], e["sub_index"], e["value"]) for e in d["sdo"]]
+        for index, sub, value in writes:
+            _sdo_var(node, index, sub).raw = value
+            written += 1
+        final = {(index, sub): value for index, sub, value in writes}
+        for (index, sub), value in final.items():
+            assert _sdo_var(node, index, sub).raw == value, (hex(index), sub)
+        node.pdo.read()  # the canopen package reads the mapping back as the drive holds it
+        assert [(v.index, v.length) for v in node.tpdo[1]] == [(0x6041, 16), (0x6064, 32),
+                                                               (0x6061, 8)]
+        assert node.sdo[0x6098].raw == 0  # ros2_canopen's homing: method 0, done at once
+    assert written >= 3 * 20
+    rig.network.nmt.state = "OPERATIONAL"
+    while not rig.tpdos.empty():
+        rig.tpdos.get_nowait()
+    for _ in range(3):
+        rig.network.sync.transmit()
+        got = dict(rig.tpdos.get(timeout=5) for _ in range(6))
+        for i in IDS:
+            t1, t2 = got[0x180 + i], got[0x280 + i]
+            assert len(t1) == 7 and t1[6] == 10 and len(t2) == 6
+            assert int.from_bytes(t2[4:6], "little", signed=True) == 0  # not enabled: no torque
+    summary = _shut_down(rig)
+    assert summary["drive_faults"] == 0
+    assert all(d["sdo_aborts"] == 0 for d in summary["drives"])

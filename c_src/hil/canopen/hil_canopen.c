@@ -11,7 +11,7 @@
 #define COB_SDO_TX 0x580u
 #define COB_HEARTBEAT 0x700u
 #define PDO_INVALID 0x80000000u
-#define PDO_EXTENDED 0x20000000u
+#define PDO_ID_BITS_11_29 0x3FFFF800u /* bit 29: 29-bit frame; 11..28: its high bits */
 
 /* ---- the dictionary ------------------------------------------------------------------------ */
 
@@ -72,6 +72,18 @@ static void reset_range(rrr_co_node *n, uint16_t lo, uint16_t hi)
     if (lo <= 0x6076u && hi >= 0x6076u) {
         n->v[RRR_CO_OD_RATED_TORQUE] = n->cfg.rated_torque_mNm;
     }
+}
+
+int rrr_co_restricted_id(uint32_t can_id)
+{
+    /* CiA 301's table of restricted CAN-IDs: 0x000 (NMT), 0x001..0x07F, 0x101..0x180,
+     * 0x581..0x5FF and 0x601..0x67F (the default SDOs), 0x6E0..0x6FF, 0x701..0x77F (NMT error
+     * control), 0x780..0x7FF (0x7E4/0x7E5: LSS); and the broadcast objects of the predefined
+     * connection set it leaves configurable but these drives do not: 0x080 (SYNC, 0x1005 is
+     * read-only), 0x081..0x0FF (EMCY, 0x1014 read-only), 0x100 (TIME) */
+    return can_id <= 0x180u || (can_id >= 0x581u && can_id <= 0x5FFu) ||
+           (can_id >= 0x601u && can_id <= 0x67Fu) || (can_id >= 0x6E0u && can_id <= 0x6FFu) ||
+           (can_id >= 0x701u && can_id <= 0x7FFu) || can_id > 0x7FFu;
 }
 
 /* ---- output -------------------------------------------------------------------------------- */
@@ -340,10 +352,14 @@ static uint32_t write_entry(rrr_co_node *n, int slot, uint32_t raw, rrr_co_out *
     if (p) {
         const uint32_t cob = n->v[p->cob];
         if (what == 0 && slot == p->cob) {
-            if (raw & PDO_EXTENDED) {
-                return RRR_CO_ABORT_VALUE;
+            const int valid = !(raw & PDO_INVALID);
+            if (raw & PDO_ID_BITS_11_29) {
+                return RRR_CO_ABORT_VALUE; /* a 29-bit identifier (bit 29), bits 11..28 */
             }
-            if (!(cob & PDO_INVALID) && !(raw & PDO_INVALID) && (raw & 0x7FFu) != (cob & 0x7FFu)) {
+            if (valid && rrr_co_restricted_id(raw & 0x7FFu)) {
+                return RRR_CO_ABORT_VALUE; /* NMT, SYNC, EMCY, TIME, SDO, heartbeat, LSS... */
+            }
+            if (!(cob & PDO_INVALID) && valid && (raw & 0x7FFu) != (cob & 0x7FFu)) {
                 return RRR_CO_ABORT_VALUE; /* change the id only while the PDO is invalid */
             }
         } else if (what == 0 && p->rx && raw > 240u && raw < 254u) {
@@ -887,8 +903,10 @@ void rrr_co_set_feedback(rrr_co_node *n, double q_rad, double qd_rad_s)
 
 double rrr_co_torque_Nm(const rrr_co_node *n)
 {
-    double tau = 0.0; /* the drive function: the target torque, in OPERATION ENABLED only */
-    if (n->nmt == RRR_CO_NMT_OPERATIONAL && n->s402 == RRR_CO_402_OPERATION_ENABLED) {
+    double tau = 0.0; /* the drive function: the target torque, in OPERATION ENABLED only, and
+                       * not while the halt bit (controlword bit 8, 0x605D: 0 torque at once) */
+    if (n->nmt == RRR_CO_NMT_OPERATIONAL && n->s402 == RRR_CO_402_OPERATION_ENABLED &&
+        !(n->v[RRR_CO_OD_CONTROLWORD] & RRR_CO_CW_HALT)) {
         const int16_t t = (int16_t)(uint16_t)n->v[RRR_CO_OD_TARGET_TORQUE];
         tau = (double)t * (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-6;
     }

@@ -22,9 +22,13 @@
  *   caller first moves its plant by the period the SYNC closes: see rrr_co_transmit);
  * - PDO mapping readable and writable by SDO, in CiA 301's order (COB-ID bit 31 = 1, sub 0 = 0,
  *   the entries, sub 0 = n, COB-ID bit 31 = 0), checked (mappable, direction, length <= 64 bits);
+ *   the COB-IDs by CiA 301's rules (abort 0x06090030): no valid PDO on a restricted identifier
+ *   (rrr_co_restricted_id), the identifier changed only while the PDO is invalid, 11 bits only;
  * - the CiA 402 state machine on the controlword 0x6040 / statusword 0x6041 (shutdown, switch
  *   on, enable operation, disable operation, quick stop with the quick stop option code 0x605A,
- *   disable voltage, fault, fault reset on the rising edge of bit 7);
+ *   disable voltage, fault, fault reset on the rising edge of bit 7), halt (bit 8: 0 torque,
+ *   the state kept); the option codes 0x605A..0x605E (every stop is 0 torque at once);
+ *   homing method 0x6098 = 0 (no homing);
  * - EMCY producer (0x80 + id) with the error register 0x1001 and the error code 0x603F on every
  *   fault, and the error reset EMCY (code 0x0000) on the fault reset.
  * Faults (each latches FAULT, 0 torque, until the 402 fault reset): master heartbeat lost
@@ -115,6 +119,10 @@ enum {
     RRR_CO_QS_QUICK_STAY = 6        ///< quick-stop ramp, stay in QUICK STOP ACTIVE (the default)
 };
 
+/** Controlword bit 8, halt: in OPERATION ENABLED the torque is 0 while it is set (the halt
+ *  option code 0x605D, 1 or 2: a ramp, immediate at 0 V), the state stays. */
+#define RRR_CO_CW_HALT 0x0100u
+
 /** Frames to send, appended by the node's calls. */
 #define RRR_CO_MAX_OUT 8u
 typedef struct rrr_co_out {
@@ -195,8 +203,8 @@ void rrr_co_advance(rrr_co_node *n, uint32_t dt_us, rrr_co_out *out);
 /** The plant's joint position (rad) and velocity (rad/s), sent at the next SYNC. */
 void rrr_co_set_feedback(rrr_co_node *n, double q_rad, double qd_rad_s);
 
-/** The torque to apply now, N m: the target torque in OPERATION ENABLED and NMT operational,
- *  0 otherwise, through the output stage of the node's latch (0 while a fault is latched or in
+/** The torque to apply now, N m: the target torque in OPERATION ENABLED and NMT operational
+ *  without the halt bit, 0 otherwise, through the output stage of the node's latch (0 while a fault is latched or in
  *  QUICK STOP ACTIVE). */
 double rrr_co_torque_Nm(const rrr_co_node *n);
 
@@ -209,6 +217,12 @@ uint16_t rrr_co_statusword(rrr_co_402 s);
 
 /** Name of a 402 state as canopen.BaseNode402 spells it ("OPERATION ENABLED"). */
 const char *rrr_co_402_str(rrr_co_402 s);
+
+/** 1 if no PDO of these drives may be valid on the 11-bit CAN-ID @p can_id (an SDO write of such
+ *  a COB-ID is aborted with 0x06090030): CiA 301's restricted CAN-IDs (0x000, 0x001..0x07F,
+ *  0x101..0x180, 0x581..0x5FF, 0x601..0x67F, 0x6E0..0x6FF, 0x701..0x7FF) and the predefined
+ *  connection set's SYNC 0x080, EMCY 0x081..0x0FF and TIME 0x100; 1 for anything above 0x7FF. */
+int rrr_co_restricted_id(uint32_t can_id);
 
 /** Row of (index, sub) in rrr_co_od: >= 0; -1 no such object; -2 no such sub-index. */
 int rrr_co_od_find(uint16_t index, uint8_t sub);

@@ -38,10 +38,10 @@ typedef struct co_master {
  * bits), and the COB-IDs of RPDO1, TPDO1, TPDO2 (0x1400/0x1800/0x1801 sub 1) less the node id. */
 static const struct {
     uint16_t map_index, comm_index, cob_base;
-    uint32_t entries[2];
-} CO_PDOS[3] = {{0x1600u, 0x1400u, 0x200u, {0x60400010u, 0x60710010u}},
-                {0x1A00u, 0x1800u, 0x180u, {0x60410010u, 0x60640020u}},
-                {0x1A01u, 0x1801u, 0x280u, {0x606C0020u, 0x60770010u}}};
+    uint32_t count, entries[3];
+} CO_PDOS[3] = {{0x1600u, 0x1400u, 0x200u, 2u, {0x60400010u, 0x60710010u, 0u}},
+                {0x1A00u, 0x1800u, 0x180u, 3u, {0x60410010u, 0x60640020u, 0x60610008u}},
+                {0x1A01u, 0x1801u, 0x280u, 2u, {0x606C0020u, 0x60770010u, 0u}}};
 #define CO_SW_MASK 0x6Fu
 
 /* One expedited SDO transfer (download: size 1, 2 or 4 bytes of *value; upload: size 0, the
@@ -165,15 +165,16 @@ static int co_configure(co_master *m, const rrr_hil_ctrl_opts *o)
         for (unsigned p = 0; rc == 0 && p < 3u; ++p) {
             uint32_t count = 0, entry = 0, cob = 0;
             rc = co_read(m, o, id, CO_PDOS[p].map_index, 0u, &count);
-            for (uint8_t e = 0; rc == 0 && e < 2u; ++e) {
+            for (uint8_t e = 0; rc == 0 && e < CO_PDOS[p].count; ++e) {
                 rc = co_read(m, o, id, CO_PDOS[p].map_index, (uint8_t)(e + 1u), &entry);
-                if (rc == 0 && (count != 2u || entry != CO_PDOS[p].entries[e])) {
+                if (rc == 0 && (count != CO_PDOS[p].count || entry != CO_PDOS[p].entries[e])) {
                     rc = rrr_hil_run_end(&m->c->run, RRR_HIL_EXIT_SETUP,
                                          "drive %u: PDO mapping 0x%04X: %u entries, sub %u = "
-                                         "0x%08X; this master decodes 0x%08X, 0x%08X",
+                                         "0x%08X; this master decodes %u: 0x%08X, 0x%08X%s",
                                          (unsigned)id, (unsigned)CO_PDOS[p].map_index, count,
-                                         (unsigned)e + 1u, entry, CO_PDOS[p].entries[0],
-                                         CO_PDOS[p].entries[1]);
+                                         (unsigned)e + 1u, entry, CO_PDOS[p].count,
+                                         CO_PDOS[p].entries[0], CO_PDOS[p].entries[1],
+                                         CO_PDOS[p].count > 2u ? ", 0x60610008" : "");
                 }
             }
             if (rc == 0) {

@@ -102,7 +102,7 @@ int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb)
     if (f->extended || (f->id != 0x180u + node && f->id != 0x280u + node)) {
         return 0;
     }
-    if (f->dlc != 6u) {
+    if (f->dlc != (f->id == 0x180u + node ? RRR_COM_TPDO1_DLC : RRR_COM_TPDO2_DLC)) {
         return -1;
     }
     if (f->id == 0x180u + node) {

@@ -71,8 +71,13 @@ typedef struct rrr_com_feedback {
     uint8_t have;          ///< bit 0: TPDO1 seen, bit 1: TPDO2 seen
 } rrr_com_feedback;
 
+/** The lengths of the drives' default TPDOs: TPDO1 statusword, position actual value, modes of
+ *  operation display (2 + 4 + 1 bytes); TPDO2 velocity and torque actual values (4 + 2). */
+#define RRR_COM_TPDO1_DLC 7u
+#define RRR_COM_TPDO2_DLC 6u
+
 /** Feed @p f: 1 if it is TPDO1 or TPDO2 of @p node (stored into *fb), -1 if it is one with a
- *  DLC other than 6, 0 otherwise. */
+ *  DLC other than its mapping's (RRR_COM_TPDO1_DLC, RRR_COM_TPDO2_DLC), 0 otherwise. */
 int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb);
 
 /** The node of an EMCY frame (COB 0x081..0x0FF with 8 bytes), its error code in *code; 0 if

@@ -3,12 +3,13 @@
  * one booted node, with its invariants checked after every step (a violation traps):
  *  - a call never appends more than RRR_CO_MAX_OUT frames, none with a DLC above 8;
  *  - the statusword is that of the 402 state; the mode is CST;
- *  - torque only in NMT operational and OPERATION ENABLED, and never beyond the max torque
- *    0x6072 (per mille of the rated torque);
+ *  - torque only in NMT operational and OPERATION ENABLED without the halt bit, and never
+ *    beyond the max torque 0x6072 (per mille of the rated torque);
  *  - FAULT has the error register's generic bit set; the error register is 0 outside FAULT
  *    (every fault goes to FAULT, only the fault reset clears it); the safety policy's latch
  *    (rrr_hil_latch) is set exactly in FAULT, with the code 0x603F;
- *  - the PDO mappings never exceed 64 bits nor RRR_CO_MAX_MAPPED entries.
+ *  - the PDO mappings never exceed 64 bits nor RRR_CO_MAX_MAPPED entries; a valid PDO's COB-ID
+ *    is never a restricted identifier (rrr_co_restricted_id) nor a 29-bit one.
  *
  * Input layout: byte 0: the node id (1..127, from byte 0 % 127 + 1); then 12-byte records: op,
  * id low, dlc, data[8], dt. op & 7 chooses the identifier's base (0 NMT, 1 SYNC, 2 SDO request,
@@ -52,7 +53,8 @@ static void check(const rrr_co_node *n, const rrr_co_out *out)
     const double rated = (double)n->v[RRR_CO_OD_RATED_TORQUE] * 1e-6 *
                          (double)n->v[RRR_CO_OD_MAX_TORQUE];
     if (tau != 0.0 && (n->nmt != RRR_CO_NMT_OPERATIONAL ||
-                       n->s402 != RRR_CO_402_OPERATION_ENABLED)) {
+                       n->s402 != RRR_CO_402_OPERATION_ENABLED ||
+                       (n->v[RRR_CO_OD_CONTROLWORD] & RRR_CO_CW_HALT))) {
         __builtin_trap();
     }
     if (!(fabs(tau) <= rated * (1.0 + 1e-12))) {
@@ -70,7 +72,15 @@ static void check(const rrr_co_node *n, const rrr_co_out *out)
     }
     static const int maps[3] = {RRR_CO_OD_RPDO1_MAP_N, RRR_CO_OD_TPDO1_MAP_N,
                                 RRR_CO_OD_TPDO2_MAP_N};
+    static const int cobs[3] = {RRR_CO_OD_RPDO1_COBID, RRR_CO_OD_TPDO1_COBID,
+                                RRR_CO_OD_TPDO2_COBID};
     for (int m = 0; m < 3; ++m) {
+        /* a valid PDO is never on a restricted identifier; never a 29-bit one */
+        const uint32_t cob = n->v[cobs[m]];
+        if ((cob & 0x3FFFF800u) != 0u ||
+            (!(cob & 0x80000000u) && rrr_co_restricted_id(cob & 0x7FFu))) {
+            __builtin_trap();
+        }
         const uint32_t cnt = n->v[maps[m]];
         if (cnt > RRR_CO_MAX_MAPPED) {
             __builtin_trap();

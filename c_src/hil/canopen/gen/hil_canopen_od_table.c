@@ -18,6 +18,9 @@ const rrr_co_od_entry rrr_co_od[RRR_CO_OD_COUNT] = {
     {0x1018u, 2u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x52525233u, NULL, "Product code"}, /* PRODUCT_CODE */
     {0x1018u, 3u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x00010000u, NULL, "Revision number"}, /* REVISION */
     {0x1018u, 4u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 1u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Serial number"}, /* SERIAL */
+    {0x1200u, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RO, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000002u, NULL, "Highest sub-index supported"}, /* SDO_SERVER_N */
+    {0x1200u, 1u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 1u, 0u, 0u, 0, 0, 0x00000600u, NULL, "COB-ID client to server"}, /* SDO_RX_COBID */
+    {0x1200u, 2u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 1u, 0u, 0u, 0, 0, 0x00000580u, NULL, "COB-ID server to client"}, /* SDO_TX_COBID */
     {0x1400u, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RO, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000002u, NULL, "Highest sub-index supported"}, /* RPDO1_N */
     {0x1400u, 1u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 1u, 0u, 0u, 0, 0, 0x00000200u, NULL, "COB-ID used by PDO"}, /* RPDO1_COBID */
     {0x1400u, 2u, RRR_CO_T_UNSIGNED8, RRR_CO_RW, 1u, 0u, 0u, 1u, 1u, 0, 255, 0x00000001u, NULL, "Transmission type"}, /* RPDO1_TYPE */
@@ -32,10 +35,10 @@ const rrr_co_od_entry rrr_co_od[RRR_CO_OD_COUNT] = {
     {0x1801u, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RO, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000002u, NULL, "Highest sub-index supported"}, /* TPDO2_N */
     {0x1801u, 1u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 1u, 0u, 0u, 0, 0, 0x00000280u, NULL, "COB-ID used by PDO"}, /* TPDO2_COBID */
     {0x1801u, 2u, RRR_CO_T_UNSIGNED8, RRR_CO_RW, 1u, 0u, 0u, 1u, 1u, 1, 240, 0x00000001u, NULL, "Transmission type"}, /* TPDO2_TYPE */
-    {0x1A00u, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RW, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000002u, NULL, "Highest sub-index supported"}, /* TPDO1_MAP_N */
+    {0x1A00u, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RW, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000003u, NULL, "Highest sub-index supported"}, /* TPDO1_MAP_N */
     {0x1A00u, 1u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x60410010u, NULL, "Mapping entry 1"}, /* TPDO1_MAP_1 */
     {0x1A00u, 2u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x60640020u, NULL, "Mapping entry 2"}, /* TPDO1_MAP_2 */
-    {0x1A00u, 3u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Mapping entry 3"}, /* TPDO1_MAP_3 */
+    {0x1A00u, 3u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x60610008u, NULL, "Mapping entry 3"}, /* TPDO1_MAP_3 */
     {0x1A00u, 4u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Mapping entry 4"}, /* TPDO1_MAP_4 */
     {0x1A01u, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RW, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000002u, NULL, "Highest sub-index supported"}, /* TPDO2_MAP_N */
     {0x1A01u, 1u, RRR_CO_T_UNSIGNED32, RRR_CO_RW, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x606C0020u, NULL, "Mapping entry 1"}, /* TPDO2_MAP_1 */
@@ -48,6 +51,10 @@ const rrr_co_od_entry rrr_co_od[RRR_CO_OD_COUNT] = {
     {0x6040u, 0u, RRR_CO_T_UNSIGNED16, RRR_CO_RW, 2u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Controlword"}, /* CONTROLWORD */
     {0x6041u, 0u, RRR_CO_T_UNSIGNED16, RRR_CO_RO, 2u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Statusword"}, /* STATUSWORD */
     {0x605Au, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 0u, 0u, 0u, 0u, 0, 0, 0x00000006u, NULL, "Quick stop option code"}, /* QUICK_STOP_OPTION */
+    {0x605Bu, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 0u, 0u, 1u, 1u, 0, 1, 0x00000000u, NULL, "Shutdown option code"}, /* SHUTDOWN_OPTION */
+    {0x605Cu, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 0u, 0u, 1u, 1u, 0, 1, 0x00000001u, NULL, "Disable operation option code"}, /* DISABLE_OPTION */
+    {0x605Du, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 0u, 0u, 1u, 1u, 1, 2, 0x00000001u, NULL, "Halt option code"}, /* HALT_OPTION */
+    {0x605Eu, 0u, RRR_CO_T_INTEGER16, RRR_CO_RW, 2u, 0u, 0u, 1u, 1u, 0, 2, 0x00000000u, NULL, "Fault reaction option code"}, /* FAULT_OPTION */
     {0x6060u, 0u, RRR_CO_T_INTEGER8, RRR_CO_RW, 1u, 1u, 0u, 1u, 1u, 10, 10, 0x0000000Au, NULL, "Modes of operation"}, /* MODE */
     {0x6061u, 0u, RRR_CO_T_INTEGER8, RRR_CO_RO, 1u, 1u, 0u, 0u, 0u, 0, 0, 0x0000000Au, NULL, "Modes of operation display"}, /* MODE_DISPLAY */
     {0x6064u, 0u, RRR_CO_T_INTEGER32, RRR_CO_RO, 4u, 1u, 0u, 0u, 0u, 0, 0, 0x00000000u, NULL, "Position actual value"}, /* POSITION_ACTUAL */
@@ -59,5 +66,6 @@ const rrr_co_od_entry rrr_co_od[RRR_CO_OD_COUNT] = {
     {0x608Fu, 0u, RRR_CO_T_UNSIGNED8, RRR_CO_RO, 1u, 0u, 0u, 0u, 0u, 0, 0, 0x00000002u, NULL, "Highest sub-index supported"}, /* ENCODER_N */
     {0x608Fu, 1u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x00100000u, NULL, "Encoder increments"}, /* ENCODER_INCREMENTS */
     {0x608Fu, 2u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x00000001u, NULL, "Motor revolutions"}, /* ENCODER_REVOLUTIONS */
+    {0x6098u, 0u, RRR_CO_T_INTEGER8, RRR_CO_RW, 1u, 0u, 0u, 1u, 1u, 0, 0, 0x00000000u, NULL, "Homing method"}, /* HOMING_METHOD */
     {0x6502u, 0u, RRR_CO_T_UNSIGNED32, RRR_CO_RO, 4u, 0u, 0u, 0u, 0u, 0, 0, 0x00000200u, NULL, "Supported drive modes"}, /* SUPPORTED_MODES */
 };

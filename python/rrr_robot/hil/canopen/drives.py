@@ -48,7 +48,7 @@ MASTER_NODE_ID = 0x7F
 MODE_CST = 10
 #: The PDO mapping the master expects (read back by SDO): RPDO1, TPDO1, TPDO2 as (index, bits).
 EXPECTED_MAPPING = {"RPDO1": [(0x6040, 16), (0x6071, 16)],
-                    "TPDO1": [(0x6041, 16), (0x6064, 32)],
+                    "TPDO1": [(0x6041, 16), (0x6064, 32), (0x6061, 8)],
                     "TPDO2": [(0x606C, 32), (0x6077, 16)]}
 #: The plant node's own frame log (hil_framelog.h: every frame it sent and received), and the
 #: standard frame log written from it.
