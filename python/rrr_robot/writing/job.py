@@ -99,11 +99,13 @@ class WritingJob:
     controller_robot: Path | None = None
 
 
-def read_controller_robot(path: Path, robot: RobotFile) -> RobotFile:
-    """The robot file of ``--controller-robot``, read and checked: only its model goes to the
-    controller (the gains, the sample period and the writing task stay those of the plant's
-    robot file ``robot``; a warning names what it says otherwise)."""
-    believed = read_robot_file(path)
+def read_controller_robot(path: str | Path | Mapping[str, Any], robot: RobotFile,
+                          source: str | None = None) -> RobotFile:
+    """The robot file of ``--controller-robot`` (its path, or its parsed tables named
+    ``source``: as :func:`~rrr_robot.core.robot.read_robot_file`), read and checked: only its
+    model goes to the controller (the gains, the sample period and the writing task stay those
+    of the plant's robot file ``robot``; a warning names what it says otherwise)."""
+    believed = read_robot_file(path, source)
     ignored = [name for name, mine, theirs in (
         ("[control]", believed.control, robot.control),
         ("[writing]", dict(believed.writing), dict(robot.writing))) if mine and mine != theirs]
