@@ -191,6 +191,12 @@ def _describe(s: dict[str, Any]) -> str:
             + (f"{rtf:.0f}x real time" if rtf is not None else "real-time factor unavailable"))
 
 
+def view_title(text: str) -> str:
+    """The title of ``rrr writing --view``'s page: the text in quotes, its lines joined by
+    " / " (one line of a title shows a newline as nothing, and repr as a backslash and n)."""
+    return "rrr writing: \u201c" + " / ".join(text.split("\n")) + "\u201d"
+
+
 def writing_spec(robot: RobotFile, text: str | None = None, scale: float = 1.0,
                  changes: Mapping[str, Any] | None = None) -> WritingSpec:
     """What a job writes: the robot file's [writing] values, with ``changes`` (WritingSpec
@@ -346,7 +352,7 @@ def run_writing(job: WritingJob,
             start = time.perf_counter()
             rs.write_text("view.html", view_html(
                 {name: res.columns() for name, res in results.items()}, robot,
-                f"rrr writing: {ref.spec.text!r}"))
+                view_title(ref.spec.text)))
             log.info("view.html: %.2f s", time.perf_counter() - start)
         summary = write_summary(rs, summary)
     return summary
