@@ -167,7 +167,7 @@ def test_the_letters_fill_their_axes_at_equal_aspect(text: str, tmp_path: Path,
     canvas)."""
     from rrr_robot.writing import plots
 
-    model, robot, _, ref = prepare(WritingJob(out=tmp_path / "unused", text=text))
+    ref = prepare(WritingJob(out=tmp_path / "unused", text=text)).reference
     figures = _kept(monkeypatch)
     plots.fig_reference(tmp_path, ref)
     plots.fig_letters(tmp_path, ref, _results(ref, 1e-4))

@@ -83,7 +83,8 @@ class Identified:
 
     def compared_with(self, true: RobotFile, prior: Model) -> Identified:
         """This result with each estimate beside its value in the true robot file ``true``
-        (:mod:`.truth`); ``prior`` supplied what is not identified."""
+        (:func:`~rrr_robot.identify.truth.compare_with_truth`); ``prior`` supplied what is not
+        identified."""
         return replace(self, truth=compare_with_truth(self.estimate, self.friction, prior,
                                                       true.model, true.source))
 

@@ -193,14 +193,14 @@ def _letters_figure(ratio: float, below: float, title_lines: int = 1) -> tuple[F
 
 
 def _fit_letters(fig: Figure, ax: Any, ratio: float,
-                 rect: Callable[[], tuple[float, float, float, float]]) -> None:
+                 rect: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)) -> None:
     """Lay out, then change the figure's height so that the letters' axes ``ax`` get the
     height their width asks for at equal aspect (``ratio``: height over width of the letters,
-    bounded as :func:`letters_box` bounds it); ``rect()``: the layout's rectangle (the legend's
-    band depends on the height). The axes keep their slot (``adjustable="datalim"``): equal
+    bounded as :func:`letters_box` bounds it); ``rect``: the layout's rectangle (the legend's
+    band at the present height). The axes keep their slot (``adjustable="datalim"``): equal
     aspect, the box filled, the letters filling it in the direction that bounds them."""
     ax.set_aspect("equal", adjustable="datalim")
-    fig.tight_layout(rect=rect())
+    fig.tight_layout(rect=rect)
     w_in, h_in = fig.get_size_inches()
     slot = ax.get_position(original=True)
     want = min(max(slot.width * w_in * ratio, LETTERS_MIN_HEIGHT), LETTERS_MAX_HEIGHT)
@@ -221,7 +221,7 @@ def fig_reference(out: Path, ref: Reference) -> None:
     ax2.set(xlabel="t [s]", ylabel="tip speed [m/s]",
             title="Fig. 2: tip speed v = sqrt(xd^2 + zd^2) (eq 14)")
     ax2.grid(True)
-    _fit_letters(fig, ax1, ratio, lambda: (0.0, 0.0, 1.0, 1.0))
+    _fit_letters(fig, ax1, ratio)
     _save(fig, out / "fig2_reference.png")
 
 
@@ -346,8 +346,7 @@ def fig_letters(out: Path, ref: Reference, results: Mapping[str, CosimResult],
         ax_err.grid(True)
         # below the axes and their labels, never over the letters: in a band at the bottom as
         # high as the legend, which the layout keeps free (it does not see a figure legend)
-        legend = _bottom_legend(fig)
-        _fit_letters(fig, ax, ratio, lambda: (0.0, legend, 1.0, 1.0))
+        _fit_letters(fig, ax, ratio, (0.0, _bottom_legend(fig), 1.0, 1.0))
         fig.legends.clear()
         _save(fig, out / (file or letters_file(name)), rect=(0.0, _bottom_legend(fig), 1.0, 1.0))
 

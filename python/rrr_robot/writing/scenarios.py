@@ -125,8 +125,8 @@ class Scenario:
         return replace(self, controller_base=model)
 
     def controller_model(self, true_model: Model) -> Model:
-        """The model the controller believes in: the true one (or :attr:`controller_base`, when
-        the controller has a robot file of its own), perturbed by [mismatch]."""
+        """The model the controller believes in: the true one (or ``controller_base``, when the
+        controller has a robot file of its own: :meth:`believing`), perturbed by [mismatch]."""
         base = true_model if self.controller_base is None else self.controller_base
         if not self.mismatch:
             return base
