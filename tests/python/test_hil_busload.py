@@ -138,3 +138,42 @@ def test_each_registered_profile_is_a_package_of_hil() -> None:
     got = subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "busload", "--profile",
                           "nope"], capture_output=True, text=True, timeout=120)
     assert got.returncode == 2 and all(name in got.stderr for name in PROFILES), got.stderr
+
+
+def test_each_load_of_a_run_is_named_and_printed_by_its_meaning() -> None:
+    """bus_loads: the measured load of a frame list (exact stuffing), the worst case of the
+    run's schedule and of the real-time one, each under its own name; format_loads says which
+    is which (a lockstep run's rate is the hypothetical one of a 1 ms period); the real-time
+    schedule's worst case is what rrr hil busload's last line prints."""
+    rt = bl.schedule_load(database(), 1_000_000)
+    lockstep = bl.schedule_load(database(), 1_000_000, lockstep=True)
+    frames = [(0x100, bytes(range(8)), False), (0x080, bytes(4), False)] * 3
+    load = bl.bus_loads(frames, 3, lockstep, rt)
+    assert load["measured_percent"] == bl.measured_load(frames, 3)["load_percent"]
+    assert load["schedule_worst_case_percent"] == lockstep.worst_percent
+    assert load["schedule_no_stuffing_percent"] == lockstep.nominal_percent
+    assert load["realtime_schedule_worst_case_percent"] == rt.worst_percent
+    assert load["schedule"] == "lockstep (Sync included)"
+    text = bl.format_loads(load)
+    assert f"measured {load['measured_percent']:.2f} % (this run's frames" in text
+    assert f"lockstep schedule {lockstep.worst_percent:.2f} % (Sync included)" in text
+    assert f"real-time schedule {rt.worst_percent:.2f} % (rrr hil busload)" in text
+    assert "as if run at that rate" in text and "frames/s" not in text
+    alone = bl.format_loads(bl.bus_loads(frames, 3, rt, rt))
+    assert "as if" not in alone and "lockstep" not in alone
+    assert f"real-time schedule {rt.worst_percent:.2f} %" in alone
+    fd_schedule = bl.schedule_load(database(), 1_000_000, bl.FD_DATA_BITRATE, lockstep=True)
+    fd = bl.fd_bus_loads(frames, 3, fd_schedule)
+    measured = bl.measured_fd_load(frames, 3)
+    assert fd["measured_worst_case_percent"] == measured["load_worst_percent"]
+    assert fd["measured_no_stuffing_percent"] == measured["load_no_stuffing_percent"]
+    assert fd["schedule_worst_case_percent"] == fd_schedule.worst_percent
+    assert f"CAN FD 1 Mbit/s + 5 Mbit/s: measured {fd['measured_worst_case_percent']:.2f} %" \
+        in bl.format_loads(load, fd)
+    proc = subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "busload"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.stdout.strip().splitlines()[-1] == f"worst-case bus load: {rt.worst_percent:.2f} %"
+    assert " frames/s; " in proc.stdout and "if run at 1 kHz" not in proc.stdout
+    locked = subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "busload", "--lockstep"],
+                            capture_output=True, text=True, timeout=60)
+    assert "6020 frames/s if run at 1 kHz" in locked.stdout

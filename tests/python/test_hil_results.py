@@ -13,6 +13,8 @@ frame log in a standard format.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 from pathlib import Path
 
@@ -29,8 +31,13 @@ from rrr_robot.writing.job import WritingJob, controller_fmu_values, metrics, pr
 
 @pytest.fixture(scope="module")
 def bench_out(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The output folder of ``rrr hil bench --out DIR -q``; what it printed is in the file
+    printed.txt beside the folder."""
     out = tmp_path_factory.mktemp("hil") / "out"
-    assert main(["hil", "bench", "--out", str(out), "-q"]) == 0
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        assert main(["hil", "bench", "--out", str(out), "-q"]) == 0
+    (out.parent / "printed.txt").write_text(printed.getvalue(), encoding="utf-8")
     return out
 
 
@@ -108,6 +115,48 @@ def test_frame_log_reads_back_frame_for_frame(bench_out: Path, tmp_path: Path) -
     assert "frames read back" in (fl.compare(records[:-1], fl.read_can_log(asc)) or "")
 
 
+def test_each_bus_load_is_named_by_its_meaning(bench_out: Path) -> None:
+    """summary.json ``bus`` of a lockstep run: frames per period, no frames per second (no wall
+    clock), and the loads of a 1 Mbit/s bus each under its own name: measured from the frame
+    log (exact stuffing), the worst case of the lockstep schedule (Sync included) and of the
+    real-time schedule (what rrr hil busload prints), each recomputed here."""
+    from rrr_robot.hil.busload import measured_load, schedule_load
+    from rrr_robot.hil.dbc.protocol import database
+
+    s = json.loads((bench_out / "summary.json").read_text())
+    bus, periods = s["bus"], s["reference"]["periods"]
+    records = fl.read_node_log(bench_out / "frames.rrrcan")
+
+    def keys(value: object) -> set[str]:
+        if isinstance(value, dict):
+            return set(value).union(*(keys(v) for v in value.values()))
+        return set()
+    assert not keys(bus) & {"frames_per_second", "per_second", "duration_s"}
+    assert bus["frames_per_period"] == len(records) / periods
+    assert bus["by_id"]["0x100"] == {"frames": periods, "per_period": 1.0}
+    load = bus["load"]
+    assert load["bitrate"] == 1_000_000 and load["period_s"] == 1e-3
+    assert load["measured_percent"] == measured_load(fl.frames(records), periods)["load_percent"]
+    lockstep = schedule_load(database(), lockstep=True)
+    assert load["schedule"] == "lockstep (Sync included)"
+    assert load["schedule_worst_case_percent"] == lockstep.worst_percent
+    assert load["schedule_no_stuffing_percent"] == lockstep.nominal_percent
+    assert load["realtime_schedule_worst_case_percent"] == schedule_load(database()).worst_percent
+    # the frames really sent lie between the schedule without stuff bits and its worst case
+    assert load["schedule_no_stuffing_percent"] < load["measured_percent"] < \
+        load["schedule_worst_case_percent"]
+    assert "load_fd" not in bus
+    # what rrr hil bench prints: each load by its name, no rate per second
+    printed = (bench_out.parent / "printed.txt").read_text(encoding="utf-8")
+    lines = [ln for ln in printed.splitlines() if ln.startswith("  bus")]
+    assert lines[0].startswith(f"  bus: {len(records)} frames (") and "per second" not in printed
+    assert f", {bus['frames_per_period']:.2f} per period;" in lines[0]
+    assert "frames/s" not in printed
+    assert f"measured {load['measured_percent']:.2f} %" in lines[1]
+    assert f"lockstep schedule {lockstep.worst_percent:.2f} %" in lines[1]
+    assert f"real-time schedule {load['realtime_schedule_worst_case_percent']:.2f} %" in lines[1]
+
+
 def test_can_log_option_writes_asc(tmp_path: Path) -> None:
     target = tmp_path / "elsewhere" / "bench.asc"
     target.parent.mkdir()
@@ -146,4 +195,9 @@ def test_realtime_bench_reports_latencies(tmp_path: Path) -> None:
     tx = records[records["dir"] == 1]
     assert not np.any(tx["id"] == 0x080)
     assert np.count_nonzero(tx["id"] == 0x100) == s["realtime"]["controller"]["rt_periods"]
-    assert s["bus"]["frames_per_second"] is not None
+    # in real time the periods are 1 ms apart: the frames per wall-clock second mean something
+    assert s["bus"]["frames_per_second"] > 0 and s["bus"]["duration_s"] > 0
+    assert s["bus"]["by_id"]["0x100"]["per_second"] > 0
+    load = s["bus"]["load"]
+    assert load["schedule"] == "real time"
+    assert load["schedule_worst_case_percent"] == load["realtime_schedule_worst_case_percent"]

@@ -156,3 +156,102 @@ def test_write_robot_roundtrip(tmp_path: Path, ideal_logs) -> None:
     res = identify(ideal_logs[1], PRIOR, None, Settings(derivatives="log"))
     write_robot(res, tmp_path / "r.toml")
     np.testing.assert_allclose(read_robot_file(tmp_path / "r.toml").model.p, res.model.p)
+
+
+def test_truth_puts_each_estimate_beside_its_true_value(tmp_path: Path, noisy_logs,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """rrr identify --truth FILE: a line per base parameter with the estimate, its 95 %
+    interval (estimate +/- 1.96 std), the true value and whether the interval holds it, the
+    count inside, the friction beside the truth; the same in --report (``truth``) and in the
+    robot file's [identification] (p_true, p_inside_95), which reads back; the truth cannot be
+    an output."""
+    from rrr_robot.identify.truth import friction_curve
+
+    fric, exc = noisy_logs
+    fric.to_csv(tmp_path / "friction.csv")
+    exc.to_csv(tmp_path / "excitation.csv", "simulated")
+    parser = argparse.ArgumentParser()
+    register_cli(parser.add_subparsers(dest="command"))
+    out, report = tmp_path / "identified.toml", tmp_path / "r.json"
+    args = parser.parse_args(["identify", "--log", str(tmp_path / "excitation.csv"),
+                              "--friction-log", str(tmp_path / "friction.csv"),
+                              "--truth", str(DEFAULT_ROBOT_TOML), "--out", str(out),
+                              "--report", str(report)])
+    assert args.func(args) == 0
+    printed = capsys.readouterr().out.splitlines()
+    truth = json.loads(report.read_text())["truth"]
+    data = tomllib.loads(out.read_text())
+    est = np.array(data["identification"]["p"])
+    std = np.array(data["identification"]["p_std"])
+    inside = np.abs(est - TRUE.p) <= 1.96 * std
+    assert truth["source"] == str(DEFAULT_ROBOT_TOML) and truth["estimator"] == "ls"
+    assert truth["p_inside_95"] == int(inside.sum()) >= 15 and truth["p_count"] == 16
+    for k, row in enumerate(truth["p"]):
+        assert row["name"] == f"p[{k + 1}]" and row["truth"] == TRUE.p[k]
+        assert row["estimate"] == est[k] and row["std"] == std[k]
+        assert row["interval_95"] == pytest.approx([est[k] - 1.96 * std[k],
+                                                    est[k] + 1.96 * std[k]], rel=1e-12)
+        assert row["inside_95"] == bool(inside[k])
+        line = next(ln for ln in printed if ln.startswith(f"  p[{k + 1}] "))
+        assert line.split()[-1] == ("inside" if inside[k] else "OUTSIDE"), line
+    assert f"{int(inside.sum())} of 16 true base parameters inside their 95 % intervals" in printed
+    for j, joint in enumerate(truth["friction"]):
+        assert joint["f_true"] == TRUE.f[j].tolist() and joint["b_true"] == TRUE.b[j]
+        v = np.linspace(joint["speed_min"], joint["speed_max"], 50)
+        diff = friction_curve(np.array(joint["f"]), np.array(joint["w"]), joint["b"], v) - \
+            friction_curve(TRUE.f[j], TRUE.w[j], float(TRUE.b[j]), v)
+        # the reported largest difference is taken on a finer grid of the same speeds
+        assert np.abs(diff).max() <= 1.01 * joint["curve_error_max_V"] < 0.02
+        assert sum(ln.startswith(f"friction joint {j + 1}: ") for ln in printed) == 1
+    assert truth["prior_differs"] == []
+    ident = read_robot_file(out).data.identification
+    assert list(ident["p_true"]) == TRUE.p.tolist() and ident["p_inside_95"] == inside.sum()
+    assert ident["truth"] == str(DEFAULT_ROBOT_TOML)
+    (tmp_path / "true.toml").write_bytes(DEFAULT_ROBOT_TOML.read_bytes())
+    with pytest.raises(BadInputError, match="is the truth"):
+        run_identify(IdentifyJob(log=tmp_path / "excitation.csv", out=tmp_path / "true.toml",
+                                 truth=tmp_path / "true.toml"))
+    assert (tmp_path / "true.toml").read_bytes() == DEFAULT_ROBOT_TOML.read_bytes()
+
+
+def test_truth_names_what_the_prior_gives_wrongly() -> None:
+    """The parameters identification takes from the prior and in which it differs from the
+    truth are listed (they bias the estimate); without a friction log the friction is the
+    prior's too."""
+    from rrr_robot.identify.base_params import Estimate
+    from rrr_robot.identify.truth import compare_with_truth
+
+    true = TRUE.with_params(kt=TRUE.kt * np.array([1.0, 1.1, 1.0]))
+    est = Estimate(TRUE.p, np.full(16, 1e-3), np.zeros(3), "ls")
+    cmp = compare_with_truth(est, [], PRIOR, true, "true.toml")
+    assert cmp.prior_differs == ("kt[2]",) and cmp.friction == ()
+    assert cmp.inside.all() and cmp.report()["p_inside_95"] == 16
+    no_log = compare_with_truth(est, None, PRIOR, true, "true.toml")
+    assert no_log.prior_differs[0] == "kt[2]" and "f[1,1]" in no_log.prior_differs
+    assert any("kt[2]" in ln for ln in no_log.lines())
+
+
+def test_validate_runs_the_truth_as_the_plant(tmp_path: Path, noisy_logs) -> None:
+    """--validate with --truth: the writing task's plant is the truth (its ctc run is rrr
+    writing --robot TRUTH --scenario ctc, bit for bit), the controller once the truth's model
+    and once the identified one."""
+    from rrr_robot.writing.job import WritingJob, run_writing
+
+    fric, exc = noisy_logs
+    fric.to_csv(tmp_path / "friction.csv")
+    exc.to_csv(tmp_path / "excitation.csv", "simulated")
+    text = DEFAULT_ROBOT_TOML.read_text(encoding="utf-8")
+    truth = tmp_path / "truth.toml"  # the default robot's kinematics, a heavier forearm
+    truth.write_text(text.replace("\nmass = 2.5\n", "\nmass = 4.0\n"), encoding="utf-8")
+    outcome = run_identify(IdentifyJob(log=tmp_path / "excitation.csv", out=tmp_path / "i.toml",
+                                       friction_log=tmp_path / "friction.csv", validate=True,
+                                       truth=truth))
+    writing = outcome.report["writing"]
+    assert writing["plant"] == "truth"
+    plain = run_writing(WritingJob(out=tmp_path / "w", robot=truth, scenarios=["ctc"],
+                                   figures=False))["scenarios"]["ctc"]
+    assert writing["true"]["tip_error_max"] == plain["tip_error_max"]
+    assert writing["true"]["rms_u_n"] == plain["rms_u_n"]
+    # the logs are of the default arm: its identified model is far from the heavy truth
+    assert outcome.report["truth"]["p_inside_95"] < 16
+    assert writing["tip_error_ratio"] > 2

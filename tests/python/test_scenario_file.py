@@ -84,6 +84,22 @@ def test_mismatch_model_is_the_documented_perturbation() -> None:
         Scenario("bad", "", True, mismatch={"p_rel": 5.0}).controller_model(true)
 
 
+def test_a_controller_model_of_its_own_is_what_mismatch_perturbs() -> None:
+    """Scenario.believing(model) (rrr writing --controller-robot): the controller starts from
+    ``model`` instead of the true one, and [mismatch] perturbs ``model``, bit for bit."""
+    true = rr.Model.default()
+    own = true.with_params(p=true.p * 1.2, kt=true.kt * 0.9)
+    ctc, mismatch = load_scenario("ctc"), load_scenario("mismatch")
+    assert ctc.believing(own).controller_model(true) is own
+    assert ctc.believing(None).controller_model(true) is true
+    believed = mismatch.believing(own).controller_model(true)
+    signs = np.array([(-1.0) ** k for k in range(1, 17)])
+    np.testing.assert_array_equal(believed.p, own.p * (1.0 + 0.15 * signs))
+    np.testing.assert_array_equal(believed.kt, own.kt * (1.0 + -0.10))
+    np.testing.assert_array_equal(believed.f, own.f * (1.0 + 0.30))
+    assert mismatch.believing(own) == mismatch  # the model is not part of the scenario's file
+
+
 def test_mismatch_per_value_is_the_documented_perturbation(tmp_path: Path) -> None:
     """One error per value of a group (in its shape): v (1 + rel_v), no alternating sign."""
     true = rr.Model.default()

@@ -709,8 +709,8 @@ def test_rrr_hil_bench_over_socketcan(python_sides: dict[str, Any],
     assert {k: v for k, v in s["controller"].items() if k not in TRANSPORT_FIELDS} == \
         {k: v for k, v in h["controller"].items() if k not in TRANSPORT_FIELDS}
     bus, hbus = _untimed(s["bus"]), _untimed(h["bus"])
-    assert {k: bus[k] for k in ("frames", "tx", "rx", "by_id", "measured_1mbit")} == \
-        {k: hbus[k] for k in ("frames", "tx", "rx", "by_id", "measured_1mbit")}
+    same = ("frames", "frames_per_period", "tx", "rx", "by_id", "load")
+    assert {k: bus[k] for k in same} == {k: hbus[k] for k in same}
     assert framelog.compare(framelog.read_node_log(mine / "frames.rrrcan"),
                             framelog.read_can_log(mine / "frames.blf")) is None
 
@@ -750,16 +750,15 @@ def test_rrr_hil_bench_fd_over_socketcan(python_sides: dict[str, Any]) -> None:
     s, c = (json.loads((out / d / "summary.json").read_text()) for d in ("bench_fd", "bench"))
     assert s["controller"]["transport"] == "socketcan-fd" and s["plant_exit"] == 0
     assert _untimed(s["bench"]) == _untimed(c["bench"]) and s["faults"] == c["faults"]
-    fd = s["bus"]["measured_fd"]
-    assert fd["frames_per_period"] == s["bus"]["measured_1mbit"]["frames_per_period"] == \
-        c["bus"]["measured_1mbit"]["frames_per_period"]
-    assert 0 < fd["load_no_stuffing_percent"] < fd["load_worst_percent"] < \
-        s["bus"]["measured_1mbit"]["load_percent"]
-    assert "measured_fd" not in c["bus"]
-    print(f"  rrr hil bench --fd: {fd['frames_per_period']:.3f} frames, "
+    fd = s["bus"]["load_fd"]
+    assert s["bus"]["frames_per_period"] == c["bus"]["frames_per_period"]
+    assert 0 < fd["measured_no_stuffing_percent"] < fd["measured_worst_case_percent"] < \
+        s["bus"]["load"]["measured_percent"]
+    assert "load_fd" not in c["bus"]
+    print(f"  rrr hil bench --fd: {s['bus']['frames_per_period']:.3f} frames, "
           f"{fd['bytes_per_period']:.2f} bytes per period at the controller, "
-          f"{fd['load_worst_percent']:.2f} % worst case (schedule "
-          f"{s['bus']['schedule_fd_worst_percent']:.2f} %)")
+          f"{fd['measured_worst_case_percent']:.2f} % worst case (schedule "
+          f"{fd['schedule_worst_case_percent']:.2f} %)")
 
 
 def test_rrr_hil_bench_safety_status(python_sides: dict[str, Any]) -> None:

@@ -253,3 +253,29 @@ def test_not_an_archive_and_bad_options(tmp_path: Path,
     assert main(["ssp", "--out", str(tmp_path / "x.ssp"), "--scenario", "nope"]) == 2
     assert "unknown scenario 'nope'" in capsys.readouterr().err
     assert not out.exists() and not (tmp_path / "x.ssp").exists()
+
+
+def test_controller_robot_sets_the_controllers_parameters(tmp_path: Path) -> None:
+    """rrr ssp --robot heavy.toml --controller-robot default.toml: the plant's bindings are the
+    heavy arm's model, the controller's the default robot's (rrr writing --controller-robot);
+    the archive names both files."""
+    from rrr_robot.core.model import DEFAULT_ROBOT_TOML
+    from rrr_robot.core.param_names import model_fmu_values
+    from rrr_robot.core.robot import read_robot_file
+
+    text = DEFAULT_ROBOT_TOML.read_text(encoding="utf-8")
+    heavy = tmp_path / "heavy.toml"
+    heavy.write_text(text.replace("\nmass = 2.5\n", "\nmass = 4.0\n"), encoding="utf-8")
+    ssp = tmp_path / "mix.ssp"
+    assert main(["ssp", "--out", str(ssp), "--text", "am", "--robot", str(heavy),
+                 "--controller-robot", str(DEFAULT_ROBOT_TOML), "-q"]) == 0
+    arch = read_ssp(ssp)
+    plant = model_fmu_values(read_robot_file(heavy).model)
+    controller = model_fmu_values(read_robot_file(DEFAULT_ROBOT_TOML).model)
+    assert plant["p[1]"] != controller["p[1]"]
+    for name, value in plant.items():
+        assert arch.parameters["plant"][name] == value, name
+    for name, value in controller.items():
+        assert arch.parameters["controller"][name] == value, name
+    assert arch.info["robot"] == "heavy.toml"
+    assert arch.info["controller_robot"] == DEFAULT_ROBOT_TOML.name

@@ -344,6 +344,38 @@ def test_the_robot_file_is_read_once_on_the_client_for_the_workers(
     assert len(plan.fingerprint) == 64
 
 
+def test_a_controller_robot_gives_every_run_the_controller_of_rrr_writing_controller_robot(
+        tmp_path: Path, plan: sweep_runs.SweepPlan) -> None:
+    """[sweep] controller_robot (relative to the spec's folder): a run is rrr writing --robot
+    <robot> --controller-robot <file> bit for bit (its tip error and voltages), and the file's
+    tables join the sweep's fingerprint; a spec without it keeps its identity as before."""
+    from rrr_robot.writing.job import WritingJob, run_writing
+
+    text = DEFAULT_ROBOT_TOML.read_text(encoding="utf-8")
+    (tmp_path / "heavy.toml").write_text(text.replace("\nmass = 2.5\n", "\nmass = 4.0\n"),
+                                         encoding="utf-8")
+    (tmp_path / "default.toml").write_text(text, encoding="utf-8")
+    spec = read_spec(spec_file(tmp_path, '[sweep]\nbase = "ctc"\nsamples = 1\nrobot = '
+                               '"heavy.toml"\ncontroller_robot = "default.toml"\n'))
+    assert spec.identity()["controller_robot"] == "default.toml"
+    assert "controller_robot" not in spec_from_dict(
+        {"sweep": {"base": "ctc", "samples": 1}}, "spec.toml").identity()
+    mixed = make_plan(spec, "native")
+    assert mixed.controller_robot == load_toml(tmp_path / "default.toml", "robot file",
+                                               rr.RobotFileError)
+    alone = make_plan(dataclasses.replace(spec, controller_robot=None), "native")
+    assert alone.controller_robot is None and alone.fingerprint != mixed.fingerprint
+    row = run_one(mixed, RunInput(0, 1, ()))
+    writing = run_writing(WritingJob(out=tmp_path / "w", scenarios=["ctc"], engine="native",
+                                     figures=False, robot=tmp_path / "heavy.toml",
+                                     controller_robot=tmp_path / "default.toml"))
+    ctc = writing["scenarios"]["ctc"]
+    assert row["status"] == "ok" and row["tip_error_max"] == ctc["tip_error_max"]
+    assert [row[f"rms_u_n[{i}]"] for i in (1, 2, 3)] == ctc["rms_u_n"]
+    # the mismatch the user asked for: far from the plant's own model (the base plan's run)
+    assert row["tip_error_max"] > 10 * run_one(plan, RunInput(0, 1, ()))["tip_error_max"]
+
+
 def test_a_scheduler_that_cannot_be_reached_stops_the_sweep_before_anything_is_written(
         tmp_path: Path, capsys: pytest.CaptureFixture[str],
         monkeypatch: pytest.MonkeyPatch) -> None:

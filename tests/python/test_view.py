@@ -212,3 +212,30 @@ def test_a_diverged_run_beside_another_opens_at_its_last_finite_row(run, tmp_pat
     with pytest.raises(rr.BadInputError, match="no row with finite t and q"):
         view_html({"all_nan": {k: np.full_like(v, np.nan) if k != "t" else v
                                for k, v in table.items()}}, ROBOT)
+
+
+def test_the_title_reads_as_text_and_an_error_norm_never_goes_below_zero(tmp_path) -> None:
+    """rrr writing --view of a text on two lines: the page's title joins the lines with " / "
+    (it printed the repr, a literal backslash and n); in the browser the strips' ranges hold
+    their data, and the tip error's (a norm) starts at 0, not at a padded negative value, while
+    a signed signal keeps its margin below its minimum."""
+    out = tmp_path / "two-lines"
+    subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--text", "Hi\\nyou",
+                    "--scenario", "ctc", "--engine", "native", "--no-figures", "--view",
+                    "--out", str(out), "-q"], check=True)
+    html = (out / "view.html").read_text(encoding="utf-8")
+    title = re.search(r"<title>(.*?)</title>", html, re.S)
+    assert title is not None and title.group(1) == "rrr writing: \u201cHi / you\u201d"
+    assert "\\n" not in title.group(1) and re.search(r"<h1>rrr writing: \u201cHi / you", html)
+    s = state(out / "view.html", "#scenario=ctc", tmp_path)
+    assert s["state"] == "ready" and s["errors"] == "0"
+    ranges = {title: (lo, hi) for title, lo, hi in json.loads(s["ranges"])}
+    table = read_csv_table(out / "ctc.csv")
+    err = 1e3 * np.linalg.norm(np.stack([table[f"tip.{a}"] - table[f"x_ref.{a}"]
+                                         for a in "xyz"], axis=1), axis=1)
+    lo, hi = ranges["tip error |tip - x_ref| (mm)"]
+    assert lo == 0.0 and hi >= err.max() * (1 - 1e-6)
+    u1 = table["u[1]"]   # a signed voltage: its range has room below its minimum
+    lo, hi = ranges["voltage u (V)"]
+    assert lo < min(table["u[1]"].min(), table["u[2]"].min(), table["u[3]"].min()) < 0 < hi
+    assert u1.max() <= hi

@@ -166,3 +166,63 @@ def test_unreadable_files_and_outputs_fail_cleanly(tmp_path: Path) -> None:
         assert result.returncode == 2, result.stderr
         assert message in result.stderr and "Traceback" not in result.stderr
     assert blocker.read_text() == "not a folder"
+
+
+def _robot_files(folder: Path) -> tuple[Path, Path]:
+    """default.toml (the packaged robot's file, copied) and heavy.toml (the same with a forearm
+    of 4.0 kg instead of 2.5 kg: a payload)."""
+    from rrr_robot.core.model import DEFAULT_ROBOT_TOML
+
+    text = DEFAULT_ROBOT_TOML.read_text(encoding="utf-8")
+    default, heavy = folder / "default.toml", folder / "heavy.toml"
+    default.write_text(text, encoding="utf-8")
+    assert text.count("\nmass = 2.5\n") == 1
+    heavy.write_text(text.replace("\nmass = 2.5\n", "\nmass = 4.0\n"), encoding="utf-8")
+    return default, heavy
+
+
+def _writing(out: Path, *args: str) -> dict:
+    result = subprocess.run([sys.executable, "-m", "rrr_robot", "writing", "--out", str(out),
+                             "--text", "am", "--no-figures", "-q", *args],
+                            capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    return json.loads((out / "summary.json").read_text())
+
+
+@pytest.mark.parametrize("engine", ["fmpy", "native"])
+def test_controller_robot_of_the_same_file_is_the_plain_run(tmp_path: Path, engine: str) -> None:
+    """--controller-robot FILE with the file of --robot: the tables of the plain run, byte for
+    byte (also with [mismatch], which then perturbs the controller robot's model)."""
+    default, _ = _robot_files(tmp_path)
+    runs = {"plain": [], "twice": ["--controller-robot", str(default)]}
+    summaries = {name: _writing(tmp_path / name, "--robot", str(default), "--engine", engine,
+                                "--scenario", "ctc", "--scenario", "mismatch", *extra)
+                 for name, extra in runs.items()}
+    for scn in ("ctc", "mismatch"):
+        plain = (tmp_path / "plain" / f"{scn}.csv").read_bytes()
+        assert plain == (tmp_path / "twice" / f"{scn}.csv").read_bytes(), scn
+    assert summaries["plain"]["controller_robot"] is None
+    assert summaries["twice"]["controller_robot"] == str(default)
+
+
+def test_controller_robot_runs_the_mismatch_asked_for(tmp_path: Path) -> None:
+    """rrr writing --robot heavy.toml --controller-robot default.toml: the plant is the heavy
+    arm (its motion differs from the default arm's), the controller computes the default model's
+    feedforward (u_n, from the reference and its model only: the default run's, bit for bit),
+    and the computed torque no longer cancels the dynamics (the tip error grows)."""
+    from rrr_robot.core.tables import read_csv_table
+
+    default, heavy = _robot_files(tmp_path)
+    common = ["--scenario", "ctc", "--engine", "native"]
+    tip = {name: _writing(tmp_path / name, *args, *common)["scenarios"]["ctc"]["tip_error_max"]
+           for name, args in (("default", ["--robot", str(default)]),
+                              ("heavy", ["--robot", str(heavy)]),
+                              ("mismatch", ["--robot", str(heavy), "--controller-robot",
+                                            str(default)]))}
+    table = {name: read_csv_table(tmp_path / name / "ctc.csv")
+             for name in ("default", "heavy", "mismatch")}
+    for col in ("u_n[1]", "u_n[2]", "u_n[3]"):
+        np.testing.assert_array_equal(table["mismatch"][col], table["default"][col])
+        assert not np.array_equal(table["heavy"][col], table["default"][col])
+    assert not np.array_equal(table["mismatch"]["q[2]"], table["default"]["q[2]"])
+    assert tip["mismatch"] > 10 * tip["heavy"] and tip["mismatch"] > 10 * tip["default"], tip

@@ -274,10 +274,21 @@ _VIEW = {"bench": "the C controller node's (Tx: its frames, Rx: the plant's)",
          "controller": "the C plant node's (Tx: its frames, Rx: the FMU controller's)"}
 
 
+def _bus_lines(bus: Mapping[str, Any]) -> list[str]:
+    """The bus traffic of a run and its loads, each named by its meaning (summary.json
+    ``bus``); frames per second only in real time (a lockstep run has no wall clock)."""
+    from ..hil.busload import format_loads
+
+    fps = bus.get("frames_per_second")
+    return [f"  bus: {bus['frames']} frames ({bus['tx']} Tx, {bus['rx']} Rx), "
+            f"{bus['frames_per_period']:.2f} per period"
+            + (f", {fps:.0f} per second" if fps else "")
+            + (f"; frame log {bus['can_log']}" if "can_log" in bus else ""),
+            f"  bus {format_loads(bus['load'], bus.get('load_fd'))}"]
+
+
 def _report(s: Mapping[str, Any], out: Path) -> None:
     b, d = s["bench"], s["difference_to_unquantised"]
-    bus = s["bus"]
-    fps = bus.get("frames_per_second")
     print(f"CAN bench ({s['side']}, {s['mode']}, scenario {s['scenario']}): "
           f"{s['reference']['periods']} periods; tip error max {1e3 * b['tip_error_max']:.3f} mm, "
           f"rms {1e3 * b['tip_error_rms']:.3f} mm; max |q - q_ref| "
@@ -291,12 +302,7 @@ def _report(s: Mapping[str, Any], out: Path) -> None:
     f = s["faults"]
     print(f"  plant: faults latched {f.get('faults')}, fault events {f.get('fault_events')}, "
           f"missed commands {s['missed_commands']}")
-    print(f"  bus: {bus['frames']} frames ({bus['tx']} Tx, {bus['rx']} Rx), "
-          + (f"{fps:.0f} frames/s, " if fps else "")
-          + f"{bus['measured_1mbit']['frames_per_period']:.2f} per period, "
-          f"{bus['measured_1mbit']['load_percent']:.1f} % of 1 Mbit/s at 1 kHz (schedule worst "
-          f"case {bus['schedule_worst_percent_1mbit']:.1f} %)"
-          + (f"; frame log {bus['can_log']}" if "can_log" in bus else ""))
+    print("\n".join(_bus_lines(s["bus"])))
     for node, r in (s.get("realtime") or {}).items():
         if isinstance(r, dict):
             print(f"  {node}: wake-up latency p50 {r['p50_us']:.1f} us, p99 {r['p99_us']:.1f} "
@@ -365,6 +371,7 @@ def _cmd_canopen(args: argparse.Namespace) -> int:
     print(f"  drives: faults {s['faults'].get('faults')}, RPDO timeouts "
           f"{s['missed_commands']}; rated torque "
           f"{', '.join(str(d.rated_torque_mNm) for d in mrun.drives)} mN m")
+    print("\n".join(_bus_lines(s["bus"])))
     rt = s.get("realtime")
     if rt is not None:
         d, sp, jit = rt["drives"], rt["drives"]["sync_period"], rt["drives"]["sync_jitter"]

@@ -36,7 +36,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         settings=Settings(derivatives=args.derivatives, cutoff=args.cutoff,
                           friction_method=args.friction_method, weighting=args.weighting,
                           v_min=args.v_min),
-        report=args.report, validate=args.validate)
+        report=args.report, validate=args.validate,
+        truth=Path(args.truth) if args.truth else None)
 
     with Bars(shown(quiet(args)), unit="joint") as fits, Bars(shown(quiet(args))) as steps:
         def progress(phase: str, done: int, total: int) -> None:
@@ -47,13 +48,19 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             est = result.base.wls if job.settings.weighting == "wls" else result.base.ls
             print(f"cond(W) = {result.base.cond:.1f} from {result.base.rows} rows; "
                   f"{est.method}:")
+            if result.truth is not None:  # each estimate beside the truth, with its interval
+                print("\n".join(result.truth.lines()))
+                return
             for name, p, s in zip(group_names("p"), est.p, est.std, strict=True):
                 print(f"  {name:<5} = {p: .6g} +/- {1.96 * s:.2g} (95 %)")
 
         outcome = run_identify(job, progress, estimated)
     if job.validate:
-        ratio = outcome.report["writing"]["tip_error_ratio"]
-        print(f"writing task: tip error ratio identified/prior {ratio:.2f}")
+        w = outcome.report["writing"]
+        print(f"writing task (ctc, plant: the {w['plant']}): tip error max "
+              f"{1e3 * w['identified']['tip_error_max']:.4f} mm with the identified controller "
+              f"model, {1e3 * w['true']['tip_error_max']:.4f} mm with the {w['plant']}'s: ratio "
+              f"identified/{w['plant']} {w['tip_error_ratio']:.2f}")
     print(f"identified robot written to {args.out}")
     return 0
 
@@ -83,12 +90,15 @@ def _sweep_speeds(text: str) -> int:
 
 def identify_command(out: Path, robot: str | None) -> str:
     """The ``rrr identify`` command that reads the logs of ``rrr identify-experiment --out
-    OUT`` (with its robot as the prior, whose kinematics and motors identification keeps)."""
+    OUT`` (with its robot as the prior, whose kinematics and motors identification keeps, and
+    as the truth each estimate is shown beside: the experiment was simulated on it)."""
+    from ..core.model import DEFAULT_ROBOT_TOML
+
     words = ["rrr", "identify", "--log", str(out / "excitation.csv"), "--friction-log",
              str(out / "friction.csv")]
     if robot:
         words += ["--robot", robot]
-    words += ["--out", str(out / "identified.toml")]
+    words += ["--truth", robot or str(DEFAULT_ROBOT_TOML), "--out", str(out / "identified.toml")]
     return shlex.join(words)
 
 
@@ -118,7 +128,12 @@ def register_cli(sub: Any) -> None:
                    help="drop rows of joints slower than this, rad/s")
     p.add_argument("--report", type=output_path, help="write the figures of merit as JSON")
     p.add_argument("--validate", action="store_true",
-                   help="run the writing task with the prior and the identified model")
+                   help="run the writing task (ctc) with the identified controller model and "
+                   "with the plant's own model (the plant: --truth, else the prior)")
+    p.add_argument("--truth", metavar="FILE",
+                   help="the true robot TOML of a simulated experiment (rrr identify-experiment "
+                   "--robot FILE): print each estimate beside its true value and its 95 %% "
+                   "interval, and write the comparison into --out and --report")
     add_verbosity_arguments(p)
     p.set_defaults(func=_cmd_identify)
     e = command_parser(

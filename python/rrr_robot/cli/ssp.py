@@ -17,8 +17,11 @@ def _cmd_ssp(args: argparse.Namespace) -> int:
 
     job = SspJob(out=Path(args.out), text=args.text, scenario=args.scenario,
                  robot=Path(args.robot) if args.robot else SspJob.robot, scale=args.scale,
-                 lookahead_steps=args.lookahead)
+                 lookahead_steps=args.lookahead,
+                 controller_robot=Path(args.controller_robot) if args.controller_robot else None)
     info = export_ssp(job)
+    if job.controller_robot is not None:
+        print(f"plant: {job.robot}; controller's model: {job.controller_robot}")
     print(f"{job.out}: scenario {info['scenario']}, {info['duration']:.3f} s at "
           f"{info['step']:g} s ({info['samples']} samples), look-ahead "
           f"{info['lookahead_steps']} step(s); run it with: rrr run-ssp {job.out} --tool "
@@ -62,7 +65,11 @@ def register_cli(subparsers: Any) -> None:
     p.add_argument("--text", help="text to write (default: the paper-like default text)")
     p.add_argument("--scenario", default="ctc", metavar="S",
                    help="pd, ctc (default), mismatch or a scenario .toml file")
-    p.add_argument("--robot", help="robot TOML file (default: the packaged default robot)")
+    p.add_argument("--robot", help="robot TOML file (default: the packaged default robot): the "
+                   "plant, and the controller's model unless --controller-robot")
+    p.add_argument("--controller-robot", metavar="FILE",
+                   help="the controller's model from this robot TOML file (e.g. the output of "
+                   "rrr identify), the plant from --robot; as rrr writing --controller-robot")
     p.add_argument("--scale", type=float, default=1.0,
                    help="factor on the letter height (default 1)")
     p.add_argument("--lookahead", type=nonnegative_int, default=1, metavar="STEPS",

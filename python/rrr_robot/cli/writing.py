@@ -55,9 +55,12 @@ def _cmd_writing(args: argparse.Namespace) -> int:
         figures=not args.no_figures, fmi_version=args.fmi, table_format=args.format,
         engine=args.engine, animate=args.animate, fps=args.fps, mcap=args.mcap,
         view=args.view,
+        controller_robot=Path(args.controller_robot) if args.controller_robot else None,
     )
     with Bars(shown(quiet(args))) as bars:
         summary = run_writing(job, progress=lambda name, k, n: bars(name, k + 1, n))
+    if job.controller_robot is not None:
+        print(f"plant: {job.robot}; controller's model: {job.controller_robot}")
     for name, s in summary["scenarios"].items():
         print(f"{name:>10}: {_scenario_line(s)}")
     figures = ", figures" if job.figures else ""
@@ -83,7 +86,8 @@ glyphs: printable ASCII (space to ~) in the cursive Hershey font 'scripts', and 
   characters.
 """
 WRITING_EXAMPLES = ["rrr writing --out results --text \"Hello, world\"",
-                    "rrr writing --out results --text 'Hello\\nworld' --scenario ctc"]
+                    "rrr writing --out results --text 'Hello\\nworld' --scenario ctc",
+                    "rrr writing --out results --scenario ctc --controller-robot identified.toml"]
 
 
 def register_cli(subparsers: Any) -> None:
@@ -104,7 +108,13 @@ def register_cli(subparsers: Any) -> None:
     p_w.add_argument("--out", default=Path("results"), type=output_path,
                      help="output folder (default: results); its previous results stay as they "
                      "were unless the run succeeds")
-    p_w.add_argument("--robot", help="robot TOML file (default: the packaged default robot)")
+    p_w.add_argument("--robot", help="robot TOML file (default: the packaged default robot): "
+                     "the plant, and the controller's model unless --controller-robot")
+    p_w.add_argument("--controller-robot", metavar="FILE",
+                     help="the controller's model from this robot TOML file instead of --robot's "
+                     "(e.g. the output of rrr identify: the identified controller against the "
+                     "true plant); a scenario's [mismatch] perturbs it; gains, sample time and "
+                     "the writing task stay --robot's")
     p_w.add_argument("--scale", type=float, default=1.0,
                      help="factor on the letter height the text is written at (after the fit "
                      "to the writing area; default 1); a scaled text that does not fit is "

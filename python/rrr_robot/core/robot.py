@@ -151,6 +151,10 @@ IDENTIFICATION_FIELDS: dict[str, Field] = {
     "p_ls": _P16, "p_std_ls": _P16, "p_wls": _P16, "p_std_wls": _P16,
     "friction_method": Text(max_len=80), "friction_residual_rms_V": _J3,
     "friction_residual_max_V": _J3,
+    # against the truth of a simulated experiment (rrr identify --truth)
+    "truth": Text(max_len=4096), "p_true": _P16, "p_inside_95": Number(lo=0.0, hi=16.0,
+                                                                      integer=True),
+    "friction_curve_error_max_V": _J3,
 }
 
 Vec3 = tuple[float, float, float]

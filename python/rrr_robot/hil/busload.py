@@ -27,7 +27,7 @@ once per run: neither is part of the real-time schedule.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -41,14 +41,18 @@ __all__ = [
     "MAX_NOMINAL_BITRATE",
     "BusLoad",
     "FrameLoad",
+    "bus_loads",
     "can_crc15",
     "check_bitrates",
     "classical_bits",
     "fd_bits",
+    "fd_bus_loads",
+    "format_loads",
     "format_report",
     "measured_fd_load",
     "measured_load",
     "schedule_load",
+    "schedule_name",
     "stuffed_length",
 ]
 
@@ -286,14 +290,96 @@ def measured_fd_load(frames: Sequence[tuple[int, bytes, bool]], periods: int,
     return out
 
 
+def schedule_name(load: BusLoad) -> str:
+    """Which schedule ``load`` is, in words: the DBC's in real time or in lockstep (Sync
+    included), or the CANopen profile's."""
+    if load.dbc.endswith(".eds"):
+        sync = next((f.period_ms for f in load.frames if f.frame_id == 0x080), 0.0)
+        return f"three CiA 402 drives, SYNC every {sync:g} ms"
+    return "lockstep (Sync included)" if load.lockstep else "real time"
+
+
+def bus_loads(frames: Sequence[tuple[int, bytes, bool]], periods: int, schedule: BusLoad,
+              realtime_schedule: BusLoad, period_s: float = PERIOD) -> dict[str, Any]:
+    """The bus loads of a run on a classical bus of ``schedule.bitrate``, each named by what it
+    is (summary.json ``bus.load``; docs/can.md, "Bus load of the schedule"):
+
+    - ``measured_percent``: the frames the run's frame log holds (``frames``: identifier, data,
+      extended), each with its stuff bits counted exactly, per period of ``period_s`` (in
+      lockstep: as if the periods were ``period_s`` apart);
+    - ``schedule_worst_case_percent`` and ``schedule_no_stuffing_percent``: the periodic schedule
+      of the run's mode (``schedule``; lockstep: Sync included), every frame with the worst case
+      of stuffing, and with none;
+    - ``realtime_schedule_worst_case_percent``: the real-time schedule's worst case, what ``rrr
+      hil busload`` prints (the run's own schedule in real time)."""
+    measured = measured_load(frames, periods, schedule.bitrate, period_s)
+    return {
+        "bitrate": schedule.bitrate, "period_s": period_s,
+        "measured_percent": measured["load_percent"],
+        "measured_bits_per_period": measured["bits_per_period"],
+        "schedule": schedule_name(schedule),
+        "schedule_worst_case_percent": schedule.worst_percent,
+        "schedule_no_stuffing_percent": schedule.nominal_percent,
+        "realtime_schedule_worst_case_percent": realtime_schedule.worst_percent,
+    }
+
+
+def fd_bus_loads(frames: Sequence[tuple[int, bytes, bool]], periods: int, schedule: BusLoad,
+                 period_s: float = PERIOD) -> dict[str, Any]:
+    """The same for CAN FD with bit-rate switch (``schedule``: the run's schedule on that bus;
+    summary.json ``bus.load_fd``): the measured frames with the worst case of dynamic stuffing
+    and with none (:func:`measured_fd_load`: an FD frame's stuffing is not counted exactly), and
+    the schedule's worst case."""
+    assert schedule.data_bitrate is not None
+    measured = measured_fd_load(frames, periods, schedule.bitrate, schedule.data_bitrate,
+                                period_s)
+    return {
+        "bitrate": schedule.bitrate, "data_bitrate": schedule.data_bitrate,
+        "period_s": period_s, "bytes_per_period": measured["bytes_per_period"],
+        "measured_worst_case_percent": measured["load_worst_percent"],
+        "measured_no_stuffing_percent": measured["load_no_stuffing_percent"],
+        "schedule": schedule_name(schedule),
+        "schedule_worst_case_percent": schedule.worst_percent,
+    }
+
+
+def _mbit(bitrate: int) -> str:
+    return f"{bitrate / 1e6:g} Mbit/s" if bitrate >= 1_000_000 else f"{bitrate / 1e3:g} kbit/s"
+
+
+def format_loads(load: Mapping[str, Any], fd: Mapping[str, Any] | None = None) -> str:
+    """One line of a run's bus loads (:func:`bus_loads`, and :func:`fd_bus_loads` on CAN FD),
+    each named by what it is."""
+    period = f"{1e3 * load['period_s']:g} ms"
+    worst, realtime = load["schedule_worst_case_percent"], \
+        load["realtime_schedule_worst_case_percent"]
+    name = load["schedule"]
+    if name.startswith("lockstep"):
+        clock = " (lockstep has no clock: as if run at that rate)"
+        schedules = (f"worst case of the lockstep schedule {worst:.2f} % (Sync included), of the "
+                     f"real-time schedule {realtime:.2f} % (rrr hil busload)")
+    elif name == "real time":
+        clock = ""
+        schedules = f"worst case of the real-time schedule {worst:.2f} % (rrr hil busload)"
+    else:
+        clock = ""
+        schedules = (f"worst case of the schedule {worst:.2f} % ({name}: rrr hil busload "
+                     "--profile canopen)")
+    text = (f"load of a {_mbit(load['bitrate'])} classical CAN bus, one period per {period}"
+            f"{clock}: measured {load['measured_percent']:.2f} % (this run's frames, stuff bits "
+            f"counted exactly); {schedules}")
+    if fd is not None:
+        text += (f"; CAN FD {_mbit(fd['bitrate'])} + {_mbit(fd['data_bitrate'])}: measured "
+                 f"{fd['measured_worst_case_percent']:.2f} % with worst-case stuffing, worst "
+                 f"case of the schedule {fd['schedule_worst_case_percent']:.2f} %")
+    return text
+
+
 def format_report(load: BusLoad) -> str:
     """The report of ``rrr hil busload``; its last line states the worst-case load in percent."""
     bus = (f"CAN FD, {load.bitrate} bit/s nominal, {load.data_bitrate} bit/s data (bit-rate "
            "switch)" if load.data_bitrate is not None else f"classical CAN, {load.bitrate} bit/s")
-    mode = "lockstep (Sync included)" if load.lockstep else "real time"
-    if load.dbc.endswith(".eds"):
-        sync = next((f.period_ms for f in load.frames if f.frame_id == 0x080), 0.0)
-        mode = f"three CiA 402 drives, SYNC every {sync:g} ms"
+    mode = schedule_name(load)
     lines = [f"schedule of {Path(load.dbc).name or 'the DBC'}, {mode}; bus: {bus}",
              f"{'id':>6} {'frame':<16} {'bytes':>5} {'period':>8} {'bits worst':>10} "
              f"{'bits no stuff':>13} {'us worst':>9} {'load worst':>10} {'load no stuff':>13}"]
@@ -304,7 +390,8 @@ def format_report(load: BusLoad) -> str:
                      f"{f.bits_worst:>10.1f} {f.bits_nominal:>13.1f} {f.time_worst_us:>9.2f} "
                      f"{share:>9.2f} % {share0:>11.2f} %")
     lines += [f"not in the periodic schedule: {e}" for e in load.excluded]
-    lines.append(f"{load.frames_per_second:.0f} frames/s; load without stuff bits "
+    rate = " if run at 1 kHz" if load.lockstep else ""
+    lines.append(f"{load.frames_per_second:.0f} frames/s{rate}; load without stuff bits "
                  f"{load.nominal_percent:.2f} %")
     lines.append(f"worst-case bus load: {load.worst_percent:.2f} %")
     return "\n".join(lines)

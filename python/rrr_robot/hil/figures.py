@@ -33,9 +33,10 @@ def fig_difference(out: Path, bench: CosimResult, other: CosimResult, scenario: 
                     label=f"u{i + 1}")
     dq = np.abs(bench.q[:m] - other.q[:m]).max()
     du = np.abs(bench.u[:m] - other.u[:m]).max()
-    ax1.set(ylabel="rad", title=f"CAN bench minus unquantised co-simulation, scenario "
+    ax1.set(ylabel="q bench - q co-sim. [rad]",
+            title=f"CAN bench minus unquantised co-simulation, scenario "
             f"{scenario}: max |dq| {dq:.2e} rad, max |du| {du:.2e} V")
-    ax2.set(xlabel="t [s]", ylabel="V")
+    ax2.set(xlabel="t [s]", ylabel="u bench - u co-sim. [V]")
     for ax in (ax1, ax2):
         ax.grid(True)
         ax.legend(**OUTSIDE)
@@ -70,7 +71,7 @@ def fig_joint_errors(out: Path, bench: CosimResult, other: CosimResult, scenario
 def fig_voltages(out: Path, bench: CosimResult, other: CosimResult, scenario: str) -> None:
     """Commanded voltages of the bench (solid) and of the co-simulation (dashed)."""
     _against_cosim(out, "fig_voltages.png", (bench.t, other.t), (bench.u, other.u),
-                   ("u1", "u2", "u3"), "V",
+                   ("u1", "u2", "u3"), "u [V]",
                    f"Motor voltages commanded over CAN and co-simulated, scenario {scenario}")
 
 

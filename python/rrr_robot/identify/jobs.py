@@ -40,6 +40,9 @@ class IdentifyJob:
     settings: Settings = field(default_factory=Settings)
     report: Path | None = None            # the figures of merit as JSON
     validate: bool = False                # the writing task with the prior and the estimate
+    # the true robot file of a simulated experiment: each estimate beside its true value, and
+    # the plant of --validate
+    truth: Path | None = None
 
 
 @dataclass(frozen=True)
@@ -52,9 +55,11 @@ class IdentifyOutcome:
 
 def check_outputs(job: IdentifyJob) -> None:
     """The files the job will write, checked before it reads or estimates anything: each in an
-    existing, writable folder, not a folder itself, not one of the input logs, and not the same
-    file twice (:class:`~rrr_robot.errors.BadInputError` otherwise)."""
-    inputs = {Path(f).resolve(): f for f in (job.log, job.friction_log) if f}
+    existing, writable folder, not a folder itself, not one of the input logs or the truth, and
+    not the same file twice (:class:`~rrr_robot.errors.BadInputError` otherwise)."""
+    inputs = {Path(f).resolve(): f"input log {f}" for f in (job.log, job.friction_log) if f}
+    if job.truth is not None:
+        inputs[Path(job.truth).resolve()] = f"truth {job.truth}"
     seen: dict[Path, str] = {}
     for option, path in (("--out", job.out), ("--report", job.report)):
         if path is None:
@@ -68,8 +73,8 @@ def check_outputs(job: IdentifyJob) -> None:
             raise BadInputError(f"cannot write {path}: the folder {target.parent} is not "
                                 "writable")
         if target in inputs:
-            raise BadInputError(f"{option} {path} is the input log {inputs[target]}: it would "
-                                "be overwritten")
+            raise BadInputError(f"{option} {path} is the {inputs[target]}: it would be "
+                                "overwritten")
         if target in seen:
             raise BadInputError(f"{option} {path} is also {seen[target]}: give two files")
         seen[target] = option
@@ -77,27 +82,33 @@ def check_outputs(job: IdentifyJob) -> None:
 
 def run_identify(job: IdentifyJob, progress: Progress | None = None,
                  estimated: Callable[[Identified], None] | None = None) -> IdentifyOutcome:
-    """Estimate friction and the base parameters from the job's logs, validate on the writing
-    task if asked, and write the robot file and the report: together at the end, each complete
+    """Estimate friction and the base parameters from the job's logs, compare them with the
+    truth (``job.truth``), validate on the writing task if asked (the plant: the truth, else
+    the prior), and write the robot file and the report: together at the end, each complete
     or not at all (an interrupted run, also during validation, leaves the previous files as
     they were). ``estimated(result)`` is called between estimation and validation (the CLI
     prints the estimate there)."""
     prior_robot = read_robot_file(job.robot)
     prior = prior_robot.model
+    truth = read_robot_file(job.truth) if job.truth is not None else None
     if job.validate:
         prior_robot.require_control()
     check_outputs(job)  # fail before the estimation, not after it
     friction = read_log(job.friction_log, friction=True) if job.friction_log else None
     result = identify(read_log(job.log), prior, friction, job.settings, progress=progress)
+    if truth is not None:
+        result = result.compared_with(truth, prior)
     if estimated is not None:
         estimated(result)
     report: dict[str, Any] = result.report()
     if job.validate:
         from .validation import validate_writing  # the writing task: only when asked
 
+        # the plant: the truth when it is known, else the prior
         report["writing"] = validate_writing(
-            prior, result.model, prior_robot,
+            prior if truth is None else truth.model, result.model, prior_robot,
             progress=None if progress is None else lambda name, k, n: progress(name, k + 1, n))
+        report["writing"]["plant"] = "prior" if truth is None else "truth"
     with contextlib.ExitStack() as outputs:
         write_robot(result, outputs.enter_context(atomic_path(job.out)), prior_robot)
         if job.report is not None:

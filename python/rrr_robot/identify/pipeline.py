@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -24,9 +24,10 @@ from ..core.param_names import group_names
 from ..core.robot import RobotFile, read_robot_file
 from ..errors import BadInputError, ModelError
 from ._threads import one_blas_thread
-from .base_params import BaseParamResult, estimate_base_params
+from .base_params import BaseParamResult, Estimate, estimate_base_params
 from .friction import FrictionFit, curve_points, fit_ls, fit_nls
 from .logs import Log
+from .truth import TruthComparison, compare_with_truth
 
 log = logging.getLogger(__name__)
 
@@ -72,11 +73,26 @@ class Identified:
     model: Model
     friction: list[FrictionFit] | None
     base: BaseParamResult
+    # each estimate beside the true value (rrr identify --truth: simulated experiments only)
+    truth: TruthComparison | None = None
+
+    @property
+    def estimate(self) -> Estimate:
+        """The base-parameter estimate the model holds (least squares or weighted)."""
+        return self.base.wls if self.model_uses_wls else self.base.ls
+
+    def compared_with(self, true: RobotFile, prior: Model) -> Identified:
+        """This result with each estimate beside its value in the true robot file ``true``
+        (:func:`~rrr_robot.identify.truth.compare_with_truth`); ``prior`` supplied what is not
+        identified."""
+        return replace(self, truth=compare_with_truth(self.estimate, self.friction, prior,
+                                                      true.model, true.source))
 
     def report(self) -> dict[str, Any]:
         """The result as JSON values: the estimated p with its standard deviations, the
-        estimator, the regressor's condition and rows, and the friction fits."""
-        est = self.base.wls if self.model_uses_wls else self.base.ls
+        estimator, the regressor's condition and rows, the friction fits and, against a truth,
+        each estimate beside its true value (``truth``)."""
+        est = self.estimate
         other = self.base.ls if self.model_uses_wls else self.base.wls
         out: dict[str, Any] = {
             "p": est.p.tolist(), "p_std": est.std.tolist(), "estimator": est.method,
@@ -88,6 +104,8 @@ class Identified:
             out["friction_method"] = self.friction[0].method
             out["friction_residual_rms_V"] = [f.residual_rms for f in self.friction]
             out["friction_residual_max_V"] = [f.residual_max for f in self.friction]
+        if self.truth is not None:
+            out["truth"] = self.truth.report()
         return out
 
     @property
@@ -159,7 +177,10 @@ def write_robot(result: Identified, path: Path,
     ident = result.model.to_dict()
     for name, table in ident.items():
         tables[name] = tables.get(name, {}) | table
-    tables["identification"] = {k: v for k, v in result.report().items()}
+    report = result.report()
+    report.pop("truth", None)  # the robot file keeps the flat values of the comparison
+    tables["identification"] = report | ({} if result.truth is None
+                                         else result.truth.toml_values())
     header = ("Identified by rrr identify: [base_parameters] and [friction] estimated from logs;\n"
               "[identification] holds p_std (1 sigma) and figures of merit; the base parameters "
               f"are {group_names('p')[0]} ... {group_names('p')[-1]} (rrr_params.h).")

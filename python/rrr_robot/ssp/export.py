@@ -74,8 +74,9 @@ MAX_LOOKAHEAD_STEPS = 10
 @dataclass(frozen=True)
 class SspJob:
     """What to export: the archive's path, the writing task's text, one scenario, the robot file,
-    the letter scale, and the compensation in communication steps (the reference FMU's
-    ``lookahead`` and the controller's ``lead``; 0: none)."""
+    the letter scale, the compensation in communication steps (the reference FMU's
+    ``lookahead`` and the controller's ``lead``; 0: none) and the controller's own robot file
+    (``rrr ssp --controller-robot``: its model in the controller's parameters)."""
 
     out: Path
     text: str | None = None
@@ -83,6 +84,8 @@ class SspJob:
     robot: Path = DEFAULT_ROBOT_TOML
     scale: float = 1.0
     lookahead_steps: int = 1
+    # the controller's model from this robot file (None: the plant's, from ``robot``)
+    controller_robot: Path | None = None
 
 
 def connections() -> list[Connection]:
@@ -168,7 +171,8 @@ def export_ssp(job: SspJob) -> dict[str, Any]:
         raise BadInputError(f"the look-ahead must be 0 to {MAX_LOOKAHEAD_STEPS} steps, got "
                             f"{job.lookahead_steps}")
     prepared = prepare(WritingJob(out=job.out.parent, text=job.text, scenarios=[job.scenario],
-                                  robot=job.robot, scale=job.scale, figures=False))
+                                  robot=job.robot, scale=job.scale, figures=False,
+                                  controller_robot=job.controller_robot))
     model, robot, (scn,), ref = prepared
     fmus = {name: fmu_path(name, 2) for name in COMPONENTS}
     step = float(ref.t[1] - ref.t[0])
@@ -180,6 +184,8 @@ def export_ssp(job: SspJob) -> dict[str, Any]:
     info = {
         "scenario": scn.name, "text": ref.spec.text, "scale": repr(job.scale),
         "robot": job.robot.name, "lookahead_steps": str(job.lookahead_steps),
+        **({} if job.controller_robot is None
+           else {"controller_robot": job.controller_robot.name}),
         "min_workspace_margin_m": repr(ref.min_margin_m),
         "min_elbow_margin": repr(ref.min_elbow_margin),
         "min_shoulder_margin_m": repr(ref.min_shoulder_margin_m),

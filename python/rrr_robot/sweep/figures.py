@@ -28,6 +28,9 @@ FIGURES = ("fig_sweep_tip_error.png", "fig_sweep_dependence.png", "fig_sweep_sen
 MAX_PANELS = 12
 MAX_BARS = 30
 _COLORS = {"ok": "tab:blue", "saturated": "tab:orange"}
+#: Points of the dependence figure: filled circles this large (pt), a little transparent so
+#: that overlapping runs show as darker.
+MARKER_SIZE = 5.0
 
 
 def _counts(status: Sequence[str]) -> str:
@@ -93,16 +96,17 @@ def fig_dependence(out: Path, inputs: Mapping[str, Input], ranking: Sequence[Sen
         for name, color in _COLORS.items():
             sel = (st == name) & np.isfinite(y)
             x = inp.values[sel] + (0.0 if inp.numeric else jitter[sel])
-            ax.plot(x, y[sel], ".", ms=3, color=color, label=name if sel.any() else None)
+            ax.plot(x, y[sel], "o", ms=MARKER_SIZE, alpha=0.7, mec="none", color=color,
+                    label=name if sel.any() else None)
         if not inp.numeric:
             ax.set_xticks(range(len(inp.categories)))
             ax.set_xticklabels([c if len(c) <= 14 else c[:12] + ".." for c in inp.categories],
-                               rotation=20, fontsize=7)
+                               rotation=20, fontsize=8)
         ax.set(xlabel=inp.name, ylabel="max tip error [mm]", title=f"S1 {sens.s1:.2f}")
         ax.grid(True)
     for ax in axes[len(shown):]:
         ax.set_visible(False)
-    axes[0].legend(fontsize=7)
+    axes[0].legend(fontsize=8, markerscale=1.5)
     save_figure(fig, out / FIGURES[1])
 
 

@@ -33,7 +33,7 @@ import json
 import logging
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -52,7 +52,7 @@ from ..core.outputs import (
 )
 from ..core.robot import read_robot_file
 from ..errors import BadInputError, RobotFileError, RrrError
-from ..writing.job import ENGINES, writing_spec
+from ..writing.job import ENGINES, read_controller_robot, writing_spec
 from ..writing.scenarios import BUILTIN, read_scenario_file, scenario_from_dict
 from ..writing.trajectory import make_reference
 from .results import RESULTS, finished_runs, read_results, schema, write_part
@@ -120,18 +120,30 @@ def make_plan(spec: SweepSpec, engine: str) -> SweepPlan:
     robot_data = load_toml(robot_path, "robot file", RobotFileError)
     robot = read_robot_file(robot_data, robot_path)
     robot.require_control()
+    ctrl_data: dict[str, Any] | None = None
+    ctrl_path = ""
+    if spec.controller_robot is not None:
+        ctrl_path = spec.resolve(spec.controller_robot)
+        ctrl_data = load_toml(ctrl_path, "robot file", RobotFileError)
+        believed = read_controller_robot(ctrl_data, robot, ctrl_path)
+        scenario = scenario.believing(believed.model)
     scenario.controller_model(robot.model)
     make_reference(robot.model, writing_spec(robot))
-    identity = {"spec": spec.identity(), "engine": engine, "base_scenario": base,
-                "robot_file": robot_data}
-    return SweepPlan(base=base, base_source=base_source, robot=robot_data,
-                     robot_source=robot_path, engine=engine, fingerprint=_fingerprint(identity))
+    plan = SweepPlan(base=base, base_source=base_source, robot=robot_data,
+                     robot_source=robot_path, engine=engine, fingerprint="",
+                     controller_robot=ctrl_data, controller_robot_source=ctrl_path)
+    return replace(plan, fingerprint=_fingerprint(_identity(plan, spec)))
 
 
 def _identity(plan: SweepPlan, spec: SweepSpec) -> dict[str, Any]:
-    identity: dict[str, Any] = json.loads(strict_json({
-        "spec": spec.identity(), "engine": plan.engine, "base_scenario": plan.base,
-        "robot_file": plan.robot}))
+    """What defines the runs: the spec, the engine, the base scenario's and the robot files'
+    tables (the controller's only when the spec gives one: the fingerprints of sweeps without
+    it stay as they were)."""
+    values: dict[str, Any] = {"spec": spec.identity(), "engine": plan.engine,
+                              "base_scenario": plan.base, "robot_file": plan.robot}
+    if plan.controller_robot is not None:
+        values["controller_robot_file"] = plan.controller_robot
+    identity: dict[str, Any] = json.loads(strict_json(values))
     return identity
 
 
@@ -166,8 +178,9 @@ def _check_folder_state(out: Path, plan: SweepPlan, spec: SweepSpec, resume: boo
         new = _identity(plan, spec)
         differ = [f"the spec's {k}" for k in new["spec"] if new["spec"].get(k) !=
                   (old.get("spec") or {}).get(k)] if isinstance(old, dict) else []
-        differ += [k.replace("_", " ") for k in ("engine", "base_scenario", "robot_file")
-                   if isinstance(old, dict) and new[k] != old.get(k)]
+        differ += [k.replace("_", " ") for k in ("engine", "base_scenario", "robot_file",
+                                                 "controller_robot_file")
+                   if isinstance(old, dict) and new.get(k) != old.get(k)]
         raise BadInputError(f"cannot resume the sweep in {out}: it ran another sweep ("
                             f"{', '.join(differ) or 'its description'} differ"
                             f"{'s' if len(differ) == 1 else ''}); use its own spec or another "

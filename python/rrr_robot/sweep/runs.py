@@ -4,7 +4,8 @@ job's own pieces, and its row of results.
 A run is "a scenario with some fields changed": the base scenario's tables with the run's
 ``scenario.*``, ``gains.*`` and ``mismatch.*`` values go through the scenario reader
 (:func:`~rrr_robot.writing.scenarios.scenario_from_dict`: the same schema and checks as a
-file), its ``writing.*`` values through :func:`~rrr_robot.writing.job.writing_spec` and the
+file; the controller starting from ``[sweep] controller_robot``'s model when the spec gives
+one), its ``writing.*`` values through :func:`~rrr_robot.writing.job.writing_spec` and the
 reference planner, then the closed loop (:func:`~rrr_robot.writing.job.run_engine`) and the
 writing job's :func:`~rrr_robot.writing.job.metrics`. With no values, a run is exactly
 ``rrr writing --scenario <base>``.
@@ -41,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from ..core import fmu_vars as fv
+from ..core.model import Model
 from ..core.robot import RobotFile, read_robot_file
 from ..writing.job import metrics, run_engine, scenario_options, scenario_summary, writing_spec
 from ..writing.scenarios import scenario_from_dict
@@ -68,7 +70,8 @@ _CACHED_REFERENCES = 8
 class SweepPlan:
     """What every run of a sweep shares, sent once to each worker: the base scenario's and the
     robot file's parsed tables (checked on the client; the workers need neither file), the
-    engine, and ``fingerprint`` (the sweep's identity: the key of the workers' caches)."""
+    engine, ``fingerprint`` (the sweep's identity: the key of the workers' caches) and the
+    controller's robot file's tables, if the spec gives one."""
 
     base: Mapping[str, Any]
     base_source: str
@@ -76,23 +79,31 @@ class SweepPlan:
     robot_source: str
     engine: str
     fingerprint: str
+    # the controller's robot file (``[sweep] controller_robot``), its tables and name; None: the
+    # controller starts from the plant's model
+    controller_robot: Mapping[str, Any] | None = None
+    controller_robot_source: str = ""
 
 
 _lock = threading.Lock()
-_robots: dict[str, RobotFile] = {}
+_robots: dict[str, tuple[RobotFile, Model | None]] = {}
 _references: OrderedDict[tuple[Any, ...], Reference] = OrderedDict()
 
 
-def _robot(plan: SweepPlan) -> RobotFile:
+def _robot(plan: SweepPlan) -> tuple[RobotFile, Model | None]:
+    """The plant's robot file and the controller's model (None: the plant's)."""
     with _lock:
-        robot = _robots.get(plan.fingerprint)
-    if robot is None:
+        found = _robots.get(plan.fingerprint)
+    if found is None:
         robot = read_robot_file(plan.robot, plan.robot_source)
         robot.require_control()
+        believed = None if plan.controller_robot is None else read_robot_file(
+            plan.controller_robot, plan.controller_robot_source).model
+        found = (robot, believed)
         with _lock:
             _robots.clear()  # one sweep at a time per worker in practice
-            _robots[plan.fingerprint] = robot
-    return robot
+            _robots[plan.fingerprint] = found
+    return found
 
 
 def _reference(plan: SweepPlan, robot: RobotFile, writing: tuple[tuple[str, Any], ...],
@@ -177,12 +188,12 @@ def run_one(plan: SweepPlan, inp: RunInput) -> dict[str, Any]:
                            **dict(inp.values)}
     row |= dict.fromkeys(METRICS)
     try:
-        robot = _robot(plan)
+        robot, believed = _robot(plan)
         writing = tuple((k.split(".", 1)[1], v) for k, v in inp.values
                         if k.startswith("writing."))
         ref = _reference(plan, robot, writing)
         scenario = scenario_from_dict(_scenario_tables(plan, inp.values),
-                                      f"{plan.base_source} (run {inp.run})")
+                                      f"{plan.base_source} (run {inp.run})").believing(believed)
         limits = (scenario.controller_model(robot.model).u_max, robot.model.u_max)
         options = scenario_options(scenario, robot.model, robot, ref)
     except Exception as exc:  # a run's values that the checks refuse: a row, not an error

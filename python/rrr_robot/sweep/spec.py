@@ -8,6 +8,7 @@
     seed = 1              # 0 to 1e9 (default 0)
     method = "random"     # "random" (default), "lhs" (Latin hypercube) or "grid"
     robot = "robot.toml"  # optional: the robot file (default: the packaged robot)
+    controller_robot = "identified.toml"  # optional: the controller's model from this file
 
     [vary]                # keys: rrr_robot.sweep.keys (scenario fields by dotted name)
     "mismatch.p_rel" = { uniform = [-0.2, 0.2] }
@@ -22,8 +23,10 @@ each checked as a scenario file's value; drawn with equal probability, or the ax
 ``per_element = true`` draws each element of a field with several numbers (``gains.kp``,
 ``mismatch.p_rel``, ...) independently from the distribution. The bounds of uniform and
 loguniform and the mean of normal must be valid values of the field; a normal draw may still
-fall outside its range, which makes that run ``invalid`` (rrr_robot.sweep.runs). Relative paths
-(``base``, ``robot``) are relative to the spec file's folder. Errors
+fall outside its range, which makes that run ``invalid`` (rrr_robot.sweep.runs).
+``controller_robot``: every run's controller starts from this robot file's model instead of the
+plant's (``rrr writing --controller-robot``), and ``mismatch.*`` perturbs it. Relative paths
+(``base``, ``robot``, ``controller_robot``) are relative to the spec file's folder. Errors
 (:class:`~rrr_robot.errors.SweepSpecError`) name the file, the table and the key.
 """
 
@@ -66,6 +69,7 @@ SWEEP_FIELDS = {
     "seed": Number(lo=0, hi=SEED_MAX, integer=True),
     "method": Text(choices=METHODS),
     "robot": Text(max_len=4096, nonblank=True),
+    "controller_robot": Text(max_len=4096, nonblank=True),
 }
 
 
@@ -113,6 +117,7 @@ class SweepSpec:
     method: str
     robot: str | None
     vary: tuple[Vary, ...]
+    controller_robot: str | None = None   # the controller's model from this robot file
 
     @property
     def folder(self) -> Path:
@@ -126,9 +131,12 @@ class SweepSpec:
 
     def identity(self) -> dict[str, Any]:
         """What defines the runs, as JSON values: a resumed sweep must have the same."""
-        return {"base": self.base, "samples": self.samples, "seed": self.seed,
-                "method": self.method, "robot": self.robot,
-                "vary": {v.key: v.dist.identity() for v in self.vary}}
+        out = {"base": self.base, "samples": self.samples, "seed": self.seed,
+               "method": self.method, "robot": self.robot,
+               "vary": {v.key: v.dist.identity() for v in self.vary}}
+        if self.controller_robot is not None:  # absent otherwise: older sweeps keep their key
+            out["controller_robot"] = self.controller_robot
+        return out
 
 
 class _Checker:
@@ -273,7 +281,7 @@ def spec_from_dict(data: Mapping[str, Any], source: str) -> SweepSpec:
                  f"1 to {MAX_SAMPLES}; only a grid has its own)")
     return SweepSpec(source=source, base=head["base"], samples=int(samples),
                      seed=int(head.get("seed", 0)), method=method, robot=head.get("robot"),
-                     vary=vary)
+                     vary=vary, controller_robot=head.get("controller_robot"))
 
 
 def _grid_size(doc: Document, vary: tuple[Vary, ...], samples: int | None) -> int:

@@ -54,6 +54,7 @@ __all__ = [
     "controller_fmu_values",
     "metrics",
     "prepare",
+    "read_controller_robot",
     "run_engine",
     "run_writing",
     "scenario_options",
@@ -93,11 +94,32 @@ class WritingJob:
     mcap: bool = False
     # also view.html: the runs in a browser (writing.view)
     view: bool = False
+    # the controller's model from this robot file (None: the plant's, from ``robot``): the
+    # identified controller against the true plant (rrr writing --controller-robot)
+    controller_robot: Path | None = None
+
+
+def read_controller_robot(path: str | Path | Mapping[str, Any], robot: RobotFile,
+                          source: str | None = None) -> RobotFile:
+    """The robot file of ``--controller-robot`` (its path, or its parsed tables named
+    ``source``: as :func:`~rrr_robot.core.robot.read_robot_file`), read and checked: only its
+    model goes to the controller (the gains, the sample period and the writing task stay those
+    of the plant's robot file ``robot``; a warning names what it says otherwise)."""
+    believed = read_robot_file(path, source)
+    ignored = [name for name, mine, theirs in (
+        ("[control]", believed.control, robot.control),
+        ("[writing]", dict(believed.writing), dict(robot.writing))) if mine and mine != theirs]
+    if ignored:
+        log.warning("%s: its %s differ(s) from %s's and are not used: the controller takes only "
+                    "the model from it (gains from the scenario or %s)", believed.source,
+                    " and ".join(ignored), robot.source, robot.source)
+    return believed
 
 
 def controller_fmu_values(scenario: Scenario, true_model: Model,
                           control: ControlGains) -> dict[str, float | bool]:
-    """Controller start values: its own (possibly perturbed) model, gains, feedforward switch."""
+    """Controller start values: its own model (the scenario's: the true one, or that of
+    ``--controller-robot``, perturbed by [mismatch]), gains, feedforward switch."""
     values: dict[str, float | bool] = dict(model_fmu_values(scenario.controller_model(true_model)))
     kp = scenario.kp or control.kp
     kd = scenario.kd or control.kd
@@ -169,6 +191,12 @@ def _describe(s: dict[str, Any]) -> str:
             + (f"{rtf:.0f}x real time" if rtf is not None else "real-time factor unavailable"))
 
 
+def view_title(text: str) -> str:
+    """The title of ``rrr writing --view``'s page: the text in quotes, its lines joined by
+    " / " (one line of a title shows a newline as nothing, and repr as a backslash and n)."""
+    return "rrr writing: \u201c" + " / ".join(text.split("\n")) + "\u201d"
+
+
 def writing_spec(robot: RobotFile, text: str | None = None, scale: float = 1.0,
                  changes: Mapping[str, Any] | None = None) -> WritingSpec:
     """What a job writes: the robot file's [writing] values, with ``changes`` (WritingSpec
@@ -218,12 +246,16 @@ class Prepared(NamedTuple):
 
 def prepare(job: WritingJob) -> Prepared:
     """Everything that can fail before a simulation: scenarios (each file checked, names unique),
-    the robot file (read and checked once, [control] required), the reference (its bounds) and
-    the workspace."""
+    the robot file (read and checked once, [control] required), the controller's robot file
+    (``controller_robot``: the scenarios' controllers start from its model), the reference (its
+    bounds) and the workspace."""
     scenarios = [load_scenario(s) for s in job.scenarios]
     check_run(scenarios)
     robot = read_robot_file(job.robot)
     robot.require_control()
+    if job.controller_robot is not None:
+        believed = read_controller_robot(job.controller_robot, robot).model
+        scenarios = [s.believing(believed) for s in scenarios]
     reference = make_reference(robot.model, writing_spec(robot, job.text, job.scale))
     for s in scenarios:
         s.controller_model(robot.model)  # a perturbed model that is invalid fails here
@@ -288,6 +320,8 @@ def run_writing(job: WritingJob,
             min_elbow_margin=ref.min_elbow_margin,
             min_shoulder_margin_m=ref.min_shoulder_margin_m)
         summary["engine"] = job.engine
+        summary["controller_robot"] = (None if job.controller_robot is None
+                                       else str(job.controller_robot))
         summary["fmi_version"] = f"{job.fmi_version}.0" if job.engine == "fmpy" else None
         summary["paper_eq16"] = {"rms_u_n": list(PAPER_RMS_U_N), "rms_u_c": list(PAPER_RMS_U_C)}
         if job.figures:
@@ -318,7 +352,7 @@ def run_writing(job: WritingJob,
             start = time.perf_counter()
             rs.write_text("view.html", view_html(
                 {name: res.columns() for name, res in results.items()}, robot,
-                f"rrr writing: {ref.spec.text!r}"))
+                view_title(ref.spec.text)))
             log.info("view.html: %.2f s", time.perf_counter() - start)
         summary = write_summary(rs, summary)
     return summary

@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
+import textwrap
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -147,23 +148,87 @@ def controls_file(name: str) -> str:
     return "fig9_u2_ctc.png" if name in PAPER_CONTROLS else f"fig_u2_{name}.png"
 
 
+#: The letters' axes: at most this wide and this high (in), and never flatter than MIN_HEIGHT;
+#: the figure around them is sized so that the letters, drawn at equal aspect, fill them.
+LETTERS_WIDTH = 8.6
+LETTERS_MAX_HEIGHT = 6.0
+LETTERS_MIN_HEIGHT = 1.2
+#: Inches around the letters' axes: the y label and ticks (left), the right margin, the two-line
+#: title (top), the x label and ticks (bottom) and the legend's band below them.
+_LEFT, _RIGHT, _TOP, _BOTTOM, _LEGEND, _PANEL_TITLE = 1.0, 0.4, 0.75, 0.6, 0.4, 0.3
+#: The letters figure is at least this wide (in), so that its title and error panel have room
+#: beside a high text, and its title is wrapped at about this many characters per inch.
+MIN_LETTERS_FIGURE_WIDTH = 5.5
+TITLE_CHARS_PER_INCH = 10.5
+
+
+def xz_ratio(*paths: FloatArray) -> float:
+    """Height over width of the x-z extent of ``paths`` ((n, 3) tip positions, NaN rows
+    ignored)."""
+    pts = np.vstack([p[np.all(np.isfinite(p), axis=1)] for p in paths])
+    if not pts.size:
+        return 1.0
+    return max(float(np.ptp(pts[:, 2])), 1e-9) / max(float(np.ptp(pts[:, 0])), 1e-9)
+
+
+def letters_box(ratio: float) -> tuple[float, float]:
+    """Width and height (in) of axes that show letters of height/width ``ratio`` at equal
+    aspect: LETTERS_WIDTH wide, unless the text is so high that LETTERS_MAX_HEIGHT bounds it
+    (then narrower); at least LETTERS_MIN_HEIGHT high."""
+    width, height = LETTERS_WIDTH, LETTERS_WIDTH * ratio
+    if height > LETTERS_MAX_HEIGHT:
+        width, height = LETTERS_MAX_HEIGHT / ratio, LETTERS_MAX_HEIGHT
+    return width, min(max(height, LETTERS_MIN_HEIGHT), LETTERS_MAX_HEIGHT)
+
+
+def _letters_figure(ratio: float, below: float, title_lines: int = 1) -> tuple[Figure, float]:
+    """A figure for letters of height/width ``ratio`` above ``below`` inches of further axes
+    (a panel and its labels): as wide as :func:`letters_box` (at least
+    MIN_LETTERS_FIGURE_WIDTH), about as high as it needs (:func:`_fit_letters` makes it
+    exact). Returns the figure and the letters' axes height (in) it was planned for."""
+    width, height = letters_box(ratio)
+    fig = _figure((max(width + _LEFT + _RIGHT, MIN_LETTERS_FIGURE_WIDTH),
+                   height + _TOP + 0.25 * (title_lines - 1) + _BOTTOM + below))
+    return fig, height
+
+
+def _fit_letters(fig: Figure, ax: Any, ratio: float,
+                 rect: tuple[float, float, float, float] = (0.0, 0.0, 1.0, 1.0)) -> None:
+    """Lay out, then change the figure's height so that the letters' axes ``ax`` get the
+    height their width asks for at equal aspect (``ratio``: height over width of the letters,
+    bounded as :func:`letters_box` bounds it); ``rect``: the layout's rectangle (the legend's
+    band at the present height). The axes keep their slot (``adjustable="datalim"``): equal
+    aspect, the box filled, the letters filling it in the direction that bounds them."""
+    ax.set_aspect("equal", adjustable="datalim")
+    fig.tight_layout(rect=rect)
+    w_in, h_in = fig.get_size_inches()
+    slot = ax.get_position(original=True)
+    want = min(max(slot.width * w_in * ratio, LETTERS_MIN_HEIGHT), LETTERS_MAX_HEIGHT)
+    fig.set_size_inches(w_in, max(h_in + want - slot.height * h_in, 1.0))
+
+
 def fig_reference(out: Path, ref: Reference) -> None:
-    fig = _figure((12, 4))
-    ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]})
+    """Fig 2: the reference path at equal aspect, in axes sized to the text, and the tip speed
+    below it."""
+    ratio = xz_ratio(np.where(ref.pen_down[:, None], ref.x, np.nan))
+    panel = 1.8
+    fig, height = _letters_figure(ratio, panel + _TOP + _BOTTOM)
+    ax1, ax2 = fig.subplots(2, 1, gridspec_kw={"height_ratios": [height, panel]})
     ax1.plot(*_pen_down_xz(ref.x, ref.pen_down), "k-", lw=1.5)
     ax1.set(xlabel="x [m]", ylabel="z [m]",
             title=f"Fig. 2: reference tip path in y = {ref.x[0, 1]:.3f} m")
-    ax1.set_aspect("equal")
     _plot_series(ax2, ref.t, ref.speed, "b-", lw=1)
-    ax2.set(xlabel="t [s]", ylabel="v = sqrt(xd^2 + zd^2) [m/s]", title="Fig. 2: tip speed (eq 14)")
+    ax2.set(xlabel="t [s]", ylabel="tip speed [m/s]",
+            title="Fig. 2: tip speed v = sqrt(xd^2 + zd^2) (eq 14)")
     ax2.grid(True)
+    _fit_letters(fig, ax1, ratio)
     _save(fig, out / "fig2_reference.png")
 
 
 def fig_joints(out: Path, ref: Reference) -> None:
-    for data, unit, name, title in ((ref.q, "rad", "fig3_joint_positions.png",
+    for data, unit, name, title in ((ref.q, "q_ref [rad]", "fig3_joint_positions.png",
                                      "Fig. 3: reference joint positions"),
-                                    (ref.qd, "rad/s", "fig4_joint_velocities.png",
+                                    (ref.qd, "qd_ref [rad/s]", "fig4_joint_velocities.png",
                                      "Fig. 4: reference joint velocities")):
         fig = _figure((9, 4))
         ax = fig.subplots()
@@ -185,21 +250,23 @@ def fig_differences(out: Path, model: Model, robot: RobotFile, ref: Reference,
     else:
         _diff_plot(out / "fig5_ik_difference.png", ref.t, ref.q - refs.ik, "rad",
                    "Fig. 5: closed-form minus numeric (Robotics Toolbox ik_LM) inverse "
-                   "kinematics")
+                   "kinematics", quantity="q closed form - q numeric")
     if refs.tau is None:
         log.warning("Fig 6 skipped: %s", refs.tau_skipped)
         return
     tau = model.inverse_dynamics(ref.q, ref.qd, ref.qdd)
     _diff_plot(out / "fig6_torque_difference.png", ref.t, tau - refs.tau, "N m",
-               "Fig. 6: closed-form R p minus Pinocchio rnea inverse dynamics")
+               "Fig. 6: closed-form R p minus Pinocchio rnea inverse dynamics",
+               quantity="tau R p - tau rnea")
 
 
-def _diff_plot(path: Path, t: FloatArray, diff: FloatArray, unit: str, title: str) -> None:
+def _diff_plot(path: Path, t: FloatArray, diff: FloatArray, unit: str, title: str,
+               quantity: str = "difference") -> None:
     fig = _figure((9, 4))
     ax = fig.subplots()
     for i in range(3):
         _plot_series(ax, t, diff[:, i], label=f"joint {i + 1}", lw=0.8)
-    ax.set(xlabel="t [s]", ylabel=unit, title=f"{title}\nmax |difference| = "
+    ax.set(xlabel="t [s]", ylabel=f"{quantity} [{unit}]", title=f"{title}\nmax |difference| = "
            f"{np.abs(diff).max():.2e} {unit}")
     ax.grid(True)
     ax.legend(**OUTSIDE)
@@ -210,28 +277,77 @@ _LETTERS_TITLE = {7: "Fig. 7: reference letters and the letters written with PD 
                   8: "Fig. 8: reference letters and the letters written with PD + feedforward"}
 
 
+#: The executed path's largest deviation from the reference is drawn magnified to about this
+#: share of the letter height when it is smaller (the factor a round 2, 5 or 10 times a power
+#: of ten): at the scale of the letters a 0.1 mm error is no wider than the line.
+VISIBLE_ERROR = 0.04
+
+
+def error_magnification(err_max: float, letter_height: float) -> float:
+    """The factor the letters figure magnifies the tip error by: 1 when the largest error is
+    already VISIBLE_ERROR of the letter height or more (or not finite), otherwise the largest
+    of 2, 5, 10, 20, 50, ... that keeps it at most that."""
+    target = VISIBLE_ERROR * letter_height
+    if not (math.isfinite(err_max) and err_max > 0.0) or err_max * 2.0 > target:
+        return 1.0
+    limit = target / err_max
+    exponent = math.floor(math.log10(limit))
+    return float(max(m * 10.0**exponent for m in (1.0, 2.0, 5.0) if m * 10.0**exponent <= limit))
+
+
 def fig_letters(out: Path, ref: Reference, results: Mapping[str, CosimResult],
                 title: str | None = None, file: str | None = None) -> None:
     """The letters written by each scenario against the reference: Figs 7 (pd) and 8 (ctc) of
     the paper, the other scenarios under descriptive names (:func:`letters_file`); ``title``
-    and ``file``: another first title line and file name (one result: the CAN bench's)."""
+    and ``file``: another first title line and file name (one result: the CAN bench's).
+
+    The letters are drawn at equal aspect in axes sized to them (:func:`letters_box`), the
+    reference dashed over the executed path; an error too small to see at that scale is drawn
+    magnified (:func:`error_magnification`: reference + k (tip - reference), the factor in the
+    legend), and a panel below gives the tip error along the path in mm (pen down; pen up
+    grey)."""
     for name, res in results.items():
-        fig = _figure((10, 4))
-        ax = fig.subplots()
-        ax.plot(*_pen_down_xz(ref.x, ref.pen_down), "k--", lw=1.2, label="reference")
         # the pen of each result row (a tool's results may start after the reference's t_0)
         pen = (ref.pen_down if res.t.shape == ref.t.shape else
                ref.pen_down[np.clip(np.searchsorted(ref.t, res.t - 1e-9), 0, ref.t.size - 1)])
-        ax.plot(*_pen_down_xz(res.tip, pen), "r-", lw=1.2, label=f"executed ({name})")
         err = np.linalg.norm(res.tip - res.x_ref, axis=1)
+        finite = err[np.isfinite(err)]
+        err_max = float(finite.max()) if finite.size else float("nan")
+        k = error_magnification(err_max, ref.spec.letter_height)
+        shown = res.x_ref + k * (res.tip - res.x_ref)
+        ratio = xz_ratio(np.where(ref.pen_down[:, None], ref.x, np.nan),
+                         np.where(pen[:, None], shown, np.nan))
+        width, _ = letters_box(ratio)
         number = PAPER_LETTERS.get(name)
         head = title or (f"{_LETTERS_TITLE[number]} (scenario {name})" if number
                          else f"Letters written in scenario {name}")
-        ax.set(xlabel="x [m]", ylabel="z [m]",
-               title=f"{head}\nmax tip error {1e3 * err.max():.2f} mm")
-        ax.set_aspect("equal")
+        # the title wrapped to the figure's width (a high text makes a narrow figure)
+        fig_width = max(width + _LEFT + _RIGHT, MIN_LETTERS_FIGURE_WIDTH)
+        lines = [*textwrap.wrap(head, width=int(fig_width * TITLE_CHARS_PER_INCH)),
+                 f"max tip error {1e3 * err_max:.2f} mm"
+                 + (f" (drawn {k:g} times larger)" if k > 1 else "")]
+        panel = 1.4
+        fig, height = _letters_figure(ratio, panel + _PANEL_TITLE + _BOTTOM + _LEGEND,
+                                      len(lines) - 1)
+        ax, ax_err = fig.subplots(2, 1, gridspec_kw={"height_ratios": [height, panel]})
+        label = f"executed ({name})" + (f", error magnified {k:g}x" if k > 1 else "")
+        ax.plot(*_pen_down_xz(shown, pen), "-", color="tab:red", lw=1.8, alpha=0.85,
+                label=label, zorder=2)
+        ax.plot(*_pen_down_xz(ref.x, ref.pen_down), "k--", lw=0.9, label="reference", zorder=3)
+        ax.set(xlabel="x [m]", ylabel="z [m]", title="\n".join(lines))
+        mm = 1e3 * err
+        ax_err.plot(res.t, np.where(pen, np.nan, mm), "-", color="0.7", lw=0.8)
+        ax_err.plot(res.t, np.where(pen, mm, np.nan), "-", color="tab:red", lw=0.9)
+        ax_err.set(xlabel="t [s]", ylabel="tip error [mm]",
+                   title="the tip error along the path, true size (grey: pen up)",
+                   ylim=(0.0, 1.08 * float(np.nanmax(mm)) if np.any(np.isfinite(mm)) and
+                         np.nanmax(mm) > 0 else 1.0))
+        ax_err.set_xlim(float(res.t[0]), float(res.t[-1]))
+        ax_err.grid(True)
         # below the axes and their labels, never over the letters: in a band at the bottom as
         # high as the legend, which the layout keeps free (it does not see a figure legend)
+        _fit_letters(fig, ax, ratio, (0.0, _bottom_legend(fig), 1.0, 1.0))
+        fig.legends.clear()
         _save(fig, out / (file or letters_file(name)), rect=(0.0, _bottom_legend(fig), 1.0, 1.0))
 
 
@@ -243,7 +359,7 @@ def fig_controls(out: Path, results: Mapping[str, CosimResult]) -> None:
         _plot_series(ax, res.t, res.u_n[:, 1], "b-", lw=1, label="u_n,2 (model)")
         _plot_series(ax, res.t, res.u_c[:, 1], "r-", lw=1, label="u_c,2 (PD)")
         what = "model (u_n) and PD (u_c) components of the joint-2 input"
-        ax.set(xlabel="t [s]", ylabel="V",
+        ax.set(xlabel="t [s]", ylabel="u_n,2 and u_c,2 [V]",
                title=f"Fig. 9: {what} (scenario {name})" if name in PAPER_CONTROLS
                else f"The {what}, scenario {name}")
         ax.grid(True)
@@ -251,21 +367,41 @@ def fig_controls(out: Path, results: Mapping[str, CosimResult]) -> None:
         _save(fig, out / controls_file(name))
 
 
+#: The tip error figure's log axis starts this far below the smallest RMS tip error of its
+#: scenarios (or at the smallest error, if that is higher): the start of a run, where the
+#: error rises from exactly 0 through round-off (1e-13 mm), is below it.
+TIP_ERROR_DECADES = 2.0
+
+
+def tip_error_floor(errors: Mapping[str, FloatArray]) -> float | None:
+    """The lower end of the tip error figure's log axis (mm): TIP_ERROR_DECADES below the
+    smallest RMS error of ``errors`` (per scenario, mm), or the smallest positive error if
+    that is higher, divided by 1.25; None without a positive finite error."""
+    rms = [float(np.sqrt(np.mean(e[np.isfinite(e)] ** 2))) for e in errors.values()
+           if np.any(np.isfinite(e))]
+    positive = np.concatenate([e[np.isfinite(e) & (e > 0.0)] for e in errors.values()]) \
+        if errors else np.zeros(0)
+    if not positive.size:
+        return None
+    floor = min(rms) * 10.0**-TIP_ERROR_DECADES if rms and min(rms) > 0 else 0.0
+    return max(floor, float(positive.min())) / 1.25
+
+
 def fig_tip_error(out: Path, results: Mapping[str, CosimResult]) -> None:
     fig = _figure((9, 4))
     ax = fig.subplots()
-    positive = []
+    errors = {name: 1e3 * np.linalg.norm(res.tip - res.x_ref, axis=1)
+              for name, res in results.items()}
     for name, res in results.items():
-        err = 1e3 * np.linalg.norm(res.tip - res.x_ref, axis=1)
-        _plot_series(ax, res.t, err, lw=0.8, label=name)
-        positive.append(err[np.isfinite(err) & (err > 0.0)])
+        _plot_series(ax, res.t, errors[name], lw=0.8, label=name)
     ax.set_yscale("log")
-    data = np.concatenate(positive) if positive else np.zeros(0)
-    if data.size:  # the axis where the data is (the first rows' zero error is not on it)
-        ax.set_ylim(float(data.min()) / 1.25, float(data.max()) * 1.25)
+    low = tip_error_floor(errors)
+    if low is not None:  # where the errors are: not down to the round-off of the first rows
+        top = max(float(np.nanmax(e)) for e in errors.values() if np.any(np.isfinite(e)))
+        ax.set_ylim(low, top * 1.25)
     ax.yaxis.set_major_formatter(PowerOfTenFormatter())
     ax.yaxis.set_minor_formatter(PowerOfTenFormatter(labelOnlyBase=False))
-    ax.set(xlabel="t [s]", ylabel="|tip - reference| [mm]",
+    ax.set(xlabel="t [s]", ylabel="tip error |tip - x_ref| [mm]",
            title=f"Cartesian tip error ({', '.join(results)})")
     ax.grid(True, which="both")
     ax.legend(**OUTSIDE)

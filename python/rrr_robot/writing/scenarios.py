@@ -13,7 +13,8 @@ One schema, every table and key checked (unknown ones are errors that name them)
   robot file's [control] gains;
 - ``[mismatch]`` (optional): ``<group>_rel`` for each group of the C parameter table (p_rel,
   kt_rel, f_rel, w_rel, b_rel, u_max_rel, g_rel, d1_rel, a2_rel, ...), a relative error of the
-  controller's model, > -1 and <= 10: every value of the group is scaled by (1 + rel), the base
+  controller's model (the true one, or that of ``rrr writing --controller-robot``), > -1 and
+  <= 10: every value of the group is scaled by (1 + rel), the base
   parameters with alternating sign, p_k (1 + rel (-1)^k). A group with several values (p, kt,
   f, w, b) also takes one error per value, in the group's shape (16 numbers for p, 3 arrays of 3
   for f): value v of the group becomes v (1 + rel_v), with no alternating sign.
@@ -25,7 +26,7 @@ The names of one run must differ (ignoring case: they name files) and a run has 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -113,19 +114,30 @@ class Scenario:
     # <group>_rel: one relative error for the group, or one per value in the group's shape
     mismatch: Mapping[str, float | tuple[Any, ...]] = field(default_factory=dict)
     source: str = ""
+    # the model the controller starts from, before [mismatch]: None for the true (plant's) one;
+    # another robot file's model with rrr writing --controller-robot (:meth:`believing`)
+    controller_base: Model | None = field(default=None, compare=False, repr=False)
+
+    def believing(self, model: Model | None) -> Scenario:
+        """This scenario with the controller's model built from ``model`` instead of the true one
+        (a robot file of its own: ``rrr writing --controller-robot``); [mismatch] then perturbs
+        ``model``. None: the true model again."""
+        return replace(self, controller_base=model)
 
     def controller_model(self, true_model: Model) -> Model:
-        """The model the controller believes in: the true one, perturbed by [mismatch]."""
+        """The model the controller believes in: the true one (or ``controller_base``, when the
+        controller has a robot file of its own: :meth:`believing`), perturbed by [mismatch]."""
+        base = true_model if self.controller_base is None else self.controller_base
         if not self.mismatch:
-            return true_model
+            return base
         changes: dict[str, float] = {}
         for info in PARAMS:
             rel = self.mismatch.get(f"{info.group}_rel")
             if rel is None:
                 continue
-            changes[info.name] = _lib.param_get(true_model.raw, info.row) * _factor(info, rel)
+            changes[info.name] = _lib.param_get(base.raw, info.row) * _factor(info, rel)
         try:
-            return Model(set_values(true_model.raw, changes))
+            return Model(set_values(base.raw, changes))
         except ModelError as exc:
             src = self.source or f"scenario {self.name}"
             raise ScenarioError(f"{src}: scenario {self.name}: [mismatch] makes the controller's "

@@ -3,7 +3,7 @@
  * (computed by librrr's rrr_fk_frames, so the page does no kinematics of its own), the URDF's
  * link visuals, the pen trace, the reference and the signals. Draws the arm with a 2-D canvas in
  * an orthographic view; the body's data-* attributes give its state (frame, time, projection,
- * errors) to tests and scripts. No network: everything is in this file. */
+ * the strips' ranges, errors) to tests and scripts. No network: everything is in this file. */
 "use strict";
 (function () {
   const body = document.body;
@@ -184,9 +184,12 @@
           if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
         }
       }
+      // a quantity that is never negative (an error norm) keeps its axis at or above 0
+      const nonnegative = lo >= 0;
       if (!(hi > lo)) { lo -= 1; hi += 1; }
       const pad = 0.08 * (hi - lo);
-      const plot = { canvas, ctx, width, height, series, lo: lo - pad, hi: hi + pad };
+      lo = nonnegative ? Math.max(0, lo - pad) : lo - pad;
+      const plot = { canvas, ctx, width, height, series, lo, hi: hi + pad };
       canvas.addEventListener("click", (e) => {
         const r = canvas.getBoundingClientRect();
         const tt = tOfX(plot, e.clientX - r.left);
@@ -196,6 +199,7 @@
       });
       plots.push(plot);
     }
+    body.dataset.ranges = JSON.stringify(plots.map((p) => [p.series.title, p.lo, p.hi]));
   }
   const left = 48;
   function xOfT(plot, t) {

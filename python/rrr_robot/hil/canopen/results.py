@@ -56,7 +56,7 @@ def write_master_results(rs: ResultSet, wc: WritingController, mrun: MasterRun, 
     the frame log NODE_FRAMES (already there: the plant node's), frames.blf (the same frames),
     summary.json (results.bench_summary, core.summary) and the figures. Returns the summary."""
     from ...core.summary import write_summary
-    from ..busload import measured_load
+    from ..busload import bus_loads
     from ..logs import frames as fl
     from ..results import (
         bench_result,
@@ -78,10 +78,12 @@ def write_master_results(rs: ResultSet, wc: WritingController, mrun: MasterRun, 
     fl.write_can_log(records, rs.path(CAN_LOG))
     bus = {"profile": "canopen", "node_log": NODE_FRAMES, "can_log": CAN_LOG,
            "view": "the C plant node's (Tx: the drives' frames, Rx: the master's)",
-           **fl.rates(records), "measured_1mbit": measured_load(fl.frames(records), n),
+           **fl.traffic(records, n, realtime=mrun.realtime is not None),
+           # the SYNC schedule is the same in both modes: it is the real-time schedule too
+           "load": bus_loads(fl.frames(records), n, canopen_load(1_000_000),
+                             canopen_load(1_000_000)),
            "node_ids": [d.node_id for d in mrun.drives],
-           "sync_periods": n, "frames_per_period": 1 + 3 * len(mrun.drives),
-           "schedule_worst_percent_1mbit": canopen_load(1_000_000).worst_percent,
+           "sync_periods": n, "schedule_frames_per_period": 1 + 3 * len(mrun.drives),
            "drives": [{"node_id": d.node_id, "rated_torque_mNm": d.rated_torque_mNm,
                        "increments_per_revolution": d.increments,
                        "pdo_mapping": {k: [f"0x{i:04X}:{b}" for i, b in v]

@@ -51,7 +51,7 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     frame log (``can_log``: in the output folder, or elsewhere, written atomically), the
     figures, with ``mcap`` the run as ``bench.mcap`` (hil.logs.mcap) and summary.json. Returns
     the summary."""
-    from ..busload import FD_DATA_BITRATE, measured_fd_load, measured_load, schedule_load
+    from ..busload import FD_DATA_BITRATE, bus_loads, fd_bus_loads, schedule_load
     from ..logs import frames as fl
     from .protocol import DBC_PATH, FAULT_BITS, database, frame_id
 
@@ -63,16 +63,20 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     ref_run = extend_reference(ref, float(bench.t[-1] - bench.t[0]))
     unq = unquantised_cosim(ref_run, model, controller_values)
     records = fl.read_node_log(work / info.node_log)
-    bus: dict[str, Any] = {"node_log": info.node_log, "view": info.view, **fl.rates(records)}
-    bus["measured_1mbit"] = measured_load(fl.frames(records), bench.t.shape[0])
-    bus["schedule_worst_percent_1mbit"] = schedule_load(
-        database(), lockstep=info.mode == "lockstep", dbc_name=str(DBC_PATH)).worst_percent
+    periods, lockstep = bench.t.shape[0], info.mode == "lockstep"
+    bus: dict[str, Any] = {"node_log": info.node_log, "view": info.view,
+                           **fl.traffic(records, periods, realtime=not lockstep)}
+    # the loads of a 1 Mbit/s bus, each named (hil.busload.bus_loads; docs/can.md)
+    bus["load"] = bus_loads(
+        fl.frames(records), periods,
+        schedule_load(database(), lockstep=lockstep, dbc_name=str(DBC_PATH)),
+        schedule_load(database(), dbc_name=str(DBC_PATH)))
     if any(n.get("transport") == "socketcan-fd" for n in nodes.values()):
         # CAN FD frames on the bus (--fd): their load at 1 Mbit/s nominal, 5 Mbit/s data
-        bus["measured_fd"] = measured_fd_load(fl.frames(records), bench.t.shape[0])
-        bus["schedule_fd_worst_percent"] = schedule_load(
-            database(), data_bitrate=FD_DATA_BITRATE, lockstep=info.mode == "lockstep",
-            dbc_name=str(DBC_PATH)).worst_percent
+        bus["load_fd"] = fd_bus_loads(
+            fl.frames(records), periods,
+            schedule_load(database(), data_bitrate=FD_DATA_BITRATE, lockstep=lockstep,
+                          dbc_name=str(DBC_PATH)))
     if can_log is not None:
         inside = can_log.parent.resolve() == rs.folder.resolve()
         fl.write_can_log(records, rs.path(can_log.name) if inside else can_log)

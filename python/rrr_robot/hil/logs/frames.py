@@ -29,9 +29,9 @@ __all__ = [
     "compare",
     "frames",
     "messages",
-    "rates",
     "read_can_log",
     "read_node_log",
+    "traffic",
     "write_can_log",
 ]
 
@@ -137,8 +137,12 @@ def compare(records: np.ndarray, read_back: Sequence[Any]) -> str | None:
     return None
 
 
-def rates(records: np.ndarray) -> dict[str, Any]:
-    """Frames and frames per second of a log, in total, per direction and per identifier."""
+def traffic(records: np.ndarray, periods: int, realtime: bool) -> dict[str, Any]:
+    """Frames of a log in total, per direction and per identifier, and per control period of
+    the ``periods`` the run had. In real time also per second of the log's wall-clock span
+    (``duration_s``): there the periods are 1 ms apart. A lockstep run has no rate per second: its
+    periods follow each other as fast as the nodes compute, so frames per wall-clock second
+    would measure the machine, not the bus."""
     n = len(records)
     span = (int(records["t_ns"][-1]) - int(records["t_ns"][0])) * 1e-9 if n > 1 else 0.0
 
@@ -146,10 +150,19 @@ def rates(records: np.ndarray) -> dict[str, Any]:
         return count / span if span > 0 else None
 
     ids, counts = np.unique(records["id"] & 0x1FFFFFFF, return_counts=True)
-    return {
-        "frames": n, "duration_s": span, "frames_per_second": per_s(n),
+    out: dict[str, Any] = {
+        "frames": n, "frames_per_period": n / periods if periods > 0 else None,
         "tx": int(np.count_nonzero(records["dir"] == 1)),
         "rx": int(np.count_nonzero(records["dir"] == 0)),
-        "by_id": {f"0x{int(i):03X}": {"frames": int(c), "per_second": per_s(int(c))}
-                  for i, c in zip(ids, counts, strict=True)},
     }
+    by_id: dict[str, dict[str, Any]] = {}
+    for i, c in zip(ids, counts, strict=True):
+        entry: dict[str, Any] = {"frames": int(c),
+                                 "per_period": int(c) / periods if periods > 0 else None}
+        if realtime:
+            entry["per_second"] = per_s(int(c))
+        by_id[f"0x{int(i):03X}"] = entry
+    if realtime:
+        out |= {"duration_s": span, "frames_per_second": per_s(n)}
+    out["by_id"] = by_id
+    return out
