@@ -217,3 +217,22 @@ def test_defaults_equal_the_core_defaults() -> None:
             s.fmu.enterInitializationMode()
             got = dict(zip(expected, s.get(expected), strict=True))
         assert got == expected
+
+
+@pytest.mark.parametrize("which", FMU_NAMES)
+@pytest.mark.parametrize("fmi", [2, 3])
+def test_documentation_lists_the_archives_binaries(which: str, fmi: int) -> None:
+    """documentation/index.html names exactly the binaries/ folders of its archive (the build
+    passes them to the generator: aarch64-linux too when it had the cross compiler)."""
+    import re
+
+    import rrr_robot
+
+    with zipfile.ZipFile(rrr_robot.fmu_path(which, fmi)) as z:
+        page = z.read("documentation/index.html").decode()
+        folders = {n.split("/")[1] for n in z.namelist()
+                   if n.startswith("binaries/") and n.count("/") >= 2}
+    item = re.search(r"<li>Binaries in <code>binaries/</code>: (.*?)</li>", page)
+    assert item, "the page lists no binaries"
+    listed = set(re.findall(r"<code>([^<]+)</code>", item[1].split(" (")[0]))
+    assert listed == folders, (listed, folders)
