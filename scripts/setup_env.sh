@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Creates .venv (if missing) and installs rrr_robot with its test tools into it.
+# Creates .venv (if missing) and installs rrr_robot into it (RRR_PIP_TARGET: another target, e.g.
+# '.[test,bench,docs]' for the test command; the default '.' draws every figure of the paper).
 # Sourced by the other scripts; needs only python3 (>= 3.11), a C compiler and CMake.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -10,7 +11,7 @@ if [ ! -x .venv/bin/python ]; then
 fi
 # shellcheck disable=SC1091
 . .venv/bin/activate
-RRR_TARGET="${RRR_PIP_TARGET:-.[verify]}"
+RRR_TARGET="${RRR_PIP_TARGET:-.}"
 # RRR_SKIP_INSTALL=1: use the package already installed in .venv (the docs test runs
 # scripts/writing_task.sh right after the test command installed it)
 if [ "${RRR_SKIP_INSTALL:-0}" = 1 ] && python -c "import rrr_robot" 2>/dev/null; then

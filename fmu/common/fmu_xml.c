@@ -499,8 +499,28 @@ static void write_doc_variables(const fmu_model *m, const void *data, FILE *f)
     fprintf(f, "</table>\n");
 }
 
+/* "<code>a</code>, <code>b</code> and <code>c</code>" of the comma-separated list, into buf. */
+static void platform_list(const char *platforms, char *buf, size_t n)
+{
+    size_t count = 1;
+    for (const char *c = platforms; *c != '\0'; ++c) {
+        count += *c == ',';
+    }
+    size_t used = 0;
+    buf[0] = '\0';
+    const char *item = platforms;
+    for (size_t k = 0; k < count && used < n; ++k) {
+        const char *end = strchr(item, ',');
+        const int len = (int)(end != NULL ? (size_t)(end - item) : strlen(item));
+        const char *sep = k == 0 ? "" : (k + 1 == count ? " and " : ", ");
+        const int w = snprintf(buf + used, n - used, "%s<code>%.*s</code>", sep, len, item);
+        used += w > 0 ? (size_t)w : 0;
+        item = end != NULL ? end + 1 : item;
+    }
+}
+
 int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_html,
-                  const char *conventions_html, FILE *f)
+                  const char *conventions_html, const char *platforms, FILE *f)
 {
     void *data = start_values(m);
     if (data == NULL) {
@@ -508,9 +528,13 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
     }
     char token[FMU_TOKEN_SIZE];
     fmu_model_token(m, data, token);
-    const char *platform_dirs = fmi_version == 3 ? "<code>x86_64-linux</code> and "
-                                                   "<code>x86_64-windows</code>"
-                                                 : "<code>linux64</code> and <code>win64</code>";
+    char platform_dirs[512];
+    platform_list(platforms, platform_dirs, sizeof platform_dirs);
+    const char *a64_note = fmi_version == 2 && strstr(platforms, "aarch64-linux") != NULL
+                               ? "; the FMI 2.0 archive for aarch64 Linux hosts carries the "
+                                 "aarch64 binary in <code>linux64</code>, where importers look "
+                                 "for it"
+                               : "";
     fprintf(f, "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
                "<title>%s (FMI %d.0)</title>\n"
                "<style>body{font-family:sans-serif;max-width:70em;margin:2em auto;line-height:1.4}"
@@ -538,7 +562,8 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
                "<li>Log categories: <code>logStatusWarning</code>, <code>logStatusDiscard</code>, "
                "<code>logStatusError</code>, <code>logStatusFatal</code> (on by default) and "
                "<code>logCalls</code> (every FMI call with its arguments).</li>\n"
-               "<li>Binaries for %s (platforms where the build had a compiler for them).</li>\n"
+               "<li>Binaries in <code>binaries/</code>: %s (the platforms this build had a "
+               "compiler for%s).</li>\n"
                "</ul>\n",
             m->n_states, m->n_states > 0 ? " (listed in the table below)" : "", fmi_version,
             m->partials == NULL
@@ -548,7 +573,7 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
                   "continuous states, and in Initialization Mode by the parameters, from the "
                   "closed-form model (no finite differences); a clamped voltage has derivative "
                   "0. The ModelStructure lists the dependencies and their kinds exactly.</li>\n",
-            platform_dirs);
+            platform_dirs, a64_note);
     fprintf(f, "<h2>Variables</h2>\n<p>Value references are the same in the FMI 2.0 and FMI 3.0 "
                "builds; FMI 3.0 uses the same scalar variables (no arrays).</p>\n");
     write_doc_variables(m, data, f);

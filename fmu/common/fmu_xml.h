@@ -32,9 +32,11 @@ int fmu_write_build_description(const fmu_model *m, fmu_sources src, FILE *f);
 /**
  * @brief Write documentation/index.html: what the FMU computes (equations_html, a fragment), every
  *        variable with unit, causality, variability, default and description, the interfaces and
- *        states, the conventions (conventions_html, a fragment) and how to build from sources.
+ *        states, the conventions (conventions_html, a fragment) and how to build from sources;
+ *        platforms: the binaries/ folders of this build's archive, comma-separated (the build
+ *        passes what it packs, so the page lists exactly the binaries the archive holds).
  */
 int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_html,
-                  const char *conventions_html, FILE *f);
+                  const char *conventions_html, const char *platforms, FILE *f);
 
 #endif /* FMU_XML_H */

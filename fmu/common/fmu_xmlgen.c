@@ -3,9 +3,11 @@
  * executable, from its variable table.
  *
  * Usage: <model>_xmlgen --fmi 2|3 [--xml OUT] [--build-description OUT]
- *                       [--doc OUT --equations FRAGMENT.html --conventions FRAGMENT.html]
+ *                       [--doc OUT --equations FRAGMENT.html --conventions FRAGMENT.html
+ *                        --platforms A,B,...]
  *                       [SOURCE...]
- * SOURCE... are the compile units shipped in the FMU's sources/ (names only).
+ * SOURCE... are the compile units shipped in the FMU's sources/ (names only); --platforms names
+ * the binaries/ folders the build packs into the archive (the documentation lists them).
  */
 #include "fmu_xml.h"
 
@@ -37,7 +39,7 @@ static char *slurp(const char *path)
 typedef enum { OUT_XML, OUT_BUILD, OUT_DOC } out_kind;
 
 static int write_one(out_kind kind, const char *path, int fmi, fmu_sources src, const char *eq,
-                     const char *conv)
+                     const char *conv, const char *platforms)
 {
     FILE *f = fopen(path, "w");
     if (f == NULL) {
@@ -53,7 +55,7 @@ static int write_one(out_kind kind, const char *path, int fmi, fmu_sources src, 
         rc = fmu_write_build_description(&FMU_MODEL, src, f);
         break;
     case OUT_DOC:
-        rc = fmu_write_doc(&FMU_MODEL, fmi, eq, conv, f);
+        rc = fmu_write_doc(&FMU_MODEL, fmi, eq, conv, platforms, f);
         break;
     }
     if (fclose(f) != 0) {
@@ -67,6 +69,7 @@ int main(int argc, char **argv)
 {
     int fmi = 0;
     const char *xml = NULL, *build = NULL, *doc = NULL, *eq_path = NULL, *conv_path = NULL;
+    const char *platforms = NULL;
     const char **files = calloc((size_t)argc, sizeof *files);
     size_t n_files = 0;
     if (files == NULL) {
@@ -86,6 +89,8 @@ int main(int argc, char **argv)
             eq_path = argv[++i];
         } else if (strcmp(argv[i], "--conventions") == 0 && has_value) {
             conv_path = argv[++i];
+        } else if (strcmp(argv[i], "--platforms") == 0 && has_value) {
+            platforms = argv[++i];
         } else if (argv[i][0] == '-') {
             fprintf(stderr, "%s: unknown or incomplete option %s\n", argv[0], argv[i]);
             free(files);
@@ -94,10 +99,13 @@ int main(int argc, char **argv)
             files[n_files++] = argv[i];
         }
     }
-    if ((fmi != 2 && fmi != 3) || (doc != NULL && (eq_path == NULL || conv_path == NULL))) {
+    if ((fmi != 2 && fmi != 3) ||
+        (doc != NULL && (eq_path == NULL || conv_path == NULL || platforms == NULL ||
+                         platforms[0] == '\0'))) {
         fprintf(stderr,
                 "usage: %s --fmi 2|3 [--xml OUT] [--build-description OUT] [--doc OUT "
-                "--equations FRAGMENT --conventions FRAGMENT] [SOURCE...]\n",
+                "--equations FRAGMENT --conventions FRAGMENT --platforms A,B,...] "
+                "[SOURCE...]\n",
                 argv[0]);
         free(files);
         return 2;
@@ -105,15 +113,15 @@ int main(int argc, char **argv)
     const fmu_sources src = {files, n_files};
     int rc = 0;
     if (xml != NULL) {
-        rc |= write_one(OUT_XML, xml, fmi, src, NULL, NULL);
+        rc |= write_one(OUT_XML, xml, fmi, src, NULL, NULL, NULL);
     }
     if (build != NULL) {
-        rc |= write_one(OUT_BUILD, build, fmi, src, NULL, NULL);
+        rc |= write_one(OUT_BUILD, build, fmi, src, NULL, NULL, NULL);
     }
     if (doc != NULL) {
         char *eq = slurp(eq_path);
         char *conv = slurp(conv_path);
-        rc |= (eq == NULL || conv == NULL) ? 1 : write_one(OUT_DOC, doc, fmi, src, eq, conv);
+        rc |= (eq == NULL || conv == NULL) ? 1 : write_one(OUT_DOC, doc, fmi, src, eq, conv, platforms);
         free(eq);
         free(conv);
     }

@@ -44,7 +44,7 @@ BUS = frozenset({
     "test_hil_bench", "test_hil_busload", "test_hil_cli", "test_hil_faults",
     "test_hil_python_plant", "test_hil_results", "test_hostile_inputs", "test_mcap",
     "test_socketcan_guest", "test_hil_canopen", "test_hil_canopen_master",
-    "test_hil_canopen_realtime", "test_canopen_conformance",
+    "test_hil_canopen_realtime", "test_canopen_conformance", "test_node_launchers",
 })
 #: The modules that boot a QEMU guest.
 VM = frozenset({"test_socketcan_guest"})

@@ -18,7 +18,9 @@ What a block's info string (the words after the opening fence) means:
 - not run: the languages in :data:`NOT_RUN` (listings, file formats, signatures).
 
 A table with a column headed "example" (the README's table of the ``rrr`` commands): each
-```` `rrr ...` ```` code span in that column is run as a ``bash`` block where its row stands.
+```` `rrr ...` ```` code span in that column is run as a ``bash`` block where its row stands; an
+extra the row's example names (``'.[sweep]'``) is installed for its commands, as is one a block
+names (see below).
 
 Any other language, and a fence without one, is an error: every block is either run or one of
 the kinds above. Directives of MyST (```` ```{toctree} ````) are not code blocks.
@@ -27,16 +29,26 @@ All blocks of one page run in order in one working folder (a later block can use
 earlier one wrote), with HOME in that folder, the repository's top-level files and folders
 linked into it (so ``examples/...``, ``python/rrr_robot/data/...`` and ``scripts/...`` resolve
 as in a clone) and this interpreter's ``bin`` first on PATH (the ``rrr`` command of the venv).
+
+The README's blocks run "after the first command": with :func:`installed_only`, Python imports
+only what the first command's ``pip install`` (scripts/setup_env.sh's default target) installs,
+and a block (a table row's commands) also what the extras it names install; any other module of
+this venv (the test tools, the other extras) is missing for them as on a user's machine.
 """
 
 from __future__ import annotations
 
+import importlib.metadata as md
 import os
 import re
 import subprocess
 import sys
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
 
 ROOT = Path(__file__).resolve().parents[2]
 SHELL = frozenset({"bash", "sh"})
@@ -74,6 +86,13 @@ class Block:
         if self.lang == "console" and first.startswith(NOT_RUN_HERE):
             return first[len(NOT_RUN_HERE):].strip()
         return None
+
+    @property
+    def extras(self) -> str:
+        """The extras a block installs first (``'.[docs]'`` in it, or in its table row)."""
+        if "table" in self.flags:
+            return self.flags.get("extras", "")
+        return ",".join(re.findall(r"\.\[([\w,-]+)\]", self.text))
 
     @property
     def kind(self) -> str:
@@ -151,13 +170,117 @@ def _table_row(page: str, lines: list[str], i: int, example_col: int | None,
         return example_col
     cells = _cells(line)
     if example_col < len(cells):
+        extras = ",".join(re.findall(r"\.\[([\w,-]+)\]", cells[example_col]))
         for cmd in re.findall(r"`(rrr [^`]*)`", cells[example_col]):
-            out.append(Block(page, i + 1, "bash", {"table": ""}, cmd.replace("\\|", "|") + "\n"))
+            out.append(Block(page, i + 1, "bash", {"table": "", "extras": extras},
+                             cmd.replace("\\|", "|") + "\n"))
     return example_col
 
 
 def all_blocks() -> list[Block]:
     return [b for page in doc_pages() for b in blocks_of(page)]
+
+
+# ---------------------------------------------------------------------------------------------
+# what the README's first command installs
+
+
+def first_command_target() -> str:
+    """The pip target of the README's first command: scripts/setup_env.sh's default."""
+    text = (ROOT / "scripts/setup_env.sh").read_text(encoding="utf-8")
+    found = re.search(r'RRR_PIP_TARGET:-([^}"]+)\}', text)
+    assert found, "scripts/setup_env.sh: no default RRR_PIP_TARGET"
+    return found[1]
+
+
+def closure(requirements: list[str]) -> set[str]:
+    """The distributions these requirements pull in (installed ones; their extras ignored)."""
+    seen: set[str] = set()
+    todo = [Requirement(r) for r in requirements]
+    while todo:
+        req = todo.pop()
+        name = canonicalize_name(req.name)
+        if name in seen or (req.marker is not None and not req.marker.evaluate({"extra": ""})):
+            continue
+        seen.add(name)
+        try:
+            todo += [Requirement(r) for r in (md.requires(req.name) or [])]
+        except md.PackageNotFoundError:
+            pass
+    return seen
+
+
+_SITECUSTOMIZE = '''"""Written by tests/python/doc_blocks.py: imports of modules that
+`pip install {target}` does not install (nor an extra named in RRR_DOC_EXTRAS) fail, as on a
+user's machine."""
+import os
+import sys
+
+OWNERS = {owners!r}
+INSTALLED = {installed!r}
+EXTRAS = {extras!r}
+_allowed = set(INSTALLED)
+for _extra in filter(None, os.environ.get("RRR_DOC_EXTRAS", "").split(",")):
+    _allowed |= set(EXTRAS[_extra])
+_blocked = {{m for m, dists in OWNERS.items() if not set(dists) & _allowed}}
+
+
+class _NotInstalled:
+    @staticmethod
+    def find_spec(name, path=None, target=None):
+        top = name.partition(".")[0]
+        if top in _blocked:
+            raise ModuleNotFoundError(
+                f"No module named {{top!r}}: the README's first command (pip install "
+                f"{target}) does not install it (its distributions: {{OWNERS[top]}})",
+                name=top)
+        return None
+
+
+sys.meta_path.insert(0, _NotInstalled)
+'''
+
+
+def _top_level_owners() -> dict[str, set[str]]:
+    """Top-level module -> the distributions that install it, from their RECORD files (also a
+    cmeel wheel's modules, which it installs under cmeel.prefix/lib/pythonX.Y/site-packages)."""
+    owners: dict[str, set[str]] = {}
+    for dist in md.distributions():
+        name = canonicalize_name(dist.metadata["Name"])
+        for line in (dist.read_text("RECORD") or "").splitlines():
+            parts = line.rsplit(",", 2)[0].split("/")
+            if parts[0] == "cmeel.prefix" and "site-packages" in parts:
+                parts = parts[parts.index("site-packages") + 1:]
+            if len(parts) == 1 and not parts[0].endswith((".py", ".so")):
+                continue  # a file at the top that is no module (a .pth, a data file)
+            top = parts[0].split(".")[0] if len(parts) == 1 else parts[0]
+            if top.isidentifier():
+                owners.setdefault(top, set()).add(name)
+    return owners
+
+
+def installed_only(folder: Path) -> dict[str, str]:
+    """Environment variables under which Python imports only what the README's first command
+    installs (rrr_robot, its dependencies and the extras of its target, with their
+    requirements), plus the extras listed in RRR_DOC_EXTRAS: a ``sitecustomize`` in ``folder``
+    makes every other module of this venv's distributions missing."""
+    target = first_command_target()
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    optional = project["optional-dependencies"]
+    chosen = re.fullmatch(r"\.(?:\[([\w,-]*)\])?", target)
+    assert chosen, f"the first command's target {target!r} is not '.' or '.[extras]'"
+    requirements = list(project["dependencies"])
+    for extra in filter(None, (chosen[1] or "").split(",")):
+        requirements += optional[extra]
+    installed = closure(requirements) | {"rrr-robot", "pip", "setuptools"}  # and the venv's own
+    extras = {name: sorted(closure(reqs)) for name, reqs in optional.items()}
+    owners = {module: sorted(dists) for module, dists in _top_level_owners().items()
+              if module not in sys.stdlib_module_names and not module.startswith("_")}
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "sitecustomize.py").write_text(_SITECUSTOMIZE.format(
+        target=target, owners=owners, installed=sorted(installed), extras=extras),
+        encoding="utf-8")
+    return {"PYTHONPATH": str(folder)}
 
 
 # ---------------------------------------------------------------------------------------------

@@ -5,7 +5,10 @@ listed below, each with its reason."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
+import subprocess
+import sys
 import time
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -20,6 +23,7 @@ from doc_blocks import (
     blocks_of,
     check_output,
     doc_pages,
+    installed_only,
     run_block,
 )
 
@@ -101,10 +105,31 @@ def test_page_runnable_block_count() -> None:
     assert kinds.count("run") >= 4 and "file" in kinds
 
 
+def test_the_readme_imports_only_what_the_first_command_installs(tmp_path: Path) -> None:
+    """The README's blocks run "after the first command": rrr_robot and its dependencies (the
+    reference of Figs 5 and 6 among them) import; the test tools, the references of the tests
+    and the other extras do not, unless a block names its extra."""
+    env = {**os.environ, **installed_only(tmp_path)}
+
+    def imports(module: str, extras: str = "") -> bool:
+        code = f"import {module}"
+        return subprocess.run([sys.executable, "-c", code], env={**env, "RRR_DOC_EXTRAS": extras},
+                              capture_output=True, check=False).returncode == 0
+
+    assert all(imports(m) for m in ("rrr_robot.cli", "mujoco", "fmpy", "can", "matplotlib"))
+    assert not any(imports(m) for m in ("pytest", "pinocchio", "roboticstoolbox", "dask"))
+    assert imports("dask", "sweep") and imports("sphinx", "docs")
+    assert [b.extras for b in blocks_of(ROOT / "README.md") if "rrr sweep" in b.text] == \
+        ["sweep", "sweep"]
+
+
 def run_page(page: str, folder: Path) -> str:
     """Run the blocks of one page in order in a working folder; returns its log (what ran, how
     long). Raises AssertionError at the first block that fails."""
-    work = Workdir.make(folder, BLOCK_ENV)
+    env = dict(BLOCK_ENV)
+    if page == "README.md":  # "after the first command": only what it installs is importable
+        env |= installed_only(folder.parent / "first-command-site")
+    work = Workdir.make(folder, env)
     log = []
     printed = ""
     t0 = time.monotonic()
@@ -116,7 +141,9 @@ def run_page(page: str, folder: Path) -> str:
             target.write_text(block.text, encoding="utf-8")
         elif block.kind == "run":
             t = time.monotonic()
-            printed = run_block(block, work, BLOCK_TIMEOUT)
+            # the extras a block (a table row's example) names and installs first
+            here = dataclasses.replace(work, env={**work.env, "RRR_DOC_EXTRAS": block.extras})
+            printed = run_block(block, here, BLOCK_TIMEOUT)
             log.append(f"{block.where}: {block.lang} block ran in {time.monotonic() - t:.1f} s")
         elif block.kind == "output":
             check_output(block.text.split("\n"), printed, block.where)

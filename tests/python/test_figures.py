@@ -59,8 +59,6 @@ def short_run(tmp_path_factory: pytest.TempPathFactory) -> Any:
 
 
 def test_every_figure_is_written_with_its_name_and_size(short_run: Any, tmp_path: Path) -> None:
-    pytest.importorskip("roboticstoolbox")  # Figs 5 and 6 (rrr_robot[verify])
-    pytest.importorskip("pinocchio")
     model, robot, ref, results = short_run
     write_figures(tmp_path, model, robot, ref, results)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(FIGURES)
@@ -79,8 +77,6 @@ def test_run_writing_lists_every_figure(short_run: Any, tmp_path: Path,
                                         monkeypatch: pytest.MonkeyPatch) -> None:
     """Through run_writing (co-simulation replaced by the made-up results): the figures, the
     tables and summary.json are the run's files."""
-    pytest.importorskip("roboticstoolbox")
-    pytest.importorskip("pinocchio")
     results = short_run[3]
     calls: list[str] = []
 
@@ -246,8 +242,6 @@ def test_the_tip_error_axis_starts_at_a_meaningful_floor() -> None:
 def test_the_worker_draws_the_reference_figures_as_this_process_does(short_run: Any,
                                                                       tmp_path: Path) -> None:
     """Figs 2-6 drawn by the forked worker are byte for byte those drawn here."""
-    pytest.importorskip("roboticstoolbox")
-    pytest.importorskip("pinocchio")
     model, robot, ref, _ = short_run
     (tmp_path / "worker").mkdir()
     (tmp_path / "here").mkdir()
@@ -268,7 +262,7 @@ def test_a_failing_worker_gives_way_to_this_process(short_run: Any, tmp_path: Pa
     model, robot, ref, _ = short_run
 
     def broken(*args: Any) -> Any:
-        raise NumericError("ik_LM did not converge at row 3", "ik_LM")
+        raise NumericError("MuJoCo's IK did not converge at row 3", "mujoco ik")
 
     monkeypatch.setattr(references_module, "numeric_ik_path", broken)  # the fork inherits it
     with ReferenceFigures(tmp_path, model, robot, ref) as worker, \

@@ -246,3 +246,29 @@ def test_the_scan_finds_a_spelled_name(snippet: str, what: str) -> None:
 def test_the_scan_passes_what_is_not_spelled(snippet: str) -> None:
     module = "hil/nodes.py" if snippet.startswith("_REF_HEADER") else "<snippet>"
     assert spelled(snippet, module) == []
+
+
+def test_the_manuals_variable_tables_are_the_builds() -> None:
+    """docs/fmus.md's table of each FMU: every row that names variables gives their value
+    references as the build's model descriptions do (FMI 2.0 from the generated table, `time`
+    from the FMI 3.0 description): a typed number that drifted fails here."""
+    from fmpy import read_model_description
+    from rrr_robot.sim.fmus import fmu_path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "fmus.md").read_text()
+    checked = 0
+    for which in VARIABLES:
+        section = text.split(f"\n## rrr_{which}\n", 1)[1].split("\n## ", 1)[0]
+        vr = {name: ref for name, ref, *_ in VARIABLES[which]}
+        md = read_model_description(fmu_path(which, 3))
+        vr.update({v.name: int(v.valueReference) for v in md.modelVariables
+                   if v.causality == "independent"})
+        for row in re.findall(r"^\| (\d+)(?:-(\d+))? \| ([^|]*) \|", section, re.M):
+            names = re.findall(r"`([^`]+)`", row[2])
+            if not names:
+                continue  # "model parameters": the parameter table below
+            assert vr[names[0]] == int(row[0]), (which, row)
+            if row[1]:
+                assert vr[names[-1]] == int(row[1]) or len(names) == 1, (which, row)
+            checked += 1
+    assert checked >= 25

@@ -114,3 +114,17 @@ def test_bad_settings_and_files(tmp_path: Path) -> None:
     header_only.write_text("t,q[1],q[2],q[3],u[1],u[2],u[3]\n")
     with pytest.raises(BadInputError, match="no data rows"):
         read_log(header_only)
+
+
+def test_a_huge_slope_tried_by_the_fit_stays_finite_and_silent() -> None:
+    """An LM step of the friction fit may try ln w = 800: the slopes are bounded, so the
+    residual stays finite and no overflow RuntimeWarning reaches a `rrr identify -q` user."""
+    import warnings
+
+    from rrr_robot.identify import friction
+
+    pts = CurvePoints(np.linspace(0.1, 4.0, 10), np.linspace(0.2, 1.0, 10))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = friction._projected(np.array([800.0, 1.0, -800.0]), pts)
+    assert np.all(np.isfinite(res))

@@ -27,7 +27,7 @@ import rrr_robot as rr
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rrr_robot.core import param_names
-from rrr_robot.core.checked import MAX_FILE_BYTES
+from rrr_robot.core.checked import MAX_FILE_BYTES, write_toml
 from rrr_robot.core.model import DEFAULT_ROBOT_TOML
 from rrr_robot.core.robot import (
     DEFAULT_SAMPLE_TIME,
@@ -459,3 +459,13 @@ def test_cli_identification_experiment_bound(tmp_path: Path) -> None:
                             capture_output=True, text=True, timeout=300)
     _assert_one_line_error(result, "the friction sweep would have")
     assert not out.exists()
+
+
+def test_whole_numbers_of_the_schema_are_written_as_integers(tmp_path: Path) -> None:
+    """[identification] rows is a whole number (Number(integer=True)): written `rows = 846`,
+    not 846.0; the other numbers stay floats and read back bit for bit."""
+    path = tmp_path / "t.toml"
+    write_toml({"identification": {"rows": 846, "cond": 12.0, "p": [0.1, 2.0]}}, path)
+    text = path.read_text()
+    assert "rows = 846\n" in text and "cond = 12.0\n" in text
+    assert tomllib.loads(text)["identification"] == {"rows": 846, "cond": 12.0, "p": [0.1, 2.0]}

@@ -6,6 +6,7 @@ paper's Fig 5), and clear errors for texts that cannot be written."""
 from __future__ import annotations
 
 import tomllib
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ import rrr_robot as rr
 from rrr_robot.core.model import DEFAULT_ROBOT_TOML
 from rrr_robot.writing import trajectory as tr
 from rrr_robot.writing.letters import join_strokes, text_strokes
+from rrr_robot.writing.references import numeric_ik_path, numeric_references
 
 
 def wrap(a: np.ndarray) -> np.ndarray:
@@ -147,10 +149,26 @@ def test_workspace_report(model: rr.Model, ref: tr.Reference) -> None:
 
 
 def test_numeric_ik_matches_closed_form(model: rr.Model, ref: tr.Reference) -> None:
-    """The paper's Fig 5: Robotics Toolbox numeric IK along the path, every 20th sample."""
+    """The paper's Fig 5: MuJoCo's numeric IK along the path, every 20th sample."""
     idx = np.arange(0, ref.t.size, 20)
-    q_num = tr.numeric_ik_path(model, ref.x[idx], ref.q[0] + 0.01)
+    q_num = numeric_ik_path(model, ref.x[idx], ref.q[0] + 0.01)
     assert np.abs(wrap(q_num - ref.q[idx])).max() < 1e-9
+
+
+def test_numeric_references_match_the_closed_form(ref: tr.Reference, tmp_path: Path) -> None:
+    """Figs 5 and 6 along the whole reference: MuJoCo's IK and mj_inverse against the closed
+    form; a robot file of base parameters only keeps Fig 5 and says why Fig 6 is missing."""
+    robot = rr.read_robot_file(DEFAULT_ROBOT_TOML)
+    refs = numeric_references(robot.model, robot, ref)
+    assert np.abs(wrap(refs.ik - ref.q)).max() < 1e-12
+    assert refs.tau is not None
+    tau = robot.model.inverse_dynamics(ref.q, ref.qd, ref.qdd)
+    assert np.abs(refs.tau - tau).max() < 1e-10 * np.abs(tau).max()
+    robot.model.to_toml(tmp_path / "bp_robot.toml")  # [base_parameters], no link tables
+    base_only = rr.read_robot_file(tmp_path / "bp_robot.toml")
+    refs = numeric_references(base_only.model, base_only, ref)
+    assert refs.ik.shape == ref.q.shape and refs.tau is None
+    assert "base parameters" in refs.tau_skipped
 
 
 # ---- other texts and bad input ------------------------------------------------------------------

@@ -143,8 +143,18 @@ def _result(coef: FloatArray, w: FloatArray, points: CurvePoints, method: str) -
                        float(np.max(np.abs(res))), method, points)
 
 
+#: |ln w| at most this: an LM step may try a huge slope (exp would overflow to inf, with a
+#: RuntimeWarning, past ln w = 709); from e^40 (2e17 s/rad) on, tanh(w v) is the sign of v for
+#: any measured speed, so bounding it changes no fit.
+_LOG_W_BOUND = 40.0
+
+
+def _slopes(log_w: FloatArray) -> FloatArray:
+    return np.exp(np.clip(log_w, -_LOG_W_BOUND, _LOG_W_BOUND))
+
+
 def _projected(log_w: FloatArray, points: CurvePoints) -> FloatArray:
-    a = _basis(points.v, np.exp(log_w))
+    a = _basis(points.v, _slopes(log_w))
     residual: FloatArray = points.F - a @ sla.lstsq(a, points.F)[0]
     return residual
 
@@ -165,7 +175,7 @@ def fit_nls(points: CurvePoints, w_starts: FloatArray | None = None) -> Friction
         if best is None or sol.cost < best.cost:
             best = sol
     assert best is not None
-    w = np.exp(best.x)
+    w = _slopes(best.x)
     order = np.argsort(w)[::-1]
     w = w[order]
     coef = sla.lstsq(_basis(points.v, w), points.F)[0]

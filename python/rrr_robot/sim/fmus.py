@@ -49,6 +49,9 @@ def fmu_dir() -> Path:
 def fmu_path(which: str, fmi_version: int = 2) -> Path:
     """Path of an FMU (one of FMU_NAMES: 'plant', 'controller', ...) for FMI version 2 or 3.
 
+    ``fmi_version``: 2 (the default) gives the FMI 2.0 archive (``fmus/rrr_<which>.fmu``), 3 the
+    FMI 3.0 one (``fmus/fmi3/rrr_<which>.fmu``): the same variables and value references, the
+    same results bit for bit (docs/fmpy.md). Another value is refused (BadInputError).
     $RRR_FMU_DIR (e.g. a CMake build's ``fmus/`` folder) takes precedence over the copies
     installed with the package.
     """

@@ -242,22 +242,19 @@ def fig_joints(out: Path, ref: Reference) -> None:
 
 def fig_differences(out: Path, model: Model, robot: RobotFile, ref: Reference,
                     references: NumericReferences | None = None) -> None:
-    """Figs 5 and 6: closed form against the Robotics Toolbox IK and Pinocchio's rnea
+    """Figs 5 and 6: closed form against MuJoCo's numeric IK and its mj_inverse
     (``references``: computed beforehand; without them they are computed here)."""
     refs = references if references is not None else numeric_references(model, robot, ref)
-    if refs.ik is None:
-        log.warning("Fig 5 skipped: %s", refs.ik_skipped)
-    else:
-        _diff_plot(out / "fig5_ik_difference.png", ref.t, ref.q - refs.ik, "rad",
-                   "Fig. 5: closed-form minus numeric (Robotics Toolbox ik_LM) inverse "
-                   "kinematics", quantity="q closed form - q numeric")
+    _diff_plot(out / "fig5_ik_difference.png", ref.t, ref.q - refs.ik, "rad",
+               "Fig. 5: closed-form minus numeric (MuJoCo least squares) inverse kinematics",
+               quantity="q closed form - q numeric")
     if refs.tau is None:
         log.warning("Fig 6 skipped: %s", refs.tau_skipped)
         return
     tau = model.inverse_dynamics(ref.q, ref.qd, ref.qdd)
     _diff_plot(out / "fig6_torque_difference.png", ref.t, tau - refs.tau, "N m",
-               "Fig. 6: closed-form R p minus Pinocchio rnea inverse dynamics",
-               quantity="tau R p - tau rnea")
+               "Fig. 6: closed-form R p minus MuJoCo mj_inverse inverse dynamics",
+               quantity="tau R p - tau mj_inverse")
 
 
 def _diff_plot(path: Path, t: FloatArray, diff: FloatArray, unit: str, title: str,
@@ -417,7 +414,7 @@ REFERENCE_FIGURES = ("fig2_reference.png", "fig3_joint_positions.png",
 
 def write_reference_figures(out: Path, model: Model, robot: RobotFile, ref: Reference) -> None:
     """Figs 2-6: the reference, its joint motion, and the closed form against the numeric
-    references (Figs 5 and 6 skipped, with a warning, without roboticstoolbox or pinocchio)."""
+    references (Fig 6 skipped, with a warning, for a robot file without link tables)."""
     fig_reference(out, ref)
     fig_joints(out, ref)
     fig_differences(out, model, robot, ref)

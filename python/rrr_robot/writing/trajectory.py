@@ -45,7 +45,6 @@ from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
 from ..core._arrays import FloatArray
 from ..core.checked import Invalid, show
@@ -81,7 +80,6 @@ __all__ = [
     "fitted_spec",
     "letter_height_range",
     "make_reference",
-    "numeric_ik_path",
     "tip_plan",
     "writing_path",
 ]
@@ -554,43 +552,3 @@ def make_reference(model: Model, spec: WritingSpec | None = None, *,
         elbow, shoulder, time.perf_counter() - start, " (tip plan cached)" if cached else "",
     )
     return ref
-
-
-def numeric_ik_path(
-    model: Model, x: ArrayLike, q_seed: ArrayLike, tol: float = 1e-28
-) -> FloatArray:
-    """Numeric IK of every row of x (n, 3) with the Robotics Toolbox (Levenberg-Marquardt on
-    the DH chain of the model, position only), each seeded with the previous solution; the
-    comparison of the paper's Fig 5. Needs ``roboticstoolbox-python``.
-
-    ``tol`` bounds RTB's error measure ``E = 1/2 |x_err|^2``, so 1e-28 means ``|x_err| < 1.4e-14`` m
-    (about 1e-14 rad here); much below 1e-30 LM stalls at round-off and fails. A row that does
-    not converge raises NumericError."""
-    import roboticstoolbox as rtb
-
-    dh = model.dh
-    robot = rtb.DHRobot(
-        [
-            rtb.RevoluteDH(d=dh["d1"], a=0.0, alpha=math.pi / 2),
-            rtb.RevoluteDH(d=dh["d2"], a=dh["a2"], alpha=0.0),
-            rtb.RevoluteDH(d=dh["d3"], a=dh["a3"], alpha=0.0),
-        ],
-        name="rrr",
-    )
-    ets = robot.ets()
-    targets = np.atleast_2d(np.asarray(x, dtype=float))
-    mask = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
-    pose = np.eye(4)
-    q = np.asarray(q_seed, dtype=float).copy()
-    out = np.empty_like(targets)
-    for i, target in enumerate(targets):
-        pose[:3, 3] = target
-        sol = ets.ik_LM(pose, q0=q, mask=mask, tol=tol, ilimit=100, slimit=1, joint_limits=False)
-        if not sol.success:
-            raise NumericError(
-                f"Robotics Toolbox ik_LM did not converge at row {i}, x = {target.tolist()}",
-                "ik_LM",
-            )
-        q = np.asarray(sol.q, dtype=float)
-        out[i] = q
-    return out
