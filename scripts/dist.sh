@@ -110,7 +110,7 @@ for w in "$WHL_X86" "$WHL_A64"; do
 done
 "$PY" tools/dist_check.py scan "$WHL_X86" "$WHL_A64" "$STAGE/rrr_robot-fmus-$VERSION.zip"
 "$PY" tools/dist_check.py compare --tree "$WHL_X86" --sdist "$WHL_A64"
-"$ROOT/$VENV/bin/twine" check --strict "$STAGE"/*
+"$ROOT/$VENV/bin/twine" --no-color check --strict "$STAGE"/*.whl "$STAGE"/*.tar.gz
 
 (cd "$STAGE" && sha256sum -- *.tar.gz *.whl *.zip > SHA256SUMS)
 # dist/ appears complete or not at all: the staged folder is renamed over the old one
