@@ -1,5 +1,6 @@
 # CMake toolchain file: build with Zig's C compiler (the Python package ziglang) for a chosen CPU
-# and glibc version, from any Linux host: the portable wheels of scripts/dist.sh (docs/release.md).
+# and glibc version, from any Linux host: the portable wheels of scripts/dist.sh
+# (docs/getting-started.md, "From the release folder").
 #
 #   cmake -S . -B build-zig -DCMAKE_TOOLCHAIN_FILE=cmake/zig.cmake \
 #         -DRRR_ZIG_TARGET=aarch64-linux-gnu.2.17 -DRRR_BUILD_TESTS=OFF
