@@ -19,7 +19,7 @@
 # Needs python3 (>= 3.11, with venv), the tools of an FMU build (mingw-w64 for the FMUs' Windows
 # binaries; qemu-user and the aarch64 C library, Debian's gcc-aarch64-linux-gnu, to run the
 # generators of the aarch64 build) and the network of pip (or its cache): the build tools are
-# installed into build-dist/venv. About 4 minutes of CPU.
+# installed into build-dist/venv. About 2 to 3.5 minutes here (2 cores).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
