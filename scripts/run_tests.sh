@@ -106,6 +106,9 @@ echo "== the manual: sphinx-build with warnings as errors (docs/ -> build-docs/i
 sphinx-build -q -W --keep-going -n -b html docs build-docs
 echo "== pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py) =="
 python -m pytest -q --durations=25 tests/python
+# the release folder (sdist, wheels, FMU bundle) built with zig and checked, then installed and
+# run as a user would: scripts/test_dist.sh (docs/getting-started.md, "From the release folder")
+bash scripts/test_dist.sh
 echo "== every bench script's quick mode (bench/: they print their tables; no number is checked) =="
 if ! wait "$BENCH_BUILD"; then
   cat build-bench/build.log >&2

@@ -46,6 +46,10 @@ NOT_RUN_HERE = {
                           "# 1 Mbit/s; restart after bus-off"),
     ("docs/canopen.md", "sudo ip link add dev vcan0 type vcan && sudo ip link set vcan0 up"),
     ("docs/c-library.md", "cmake -S . -B build && cmake --build build -j2"),
+    # the release folder: scripts/test_dist.sh (a stage of the test command) builds it, then
+    # installs its x86-64 wheel in a venv without a compiler and runs it
+    ("docs/getting-started.md", "python3 -m venv venv && . venv/bin/activate"),
+    ("docs/getting-started.md", "bash scripts/dist.sh"),
     ("docs/sweeps.md", "dask scheduler --host 0.0.0.0 --port 8786"),
     # minutes of measurement (its --quick mode runs in the test command)
     ("docs/performance.md",

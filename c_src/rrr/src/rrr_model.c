@@ -265,7 +265,7 @@ static void pivot_row(const rrr_model *m, int i, const double s[PD_GRID],
  * large stack frame). The model's parameters are finite here (range-checked first). */
 static int mass_matrix_pd_everywhere(const rrr_model *m)
 {
-    const double h = 2.0 * RRR_PI / PD_GRID;
+    const double h = 2.0 * RRR_PI / (double)PD_GRID;
     double s[PD_GRID], c[PD_GRID];
     for (int i = 0; i < PD_GRID; ++i) {
         const double q = -RRR_PI + i * h;

@@ -346,7 +346,7 @@ static rrr_status dp5_trial(const rhs *r, const rrr_plant_integrator *s, double 
         const double ratio = e / scale(s, y[i], y5[i]);
         sum += ratio * ratio;
     }
-    *err = sqrt(sum / NY); /* NaN cannot pass the error test either */
+    *err = sqrt(sum / (double)NY); /* NaN cannot pass the error test either */
     return RRR_OK;
 }
 

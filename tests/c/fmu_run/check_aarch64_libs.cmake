@@ -1,7 +1,7 @@
 # Checks the aarch64 Linux binaries of the FMUs with readelf (binutils reads any ELF machine):
 #   - ELF64 shared object for AArch64;
 #   - the dynamic symbol table defines exactly the functions the FMI headers of that version
-#     declare (nothing missing, no librrr or glue symbol: --exclude-libs and hidden visibility);
+#     declare (nothing missing, no librrr or glue symbol: hidden visibility);
 #   - they need only libm.so.6 and libc.so.6 (no libgcc_s: -static-libgcc);
 #   - every versioned symbol they need is GLIBC_2.17 (aarch64's first glibc) .. GLIBC_2.28, so
 #     that they load on glibc 2.28 (cmake/glibc_compat.h binds exp, log, pow, hypot, ... to
