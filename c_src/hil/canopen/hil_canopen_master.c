@@ -97,15 +97,24 @@ void rrr_com_rpdo1(uint8_t node, uint16_t controlword, int16_t torque_pm, rrr_hi
     rrr_co_put_le(&f->data[2], (uint16_t)torque_pm, 2u);
 }
 
+unsigned rrr_com_tpdo_number(const rrr_hil_frame *f, uint8_t node)
+{
+    if (f->extended) {
+        return 0u;
+    }
+    return f->id == 0x180u + node ? 1u : f->id == 0x280u + node ? 2u : 0u;
+}
+
 int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb)
 {
-    if (f->extended || (f->id != 0x180u + node && f->id != 0x280u + node)) {
+    const unsigned which = rrr_com_tpdo_number(f, node);
+    if (which == 0u) {
         return 0;
     }
-    if (f->dlc != 6u) {
+    if (f->dlc != RRR_COM_TPDO_BYTES) {
         return -1;
     }
-    if (f->id == 0x180u + node) {
+    if (which == 1u) {
         fb->statusword = (uint16_t)rrr_co_get_le(&f->data[0], 2u);
         fb->position_inc = (int32_t)rrr_co_get_le(&f->data[2], 4u);
         fb->have |= 1u;

@@ -115,6 +115,8 @@ const char *rrr_hil_exit_str(int code)
         return "stopped early by the controller";
     case RRR_HIL_EXIT_SAFETY:
         return "completed, safety policy fired";
+    case RRR_HIL_EXIT_TAMPERED:
+        return "tampered input";
     default:
         return "unknown";
     }

@@ -32,10 +32,14 @@ typedef enum rrr_hil_exit {
                                   ///< that cannot be encoded (controller)
     RRR_HIL_EXIT_STOPPED_EARLY = 6, ///< plant: the controller's StopCmd gave a reason other than
                                     ///< the end of the run (it was interrupted, faulted, lost us)
-    RRR_HIL_EXIT_SAFETY = 7 ///< the run completed (as for 0), but the safety policy fired: plant:
-                            ///< a fault latched (even if reset later) or 0 V was forced for at
-                            ///< least one period; controller: a PlantStatus frame reported a
-                            ///< latched fault or 0 V (docs/can-bench.md, "Exit status")
+    RRR_HIL_EXIT_SAFETY = 7, ///< the run completed (as for 0), but the safety policy fired: plant:
+                             ///< a fault latched (even if reset later) or 0 V was forced for at
+                             ///< least one period; controller: a PlantStatus frame reported a
+                             ///< latched fault or 0 V (docs/can-bench.md, "Exit status")
+    RRR_HIL_EXIT_TAMPERED = 8 ///< controller: a frame its bus profile never sends came, so the
+                              ///< inputs were tampered with (or a node is broken): a second frame
+                              ///< of one kind in one period (a duplicated TPDO, JointState), or
+                              ///< a TPDO whose length is not its mapping's; the run ends at once
 } rrr_hil_exit;
 
 /** Static name of an exit status ("completed", "peer lost", ...). */

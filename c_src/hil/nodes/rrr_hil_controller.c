@@ -49,7 +49,7 @@ static void usage(void)
     }
     fprintf(stderr,
             "]\n"
-            "       [--node-ids a,b,c]\n"
+            "       [--node-ids a,b,c] [--consumer-ms MS] [--rpdo-timeout N]\n"
             "  the model is the default robot (rrr_model_default) with the --set parameters\n"
             "  (named as in the FMUs: d1, a2, a3, d2, d3, g, u_max, p[k], kt[i], b[i], f[i,k],\n"
             "  w[i,k]), so the controller's model may differ from the plant's; gains default\n"
@@ -61,7 +61,8 @@ static void usage(void)
             RRR_HIL_RT_USAGE
             "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault,\n"
             "  7 completed but the plant's safety policy fired (PlantStatus: a fault latched or\n"
-            "  0 V forced; docs/can.md, Exit statuses)\n");
+            "  0 V forced), 8 tampered input: a frame the plant never sends (a second one of a\n"
+            "  kind in one period, a wrong length), named (docs/can.md, Exit statuses)\n");
 }
 
 static int parse_args(int argc, char **argv, rrr_hil_ctrl_opts *o)
@@ -123,6 +124,16 @@ static int parse_args(int argc, char **argv, rrr_hil_ctrl_opts *o)
                 if (r < 0) {
                     return -1;
                 }
+            } else if (strcmp(a, "--consumer-ms") == 0 || strcmp(a, "--rpdo-timeout") == 0) {
+                const int is_consumer = a[2] == 'c';
+                const long hi = is_consumer ? 65535 : 255;
+                const long x = strtol(v, &end, 10);
+                if (end == v || *end != '\0' || x < 1 || x > hi) {
+                    fprintf(stderr, PROG ": %s: expected an integer 1..%ld, got '%s'\n", a, hi,
+                            v);
+                    return -1;
+                }
+                *(is_consumer ? &o->consumer_ms : &o->rpdo_timeout) = (uint32_t)x;
             } else if (strcmp(a, "--timeout-ms") == 0) {
                 const long x = strtol(v, &end, 10);
                 if (*end != '\0' || x < 0 || x > 3600000) {
