@@ -12,6 +12,7 @@ __all__ = [
     "HilError",
     "ModelError",
     "NumericError",
+    "OutputError",
     "RobotFileError",
     "RrrError",
     "ScenarioError",
@@ -81,6 +82,12 @@ class SweepSpecError(BadInputError):
 
 class UnreachableError(RrrError, ValueError):
     """An inverse kinematics target lies outside the workspace."""
+
+
+class OutputError(RrrError, OSError):
+    """A file or folder of the results could not be written (a full disk, a used-up quota, a
+    read-only file system, no permission): the message names it and what to do; ``errno`` is
+    the system's (an OSError, so code that handles a failed write still does)."""
 
 
 class SingularError(RrrError, ValueError):

@@ -401,3 +401,28 @@ def test_a_plant_that_dies_under_a_canopen_master_is_one_line(
     assert "plant node" in lines[0] or "the node rrr_hil_plant" in lines[0], lines
     assert "SIGKILL" in lines[0], lines
     assert "Traceback" not in err and "Exception in thread" not in err, err
+
+
+@pytest.mark.parametrize("node", ["controller", "plant"])
+def test_a_node_log_on_a_full_disk_ends_the_run_naming_it(tmp_path: Path, node: str) -> None:
+    """A node's --log on a full disk (/dev/full: a real write that fails): the node ends with
+    exit status 2 naming its log and what to do, never 0 with a log cut short (before: the
+    write errors went unchecked and the run ended with 0)."""
+    from rrr_robot.errors import HilError
+    from rrr_robot.hil.canopen.results import writing_controller
+    from rrr_robot.hil.nodes import export_reference, start_controller, start_plant, watch_nodes
+
+    ref = writing_controller(None, "ctc").ref
+    n = 300
+    csv = export_reference(ref.t[:n], ref.q[:n], ref.qd[:n], ref.qdd[:n], tmp_path / "ref.csv")
+    logs = {w: Path("/dev/full") if w == node else tmp_path / f"{w}.csv"
+            for w in ("controller", "plant")}
+    with start_plant(q0=ref.q[0], log_csv=logs["plant"]) as plant, \
+            start_controller(csv, connect=f"127.0.0.1:{plant.port}",
+                             log_csv=logs["controller"]) as ctrl:
+        with pytest.raises(HilError) as info:
+            watch_nodes([ctrl, plant], "the bench failed")
+    text = str(info.value)
+    assert f"the node rrr_hil_{node} (pid " in text and "exited with status 2" in text, text
+    assert ("cannot write the log /dev/full: No space left on device: free space, or write it "
+            "elsewhere") in text, text

@@ -80,6 +80,11 @@ int rrr_hil_run_safety(rrr_hil_run *r, int rc, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+/** Close the node's --log @p fp (NULL: none) written to @p path: a write that failed (a full
+ *  disk) turns a run that completed (@p rc 0 or RRR_HIL_EXIT_SAFETY) into RRR_HIL_EXIT_SETUP
+ *  with "cannot write the log PATH: REASON" (a log cut short is never taken for a whole one);
+ *  any other @p rc as it is. */
+int rrr_hil_log_close(FILE *fp, const char *path, rrr_hil_run *r, int rc);
 /** The exit line of the run (rrr_hil_report_exit with r's period and reason); returns @p rc. */
 int rrr_hil_run_report(const char *prog, int rc, const rrr_hil_run *r);
 /** CLOCK_MONOTONIC, ms. */

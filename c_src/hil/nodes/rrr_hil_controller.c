@@ -216,9 +216,7 @@ int main(int argc, char **argv)
     if (latency_log != NULL) {
         fclose(latency_log);
     }
-    if (c.log) {
-        fclose(c.log);
-    }
+    rc = rrr_hil_log_close(c.log, o.log_path, &c.run, rc);
     rrr_hil_reference_free(&c.ref);
     return rrr_hil_run_report(PROG, rc, &c.run);
 }

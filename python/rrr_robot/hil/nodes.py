@@ -40,7 +40,7 @@ import numpy as np
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
-from ..core.outputs import STAGING_PREFIX, atomic_write_text
+from ..core.outputs import STAGING_PREFIX, atomic_write_text, shown_paths
 from ..core.param_names import param_index
 from ..core.robot import DEFAULT_SAMPLE_TIME
 from ..errors import HilError, TamperedError
@@ -219,7 +219,7 @@ class NodeProcess:
         self.close()  # collect its output
         how = how or self.how_it_ended()
         text = self.stderr.strip()
-        last = f": {' '.join(text.splitlines()[-1].split())}" if text else ""
+        last = f": {shown_paths(' '.join(text.splitlines()[-1].split()))}" if text else ""
         tail = "" if text else "; it printed nothing"
         if folder is not None:
             path = Path(folder) / f"{self.name}.failed.log"
@@ -228,7 +228,8 @@ class NodeProcess:
                                   f"{text}\n")
                 tail = f"; its output is in {path}" + ("" if text else " (it printed nothing)")
             except OSError as exc:
-                tail = f"; its output could not be kept ({exc.strerror or exc})"
+                why = os.strerror(exc.errno) if exc.errno else str(exc)
+                tail = f"; its output could not be kept in {folder} ({why})"
         error = TamperedError if self._proc.poll() == EXIT_TAMPERED else HilError
         return error(f"{what}: the node {self.name} (pid {self.pid}) {how}{last}{tail}")
 

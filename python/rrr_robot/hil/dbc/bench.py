@@ -21,7 +21,7 @@ import numpy as np
 
 from ...core._arrays import FloatArray
 from ...core.outputs import atomic_path
-from ...errors import HilError
+from ...errors import HilError, OutputError
 from ...sim.cosim import CosimOptions, CosimResult, run_cosim
 from ..logs.specs import CONTROLLER_LOG, PLANT_LOG, read_log
 from ..nodes import (
@@ -137,7 +137,10 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                                          poll=LogProgress(ctrl_log, n, progress))
             wall = time.perf_counter() - start
             if frames is not None and cs.get("frame_log_error"):
-                raise HilError(f"the controller's frame log failed: {cs['frame_log_error']}")
+                raise OutputError(f"cannot write the controller's frame log "
+                                  f"{failure_folder(work) / str(frame_log)}: "
+                                  f"{cs['frame_log_error']}; free space, or write the results "
+                                  "elsewhere (--out)")
             p, c = read_log(plant_log, PLANT_LOG), read_log(ctrl_log, CONTROLLER_LOG)
         m = min(p.rows.shape[0], c.rows.shape[0])  # real time: the loops need not end together
         return BenchRun(t=p.col("t")[:m], q=p.group("q")[:m], qd=p.group("qd")[:m],
