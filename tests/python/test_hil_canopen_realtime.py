@@ -5,9 +5,10 @@ the drives' consumer 0x1016 (what it prints, docs/canopen.md's blocks show and t
 checks). A test, not a benchmark: it passes on a busy machine, so nothing
 here asserts a latency, a jitter or a deadline. Either master's runs set the drives' watchdogs
 generously (consumer 2 s against a 20 ms heartbeat, RPDO timeout 255 SYNC periods against the
-EDS's 3: the C master's --consumer-ms and --rpdo-timeout); the runs complete with every drive in OPERATION ENABLED and the summary
-holds the timing statistics, which are printed (``pytest -s``); when the master's heartbeat
-stops, the drives fault (EMCY 0x8130, FAULT, 0 V), never before their consumer time."""
+EDS's 3: the C master's --consumer-ms and --rpdo-timeout); the runs complete with every drive
+in OPERATION ENABLED and the summary holds the timing statistics, which are printed (``pytest
+-s``); when the master's heartbeat stops, the drives fault (EMCY 0x8130, FAULT, 0 V), never
+before their consumer time."""
 
 from __future__ import annotations
 

@@ -13,9 +13,10 @@
  * that says how the run ended ("rrr_hil_controller: exit 4 (interrupted) at period 17: SIGINT");
  * with --log, one CSV row per period (k, t, measured q and qd, u, u_n, u_c).
  * Exit status (rrr_hil_exit, hil_node.h): 0 every period done and StopCmd sent; 1 usage; 2 setup
- * failed; 3 the plant was lost (hang-up, no joint state within --timeout-ms, transport error);
- * 4 SIGINT/SIGTERM; 5 a fault of the controller (a command it cannot encode); 7 completed, but a
- * PlantStatus frame reported a latched fault or 0 V (the plant's safety policy fired).
+ * failed (or the --log could not be written); 3 the plant was lost (hang-up, no joint state
+ * within --timeout-ms, transport error); 4 SIGINT/SIGTERM; 5 a fault of the controller (a command
+ * it cannot encode); 7 completed, but a PlantStatus frame reported a latched fault or 0 V (the
+ * plant's safety policy fired); 8 tampered input (a frame the plant never sends: the profile's).
  */
 #define _POSIX_C_SOURCE 200809L
 

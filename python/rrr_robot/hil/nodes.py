@@ -475,17 +475,19 @@ def _log_size(node: NodeProcess) -> int:
 
 
 def _stuck(nodes: Sequence[NodeProcess], ok: Collection[int], grace: float, stall: float,
-           startup: float, poll: LogProgress | None) -> tuple[NodeProcess, str] | None:
+           startup: float, poll: LogProgress | None,
+           ended: tuple[str, int] | None) -> tuple[NodeProcess, str] | None:
     """Wait until every node has ended (None), or one stopped answering: (it, why). A node
     stopped answering when it still runs ``grace`` s after another ended with a status in
     ``ok`` (PEER_LOST_GRACE_PERIODS after one that lost its peer), or when its log did not grow
     for ``stall`` s (``startup`` s before its first row). After a node that failed otherwise
-    (a bad option, a fault of its own) the others are ended: the failure is that node's."""
+    (a bad option, a fault of its own) the others are ended: the failure is that node's.
+    ``ended``: the other side, not watched here, has ended already (how, its exit status)."""
     start = time.monotonic()
     size = {id(n): _log_size(n) for n in nodes}
     grew = {id(n): start for n in nodes}
     began = {id(n): False for n in nodes}
-    first: tuple[NodeProcess, float] | None = None  # the first node that ended, and when
+    first = None if ended is None else (*ended, start)  # the first that ended: how, rc, when
     while True:
         if poll is not None:
             poll.poll()
@@ -495,18 +497,17 @@ def _stuck(nodes: Sequence[NodeProcess], ok: Collection[int], grace: float, stal
             return None
         for n in nodes:
             if first is None and not n.running():
-                first = (n, now)
+                first = (f"{n.name} {n.how_it_ended()}", int(n.returncode or 0), now)
         if first is not None:
-            ended, at = first
-            lost = ended.returncode == EXIT_PEER_LOST
+            how, rc, at = first
+            lost = rc == EXIT_PEER_LOST
             bound = PEER_LOST_GRACE_PERIODS * PERIOD if lost else grace
             if now - at > bound:
-                if not lost and ended.returncode not in ok:
+                if not lost and rc not in ok:
                     for n in running:
                         n.close()
                     return None
-                return running[0], (f"{ended.name} {ended.how_it_ended()} and it did not end "
-                                    f"within {bound:g} s")
+                return running[0], f"{how} and it did not end within {bound:g} s"
         for n in running:
             now_size = _log_size(n)
             if now_size != size[id(n)]:
@@ -521,14 +522,18 @@ def _stuck(nodes: Sequence[NodeProcess], ok: Collection[int], grace: float, stal
 def watch_nodes(nodes: Sequence[NodeProcess], what: str, folder: Path | None = None, *,
                 ok: Collection[int] = (0,), poll: LogProgress | None = None,
                 grace: float = GRACE_PERIODS * PERIOD, stall: float = STALL_PERIODS * PERIOD,
-                startup: float = STARTUP_PERIODS * PERIOD) -> list[dict[str, Any]]:
+                startup: float = STARTUP_PERIODS * PERIOD,
+                ended: tuple[str, int] | None = None) -> list[dict[str, Any]]:
     """Wait for every node of a run and reap it; returns their summaries (``NodeProcess.wait``)
     in order when each ended with a status in ``ok``. Otherwise the error (``what``: the run
     that failed; the node's output kept in ``folder``) names the node at fault: one that stopped
     answering (still running ``grace`` s after another ended, or its log silent for ``stall`` s;
     it is stopped), else the first killed by a signal, else the first that failed; a node that
-    ended with EXIT_TAMPERED gives TamperedError. ``poll`` reports one node's progress."""
-    stuck = _stuck(nodes, ok, grace, stall, startup, poll)
+    ended with EXIT_TAMPERED gives TamperedError. ``poll`` reports one node's progress.
+    ``ended``: a side of the run that is not a node here (the Python side of ``rrr hil
+    controller|plant``) has ended: how ("the Python plant lost the controller") and its exit
+    status (EXIT_PEER_LOST when it lost the node)."""
+    stuck = _stuck(nodes, ok, grace, stall, startup, poll, ended)
     if stuck is not None:
         node, why = stuck
         if node.stopped_by_signal():
