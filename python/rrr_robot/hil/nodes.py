@@ -8,11 +8,12 @@ AF_CAN). The controller node can also listen (``--listen``) for the Python plant
 a bus opened before the plant starts (:func:`boot_up_watch`) sees its boot-up
 (:func:`wait_for_boot_up`).
 
-Every parent of nodes (``rrr hil bench``, ``rrr hil canopen --master c``) waits for them with
-:func:`watch_nodes`: it watches all of them, reaps them, reports the progress of one from its log
-(:class:`LogProgress`) and, when one ends or stops answering, ends the others within a bound
-counted in bench periods (:data:`GRACE_PERIODS`, :data:`STALL_PERIODS`), naming the node at
-fault. :func:`quiet_bus_threads` keeps the threads of python-can and canopen from printing a
+Every parent of nodes (``rrr hil bench``, ``rrr hil canopen --master c``, ``rrr hil
+controller|plant`` for the node beside their Python side) waits for them with
+:func:`watch_nodes`: it watches all of them, reaps them, reports the progress of one from its
+log (:class:`LogProgress`) and, when one ends or stops answering, ends the others within a
+bound counted in bench periods (:data:`GRACE_PERIODS`, :data:`STALL_PERIODS`), naming the node
+at fault. :func:`quiet_bus_threads` keeps the threads of python-can and canopen from printing a
 traceback when a node goes away: the run's own error names the node.
 """
 
