@@ -153,7 +153,7 @@ static void test_against_the_slave(void)
     for (unsigned i = 0; i < out.n; ++i) {
         const unsigned which = rrr_com_tpdo_number(&out.f[i], ID);
         CHECK(which == (out.f[i].id == 0x180u + ID ? 1u : out.f[i].id == 0x280u + ID ? 2u : 0u));
-        CHECK(which == 0u || out.f[i].dlc == RRR_COM_TPDO_BYTES); /* the drive's own lengths */
+        CHECK(which == 0u || rrr_com_tpdo(&out.f[i], ID, &fb) == 1); /* the drive's lengths */
         CHECK(rrr_com_tpdo_number(&out.f[i], ID + 1u) == 0u);
     }
     r.extended = 1u; /* a 29-bit identifier is no TPDO */

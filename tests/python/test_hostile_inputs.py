@@ -19,6 +19,7 @@ import rrr_robot as rr
 from rrr_robot.cli import main
 from rrr_robot.core import outputs
 from rrr_robot.core.outputs import ResultSet, folder_lock, make_folders
+from rrr_robot.hil.canopen.drives import EXPECTED_MAPPING
 from rrr_robot.identify import logs
 from scd_relay import Relay
 
@@ -307,9 +308,13 @@ def _through_relay(monkeypatch: pytest.MonkeyPatch, module: Any, frame_id: int, 
     return relays
 
 
+#: The length of a drive's TPDO1 by its mapping (bytes).
+_TPDO1_BYTES = sum(bits for _, bits in EXPECTED_MAPPING["TPDO1"]) // 8
+
+
 @pytest.mark.parametrize(("how", "message"), [
     ("twice", "drive 2: two TPDO1 in SYNC 299"),
-    ("longer", "drive 2: TPDO1 of 8 bytes, 6 mapped")])
+    ("longer", f"drive 2: TPDO1 of {_TPDO1_BYTES + 2} bytes, {_TPDO1_BYTES} mapped")])
 @pytest.mark.parametrize("master", ["c", "python"])
 def test_a_tampered_tpdo_ends_the_master_run_naming_the_drive_and_the_frame(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],

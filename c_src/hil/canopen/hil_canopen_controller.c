@@ -36,6 +36,7 @@ typedef struct co_master {
     int16_t pm_max[3];       /* largest |target torque| sent, per mille */
     uint32_t late_tpdos;     /* real time: SYNCs whose TPDOs had not all come by the deadline */
     uint32_t tpdo_n[3][2];   /* TPDO1, TPDO2 of each drive received so far */
+    uint8_t tpdo_bytes[3][2]; /* TPDO1, TPDO2 of each drive: their length by the mapping read */
     uint32_t heartbeats;     /* real time: the master's heartbeats sent */
 } co_master;
 
@@ -48,8 +49,6 @@ static const struct {
                 {0x1A00u, 0x1800u, 0x180u, {0x60410010u, 0x60640020u}},
                 {0x1A01u, 0x1801u, 0x280u, {0x606C0020u, 0x60770010u}}};
 #define CO_SW_MASK 0x6Fu
-_Static_assert(RRR_COM_TPDO_BYTES == (0x10u + 0x20u) / 8u,
-               "TPDO1 and TPDO2 map 16 + 32 bits (CO_PDOS)");
 
 /* One expedited SDO transfer (download: size 1, 2 or 4 bytes of *value; upload: size 0, the
  * value into *value). 0, or an exit status with why set: an abort or an answer this master cannot
@@ -206,6 +205,13 @@ static int co_configure(co_master *m, const rrr_hil_ctrl_opts *o)
                                      (unsigned)CO_PDOS[p].comm_index, cob,
                                      (unsigned)(CO_PDOS[p].cob_base + id));
             }
+            uint32_t bits = 0; /* the TPDO's length: the mapping read, as checked above */
+            for (uint32_t e = 0; rc == 0 && p > 0u && e < count; ++e) {
+                bits += CO_PDOS[p].entries[e] & 0xFFu;
+            }
+            if (rc == 0 && p > 0u) {
+                m->tpdo_bytes[j][p - 1u] = (uint8_t)(bits / 8u);
+            }
         }
     }
     return rc;
@@ -245,10 +251,10 @@ static int co_enable(co_master *m, const rrr_hil_ctrl_opts *o)
 
 /* A frame of the drives while the master waits for the TPDOs of SYNC @p k (m->syncs SYNCs sent):
  * a TPDO is stored into m->fb and counted. A drive answers each SYNC with one TPDO1 and one
- * TPDO2 of RRR_COM_TPDO_BYTES bytes, so a TPDO of another length, or one more than SYNCs were
- * sent (a second in one SYNC: forged or replayed), is tampered input: it is not used, and the run
- * ends at once with RRR_HIL_EXIT_TAMPERED naming the drive and the frame. An EMCY ends the run
- * (the drive's safety reaction). 0, or an exit status with why set. */
+ * TPDO2 of their mapped lengths (m->tpdo_bytes), so a TPDO of another length, or one more than
+ * SYNCs were sent (a second in one SYNC: forged or replayed), is tampered input: it is not used,
+ * and the run ends at once with RRR_HIL_EXIT_TAMPERED naming the drive and the frame. An EMCY
+ * ends the run (the drive's safety reaction). 0, or an exit status with why set. */
 static int co_feed(co_master *m, const rrr_hil_ctrl_opts *o, const rrr_hil_frame *f, uint32_t k)
 {
     uint16_t code = 0;
@@ -262,11 +268,11 @@ static int co_feed(co_master *m, const rrr_hil_ctrl_opts *o, const rrr_hil_frame
         if (which == 0u) {
             continue;
         }
-        if (f->dlc != RRR_COM_TPDO_BYTES) {
+        const unsigned mapped = m->tpdo_bytes[j][which - 1u];
+        if (f->dlc != mapped) {
             ++m->tpdo_bad_length;
             (void)snprintf(m->tampered, sizeof m->tampered, "drive %u: TPDO%u of %u bytes, %u "
-                           "mapped", (unsigned)o->node_ids[j], which, (unsigned)f->dlc,
-                           RRR_COM_TPDO_BYTES);
+                           "mapped", (unsigned)o->node_ids[j], which, (unsigned)f->dlc, mapped);
         } else if (++m->tpdo_n[j][which - 1u] > m->syncs) {
             ++m->tpdo_duplicates;
             (void)snprintf(m->tampered, sizeof m->tampered, "drive %u: two TPDO%u in SYNC %u",

@@ -97,24 +97,15 @@ void rrr_com_rpdo1(uint8_t node, uint16_t controlword, int16_t torque_pm, rrr_hi
     rrr_co_put_le(&f->data[2], (uint16_t)torque_pm, 2u);
 }
 
-unsigned rrr_com_tpdo_number(const rrr_hil_frame *f, uint8_t node)
-{
-    if (f->extended) {
-        return 0u;
-    }
-    return f->id == 0x180u + node ? 1u : f->id == 0x280u + node ? 2u : 0u;
-}
-
 int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb)
 {
-    const unsigned which = rrr_com_tpdo_number(f, node);
-    if (which == 0u) {
+    if (f->extended || (f->id != 0x180u + node && f->id != 0x280u + node)) {
         return 0;
     }
-    if (f->dlc != RRR_COM_TPDO_BYTES) {
+    if (f->dlc != 6u) {
         return -1;
     }
-    if (which == 1u) {
+    if (f->id == 0x180u + node) {
         fb->statusword = (uint16_t)rrr_co_get_le(&f->data[0], 2u);
         fb->position_inc = (int32_t)rrr_co_get_le(&f->data[2], 4u);
         fb->have |= 1u;
@@ -132,6 +123,14 @@ uint8_t rrr_com_emcy(const rrr_hil_frame *f, uint16_t *code)
     }
     *code = (uint16_t)rrr_co_get_le(&f->data[0], 2u);
     return (uint8_t)(f->id - 0x080u);
+}
+
+unsigned rrr_com_tpdo_number(const rrr_hil_frame *f, uint8_t node)
+{
+    if (f->extended) {
+        return 0u;
+    }
+    return f->id == 0x180u + node ? 1u : f->id == 0x280u + node ? 2u : 0u;
 }
 
 int16_t rrr_com_torque_pm(double u_V, double kt, uint32_t rated_mNm)

@@ -71,21 +71,17 @@ typedef struct rrr_com_feedback {
     uint8_t have;          ///< bit 0: TPDO1 seen, bit 1: TPDO2 seen
 } rrr_com_feedback;
 
-/** The length TPDO1 and TPDO2 have by their mapping (0x1A00: statusword 16 + position 32 bits;
- *  0x1A01: velocity 32 + torque actual 16 bits), bytes. */
-#define RRR_COM_TPDO_BYTES 6u
-
-/** Which TPDO of @p node @p f is by its COB-ID: 1 (TPDO1, 0x180 + node), 2 (TPDO2,
- *  0x280 + node), 0 neither (whatever its length). */
-unsigned rrr_com_tpdo_number(const rrr_hil_frame *f, uint8_t node);
-
 /** Feed @p f: 1 if it is TPDO1 or TPDO2 of @p node (stored into *fb), -1 if it is one with a
- *  DLC other than RRR_COM_TPDO_BYTES (not stored), 0 otherwise. */
+ *  DLC other than 6, 0 otherwise. */
 int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb);
 
 /** The node of an EMCY frame (COB 0x081..0x0FF with 8 bytes), its error code in *code; 0 if
  *  @p f is no EMCY. */
 uint8_t rrr_com_emcy(const rrr_hil_frame *f, uint16_t *code);
+
+/** Which TPDO of @p node @p f is by its COB-ID, whatever its length: 1 (TPDO1, 0x180 + node),
+ *  2 (TPDO2, 0x280 + node), 0 neither. */
+unsigned rrr_com_tpdo_number(const rrr_hil_frame *f, uint8_t node);
 
 /** A voltage as target torque: tau = k_t u (N m) in per mille of the rated torque (mN m),
  *  rounded half away from zero, within -1000..1000 (0 for a non-finite value). */
