@@ -2,7 +2,7 @@
 master, the C controller) and the plant node's socketcand server, passes every message on both
 ways unchanged, and changes one frame the server sends: the ``nth`` frame (1-based) of the
 identifier ``frame_id`` is sent twice (``how="twice"``: a replayed frame, as a forger on the bus
-would send it) or with two more bytes (``how="longer"``). The relay ends when either side hangs
+would send it) or with one more byte (``how="longer"``; at most 8: a classical CAN frame). The relay ends when either side hangs
 up. Protocol: docs/can-bench.md ("socketcand"): messages ``< ... >``, the server's frames
 ``< frame ID SEC.USEC HEXBYTES >``."""
 
@@ -75,4 +75,4 @@ class Relay:
         self.changed += 1
         if self.how == "twice":
             return msg + b" " + msg[len(lead):]
-        return lead + b"< frame " + parts[1] + b" " + parts[2] + b" " + parts[3] + b"0000 >"
+        return lead + b"< frame " + parts[1] + b" " + parts[2] + b" " + parts[3] + b"00 >"

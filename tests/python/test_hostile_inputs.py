@@ -314,12 +314,12 @@ _TPDO1_BYTES = sum(bits for _, bits in EXPECTED_MAPPING["TPDO1"]) // 8
 
 @pytest.mark.parametrize(("how", "message"), [
     ("twice", "drive 2: two TPDO1 in SYNC 299"),
-    ("longer", f"drive 2: TPDO1 of {_TPDO1_BYTES + 2} bytes, {_TPDO1_BYTES} mapped")])
+    ("longer", f"drive 2: TPDO1 of {_TPDO1_BYTES + 1} bytes, {_TPDO1_BYTES} mapped")])
 @pytest.mark.parametrize("master", ["c", "python"])
 def test_a_tampered_tpdo_ends_the_master_run_naming_the_drive_and_the_frame(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
         how: str, message: str, master: str) -> None:
-    """The 300th TPDO1 of drive 2 (its answer to SYNC 299) sent twice, or two bytes longer, on
+    """The 300th TPDO1 of drive 2 (its answer to SYNC 299) sent twice, or one byte longer, on
     the way to the master: the run ends in that SYNC with exit status 8 and one line naming the
     drive and the frame (before: the C master took the later frame, counted a wrong length and
     ended with 0)."""
