@@ -2,9 +2,9 @@
 master, the C controller) and the plant node's socketcand server, passes every message on both
 ways unchanged, and changes one frame the server sends: the ``nth`` frame (1-based) of the
 identifier ``frame_id`` is sent twice (``how="twice"``: a replayed frame, as a forger on the bus
-would send it) or with one more byte (``how="longer"``; at most 8: a classical CAN frame). The relay ends when either side hangs
-up. Protocol: docs/can-bench.md ("socketcand"): messages ``< ... >``, the server's frames
-``< frame ID SEC.USEC HEXBYTES >``."""
+would send it) or with one more byte (``how="longer"``; at most 8: a classical CAN frame). The
+relay ends when either side hangs up. Protocol: docs/can-bench.md ("socketcand"): messages
+``< ... >``, the server's frames ``< frame ID SEC.USEC HEXBYTES >``."""
 
 from __future__ import annotations
 
