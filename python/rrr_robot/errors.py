@@ -12,11 +12,13 @@ __all__ = [
     "HilError",
     "ModelError",
     "NumericError",
+    "OutputError",
     "RobotFileError",
     "RrrError",
     "ScenarioError",
     "SingularError",
     "SweepSpecError",
+    "TamperedError",
     "UnreachableError",
 ]
 
@@ -25,7 +27,10 @@ class RrrError(Exception):
     """Root of every error raised by rrr_robot.
 
     ``function`` names the C function (or FMU call) that failed, ``status`` its status name.
+    ``exit_status``: what ``rrr`` returns for it (2; docs/outputs.md).
     """
+
+    exit_status = 2
 
     def __init__(self, message: str, function: str = "", status: str = "") -> None:
         super().__init__(message)
@@ -79,6 +84,12 @@ class UnreachableError(RrrError, ValueError):
     """An inverse kinematics target lies outside the workspace."""
 
 
+class OutputError(RrrError, OSError):
+    """A file or folder of the results could not be written (a full disk, a used-up quota, a
+    read-only file system, no permission): the message names it and what to do; ``errno`` is
+    the system's (an OSError, so code that handles a failed write still does)."""
+
+
 class SingularError(RrrError, ValueError):
     """A singular configuration where the requested quantity does not exist."""
 
@@ -105,6 +116,15 @@ class FrameError(HilError, ValueError):
     def __init__(self, message: str, reason: str) -> None:
         super().__init__(message)
         self.reason = reason
+
+
+class TamperedError(HilError):
+    """During a run: a frame the other node never sends came (a second TPDO of a drive in one
+    SYNC, a TPDO whose length is not its mapping's, a JointState twice in one lockstep period):
+    the inputs were tampered with, or a node is broken. The message names the node and the
+    frame; ``rrr`` returns 8 for it (the C controller's RRR_HIL_EXIT_TAMPERED)."""
+
+    exit_status = 8
 
 
 class BusLost(HilError):

@@ -1,7 +1,8 @@
 /* The CANopen master's frames (hil_canopen_master.h) against the slave core (hil_canopen.h):
  * NMT, expedited SDO downloads and uploads and their aborts, a segmented answer refused, the 402
- * state machine driven by the master's controlwords, RPDO1 + SYNC and the TPDOs decoded, EMCY,
- * the target-torque rounding and the argument checks. */
+ * state machine driven by the master's controlwords, RPDO1 + SYNC and the TPDOs decoded (which
+ * TPDO a frame is, their mapped length), EMCY, the target-torque rounding and the argument
+ * checks. */
 #include <math.h>
 #include <string.h>
 
@@ -143,10 +144,20 @@ static void test_against_the_slave(void)
     CHECK(fb.position_inc == rrr_co_rad_to_inc(0.5, 1u << 20));
     CHECK(fb.velocity_inc == rrr_co_rad_to_inc(-1.25, 1u << 20));
     CHECK(n.v[rrr_co_od_find(0x6071u, 0u)] == 100u);
-    /* a TPDO of the wrong length is refused, not decoded */
+    /* a TPDO of the wrong length is refused, not decoded; which TPDO a frame is, by COB-ID */
     r = out.f[0];
     r.dlc = 5u;
     CHECK(rrr_com_tpdo(&r, ID, &fb) == -1);
+    r.dlc = 8u;
+    CHECK(rrr_com_tpdo(&r, ID, &fb) == -1);
+    for (unsigned i = 0; i < out.n; ++i) {
+        const unsigned which = rrr_com_tpdo_number(&out.f[i], ID);
+        CHECK(which == (out.f[i].id == 0x180u + ID ? 1u : out.f[i].id == 0x280u + ID ? 2u : 0u));
+        CHECK(which == 0u || rrr_com_tpdo(&out.f[i], ID, &fb) == 1); /* the drive's lengths */
+        CHECK(rrr_com_tpdo_number(&out.f[i], ID + 1u) == 0u);
+    }
+    r.extended = 1u; /* a 29-bit identifier is no TPDO */
+    CHECK(rrr_com_tpdo_number(&r, ID) == 0u && rrr_com_tpdo(&r, ID, &fb) == 0);
 
     /* a fault: its EMCY names the node and the code */
     out.n = 0;

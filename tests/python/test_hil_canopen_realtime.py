@@ -3,11 +3,12 @@ clock (the Python master: the canopen package's producer; the C master: its own 
 ``rrr_hil_plant --profile canopen --realtime`` over socketcand, the master's heartbeat watched by
 the drives' consumer 0x1016 (what it prints, docs/canopen.md's blocks show and the docs test
 checks). A test, not a benchmark: it passes on a busy machine, so nothing
-here asserts a latency, a jitter or a deadline. The Python master's runs set the drives'
-watchdogs generously (consumer 2 s against a 20 ms heartbeat, RPDO timeout 255 SYNC periods
-against the EDS's 3); the runs complete with every drive in OPERATION ENABLED and the summary
-holds the timing statistics, which are printed (``pytest -s``); when the master's heartbeat
-stops, the drives fault (EMCY 0x8130, FAULT, 0 V), never before their consumer time."""
+here asserts a latency, a jitter or a deadline. Either master's runs set the drives' watchdogs
+generously (consumer 2 s against a 20 ms heartbeat, RPDO timeout 255 SYNC periods against the
+EDS's 3: the C master's --consumer-ms and --rpdo-timeout); the runs complete with every drive
+in OPERATION ENABLED and the summary holds the timing statistics, which are printed (``pytest
+-s``); when the master's heartbeat stops, the drives fault (EMCY 0x8130, FAULT, 0 V), never
+before their consumer time."""
 
 from __future__ import annotations
 
@@ -35,8 +36,8 @@ from rrr_robot.hil.results import extend_reference
 
 #: Seconds of the writing task a real-time run covers (3,001 SYNC periods).
 SECONDS = 3.0
-#: The Python master's runs: the drives' heartbeat consumer (ms) and RPDO timeout (SYNC
-#: periods), far above what a quiet machine needs (a heartbeat every 20 ms, an RPDO a period).
+#: Either master's runs: the drives' heartbeat consumer (ms) and RPDO timeout (SYNC periods),
+#: far above what a quiet machine needs (a heartbeat every 20 ms, an RPDO a period).
 GENEROUS = CanopenRealTime(consumer_ms=2000, rpdo_timeout=255)
 _SW_MASK, _SW_ENABLED = 0x6F, 0x27
 
@@ -63,11 +64,11 @@ def _ids(records: np.ndarray) -> np.ndarray:
 
 @pytest.mark.parametrize("kind", ["python", "c"])
 def test_realtime_writing_task(kind: str, wc: WritingController, tmp_path: Path) -> None:
-    """Either master: the Python one on the canopen package, the C node (rrr_hil_rt clock; its
-    watchdog times are its own)."""
+    """Either master: the Python one on the canopen package, the C node (rrr_hil_rt clock), each
+    with the generous watchdogs."""
     n = wc.ref.t.shape[0]
     with ResultSet(tmp_path / "rt", kind="hil") as rs:
-        mrun = _run(wc, rs.staging, GENEROUS if kind == "python" else CanopenRealTime(), kind)
+        mrun = _run(wc, rs.staging, GENEROUS, kind)
         summary = write_master_results(rs, wc, mrun, scenario="ctc", figures=False)
     ps = mrun.plant_summary
     assert ps["exit"] == 0 and ps["drive_faults"] == 0, ps
@@ -87,6 +88,12 @@ def test_realtime_writing_task(kind: str, wc: WritingController, tmp_path: Path)
     # the master's heartbeat reached the drives while they watched it
     hb = records["t_ns"][(ids == 0x700 + MASTER_NODE_ID) & ~tx]
     assert hb.size >= 1
+    # the watchdogs written by SDO to each drive: consumer 0x1016 sub 1 of node 127, 2000 ms,
+    # and the RPDO timeout 0x2001, 255 SYNC periods
+    for node in (1, 2, 3):
+        sdo = {bytes(d) for d in records[~tx & (ids == 0x600 + node)]["data"][:, :8]}
+        assert bytes([0x23, 0x16, 0x10, 0x01, 0xD0, 0x07, 0x7F, 0x00]) in sdo, (node, sdo)
+        assert bytes([0x2F, 0x01, 0x20, 0x00, 0xFF, 0x00, 0x00, 0x00]) in sdo, (node, sdo)
     # the tracking and the timing: in the summary, printed (this machine's speed is not tested)
     assert summary["mode"] == "realtime"
     tip = summary["bench"]["tip_error_max"]
@@ -98,7 +105,7 @@ def test_realtime_writing_task(kind: str, wc: WritingController, tmp_path: Path)
         "max_us"]
     assert d["sync_jitter"]["max_us"] >= 0 and isinstance(d["deadline_misses"], int)
     assert rt["master_heartbeat_ms"] == 20
-    assert rt["drive_consumer_ms"] == (2000 if kind == "python" else 100)
+    assert rt["drive_consumer_ms"] == 2000 and rt["drive_rpdo_timeout_syncs"] == 255
     print(f"{kind} master, {SECONDS:g} s in real time: tip error max {1e3 * tip:.4f} mm "
           f"(lockstep: test_hil_canopen_master.py); SYNC period at the drives median "
           f"{d['sync_period']['median_us']:.1f} us, max {d['sync_period']['max_us']:.1f} us; "
@@ -109,13 +116,14 @@ def test_realtime_writing_task(kind: str, wc: WritingController, tmp_path: Path)
     if kind == "c":  # the C master's own account: one SYNC per period, its heartbeats
         cs = mrun.run.controller_summary
         assert cs["exit"] == 0 and cs["syncs"] == n and cs["heartbeats"] == hb.size, cs
+        assert cs["consumer_ms"] == 2000 and cs["rpdo_timeout"] == 255, cs
+        assert cs["tampered"] == "" and cs["tpdo_duplicates"] == 0, cs
         assert {"p50_us", "p99_us", "p999_us", "max_us"} <= set(m["wake_up"])
         assert "SCHED_FIFO 80" in m["setup"], m
         print(f"C master: wake-up latency p99 {m['wake_up']['p99_us']} us, "
               f"{m['rt_deadline_misses']} deadline misses")
     else:
-        assert rt["drive_rpdo_timeout_syncs"] == 255
-        assert "canopen SYNC thread" in m["setup"], m
+        assert "python-can SYNC thread" in m["setup"], m
     saved = json.loads((tmp_path / "rt" / "summary.json").read_text())
     assert saved["realtime"] == json.loads(json.dumps(rt))
 
@@ -181,8 +189,10 @@ def test_frame_log_timing_counts_late_rpdos() -> None:
     (["--realtime", "--node-ids", "1,2,127"], "node id 127 is the master's own"),
     (["--realtime", "--master", "c", "--node-ids", "1,2,127"], "node id 127 is the master's own"),
     (["--realtime", "--spin-us", "50"], "--spin-us: the C master's clock (--master c)"),
-    (["--realtime", "--master", "c", "--consumer-ms", "500"],
-     "--consumer-ms, --rpdo-timeout: the Python master's"),
+    (["--consumer-ms", "500", "--master", "c"],
+     "--consumer-ms: an option of 'rrr hil canopen --realtime'"),
+    (["--realtime", "--master", "c", "--consumer-ms", "20"],
+     "must be shorter than the consumer time 20 ms"),
     (["--realtime", "--consumer-ms", "20"], "must be shorter than the consumer time 20 ms"),
     (["--realtime", "--rpdo-timeout", "256"], "RPDO timeout is 1..255 SYNC periods, got 256"),
 ])

@@ -32,6 +32,7 @@ from rrr_robot.core.outputs import (
     is_temporary,
     strict_json,
 )
+from rrr_robot.errors import OutputError
 from rrr_robot.sim.cosim import CosimResult
 from rrr_robot.writing import job as job_module
 from rrr_robot.writing.job import WritingJob, run_writing, scenario_summary
@@ -96,6 +97,85 @@ def test_a_failed_rename_keeps_the_old_file(tmp_path: Path, monkeypatch: pytest.
     with pytest.raises(OSError, match="No space"):
         atomic_write_text(target, "new")
     assert target.read_text() == "old" and os.listdir(tmp_path) == ["a.txt"]
+
+
+# ---- a write that fails names what it was writing ------------------------------------------
+
+
+_FULL = "No space left on device; free space on its file system, or write the results elsewhere"
+
+
+def test_a_full_disk_names_the_file_and_what_to_do(tmp_path: Path,
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """An atomic write whose data meets a full disk (a real write to /dev/full: the kernel's
+    ENOSPC at the flush): the error names the file, not the temporary name, and what to do; the
+    old file stays (before: "[Errno 28] No space left on device" and nothing else)."""
+    import builtins
+
+    target = tmp_path / "ctc.csv"
+    target.write_text("old")
+    monkeypatch.setattr(outputs, "open", lambda path, *a, **kw: builtins.open("/dev/full", *a,
+                                                                               **kw),
+                        raising=False)
+    with pytest.raises(OutputError) as info:
+        atomic_write_text(target, "t,q\n" * 10000)
+    assert str(info.value) == f"cannot write {target}: {_FULL} (--out)"
+    assert isinstance(info.value, OSError) and info.value.errno == 28
+    assert target.read_text() == "old" and os.listdir(tmp_path) == ["ctc.csv"]
+
+
+@pytest.mark.parametrize("where", ["reserve", "fsync", "rename"])
+def test_every_step_of_an_atomic_write_names_the_file(tmp_path: Path, where: str,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    def full(*args: Any, **kwargs: Any) -> None:
+        raise OSError(28, "No space left on device")
+
+    name = {"reserve": "_reserve", "fsync": "_fsync_file", "rename": "replace"}[where]
+    monkeypatch.setattr(outputs.os if where == "rename" else outputs, name, full)
+    with pytest.raises(OSError, match=f"^cannot write {tmp_path / 'a.json'}: No space"):
+        atomic_write_text(tmp_path / "a.json", "{}")
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_full_disk_in_a_result_set_names_the_output_folder_or_its_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A result written into the result set's hidden staging folder is named as the output
+    folder's file; the commit's failure names the output folder."""
+    out = tmp_path / "out"
+    with pytest.raises(OutputError, match=f"^cannot write {out / 'fig.png'}: No space"), \
+            ResultSet(out, kind="writing") as rs:
+        raise OSError(28, "No space left on device", str(rs.path("fig.png")))
+    with pytest.raises(OutputError, match=f"^cannot write {out}: No space"), \
+            ResultSet(out, kind="writing"):
+        raise OSError(28, "No space left on device")
+
+    def read_only(src: Any, dst: Any) -> None:
+        raise OSError(30, "Read-only file system")
+
+    with pytest.raises(OutputError, match=f"^cannot write {out}: Read-only file system; its "
+                       "file system is read-only"):
+        with ResultSet(out, kind="writing") as rs:
+            rs.write_text("a.txt", "x")
+            monkeypatch.setattr(outputs.os, "replace", read_only)
+    monkeypatch.undo()
+    # an OSError that is not a failed write (an input not found) stays as it was
+    with pytest.raises(FileNotFoundError), ResultSet(out, kind="writing"):
+        Path(tmp_path / "missing.csv").read_text()
+
+
+def test_rrr_writing_on_a_full_disk_is_one_line_naming_the_file(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    import builtins
+
+    monkeypatch.setattr(outputs, "open", lambda path, *a, **kw: builtins.open("/dev/full", *a,
+                                                                               **kw),
+                        raising=False)
+    out = tmp_path / "out"
+    rc = main(["-q", "writing", "--scenario", "pd", "--engine", "native", "--no-figures",
+               "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and err == [f"rrr: error: cannot write {out / 'pd.csv'}: {_FULL} (--out)"]
 
 
 def test_temporary_names_are_hidden_and_never_end_like_results(tmp_path: Path) -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import html
 import json
 import os
 import re
@@ -173,6 +174,72 @@ def test_titles_and_data_cannot_break_out_of_the_page(run) -> None:
     html = view_html({"</script><b>x": table}, ROBOT, title="<img src=x onerror=alert(1)>")
     assert "<img" not in html and "</script><b>" not in html
     assert html.count("<script") == 2 and html.count("</script>") == 2
+
+
+def _view(folder: Path, *extra: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "rrr_robot", "view", str(folder), *extra],
+                          capture_output=True, text=True)
+
+
+def test_a_table_named_like_markup_opens(run: Path, tmp_path: Path) -> None:
+    """A table named ``<!--<script>.csv`` (a scenario of that name): the page opens with it
+    (before: "<!--" in the embedded data left the page blank while the command succeeded)."""
+    folder = tmp_path / "res"
+    folder.mkdir()
+    name = "<!--<script>"
+    shutil.copy(run / "ctc.csv", folder / f"{name}.csv")
+    (folder / "summary.json").write_text(json.dumps({"scenarios": {name: {}}}))
+    done = _view(folder)
+    assert done.returncode == 0, done.stderr
+    text = (folder / "view.html").read_text(encoding="utf-8")
+    assert "<!--" not in text and text.count("<script") == 2, text[:300]
+    s = state(folder / "view.html", "", tmp_path)
+    assert s["state"] == "ready" and s["errors"] == "0", s
+    assert html.unescape(s["scenario"]) == name, s
+
+
+@pytest.mark.parametrize("folder_name", ["{{DATA}}", "{{SCRIPT}}", "<h1 a='b'>&x"])
+def test_a_folder_named_like_a_placeholder_or_markup_is_only_its_name(
+        run: Path, tmp_path: Path, folder_name: str) -> None:
+    """A results folder named ``{{DATA}}`` or ``{{SCRIPT}}`` (or markup) is the page's title
+    and heading as text: no placeholder is filled twice (before: the page's data or code went
+    into its title and heading as raw HTML)."""
+    folder = tmp_path / folder_name
+    folder.mkdir()
+    shutil.copy(run / "ctc.csv", folder / "ctc.csv")
+    done = _view(folder)
+    assert done.returncode == 0, done.stderr
+    text = (folder / "view.html").read_text(encoding="utf-8")
+    shown = html.escape(f"rrr view: {folder_name}", quote=True)
+    assert f"<title>{shown}</title>" in text and f"<h1>{shown}</h1>" in text
+    assert text.count("<script") == 2 and text.count("<h1") == 1
+    s = state(folder / "view.html", "", tmp_path)
+    assert s["state"] == "ready" and s["errors"] == "0", s
+
+
+@pytest.mark.parametrize("where", ["parent", "absolute", "link", "option"])
+def test_tables_outside_the_folder_are_refused(run: Path, tmp_path: Path, where: str) -> None:
+    """summary.json naming ``../outside`` or an absolute path, a table that is a link out of
+    the folder, ``--scenario ../outside``: refused, naming it, and no page (before: the table
+    was read and its data embedded in the page)."""
+    folder = tmp_path / "res"
+    folder.mkdir()
+    outside = tmp_path / "outside.csv"
+    shutil.copy(run / "ctc.csv", outside)
+    extra: tuple[str, ...] = ()
+    names = {"parent": "../outside", "absolute": str(tmp_path / "outside"), "link": "ctc",
+             "option": "ctc"}
+    (folder / "summary.json").write_text(json.dumps({"scenarios": {names[where]: {}}}))
+    if where == "link":
+        (folder / "ctc.csv").symlink_to(outside)
+    if where == "option":
+        shutil.copy(run / "ctc.csv", folder / "ctc.csv")
+        extra = ("--scenario", "../outside")
+    done = _view(folder, *extra)
+    assert done.returncode == 2, done.stderr
+    message = "leads out of" if where == "link" else "cannot name a table in"
+    assert message in done.stderr and done.stderr.count("\n") == 1, done.stderr
+    assert not (folder / "view.html").exists()
 
 
 @pytest.mark.parametrize(("files", "message"), [

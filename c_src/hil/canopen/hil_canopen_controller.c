@@ -5,8 +5,11 @@
  * read back) and enables the drives (the 402 state machine to OPERATION ENABLED), then per period
  * sends the target torques k_t u_k (eq 8, in per mille of the rated torque) in the RPDOs and one
  * SYNC, and reads the state from the TPDOs; lockstep, or with --realtime SYNC on the clock every
- * 1 ms with the master's heartbeat and each drive's consumer of it. An EMCY, or a drive that left
- * OPERATION ENABLED, ends the run with exit status 7 (the drive's safety reaction fired).
+ * 1 ms with the master's heartbeat and each drive's consumer of it (--consumer-ms) and, if given,
+ * each drive's RPDO timeout (--rpdo-timeout). An EMCY, or a drive that left OPERATION ENABLED,
+ * ends the run with exit status 7 (the drive's safety reaction fired); a TPDO that a drive never
+ * sends (a second one of a kind in one SYNC, a length other than its mapping's) ends it at once
+ * with exit status 8 (tampered input), naming the drive and the frame.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -27,10 +30,13 @@ typedef struct co_master {
     rrr_com_feedback fb[3];  /* TPDO1/TPDO2 of the current SYNC */
     uint32_t syncs;          /* SYNCs sent */
     uint32_t sdo_transfers;  /* SDO transfers confirmed */
-    uint32_t tpdo_bad_length; /* TPDOs of a wrong length */
+    uint32_t tpdo_bad_length; /* TPDOs of a wrong length (the first ends the run) */
+    uint32_t tpdo_duplicates; /* TPDOs beyond one per drive and SYNC (the first ends the run) */
+    char tampered[128];       /* what ended the run as tampered input, "" if nothing */
     int16_t pm_max[3];       /* largest |target torque| sent, per mille */
     uint32_t late_tpdos;     /* real time: SYNCs whose TPDOs had not all come by the deadline */
-    uint32_t tpdo_n[3][2];   /* real time: TPDO1, TPDO2 of each drive received so far */
+    uint32_t tpdo_n[3][2];   /* TPDO1, TPDO2 of each drive received so far */
+    uint8_t tpdo_bytes[3][2]; /* TPDO1, TPDO2 of each drive: their length by the mapping read */
     uint32_t heartbeats;     /* real time: the master's heartbeats sent */
 } co_master;
 
@@ -110,7 +116,8 @@ static int co_send_nmt(co_master *m, uint8_t command_)
     return rrr_hil_ctrl_send(m->c, &f, "send NMT");
 }
 
-/* NMT reset node (a socketcand server drops the power-on boot-up): every drive's boot-up. */
+/* NMT reset node (a socketcand server drops the power-on boot-up): every drive's boot-up. The
+ * drives that sent none within --timeout-ms are named (a wrong --node-ids: exit status 2). */
 static int co_boot(co_master *m, const rrr_hil_ctrl_opts *o)
 {
     int rc = co_send_nmt(m, RRR_COM_NMT_RESET_NODE);
@@ -125,6 +132,18 @@ static int co_boot(co_master *m, const rrr_hil_ctrl_opts *o)
                 want &= ~(1u << j);
             }
         }
+    }
+    if (rc == RRR_HIL_EXIT_PEER_LOST && want != 0u && rrr_hil_now_ms() >= deadline) {
+        char ids[16] = "";
+        for (unsigned j = 0, n = 0; j < 3u; ++j) {
+            if (want & (1u << j)) {
+                n += (unsigned)snprintf(ids + n, sizeof ids - n, "%s%u", n ? ", " : "",
+                                        (unsigned)o->node_ids[j]);
+            }
+        }
+        rc = rrr_hil_run_end(&m->c->run, RRR_HIL_EXIT_SETUP,
+                             "drive(s) %s sent no boot-up within %d ms after NMT reset node: no "
+                             "such node id on the bus? (--node-ids)", ids, o->timeout_ms);
     }
     return rc;
 }
@@ -187,6 +206,13 @@ static int co_configure(co_master *m, const rrr_hil_ctrl_opts *o)
                                      (unsigned)CO_PDOS[p].comm_index, cob,
                                      (unsigned)(CO_PDOS[p].cob_base + id));
             }
+            uint32_t bits = 0; /* the TPDO's length: the mapping read, as checked above */
+            for (uint32_t e = 0; rc == 0 && p > 0u && e < count; ++e) {
+                bits += CO_PDOS[p].entries[e] & 0xFFu;
+            }
+            if (rc == 0 && p > 0u) {
+                m->tpdo_bytes[j][p - 1u] = (uint8_t)(bits / 8u);
+            }
         }
     }
     return rc;
@@ -224,6 +250,45 @@ static int co_enable(co_master *m, const rrr_hil_ctrl_opts *o)
     return rc == 0 ? co_send_nmt(m, RRR_COM_NMT_START) : rc;
 }
 
+/* A frame of the drives while the master waits for the TPDOs of SYNC @p k (m->syncs SYNCs sent):
+ * a TPDO is stored into m->fb and counted. A drive answers each SYNC with one TPDO1 and one
+ * TPDO2 of their mapped lengths (m->tpdo_bytes), so a TPDO of another length, or one more than
+ * SYNCs were sent (a second in one SYNC: forged or replayed), is tampered input: it is not used,
+ * and the run ends at once with RRR_HIL_EXIT_TAMPERED naming the drive and the frame. An EMCY
+ * ends the run (the drive's safety reaction). 0, or an exit status with why set. */
+static int co_feed(co_master *m, const rrr_hil_ctrl_opts *o, const rrr_hil_frame *f, uint32_t k)
+{
+    uint16_t code = 0;
+    const uint8_t from = rrr_com_emcy(f, &code);
+    if (from != 0u) {
+        return rrr_hil_run_end(&m->c->run, RRR_HIL_EXIT_SAFETY, "SYNC %u: EMCY 0x%04X from drive %u",
+                               (unsigned)k, (unsigned)code, (unsigned)from);
+    }
+    for (unsigned j = 0; j < 3u; ++j) {
+        const unsigned which = rrr_com_tpdo_number(f, o->node_ids[j]);
+        if (which == 0u) {
+            continue;
+        }
+        const unsigned mapped = m->tpdo_bytes[j][which - 1u];
+        if (f->dlc != mapped) {
+            ++m->tpdo_bad_length;
+            (void)snprintf(m->tampered, sizeof m->tampered, "drive %u: TPDO%u of %u bytes, %u "
+                           "mapped", (unsigned)o->node_ids[j], which, (unsigned)f->dlc, mapped);
+        } else if (++m->tpdo_n[j][which - 1u] > m->syncs) {
+            ++m->tpdo_duplicates;
+            (void)snprintf(m->tampered, sizeof m->tampered, "drive %u: two TPDO%u in SYNC %u",
+                           (unsigned)o->node_ids[j], which, (unsigned)k);
+        } else {
+            (void)rrr_com_tpdo(f, o->node_ids[j], &m->fb[j]);
+            return 0;
+        }
+        return rrr_hil_run_end(&m->c->run, RRR_HIL_EXIT_TAMPERED,
+                               "%s: a frame the drives never send (tampered input?)",
+                               m->tampered);
+    }
+    return 0;
+}
+
 /* The RPDO1 of each drive (controlword 0x0F, target torque), one SYNC, then the six TPDOs: the
  * decoded state into the node's q, qd. An EMCY, or a drive that left OPERATION ENABLED, ends the
  * run: the drive's safety reaction fired. 0, or an exit status with why set. */
@@ -253,20 +318,11 @@ static int co_period(co_master *m, const rrr_hil_ctrl_opts *o, const int16_t pm[
     (void)snprintf(what, sizeof what, "TPDOs of SYNC %u", (unsigned)k);
     while ((m->fb[0].have & m->fb[1].have & m->fb[2].have) != 3u) {
         rc = rrr_hil_ctrl_recv_until(m->c, deadline, o, what, &f);
+        if (rc == 0) {
+            rc = co_feed(m, o, &f, k);
+        }
         if (rc != 0) {
             return rc;
-        }
-        uint16_t code = 0;
-        const uint8_t from = rrr_com_emcy(&f, &code);
-        if (from != 0u) {
-            return rrr_hil_run_end(&m->c->run, RRR_HIL_EXIT_SAFETY,
-                                   "SYNC %u: EMCY 0x%04X from drive %u", (unsigned)k,
-                                   (unsigned)code, (unsigned)from);
-        }
-        for (unsigned j = 0; j < 3u; ++j) {
-            if (rrr_com_tpdo(&f, o->node_ids[j], &m->fb[j]) < 0) {
-                ++m->tpdo_bad_length;
-            }
         }
     }
     for (unsigned j = 0; j < 3u; ++j) {
@@ -351,20 +407,9 @@ static int co_take(co_master *m, const rrr_hil_ctrl_opts *o, int64_t deadline_ns
         if (io != RRR_HIL_IO_OK) {
             return -rrr_hil_ctrl_lost(m->c, "receive", io);
         }
-        uint16_t code = 0;
-        const uint8_t from = rrr_com_emcy(&f, &code);
-        if (from != 0u) {
-            return -rrr_hil_run_end(&m->c->run, RRR_HIL_EXIT_SAFETY,
-                                    "SYNC %u: EMCY 0x%04X from drive %u", (unsigned)k,
-                                    (unsigned)code, (unsigned)from);
-        }
-        for (unsigned j = 0; j < 3u; ++j) {
-            const int r = rrr_com_tpdo(&f, o->node_ids[j], &m->fb[j]);
-            if (r < 0) {
-                ++m->tpdo_bad_length;
-            } else if (r > 0) {
-                ++m->tpdo_n[j][f.id == 0x180u + o->node_ids[j] ? 0 : 1];
-            }
+        const int rc = co_feed(m, o, &f, k);
+        if (rc != 0) {
+            return -rc;
         }
     }
     for (unsigned j = 0; j < 3u; ++j) {
@@ -382,14 +427,19 @@ static int co_take(co_master *m, const rrr_hil_ctrl_opts *o, int64_t deadline_ns
 }
 
 /* Real time (--realtime): the master's heartbeat (RRR_COM_HEARTBEAT_MS) and the drives'
- * consumer of it (RRR_COM_CONSUMER_MS); then per period on the rrr_hil_rt clock: the heartbeat
+ * consumer of it (--consumer-ms, default RRR_COM_CONSUMER_MS), each drive's RPDO timeout 0x2001
+ * (--rpdo-timeout, when given); then per period on the rrr_hil_rt clock: the heartbeat
  * when due, one SYNC at the release, the TPDOs of that SYNC until CO_RPDO_GUARD_US before the
- * next release (later ones: a late SYNC, the law on the newest state), the law and the RPDOs. */
+ * next release (later ones: a late SYNC, the law on the newest state), the law and the RPDOs;
+ * at the end the TPDOs still on their way. */
 static int co_run_realtime(co_master *m, const rrr_hil_ctrl_opts *o, rrr_hil_rt *rt)
 {
     int rc = co_send_heartbeat(m);
     if (rc == 0) {
-        rc = co_consumer(m, o, RRR_COM_CONSUMER_MS);
+        rc = co_consumer(m, o, o->consumer_ms ? o->consumer_ms : RRR_COM_CONSUMER_MS);
+    }
+    for (unsigned j = 0; rc == 0 && o->rpdo_timeout != 0u && j < 3u; ++j) {
+        rc = co_write(m, o, o->node_ids[j], 0x2001u, 0u, o->rpdo_timeout, 1u);
     }
     const int16_t zero[3] = {0, 0, 0};
     rrr_hil_frame f;
@@ -440,6 +490,19 @@ static int co_run_realtime(co_master *m, const rrr_hil_ctrl_opts *o, rrr_hil_rt 
             rc = rrr_hil_ctrl_send(m->c, &f, "send RPDO1");
         }
         rrr_hil_rt_done(rt);
+    }
+    /* The answers still on their way (the drives' TPDOs may lag behind the clock, and a repeat
+     * among them shows only once each count can pass the SYNCs sent): read for one heartbeat
+     * period after a heartbeat, so that no consumer misses it. */
+    if (rc == 0) {
+        rc = co_send_heartbeat(m);
+    }
+    if (rc == 0) {
+        const uint32_t states = m->c->states; /* the states the law used */
+        const int got = co_take(m, o, co_now_ns() + (int64_t)RRR_COM_HEARTBEAT_MS * 1000000,
+                                m->syncs - 1u);
+        m->c->states = states;
+        rc = got < 0 ? -got : 0;
     }
     if (rc == 0) { /* the consumers off before the heartbeat stops */
         rc = co_consumer(m, o, 0u);
@@ -492,8 +555,10 @@ static int run_canopen(co_master *m, const rrr_hil_ctrl_opts *o, rrr_hil_rt *rt)
             rc = rrr_hil_run_end(&m->c->run, RRR_HIL_EXIT_OK, "all %zu periods of the reference",
                                  m->c->ref.n);
         }
-    } else {
-        (void)co_send_nmt(m, RRR_COM_NMT_STOP); /* best effort: the plant may be gone */
+    } else { /* best effort, the reason kept: the plant may be gone */
+        rrr_hil_frame f;
+        rrr_com_nmt(RRR_COM_NMT_STOP, 0u, &f);
+        (void)rrr_hil_send(m->c->tr, &f);
     }
     return rc;
 }
@@ -501,20 +566,25 @@ static int run_canopen(co_master *m, const rrr_hil_ctrl_opts *o, rrr_hil_rt *rt)
 static void co_summary(const co_master *m, const rrr_hil_ctrl_opts *o, int rc)
 {
     fprintf(stderr, PROG ": CANopen master of drives %u, %u, %u: %u SYNCs, %u states, %u SDO "
-                         "transfers, %u TPDOs of a wrong length; rrr_ctc failures %u\n",
+                         "transfers, %u TPDOs of a wrong length, %u duplicated%s%s; rrr_ctc "
+                         "failures %u\n",
             (unsigned)o->node_ids[0], (unsigned)o->node_ids[1], (unsigned)o->node_ids[2],
-            m->syncs, m->c->states, m->sdo_transfers, m->tpdo_bad_length, m->c->ctc_failed);
+            m->syncs, m->c->states, m->sdo_transfers, m->tpdo_bad_length, m->tpdo_duplicates,
+            m->tampered[0] ? ": " : "", m->tampered, m->c->ctc_failed);
     printf("RRR_HIL_SUMMARY {\"node\": \"controller\", \"profile\": \"canopen\", \"exit\": %d, "
            "\"node_ids\": [%u, %u, %u], \"syncs\": %u, \"states\": %u, \"sdo_transfers\": %u, "
-           "\"tpdo_bad_length\": %u, \"ctc_failed\": %u, "
+           "\"tpdo_bad_length\": %u, \"tpdo_duplicates\": %u, \"tampered\": \"%s\", "
+           "\"ctc_failed\": %u, "
            "\"rated_torque_mNm\": [%u, %u, %u], \"increments_per_revolution\": [%u, %u, %u], "
            "\"target_torque_per_mille_max_abs\": [%d, %d, %d], \"late_tpdos\": %u, "
-           "\"heartbeats\": %u, ",
+           "\"heartbeats\": %u, \"consumer_ms\": %u, \"rpdo_timeout\": %u, ",
            rc, (unsigned)o->node_ids[0], (unsigned)o->node_ids[1], (unsigned)o->node_ids[2],
-           m->syncs, m->c->states, m->sdo_transfers, m->tpdo_bad_length, m->c->ctc_failed,
-           m->rated_mNm[0], m->rated_mNm[1], m->rated_mNm[2], m->increments[0], m->increments[1],
+           m->syncs, m->c->states, m->sdo_transfers, m->tpdo_bad_length, m->tpdo_duplicates,
+           m->tampered, m->c->ctc_failed, m->rated_mNm[0], m->rated_mNm[1], m->rated_mNm[2], m->increments[0], m->increments[1],
            m->increments[2], m->pm_max[0], m->pm_max[1], m->pm_max[2], m->late_tpdos,
-           m->heartbeats);
+           m->heartbeats,
+           o->realtime ? (o->consumer_ms ? o->consumer_ms : RRR_COM_CONSUMER_MS) : 0u,
+           o->rpdo_timeout);
     rrr_hil_link_json(stdout, m->c->tr);
     printf("}\n");
     fflush(stdout);
@@ -522,6 +592,18 @@ static void co_summary(const co_master *m, const rrr_hil_ctrl_opts *o, int rc)
 
 static int check(const rrr_hil_ctrl_opts *o)
 {
+    if (!o->realtime && (o->consumer_ms != 0u || o->rpdo_timeout != 0u)) {
+        fprintf(stderr, PROG ": --consumer-ms, --rpdo-timeout: options of --profile canopen "
+                             "--realtime (the drives' watchdogs of the master's heartbeat and "
+                             "RPDOs)\n");
+        return -1;
+    }
+    if (o->consumer_ms != 0u && o->consumer_ms <= RRR_COM_HEARTBEAT_MS) {
+        fprintf(stderr, PROG ": --consumer-ms %u: the consumer time must be above the master's "
+                             "heartbeat period of %u ms (CiA 301)\n", o->consumer_ms,
+                RRR_COM_HEARTBEAT_MS);
+        return -1;
+    }
     if (o->realtime) {
         for (unsigned j = 0; j < 3u; ++j) {
             if (o->node_ids[j] == RRR_COM_MASTER_ID) {
@@ -581,5 +663,8 @@ const rrr_hil_ctrl_profile rrr_hil_canopen_controller = {
     "  default 1,2,3): NMT, SDO configuration (CST), the 402 state machine to\n"
     "  OPERATION ENABLED, then one SYNC per period with the target torques (lockstep;\n"
     "  with --realtime: SYNC on the clock every 1 ms, the master's heartbeat (node 127,\n"
-    "  20 ms) and each drive's consumer 0x1016 of it (100 ms); docs/canopen.md)\n",
+    "  20 ms) and each drive's consumer 0x1016 of it (--consumer-ms, 21..65535, default\n"
+    "  100), each drive's RPDO timeout 0x2001 if --rpdo-timeout N (1..255 SYNC periods;\n"
+    "  default: the drive's own); docs/canopen.md). A TPDO that is not the drives' (a\n"
+    "  second one in a SYNC, a wrong length) ends the run with exit status 8\n",
     check, rx_ids, run};

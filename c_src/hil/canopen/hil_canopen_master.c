@@ -125,6 +125,14 @@ uint8_t rrr_com_emcy(const rrr_hil_frame *f, uint16_t *code)
     return (uint8_t)(f->id - 0x080u);
 }
 
+unsigned rrr_com_tpdo_number(const rrr_hil_frame *f, uint8_t node)
+{
+    if (f->extended) {
+        return 0u;
+    }
+    return f->id == 0x180u + node ? 1u : f->id == 0x280u + node ? 2u : 0u;
+}
+
 int16_t rrr_com_torque_pm(double u_V, double kt, uint32_t rated_mNm)
 {
     const double x = kt * u_V * 1e6 / (double)rated_mNm;

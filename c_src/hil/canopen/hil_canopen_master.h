@@ -84,6 +84,10 @@ int rrr_com_tpdo(const rrr_hil_frame *f, uint8_t node, rrr_com_feedback *fb);
  *  @p f is no EMCY. */
 uint8_t rrr_com_emcy(const rrr_hil_frame *f, uint16_t *code);
 
+/** Which TPDO of @p node @p f is by its COB-ID, whatever its length: 1 (TPDO1, 0x180 + node),
+ *  2 (TPDO2, 0x280 + node), 0 neither. */
+unsigned rrr_com_tpdo_number(const rrr_hil_frame *f, uint8_t node);
+
 /** A voltage as target torque: tau = k_t u (N m) in per mille of the rated torque (mN m),
  *  rounded half away from zero, within -1000..1000 (0 for a non-finite value). */
 int16_t rrr_com_torque_pm(double u_V, double kt, uint32_t rated_mNm);

@@ -18,7 +18,8 @@
  * 3 periods is stale: the controller then sends Enable = 0 (0 V). Jitter and deadline misses are
  * printed at exit.
  * Exit status 7: the run completed, but a PlantStatus frame reported a latched fault or 0 V (the
- * plant's safety policy fired).
+ * plant's safety policy fired). Exit status 8 (lockstep): a second JointState of a joint in one
+ * period, which the plant never sends (a repeat or a forgery), ends the run at once.
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -47,6 +48,11 @@ typedef struct dbc_ctrl {
     uint8_t hb_counter;
     uint8_t last_cmd_counter; /* alive counter of the last VoltageCmd sent */
     uint32_t cmds_sent;     /* VoltageCmd frames sent */
+    int lockstep;           /* one JointState per joint and period (the repeat rule) */
+    uint8_t done;           /* alive counter of the last complete state */
+    uint8_t done_valid;     /* 1 once a state was complete */
+    uint32_t repeated;      /* JointState frames repeated in one period (the first ends it) */
+    char tampered[96];      /* what ended the run as tampered input, "" if nothing */
 } dbc_ctrl;
 
 static int send_heartbeat(dbc_ctrl *d, uint8_t nmt)
@@ -59,7 +65,26 @@ static int send_heartbeat(dbc_ctrl *d, uint8_t nmt)
     return rrr_hil_ctrl_send(d->c, &f, "send heartbeat");
 }
 
-/* Feed one frame; returns 1 when it completed the state with alive counter `counter`. */
+/* Lockstep: the plant sends each JointState once per period, so one of a joint already received
+ * for the state being assembled, or one of the state just completed, is a repeat (replayed or
+ * forged): -1 with d->tampered set; 0 otherwise. */
+static int repeat(dbc_ctrl *d, const rrr_hil_joint_state *js)
+{
+    const int again = (js->counter == d->pending && d->have[js->joint]) ||
+                      (d->done_valid && js->counter == d->done);
+    if (!d->lockstep || !again) {
+        return 0;
+    }
+    ++d->repeated;
+    (void)snprintf(d->tampered, sizeof d->tampered,
+                   "joint %u: two JointState%u with alive counter %u in period %u",
+                   (unsigned)js->joint + 1u, (unsigned)js->joint + 1u, (unsigned)js->counter,
+                   (unsigned)d->c->run.k);
+    return -1;
+}
+
+/* Feed one frame; returns 1 when it completed the state with alive counter `counter`, -1 for a
+ * repeated JointState in lockstep (repeat: d->tampered says which). */
 static int handle(dbc_ctrl *d, const rrr_hil_frame *f)
 {
     rrr_hil_msg m;
@@ -82,6 +107,9 @@ static int handle(dbc_ctrl *d, const rrr_hil_frame *f)
         return 0;
     }
     const rrr_hil_joint_state *js = &m.u.joint;
+    if (repeat(d, js) != 0) {
+        return -1;
+    }
     if (js->counter != d->pending || (d->have[0] | d->have[1] | d->have[2]) == 0u) {
         if (d->have[0] | d->have[1] | d->have[2]) {
             ++d->out_of_order; /* an incomplete state was overtaken */
@@ -96,6 +124,8 @@ static int handle(dbc_ctrl *d, const rrr_hil_frame *f)
         memcpy(d->c->q, d->pq, sizeof d->c->q);
         memcpy(d->c->qd, d->pqd, sizeof d->c->qd);
         memset(d->have, 0, sizeof d->have);
+        d->done = d->pending;
+        d->done_valid = 1u;
         ++d->c->states;
         return 1;
     }
@@ -184,7 +214,13 @@ static int wait_frames(dbc_ctrl *d, const rrr_hil_ctrl_opts *o, int want, const 
         if (rc != 0) {
             return rc;
         }
-        if (handle(d, &f) ? (want < 0 || d->pending == (uint8_t)want) : want < 0) {
+        const int h = handle(d, &f);
+        if (h < 0) {
+            return rrr_hil_run_end(&d->c->run, RRR_HIL_EXIT_TAMPERED,
+                                   "%s: a frame the plant never sends (tampered input?)",
+                                   d->tampered);
+        }
+        if (h ? (want < 0 || d->pending == (uint8_t)want) : want < 0) {
             return 0;
         }
     }
@@ -245,7 +281,7 @@ static int run_realtime(dbc_ctrl *d, const rrr_hil_ctrl_opts *o, FILE *latency_l
         rrr_hil_io io;
         int fresh = 0;
         while ((io = rrr_hil_recv(c->tr, &f, 0)) == RRR_HIL_IO_OK) {
-            fresh |= handle(d, &f);
+            fresh |= handle(d, &f) > 0;
         }
         if (io != RRR_HIL_IO_TIMEOUT) {
             rc = rrr_hil_ctrl_lost(c, "receive", io);
@@ -285,10 +321,12 @@ static void summary(const dbc_ctrl *d, int rc)
     printf("RRR_HIL_SUMMARY {\"node\": \"controller\", \"exit\": %d, \"states\": %u, "
            "\"rx_bad_crc\": %u, \"rx_bad_dlc\": %u, \"rx_unknown_id\": %u, \"out_of_order\": %u, "
            "\"stale\": %u, \"plant_faults\": %u, \"plant_status_faulty\": %u, "
-           "\"plant_status_zero\": %u, \"ctc_failed\": %u, ",
+           "\"plant_status_zero\": %u, \"ctc_failed\": %u, \"repeated\": %u, "
+           "\"tampered\": \"%s\", ",
            rc, c->states, d->rx_bad[RRR_HIL_RX_BAD_CRC], d->rx_bad[RRR_HIL_RX_BAD_DLC],
            d->rx_bad[RRR_HIL_RX_UNKNOWN_ID], d->out_of_order, d->stale,
-           (unsigned)d->status.faults, d->status_faulty, d->status_zero, c->ctc_failed);
+           (unsigned)d->status.faults, d->status_faulty, d->status_zero, c->ctc_failed,
+           d->repeated, d->tampered);
     rrr_hil_link_json(stdout, c->tr);
     printf("}\n");
     fflush(stdout);
@@ -310,6 +348,7 @@ static int run(rrr_hil_ctrl *c, const rrr_hil_ctrl_opts *o, FILE *latency_log,
     static dbc_ctrl d;
     memset(&d, 0, sizeof d);
     d.c = c;
+    d.lockstep = !o->realtime;
     int rc = o->realtime ? run_realtime(&d, o, latency_log) : run_lockstep(&d, o);
     /* a completed run while the plant reported its safety policy firing (PlantStatus: a latched
      * fault, or 0 V forced) ends with its own status, as the plant does */
@@ -324,5 +363,14 @@ static int run(rrr_hil_ctrl *c, const rrr_hil_ctrl_opts *o, FILE *latency_log,
     return rc;
 }
 
+static int check(const rrr_hil_ctrl_opts *o)
+{
+    if (o->consumer_ms != 0u || o->rpdo_timeout != 0u) {
+        fprintf(stderr, PROG ": --consumer-ms, --rpdo-timeout: options of --profile canopen\n");
+        return -1;
+    }
+    return 0;
+}
+
 const rrr_hil_ctrl_profile rrr_hil_dbc_controller = {
-    "dbc", "  real time: Sync is not sent (it is the lockstep time base)\n", NULL, rx_ids, run};
+    "dbc", "  real time: Sync is not sent (it is the lockstep time base)\n", check, rx_ids, run};

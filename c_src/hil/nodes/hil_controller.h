@@ -28,6 +28,10 @@ typedef struct rrr_hil_ctrl_opts {
     int n_sets;             ///< entries in sets
     int profile;            ///< --profile: index in the node's profile table (0: the first, dbc)
     uint8_t node_ids[3];    ///< --node-ids a,b,c (default 1,2,3)
+    uint32_t consumer_ms;   ///< --consumer-ms (CANopen, real time): the drives' heartbeat
+                            ///< consumer time of the master, ms (0: the profile's default)
+    uint32_t rpdo_timeout;  ///< --rpdo-timeout (CANopen, real time): the drives' RPDO timeout
+                            ///< 0x2001, SYNC periods (0: the drives' own)
 } rrr_hil_ctrl_opts;
 
 /** What every profile's controller loop shares. */

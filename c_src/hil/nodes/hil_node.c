@@ -115,6 +115,8 @@ const char *rrr_hil_exit_str(int code)
         return "stopped early by the controller";
     case RRR_HIL_EXIT_SAFETY:
         return "completed, safety policy fired";
+    case RRR_HIL_EXIT_TAMPERED:
+        return "tampered input";
     default:
         return "unknown";
     }
@@ -167,6 +169,22 @@ int rrr_hil_run_safety(rrr_hil_run *r, int rc, const char *fmt, ...)
     const size_t n = strlen(r->why);
     (void)snprintf(r->why + n, sizeof r->why - n, "; %s", text);
     return RRR_HIL_EXIT_SAFETY;
+}
+
+int rrr_hil_log_close(FILE *fp, const char *path, rrr_hil_run *r, int rc)
+{
+    if (fp == NULL) {
+        return rc;
+    }
+    const int failed = ferror(fp) != 0;
+    const int closed = fclose(fp);
+    const int e = errno;
+    if ((failed || closed != 0) && (rc == RRR_HIL_EXIT_OK || rc == RRR_HIL_EXIT_SAFETY)) {
+        return rrr_hil_run_end(r, RRR_HIL_EXIT_SETUP,
+                               "cannot write the log %s: %s: free space, or write it elsewhere",
+                               path, e != 0 ? strerror(e) : "a write failed");
+    }
+    return rc;
 }
 
 int rrr_hil_run_report(const char *prog, int rc, const rrr_hil_run *r)

@@ -32,10 +32,14 @@ typedef enum rrr_hil_exit {
                                   ///< that cannot be encoded (controller)
     RRR_HIL_EXIT_STOPPED_EARLY = 6, ///< plant: the controller's StopCmd gave a reason other than
                                     ///< the end of the run (it was interrupted, faulted, lost us)
-    RRR_HIL_EXIT_SAFETY = 7 ///< the run completed (as for 0), but the safety policy fired: plant:
-                            ///< a fault latched (even if reset later) or 0 V was forced for at
-                            ///< least one period; controller: a PlantStatus frame reported a
-                            ///< latched fault or 0 V (docs/can-bench.md, "Exit status")
+    RRR_HIL_EXIT_SAFETY = 7, ///< the run completed (as for 0), but the safety policy fired: plant:
+                             ///< a fault latched (even if reset later) or 0 V was forced for at
+                             ///< least one period; controller: a PlantStatus frame reported a
+                             ///< latched fault or 0 V (docs/can-bench.md, "Exit status")
+    RRR_HIL_EXIT_TAMPERED = 8 ///< controller: a frame its bus profile never sends came, so the
+                              ///< inputs were tampered with (or a node is broken): a second frame
+                              ///< of one kind in one period (a duplicated TPDO, JointState), or
+                              ///< a TPDO whose length is not its mapping's; the run ends at once
 } rrr_hil_exit;
 
 /** Static name of an exit status ("completed", "peer lost", ...). */
@@ -76,6 +80,11 @@ int rrr_hil_run_safety(rrr_hil_run *r, int rc, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+/** Close the node's --log @p fp (NULL: none) written to @p path: a write that failed (a full
+ *  disk) turns a run that completed (@p rc 0 or RRR_HIL_EXIT_SAFETY) into RRR_HIL_EXIT_SETUP
+ *  with "cannot write the log PATH: REASON" (a log cut short is never taken for a whole one);
+ *  any other @p rc as it is. */
+int rrr_hil_log_close(FILE *fp, const char *path, rrr_hil_run *r, int rc);
 /** The exit line of the run (rrr_hil_report_exit with r's period and reason); returns @p rc. */
 int rrr_hil_run_report(const char *prog, int rc, const rrr_hil_run *r);
 /** CLOCK_MONOTONIC, ms. */

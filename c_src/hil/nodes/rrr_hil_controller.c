@@ -13,9 +13,10 @@
  * that says how the run ended ("rrr_hil_controller: exit 4 (interrupted) at period 17: SIGINT");
  * with --log, one CSV row per period (k, t, measured q and qd, u, u_n, u_c).
  * Exit status (rrr_hil_exit, hil_node.h): 0 every period done and StopCmd sent; 1 usage; 2 setup
- * failed; 3 the plant was lost (hang-up, no joint state within --timeout-ms, transport error);
- * 4 SIGINT/SIGTERM; 5 a fault of the controller (a command it cannot encode); 7 completed, but a
- * PlantStatus frame reported a latched fault or 0 V (the plant's safety policy fired).
+ * failed (or the --log could not be written); 3 the plant was lost (hang-up, no joint state
+ * within --timeout-ms, transport error); 4 SIGINT/SIGTERM; 5 a fault of the controller (a command
+ * it cannot encode); 7 completed, but a PlantStatus frame reported a latched fault or 0 V (the
+ * plant's safety policy fired); 8 tampered input (a frame the plant never sends: the profile's).
  */
 #define _POSIX_C_SOURCE 200809L
 
@@ -49,7 +50,7 @@ static void usage(void)
     }
     fprintf(stderr,
             "]\n"
-            "       [--node-ids a,b,c]\n"
+            "       [--node-ids a,b,c] [--consumer-ms MS] [--rpdo-timeout N]\n"
             "  the model is the default robot (rrr_model_default) with the --set parameters\n"
             "  (named as in the FMUs: d1, a2, a3, d2, d3, g, u_max, p[k], kt[i], b[i], f[i,k],\n"
             "  w[i,k]), so the controller's model may differ from the plant's; gains default\n"
@@ -61,7 +62,8 @@ static void usage(void)
             RRR_HIL_RT_USAGE
             "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault,\n"
             "  7 completed but the plant's safety policy fired (PlantStatus: a fault latched or\n"
-            "  0 V forced; docs/can.md, Exit statuses)\n");
+            "  0 V forced), 8 tampered input: a frame the plant never sends (a second one of a\n"
+            "  kind in one period, a wrong length), named (docs/can.md, Exit statuses)\n");
 }
 
 static int parse_args(int argc, char **argv, rrr_hil_ctrl_opts *o)
@@ -123,6 +125,16 @@ static int parse_args(int argc, char **argv, rrr_hil_ctrl_opts *o)
                 if (r < 0) {
                     return -1;
                 }
+            } else if (strcmp(a, "--consumer-ms") == 0 || strcmp(a, "--rpdo-timeout") == 0) {
+                const int is_consumer = a[2] == 'c';
+                const long hi = is_consumer ? 65535 : 255;
+                const long x = strtol(v, &end, 10);
+                if (end == v || *end != '\0' || x < 1 || x > hi) {
+                    fprintf(stderr, PROG ": %s: expected an integer 1..%ld, got '%s'\n", a, hi,
+                            v);
+                    return -1;
+                }
+                *(is_consumer ? &o->consumer_ms : &o->rpdo_timeout) = (uint32_t)x;
             } else if (strcmp(a, "--timeout-ms") == 0) {
                 const long x = strtol(v, &end, 10);
                 if (*end != '\0' || x < 0 || x > 3600000) {
@@ -205,9 +217,7 @@ int main(int argc, char **argv)
     if (latency_log != NULL) {
         fclose(latency_log);
     }
-    if (c.log) {
-        fclose(c.log);
-    }
+    rc = rrr_hil_log_close(c.log, o.log_path, &c.run, rc);
     rrr_hil_reference_free(&c.ref);
     return rrr_hil_run_report(PROG, rc, &c.run);
 }

@@ -220,11 +220,9 @@ int main(int argc, char **argv)
         return rrr_hil_report_exit(PROG, RRR_HIL_EXIT_SETUP, 0, "the transport did not open");
     }
     p.tr = &link.base;
-    const int rc = profile->run(&p, &o, latency_log, &frames); /* owns latency_log */
+    int rc = profile->run(&p, &o, latency_log, &frames); /* owns latency_log */
     rrr_hil_close(p.tr);
-    if (p.log) {
-        fclose(p.log);
-    }
+    rc = rrr_hil_log_close(p.log, o.log_path, &p.run, rc);
     rrr_hil_fmu_close(&p.fmu);
     return rrr_hil_run_report(PROG, rc, &p.run);
 }

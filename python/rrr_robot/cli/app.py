@@ -169,7 +169,8 @@ def _logging(verbose: bool, quiet: bool) -> Iterator[None]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run ``rrr``; returns the exit status: 0 success, 2 bad input or a failure of the run
-    (one line ``rrr: error: ...``; argparse's own errors also exit 2), 130 Ctrl-C (``rrr:
+    (one line ``rrr: error: ...``; argparse's own errors also exit 2), 8 a CAN bench run whose
+    inputs were tampered with (TamperedError, the same one line), 130 Ctrl-C (``rrr:
     interrupted``), 143 SIGTERM (``rrr: terminated``); a command may return others (``rrr hil
     plant``: 3 when the plant latched a fault). Nothing is printed as a traceback for these:
     every error of the package (:class:`~rrr_robot.errors.RrrError`), of the file system
@@ -193,7 +194,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 143
     except (RrrError, OSError, UnicodeError) as exc:
         print(f"rrr: error: {_one_line(exc)}", file=sys.stderr)
-        return 2
+        return int(getattr(exc, "exit_status", 2))
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)

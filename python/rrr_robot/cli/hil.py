@@ -409,13 +409,9 @@ def _canopen_realtime(args: argparse.Namespace) -> Any:
     for option, refused in given.items():
         if refused and not args.realtime:
             raise BadInputError(f"{option}: an option of 'rrr hil canopen --realtime'")
-    if args.master == "c" and (given["--consumer-ms"] or given["--rpdo-timeout"]):
-        raise BadInputError("--consumer-ms, --rpdo-timeout: the Python master's (--master "
-                            "python); the C master writes its own consumer time and leaves the "
-                            "EDS's RPDO timeout")
     if args.master == "python" and given["--spin-us"]:
         raise BadInputError("--spin-us: the C master's clock (--master c); the Python master's "
-                            "SYNC comes from the canopen package's producer, which sleeps only")
+                            "SYNC comes from python-can's periodic sender, which sleeps only")
     if not args.realtime:
         return None
     return CanopenRealTime(fifo=0 if args.no_fifo else 80,
@@ -618,18 +614,18 @@ def register_cli(subparsers: Any) -> None:
     r = co.add_argument_group("real time")
     r.add_argument("--realtime", action="store_true",
                    help="a SYNC every 1 ms on the wall clock (not lockstep: the Python master's "
-                   "from the canopen package's producer, the C master's from its own clock), "
+                   "from python-can's periodic sender, the C master's from its own clock), "
                    "the master's heartbeat (20 ms) watched by each drive's consumer 0x1016, the "
                    "law on the newest TPDOs; SCHED_FIFO 80 when permitted; SYNC period jitter "
                    "and deadline misses in summary.json")
     _add_rt_tuning(r, "SYNC of the C master")
     r.add_argument("--consumer-ms", type=positive_int, metavar="MS",
-                   help="with --realtime, the Python master: each drive's heartbeat consumer "
-                   "time 0x1016, above the heartbeat's 20 ms (default 100)")
+                   help="with --realtime: each drive's heartbeat consumer time 0x1016 of the "
+                   "master, above the heartbeat's 20 ms (default 100; generous values for a "
+                   "busy machine)")
     r.add_argument("--rpdo-timeout", type=positive_int, metavar="N",
-                   help="with --realtime, the Python master: each drive's RPDO timeout 0x2001, "
-                   "SYNC periods without an RPDO before it faults, 1..255 (default: the EDS's, "
-                   "3)")
+                   help="with --realtime: each drive's RPDO timeout 0x2001, SYNC periods without "
+                   "an RPDO before it faults, 1..255 (default: the EDS's, 3)")
     g = co.add_argument_group("CANopen")
     g.add_argument("--node-ids", type=node_ids, metavar="A,B,C",
                    help="the drives' node ids, axes 1..3 (default 1,2,3: the plant's)")

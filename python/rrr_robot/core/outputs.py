@@ -39,6 +39,10 @@ commit. A command that must own its folder for its whole run (``rrr sweep``) cla
 The locks are ``flock`` locks (released by the system when their process dies, however it dies)
 on hidden files that go when the lock is released.
 
+A write that fails (a full disk, a used-up quota, a read-only file system, no permission) is an
+:class:`~rrr_robot.errors.OutputError` that names the file or the output folder (never the hidden
+temporary names) and what to do: :func:`output_error`.
+
 Limits: the renames of a result set are one after another (a reader listing the folder during the
 few milliseconds of a commit may see some files new and some old; summary.json is removed first
 and renamed last, so it is absent rather than wrong during that time).
@@ -47,6 +51,7 @@ and renamed last, so it is absent rather than wrong during that time).
 from __future__ import annotations
 
 import contextlib
+import errno
 import json
 import logging
 import math
@@ -57,9 +62,9 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
-from typing import IO, Any
+from typing import IO, Any, TypeGuard
 
-from ..errors import BadInputError
+from ..errors import BadInputError, OutputError
 
 log = logging.getLogger(__name__)
 
@@ -80,6 +85,8 @@ __all__ = [
     "folder_lock",
     "is_temporary",
     "make_folders",
+    "output_error",
+    "shown_paths",
     "strict_json",
     "to_strict_json_value",
 ]
@@ -97,6 +104,63 @@ _MAX_NAME = 100  # characters of the target's name kept in a temporary name
 #: Tokens of the temporary files and staging folders this process made (a leftover with this
 #: process's id but another token is stale: e.g. every run in a container is pid 1).
 _OWN_TOKENS: set[str] = set()
+
+
+#: What to do when a write fails, by errno (docs/outputs.md).
+_WHAT_TO_DO = {
+    errno.ENOSPC: "free space on its file system, or write the results elsewhere (--out)",
+    errno.EDQUOT: "the disk quota is used up: free space, or write the results elsewhere "
+                  "(--out)",
+    errno.EFBIG: "the file is too large for its file system: write the results elsewhere "
+                 "(--out)",
+    errno.EROFS: "its file system is read-only: write the results elsewhere (--out)",
+    errno.EACCES: "check the folder's permissions, or write the results elsewhere (--out)",
+    errno.EPERM: "check the folder's permissions, or write the results elsewhere (--out)",
+    errno.EIO: "the device failed: check it, or write the results elsewhere (--out)",
+}
+#: The errors of a write that fails whatever is written (a full disk, ...), as opposed to a
+#: writer's own OSError (an input it reads inside an atomic write): named as the output's.
+_WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EROFS, errno.EIO})
+
+
+def _shown(path: Path) -> Path:
+    """What a user knows a path as: a result staged in a result set's hidden folder is the
+    output folder's file; a temporary name is its target's; a hidden file of ours (a commit's
+    journal, a manifest) is its folder."""
+    if path.parent.name.startswith(STAGING_PREFIX):
+        path = path.parent.parent / path.name
+    m = _OURS.match(path.name)
+    if m is not None and path.name.endswith(TEMP_SUFFIX):
+        path = path.with_name(path.name[m.end():-len(TEMP_SUFFIX)])
+    return path.parent if path.name.startswith(".") else path  # a journal: its folder
+
+
+#: A staged or temporary name in a text (a C node's message quotes the path it was given).
+_HIDDEN_PATH = re.compile(r"/\.rrr-staging-\d+-[0-9a-f]{8}(/[^\s:;,]*)")
+
+
+def shown_paths(text: str) -> str:
+    """``text`` with each path into a result set's staging folder (and a temporary name in it)
+    as the output folder's file it becomes."""
+    return _HIDDEN_PATH.sub(lambda m: "/" + _shown(Path("x" + m.group(1))).name, text)
+
+
+def output_error(exc: OSError, path: str | os.PathLike[str]) -> OSError:
+    """The error of a failed write of ``path`` (a file, or the output folder): "cannot write
+    PATH: REASON; WHAT TO DO" (an OutputError with the system's errno); an OutputError as it
+    is."""
+    if isinstance(exc, OutputError):
+        return exc
+    shown = _shown(Path(path))
+    what = _WHAT_TO_DO.get(exc.errno or 0, "check it, then run again")
+    error = OutputError(f"cannot write {shown}: {exc.strerror or exc}; {what}")
+    error.errno = exc.errno
+    return error
+
+
+def _a_write_failure(exc: BaseException) -> TypeGuard[OSError]:
+    return (isinstance(exc, OSError) and not isinstance(exc, OutputError)
+            and exc.errno in _WRITE_ERRNOS)
 
 
 def _token() -> str:
@@ -346,15 +410,25 @@ def _reserve(path: Path) -> Path:
 
 @contextlib.contextmanager
 def _replace_at_end(path: Path) -> Iterator[Path]:
-    tmp = _reserve(path)
+    try:
+        tmp = _reserve(path)
+    except OSError as exc:
+        raise output_error(exc, path) from exc
     try:
         yield tmp
-        _fsync_file(tmp)
-        os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp.unlink()
+        if _a_write_failure(exc):  # the writer's write into tmp
+            raise output_error(exc, path) from exc
         raise
+    try:
+        _fsync_file(tmp)
+        os.replace(tmp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise output_error(exc, path) from exc
     _fsync_dir(path.parent)
 
 
@@ -526,8 +600,7 @@ class ResultSet:
                     continue
         except OSError as exc:
             self._remove_created()
-            raise BadInputError(f"cannot write into the output folder {self.folder}: "
-                                f"{exc.strerror or exc}") from exc
+            raise output_error(exc, self.folder) from exc
         self._staging = staging
         return self
 
@@ -538,8 +611,14 @@ class ResultSet:
                  tb: TracebackType | None) -> None:
         if exc_type is None:
             self.commit()
-        else:
-            self.discard()
+            return
+        staging = self._staging
+        self.discard()
+        if exc is not None and _a_write_failure(exc):  # a result written into the staging
+            name, where = exc.filename, self.folder
+            if staging is not None and isinstance(name, str) and Path(name).parent == staging:
+                where = self.folder / Path(name).name
+            raise output_error(exc, where) from exc
 
     # ---- writing ---------------------------------------------------------------------------
     @property
@@ -581,10 +660,13 @@ class ResultSet:
             shutil.rmtree(staging, ignore_errors=True)
             self._staging = None
             return []
-        for name in files:
-            _fsync_file(staging / name)
-        with folder_lock(self.folder, "commit", wait=True, what="another run's commit"):
-            self._commit_locked(staging, files)
+        try:
+            for name in files:
+                _fsync_file(staging / name)
+            with folder_lock(self.folder, "commit", wait=True, what="another run's commit"):
+                self._commit_locked(staging, files)
+        except OSError as exc:
+            raise output_error(exc, self.folder) from exc
         return self.committed
 
     def _commit_locked(self, staging: Path, files: list[str]) -> None:

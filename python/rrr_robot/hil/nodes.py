@@ -6,8 +6,15 @@ The C nodes (``rrr_hil_plant``, ``rrr_hil_controller``) are installed with the p
 python-can's built-in ``socketcand`` interface connects to it (``socketcan`` where the kernel has
 AF_CAN). The controller node can also listen (``--listen``) for the Python plant. Over SocketCAN
 a bus opened before the plant starts (:func:`boot_up_watch`) sees its boot-up
-(:func:`wait_for_boot_up`); :func:`wait_node` reports a node's progress from its log
-(:class:`LogProgress`).
+(:func:`wait_for_boot_up`).
+
+Every parent of nodes (``rrr hil bench``, ``rrr hil canopen --master c``, ``rrr hil
+controller|plant`` for the node beside their Python side) waits for them with
+:func:`watch_nodes`: it watches all of them, reaps them, reports the progress of one from its
+log (:class:`LogProgress`) and, when one ends or stops answering, ends the others within a
+bound counted in bench periods (:data:`GRACE_PERIODS`, :data:`STALL_PERIODS`), naming the node
+at fault. :func:`quiet_bus_threads` keeps the threads of python-can and canopen from printing a
+traceback when a node goes away: the run's own error names the node.
 """
 
 from __future__ import annotations
@@ -21,9 +28,10 @@ import re
 import shutil
 import signal
 import subprocess
+import threading
 import time
 import warnings
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterator, Mapping, Sequence
 from pathlib import Path
 from types import TracebackType
 from typing import Any
@@ -33,10 +41,10 @@ import numpy as np
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
 from ..core._package import PACKAGE_DIR
-from ..core.outputs import STAGING_PREFIX, atomic_write_text
+from ..core.outputs import STAGING_PREFIX, atomic_write_text, shown_paths
 from ..core.param_names import param_index
 from ..core.robot import DEFAULT_SAMPLE_TIME
-from ..errors import HilError
+from ..errors import HilError, TamperedError
 from ..sim.fmus import fmu_path
 from ..writing.reference_table import write_reference_table
 from .channel import DEFAULT_CHANNEL
@@ -44,10 +52,13 @@ from .channel import DEFAULT_CHANNEL
 log = logging.getLogger(__name__)
 
 __all__ = [
+    "EXIT_TAMPERED",
+    "GRACE_PERIODS",
     "NMT_BOOT",
     "NMT_OPERATIONAL",
     "NMT_STOPPED",
     "PERIOD",
+    "STALL_PERIODS",
     "LogProgress",
     "NodeProcess",
     "boot_up_watch",
@@ -56,12 +67,13 @@ __all__ = [
     "failure_folder",
     "node_executable",
     "open_bus",
+    "quiet_bus_threads",
     "set_args",
     "start_controller",
     "start_listening_controller",
     "start_plant",
     "wait_for_boot_up",
-    "wait_node",
+    "watch_nodes",
 ]
 
 #: s: the period of the bench's C nodes, RRR_SAMPLE_TIME_DEFAULT (rrr_control.h, 1 ms), the
@@ -76,6 +88,23 @@ NMT_STOPPED = 4
 NMT_OPERATIONAL = 5
 #: Progress of a run: progress(periods done, periods in all).
 Progress = Callable[[int, int], None]
+#: The C nodes' exit status "peer lost" (RRR_HIL_EXIT_PEER_LOST): the node waited its timeout for
+#: a silent peer, or the peer hung up.
+EXIT_PEER_LOST = 3
+#: The C controller's exit status "tampered input" (RRR_HIL_EXIT_TAMPERED, hil_node.h): a frame
+#: the other node never sends (a second of one kind in a period, a wrong length) came.
+EXIT_TAMPERED = 8
+#: Bench periods the other nodes of a run get to end after one ended (5 s: as long as a node
+#: waits for a silent peer, --idle-timeout-ms and --timeout-ms): a node that still runs then has
+#: stopped answering and is stopped. After a node ended with "peer lost" (it has waited that long
+#: for the other already) the others get PEER_LOST_GRACE_PERIODS (0.5 s).
+GRACE_PERIODS = 5000
+PEER_LOST_GRACE_PERIODS = 500
+#: Bench periods without a new row in a running node's log (once it has begun one; 60 s before
+#: its first) after which it has stopped answering: twice the nodes' own 5 s limit on a silent
+#: peer, so the node that notices first names it.
+STALL_PERIODS = 10_000
+STARTUP_PERIODS = 60_000
 
 
 def node_executable(which: str) -> Path:
@@ -120,12 +149,14 @@ def _signal_name(number: int) -> str:
 
 
 class NodeProcess:
-    """A running C node (context manager; ``close()`` is idempotent and stops it)."""
+    """A running C node (context manager; ``close()`` is idempotent and stops it). ``log_csv``:
+    the CSV log it writes a row to every period (its sign of life for :func:`watch_nodes`)."""
 
     def __init__(self, name: str, args: Sequence[str], *, listening: bool,
-                 cleanup: Path | None = None) -> None:
+                 cleanup: Path | None = None, log_csv: Path | None = None) -> None:
         self.name = name
         self.args = [str(a) for a in args]
+        self.log = log_csv
         self.port: int | None = None
         self._cleanup = cleanup
         self._closed = False
@@ -159,6 +190,12 @@ class NodeProcess:
             return False
         return self._proc.returncode < 0
 
+    @property
+    def returncode(self) -> int | None:
+        """Its exit status (negative: the signal that killed it), None while it runs."""
+        rc = self._proc.poll()
+        return None if rc is None else int(rc)
+
     def how_it_ended(self) -> str:
         """'was killed by SIGKILL', 'exited with status 3', 'is still running'."""
         rc = self._proc.poll()
@@ -166,14 +203,24 @@ class NodeProcess:
             return "is still running"
         return f"was killed by {_signal_name(-rc)}" if rc < 0 else f"exited with status {rc}"
 
-    def failure(self, what: str, folder: Path | None = None) -> HilError:
-        """The error of a node that failed: ``what`` happened, which node, how it ended, and
-        its output (stderr), which is written to ``folder/<node>.failed.log`` (else its last
-        line is quoted)."""
+    def stopped_by_signal(self) -> bool:
+        """Whether it is stopped (SIGSTOP, SIGTSTP; a debugger) where the system tells it
+        (Linux: state T or t in /proc)."""
+        try:
+            stat = Path(f"/proc/{self.pid}/stat").read_text(encoding="ascii", errors="replace")
+        except OSError:
+            return False
+        return stat.rpartition(")")[2].split()[:1] in (["T"], ["t"])
+
+    def failure(self, what: str, folder: Path | None = None, how: str | None = None
+                ) -> HilError:
+        """The error of a node that failed: ``what`` happened, which node, how it ended (or
+        ``how``), and its output (stderr), which is written to ``folder/<node>.failed.log``
+        (else its last line is quoted). TamperedError when it ended with EXIT_TAMPERED."""
         self.close()  # collect its output
-        how = self.how_it_ended()
+        how = how or self.how_it_ended()
         text = self.stderr.strip()
-        last = f": {' '.join(text.splitlines()[-1].split())}" if text else ""
+        last = f": {shown_paths(' '.join(text.splitlines()[-1].split()))}" if text else ""
         tail = "" if text else "; it printed nothing"
         if folder is not None:
             path = Path(folder) / f"{self.name}.failed.log"
@@ -182,19 +229,23 @@ class NodeProcess:
                                   f"{text}\n")
                 tail = f"; its output is in {path}" + ("" if text else " (it printed nothing)")
             except OSError as exc:
-                tail = f"; its output could not be kept ({exc.strerror or exc})"
-        return HilError(f"{what}: the node {self.name} (pid {self.pid}) {how}{last}{tail}")
+                why = os.strerror(exc.errno) if exc.errno else str(exc)
+                tail = f"; its output could not be kept in {folder} ({why})"
+        error = TamperedError if self._proc.poll() == EXIT_TAMPERED else HilError
+        return error(f"{what}: the node {self.name} (pid {self.pid}) {how}{last}{tail}")
 
     def wait(self, timeout: float = 120.0) -> dict[str, Any]:
         """Wait for the exit; returns the node's summary (``RRR_HIL_SUMMARY`` JSON) with
-        'exit' and, in real-time mode, the timing statistics under 'rt'."""
-        try:
-            out, err = self._proc.communicate(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            self.close()
-            raise HilError(f"{self.name} did not finish within {timeout} s") from None
-        self.stdout += out
-        self.stderr += err
+        'exit' and, in real-time mode, the timing statistics under 'rt' (of a node already
+        closed: what it printed)."""
+        if not self._closed:
+            try:
+                out, err = self._proc.communicate(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                self.close()
+                raise HilError(f"{self.name} did not finish within {timeout} s") from None
+            self.stdout += out
+            self.stderr += err
         summary: dict[str, Any] = {"exit": self._proc.returncode}
         for line in self.stdout.splitlines():
             if line.startswith("RRR_HIL_SUMMARY "):
@@ -212,11 +263,15 @@ class NodeProcess:
             self._cleanup = None
 
     def close(self) -> None:
+        """Stop it (SIGTERM, then SIGCONT so that a stopped node handles it, SIGKILL after 5 s)
+        and collect its output."""
         if self._closed:
             return
         self._closed = True
         if self._proc.poll() is None:
             self._proc.terminate()
+            with contextlib.suppress(OSError):
+                self._proc.send_signal(signal.SIGCONT)
             try:
                 out, err = self._proc.communicate(timeout=5)
             except subprocess.TimeoutExpired:
@@ -281,7 +336,7 @@ def start_plant(*, listen: str = "127.0.0.1:0", q0: Sequence[float] = (0.0, 0.0,
         args += ["--frame-log", str(frame_log)]
     try:
         return NodeProcess("rrr_hil_plant", [*args, *extra], listening=not socketcan,
-                           cleanup=unzip)
+                           cleanup=unzip, log_csv=log_csv)
     except BaseException:
         shutil.rmtree(unzip, ignore_errors=True)
         raise
@@ -300,7 +355,7 @@ def start_controller(reference_csv: Path, *, connect: str = "", log_csv: Path | 
         args += ["--log", str(log_csv)]
     if frame_log is not None:
         args += ["--frame-log", str(frame_log)]
-    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=False)
+    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=False, log_csv=log_csv)
 
 
 def start_listening_controller(reference_csv: Path, *, listen: str = "127.0.0.1:0",
@@ -315,7 +370,7 @@ def start_listening_controller(reference_csv: Path, *, listen: str = "127.0.0.1:
         args += ["--log", str(log_csv)]
     if frame_log is not None:
         args += ["--frame-log", str(frame_log)]
-    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=True)
+    return NodeProcess("rrr_hil_controller", [*args, *extra], listening=True, log_csv=log_csv)
 
 
 def controller_node_args(values: Mapping[str, float | bool]) -> list[str]:
@@ -413,13 +468,122 @@ class LogProgress:
         self.progress(max(0, min(self._rows, self.total)), self.total)
 
 
-def wait_node(node: NodeProcess, timeout: float, poll: LogProgress | None) -> dict[str, Any]:
-    """node.wait(timeout), reporting progress every 0.2 s."""
-    if poll is None or poll.progress is None:
-        return node.wait(timeout)
-    deadline = time.monotonic() + timeout
-    while node.running() and time.monotonic() < deadline:
-        poll.poll()
-        time.sleep(0.2)
-    poll.poll()
-    return node.wait(max(1.0, deadline - time.monotonic()))
+def _log_size(node: NodeProcess) -> int:
+    try:
+        return os.stat(node.log).st_size if node.log is not None else -1
+    except OSError:
+        return -1
+
+
+def _stuck(nodes: Sequence[NodeProcess], ok: Collection[int], grace: float, stall: float,
+           startup: float, poll: LogProgress | None,
+           ended: tuple[str, int] | None) -> tuple[NodeProcess, str] | None:
+    """Wait until every node has ended (None), or one stopped answering: (it, why). A node
+    stopped answering when it still runs ``grace`` s after another ended with a status in
+    ``ok`` (PEER_LOST_GRACE_PERIODS after one that lost its peer), or when its log did not grow
+    for ``stall`` s (``startup`` s before its first row). After a node that failed otherwise
+    (a bad option, a fault of its own) the others are ended: the failure is that node's.
+    ``ended``: the other side, not watched here, has ended already (how, its exit status)."""
+    start = time.monotonic()
+    size = {id(n): _log_size(n) for n in nodes}
+    grew = {id(n): start for n in nodes}
+    began = {id(n): False for n in nodes}
+    first = None if ended is None else (*ended, start)  # the first that ended: how, rc, when
+    while True:
+        if poll is not None:
+            poll.poll()
+        now = time.monotonic()
+        running = [n for n in nodes if n.running()]
+        if not running:
+            return None
+        for n in nodes:
+            if first is None and not n.running():
+                first = (f"{n.name} {n.how_it_ended()}", int(n.returncode or 0), now)
+        if first is not None:
+            how, rc, at = first
+            lost = rc == EXIT_PEER_LOST
+            bound = PEER_LOST_GRACE_PERIODS * PERIOD if lost else grace
+            if now - at > bound:
+                if not lost and rc not in ok:
+                    for n in running:
+                        n.close()
+                    return None
+                return running[0], f"{how} and it did not end within {bound:g} s"
+        for n in running:
+            now_size = _log_size(n)
+            if now_size != size[id(n)]:
+                began[id(n)] = began[id(n)] or size[id(n)] >= 0
+                size[id(n)], grew[id(n)] = now_size, now
+            limit = stall if began[id(n)] else startup
+            if n.log is not None and now - grew[id(n)] > limit:
+                return n, f"its log {n.log.name} did not grow for {limit:g} s"
+        time.sleep(0.1)
+
+
+def watch_nodes(nodes: Sequence[NodeProcess], what: str, folder: Path | None = None, *,
+                ok: Collection[int] = (0,), poll: LogProgress | None = None,
+                grace: float = GRACE_PERIODS * PERIOD, stall: float = STALL_PERIODS * PERIOD,
+                startup: float = STARTUP_PERIODS * PERIOD,
+                ended: tuple[str, int] | None = None) -> list[dict[str, Any]]:
+    """Wait for every node of a run and reap it; returns their summaries (``NodeProcess.wait``)
+    in order when each ended with a status in ``ok``. Otherwise the error (``what``: the run
+    that failed; the node's output kept in ``folder``) names the node at fault: one that stopped
+    answering (still running ``grace`` s after another ended, or its log silent for ``stall`` s;
+    it is stopped), else the first killed by a signal, else the first that failed; a node that
+    ended with EXIT_TAMPERED gives TamperedError. ``poll`` reports one node's progress.
+    ``ended``: a side of the run that is not a node here (the Python side of ``rrr hil
+    controller|plant``) has ended: how ("the Python plant lost the controller") and its exit
+    status (EXIT_PEER_LOST when it lost the node)."""
+    stuck = _stuck(nodes, ok, grace, stall, startup, poll, ended)
+    if stuck is not None:
+        node, why = stuck
+        if node.stopped_by_signal():
+            why += "; it was stopped by a signal (SIGSTOP?)"
+        for other in nodes:
+            other.close()
+        raise node.failure(what, folder, how=f"stopped answering ({why}) and was ended")
+    summaries = [n.wait(30.0) for n in nodes]
+    if all(int(s["exit"]) in ok for s in summaries):
+        return summaries
+    failed = [n for n, s in zip(nodes, summaries, strict=True) if int(s["exit"]) not in ok]
+    killed = [n for n in failed if int(n.returncode or 0) < 0]
+    first = [n for n in failed if n.returncode != EXIT_PEER_LOST]  # not those that lost it
+    raise (killed or first or failed)[0].failure(what, folder)
+
+
+@contextlib.contextmanager
+def quiet_bus_threads() -> Iterator[list[BaseException]]:
+    """For the block: the threads of python-can and canopen (a bus's receive thread "Notifier
+    for bus ...", a periodic sender "...Cyclic send task...") that end with an exception when
+    their bus fails (a node that went away, a socketcand server's "< error ... >") keep it in the
+    yielded list and log it as one DEBUG line instead of printing a traceback, and the ERROR
+    lines those libraries log about it become DEBUG lines (shown with -v): the run's own error
+    names the node and the cause. Other threads' exceptions are reported as before."""
+    kept: list[BaseException] = []
+    previous = threading.excepthook
+
+    def hook(args: Any) -> None:
+        name = args.thread.name if args.thread is not None else ""
+        if args.exc_value is not None and ("Notifier" in name or "Cyclic" in name):
+            kept.append(args.exc_value)
+            log.debug("%s ended: %s", name, args.exc_value)
+            return
+        previous(args)
+
+    def demote(record: logging.LogRecord) -> bool:
+        if record.levelno > logging.DEBUG:
+            record.levelno, record.levelname = logging.DEBUG, "DEBUG"
+        return True
+
+    loggers = [logging.getLogger(n) for n in ("can.interfaces.socketcand.socketcand",
+                                              "can.notifier", "can.broadcastmanager",
+                                              "canopen.network", "canopen.sdo.client")]
+    threading.excepthook = hook
+    for lg in loggers:
+        lg.addFilter(demote)
+    try:
+        yield kept
+    finally:
+        threading.excepthook = previous
+        for lg in loggers:
+            lg.removeFilter(demote)

@@ -7,14 +7,23 @@ link k frame is DH frame k-1 turned by q_k, the tool is frame 3), the URDF's lin
 cylinders of :func:`robot_urdf`), the pen trace and the reference (``tip``, ``x_ref``), and the
 joint signals (q against q_ref, the voltages u, u_n, u_c, the tip error). The page's script only
 draws: an orthographic 3-D view on a canvas, a time slider, play/pause, plots with a time cursor.
+
+Hostile folders: the tables are read only inside the folder, by plain names (a scenario name
+from summary.json or ``--scenario`` that is not one plain file name, or a table that is a link
+out of the folder, is refused); the page's data is JSON with ``<``, ``>``, ``&`` and the line
+separators escaped (no ``</script``, no ``<!--`` in its script element), its title is
+HTML-escaped where it lands (``<title>``, ``<h1>``), and the template's placeholders are filled
+in one pass, so no value (a folder named ``{{DATA}}``) can become another placeholder.
 """
 
 from __future__ import annotations
 
 import base64
 import hashlib
+import html
 import json
 import math
+import re
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from importlib import resources
@@ -25,7 +34,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core.fmu_vars import JOINTS
-from ..core.outputs import atomic_write_text
+from ..core.outputs import atomic_write_text, check_name
 from ..core.robot import RobotFile
 from ..core.tables import read_table
 from ..core.urdf import robot_urdf
@@ -192,6 +201,20 @@ def _sha256(text: str) -> str:
     return "'sha256-" + base64.b64encode(hashlib.sha256(text.encode()).digest()).decode() + "'"
 
 
+#: What the page's JSON holds as escapes (valid JSON, and never markup inside its script
+#: element: no "</script", no "<!--", no "]]>").
+_JSON_ESCAPES = {"<": "\\u003c", ">": "\\u003e", "&": "\\u0026", "\u2028": "\\u2028",
+                 "\u2029": "\\u2029"}
+#: The template's placeholders, filled in one pass.
+_PLACEHOLDER = re.compile(r"\{\{(CSP|TITLE|STYLE|SCRIPT|DATA)\}\}")
+
+
+def script_json(data: Any) -> str:
+    """``data`` as JSON for an HTML ``<script type="application/json">`` element."""
+    text = json.dumps(data, separators=(",", ":"), allow_nan=False)
+    return re.sub("[<>&\u2028\u2029]", lambda m: _JSON_ESCAPES[m.group(0)], text)
+
+
 def view_html(runs: Mapping[str, Mapping[str, FloatArray]], robot: RobotFile,
               title: str = "rrr view") -> str:
     """The page for ``runs`` (scenario name -> its table's columns)."""
@@ -200,29 +223,47 @@ def view_html(runs: Mapping[str, Mapping[str, FloatArray]], robot: RobotFile,
     scenarios = [scenario_data(name, cols, robot) for name, cols in runs.items()]
     data = {"colors": COLORS, "visuals": urdf_visuals(robot_urdf(robot)),
             "view": _view_box(scenarios), "scenarios": scenarios}
-    # "</" never appears inside the JSON block (it would end the script element)
-    payload = json.dumps(data, separators=(",", ":"), allow_nan=False).replace("</", "<\\/")
     script, style = _asset("view.js"), _asset("view.css")
     csp = (f"default-src 'none'; script-src {_sha256(script)}; style-src {_sha256(style)}; "
            "img-src 'none'; connect-src 'none'; base-uri 'none'; form-action 'none'")
-    page = _asset("view.html")
-    safe_title = title.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
-    for key, value in (("{{CSP}}", csp), ("{{TITLE}}", safe_title), ("{{STYLE}}", style),
-                       ("{{SCRIPT}}", script)):
-        page = page.replace(key, value)
-    return page.replace("{{DATA}}", payload)   # last: the data may contain any text
+    values = {"CSP": csp, "TITLE": html.escape(title, quote=True), "STYLE": style,
+              "SCRIPT": script, "DATA": script_json(data)}
+    return _PLACEHOLDER.sub(lambda m: values[m.group(1)], _asset("view.html"))
+
+
+def _table(root: Path, name: str, source: str) -> Path | None:
+    """The table of scenario ``name`` in ``root``: ``<name>.csv`` or ``.parquet`` (None: no
+    such file), read only inside ``root``: BadInputError for a name that is not one plain file
+    name (``source`` names where it came from) or a table that leads out of the folder."""
+    try:
+        check_name(f"{name}.csv")
+    except BadInputError:
+        raise BadInputError(f"{source}: the scenario {name!r} cannot name a table in {root} "
+                            "(one plain file name: no folder, not hidden)") from None
+    inside = root.resolve()
+    for path in (root / f"{name}.csv", root / f"{name}.parquet"):
+        if not path.is_file():
+            continue
+        if path.resolve().parent != inside:
+            raise BadInputError(f"{path} leads out of {root} (to {path.resolve()}): rrr view "
+                                "reads the tables inside the folder only")
+        return path
+    return None
 
 
 def read_run(folder: str | Path, scenarios: Sequence[str] | None = None
              ) -> dict[str, dict[str, FloatArray]]:
     """The tables of a result folder: ``<name>.csv`` (or ``.parquet``) for each scenario of its
-    summary.json (or of ``scenarios``), name -> columns."""
+    summary.json (or of ``scenarios``), name -> columns; only files inside the folder, by plain
+    names."""
     root = Path(folder)
     if not root.is_dir():
         raise BadInputError(f"{root} is not a folder of results")
     names = list(scenarios or [])
+    source = "--scenario"
     if not names:
         summary = root / "summary.json"
+        source = str(summary)
         if summary.is_file():
             try:
                 doc = json.loads(summary.read_text(encoding="utf-8"))
@@ -231,15 +272,13 @@ def read_run(folder: str | Path, scenarios: Sequence[str] | None = None
                 raise BadInputError(f"{summary}: not a summary of a run ({exc})") from None
         else:
             names = sorted(p.stem for p in root.glob("*.csv"))
+            source = str(root)
     runs: dict[str, dict[str, FloatArray]] = {}
     for name in names:
-        csv, parquet = root / f"{name}.csv", root / f"{name}.parquet"
-        if csv.is_file():
-            runs[name] = read_table(csv)
-        elif parquet.is_file():
-            runs[name] = read_table(parquet)
-        else:
+        path = _table(root, name, source)
+        if path is None:
             raise BadInputError(f"{root}: no table {name}.csv or {name}.parquet")
+        runs[name] = read_table(path)
     if not runs:
         raise BadInputError(f"{root}: no result table (<scenario>.csv) to show")
     return runs

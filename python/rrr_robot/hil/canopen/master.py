@@ -1,9 +1,9 @@
 """A CANopen master of the three simulated CiA 402 drives (``rrr hil canopen``, docs/canopen.md),
 built on the unmodified ``canopen`` package: NMT, SDO configuration, the PDO mapping read back,
 ``BaseNode402`` to OPERATION ENABLED, then the computed-torque law of eq 15 (``Model.ctc``) in
-lockstep, one explicit SYNC per period, or in real time (:mod:`.realtime`: the package's SYNC
-producer), against ``rrr_hil_plant --profile canopen`` (:mod:`.drives`). The C controller node
-as the master is :mod:`.c_master`; the run's files, :mod:`.results`.
+lockstep, one explicit SYNC per period, or in real time (:mod:`.realtime`: python-can's
+periodic SYNC sender), against ``rrr_hil_plant --profile canopen`` (:mod:`.drives`). The C
+controller node as the master is :mod:`.c_master`; the run's files, :mod:`.results`.
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ import numpy as np
 from ...core._arrays import FloatArray
 from ...core.control import CtcGains
 from ...core.model import Model
-from ...errors import BadInputError, EmcyError, HilError
-from ..nodes import NodeProcess, Progress, open_bus
+from ...errors import BadInputError, EmcyError, HilError, TamperedError
+from ..nodes import NodeProcess, Progress, open_bus, quiet_bus_threads
 from ..results import BenchRun
 from .drives import (
     DEFAULT_NODE_IDS,
@@ -42,6 +42,9 @@ __all__ = ["MasterRun", "check_run", "run_canopen_master"]
 
 #: Over SocketCAN, seconds to wait for the plant node's power-on boot-ups (at least).
 POWER_ON_S = 60.0
+#: The length of each TPDO by its mapping (bytes): what a drive sends, and all it sends.
+TPDO_BYTES = {name: sum(bits for _, bits in EXPECTED_MAPPING[name]) // 8
+              for name in ("TPDO1", "TPDO2")}
 
 
 @dataclass(frozen=True)
@@ -116,6 +119,9 @@ class _Master:
         self.plant, self.timeout = plant, timeout
         self.bus = bus
         self._hb: Any = None  # the master's heartbeat producer (real time)
+        self._sync: Any = None  # the SYNC producer (real time)
+        self.syncs = 0  # SYNCs sent
+        self.tpdos: dict[int, int] = {}  # TPDOs received, by COB-ID
         self.network = canopen.Network(self.bus)
         drive: Any = canopen.BaseNode402
         self.nodes: list[Any] = [drive(i, str(EDS_PATH)) for i in node_ids]
@@ -142,6 +148,26 @@ class _Master:
                 if self.plant is not None and not self.plant.running():
                     raise HilError(f"the plant node ended while the master waited for {what}: "
                                    f"{self.plant.how_it_ended()}") from None
+                failed = getattr(self.network.notifier, "exception", None)
+                if failed is not None:  # the bus's receive thread ended (quiet_bus_threads)
+                    raise HilError(f"the bus failed while the master waited for {what}: "
+                                   f"{' '.join(str(failed).split())}") from None
+
+    def check_tpdo(self, cob: int, data: bytes, k: int) -> None:
+        """A TPDO (COB-ID ``cob``) received while the master waits for those of SYNC ``k``:
+        each drive sends one TPDO1 and one TPDO2 per SYNC, of their mapped lengths, so one of
+        another length, or more of one than SYNCs were sent (a second in a SYNC: forged or
+        replayed), is tampered input: TamperedError naming the drive and the frame."""
+        name = "TPDO1" if cob & 0x780 == 0x180 else "TPDO2"
+        drive = cob & 0x7F
+        if len(data) != TPDO_BYTES[name]:
+            raise TamperedError(f"drive {drive}: {name} of {len(data)} bytes, "
+                                f"{TPDO_BYTES[name]} mapped: a frame the drives never send "
+                                "(tampered input?)")
+        self.tpdos[cob] = self.tpdos.get(cob, 0) + 1
+        if self.tpdos[cob] > self.syncs:
+            raise TamperedError(f"drive {drive}: two {name} in SYNC {k}: a frame the drives "
+                                "never send (tampered input?)")
 
     def boot(self, power_on: bool = False) -> None:
         """NMT reset node (a socketcand server drops the power-on boot-up): every drive must
@@ -157,9 +183,9 @@ class _Master:
         want = {0x700 + n.id for n in self.nodes}
         deadline = time.monotonic() + timeout
         while want:
-            got = self._next(deadline, "the boot-up messages")
+            ids = ", ".join(str(c - 0x700) for c in sorted(want))
+            got = self._next(deadline, f"the boot-up of drive(s) {ids} {when}")
             if got is None:
-                ids = ", ".join(str(c - 0x700) for c in sorted(want))
                 raise HilError(f"drive(s) {ids} sent no boot-up within {timeout:g} s {when}"
                                ": no such node id on the bus?")
             if got[1] == b"\0":
@@ -234,6 +260,24 @@ class _Master:
             self.network.sync.transmit()
         except (can.CanError, OSError) as exc:
             raise self._bus_failed(k, exc) from exc
+        self.syncs += 1
+
+    def start_sync(self, period: float) -> None:
+        """A SYNC every ``period`` s from python-can's periodic sender (a thread with absolute
+        due times and a sleep only: the one canopen's SyncProducer starts), each counted before
+        it is sent."""
+        import can
+
+        def count(msg: Any) -> None:
+            self.syncs += 1
+
+        sync = can.Message(arbitration_id=0x080, data=b"", is_extended_id=False)
+        self._sync = self.bus.send_periodic(sync, period, modifier_callback=count)
+
+    def stop_sync(self) -> None:
+        task, self._sync = self._sync, None
+        if task is not None:
+            task.stop()
 
     def next_frame(self, timeout: float, what: str) -> tuple[int, bytes] | None:
         """The next frame of the drives within ``timeout`` s (None after it)."""
@@ -279,6 +323,7 @@ class _Master:
             if 0x80 < cob < 0x100:
                 raise EmcyError(k, cob - 0x80, int.from_bytes(data[:2], "little"))
             if (cob & 0x780) in (0x180, 0x280):
+                self.check_tpdo(cob, data, k)
                 got[cob] = data
         return decode_feedback(k, [node.id for node in self.nodes], got)
 
@@ -298,6 +343,8 @@ class _Master:
         time.sleep(0.05)
 
     def close(self) -> None:
+        with contextlib.suppress(Exception):
+            self.stop_sync()
         with contextlib.suppress(Exception):
             self.stop_heartbeat()
         with contextlib.suppress(Exception):
@@ -338,7 +385,7 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     IDLE_MS_SOCKETCAN after the master's NMT stop). HilError when a drive does not boot or
     enable, on an SDO abort, a lost plant or a timeout (``timeout`` s per wait).
 
-    ``realtime`` (:mod:`.realtime`): the canopen package's SYNC producer every period instead of
+    ``realtime`` (:mod:`.realtime`): python-can's periodic SYNC sender every period instead of
     lockstep, the master's heartbeat watched by the drives (0x1016), the drives' RPDO timeout
     if given, the law on the newest TPDOs."""
     check_run(t, q_ref, node_ids, interface, realtime)
@@ -352,14 +399,14 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     bus = open_bus("socketcan", channel=channel) if sc else None
     try:
         plant = start_drives(q_ref, qd_ref, Path(work), channel if sc else None,
-                             None if realtime is None else realtime.fifo)
+                             None if realtime is None else realtime.fifo, timeout=timeout)
     except BaseException:
         if bus is not None:
             bus.shutdown()
         raise
     # real time from here (after the plant's start): the master's threads
-    with plant, (contextlib.nullcontext() if realtime is None
-                 else realtime_process(realtime)) as setup:
+    with plant, quiet_bus_threads(), (contextlib.nullcontext() if realtime is None
+                                      else realtime_process(realtime)) as setup:
         master = _Master(bus if sc else open_bus("socketcand", port=int(plant.port or 0)),
                          plant, node_ids, timeout)
         try:

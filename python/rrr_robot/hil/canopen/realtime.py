@@ -1,10 +1,11 @@
 """The CANopen master in real time (``rrr hil canopen --realtime``, docs/canopen.md "Real
-time"): the SYNC every 1 ms period from the ``canopen`` package's own producer
-(``network.sync.start``: python-can's thread with absolute due times and a sleep only), the
-master's heartbeat for the drives' consumer 0x1016, the drives' watchdogs (their consumer time
-and their RPDO timeout 0x2001, both settable), and the timing statistics of a run, measured
-where the drives see it (the plant node's frame log). The C master (``--master c``) SYNCs on its
-own clock (rrr_hil_rt), with its own heartbeat and consumer times.
+time"): the SYNC every 1 ms period from python-can's periodic sender (the thread canopen's
+SyncProducer starts: absolute due times and a sleep only; the master counts each SYNC it sends,
+so that a second TPDO of a drive in one SYNC is seen), the master's heartbeat for the drives'
+consumer 0x1016, the drives' watchdogs (their consumer time and their RPDO timeout 0x2001, both
+settable), and the timing statistics of a run, measured where the drives see it (the plant
+node's frame log). The C master (``--master c``) SYNCs on its own clock (rrr_hil_rt), with its
+own heartbeat and the same settable watchdogs.
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ _SW_MASK, _SW_ENABLED = 0x6F, 0x27  # statusword: OPERATION ENABLED
 #: report their reaction in their TPDOs and the plant logs the periods at 0 V) before it ends
 #: the run.
 EMCY_GRACE_PERIODS = 20
+#: s: at the end of a run, how long the master reads the TPDOs still on their way.
+DRAIN_S = 0.1
 
 
 def decode_feedback(k: int, node_ids: Sequence[int], tpdos: dict[int, bytes]
@@ -62,8 +65,8 @@ class CanopenRealTime:
     the C master's clock (us; 0: sleep only), the heartbeat producer period and the drives'
     consumer time (ms), the drives' RPDO timeout 0x2001 (SYNC periods; None: the EDS's, 3), and
     ``heartbeat_stop_at``: fault injection, the master's heartbeat stops at that SYNC (the drives
-    must fault). The C master takes its own heartbeat and consumer times and the EDS's RPDO
-    timeout only."""
+    must fault). The C master takes the consumer time and the RPDO timeout (its --consumer-ms,
+    --rpdo-timeout), its own heartbeat period, and no heartbeat_stop_at."""
 
     fifo: int = 80
     spin_us: int = 100
@@ -107,7 +110,7 @@ def realtime_process(rt: CanopenRealTime) -> Iterator[str]:
     sys.setswitchinterval(1e-4)
     enabled = gc.isenabled()
     gc.disable()
-    notes += ["gc off", "GIL switch 100 us", "canopen SYNC thread"]
+    notes += ["gc off", "GIL switch 100 us", "python-can SYNC thread"]
     try:
         yield ", ".join(notes)
     finally:
@@ -190,7 +193,7 @@ def run_periods(master: Any, n: int, law: Law, rt: CanopenRealTime,
                 progress: Callable[[int, int], None] | None = None) -> None:
     """``n`` SYNC periods in real time on ``master`` (master._Master, its drives in OPERATION
     ENABLED and NMT operational, the master's heartbeat running), the SYNCs from the canopen
-    package's producer (a python-can thread, sleep only): the master answers the newest
+    master's producer (python-can's periodic sender, sleep only): the master answers the newest
     complete set of TPDOs, ``law(k, feedback)`` (per drive: statusword, position, velocity)
     gives the target torques, sent in the RPDOs. The SYNCs it did not answer before the next
     are the drives' deadline misses (:func:`frame_log_timing`). EmcyError on an EMCY (after
@@ -213,6 +216,7 @@ def run_periods(master: Any, n: int, law: Law, rt: CanopenRealTime,
             if 0x80 < cob < 0x100:
                 raise EmcyError(k, cob - 0x80, int.from_bytes(data[:2], "little"))
             if cob in counts:
+                master.check_tpdo(cob, data, k)
                 counts[cob] += 1
                 newest[cob] = data
 
@@ -230,7 +234,7 @@ def run_periods(master: Any, n: int, law: Law, rt: CanopenRealTime,
 
     heartbeat_on = True
     master.send_rpdos([0, 0, 0], 0)
-    master.network.sync.start(PERIOD)
+    master.start_sync(PERIOD)
     try:
         k = -1
         while k < n - 1:
@@ -245,11 +249,20 @@ def run_periods(master: Any, n: int, law: Law, rt: CanopenRealTime,
                 raise after_emcy(emcy) from None
             k = min(n - 1, min(counts.values()) - 1)
             if k == n - 1:
-                master.network.sync.stop()
+                master.stop_sync()
             torques = law(k, decode_feedback(k, ids, newest))
             if k < n - 1:
                 master.send_rpdos(torques, k)
             if progress is not None:
                 progress(k + 1, n)
+        # the answers still on their way (the drives' TPDOs may lag behind the SYNCs, and a
+        # repeat among them shows only once each count can pass the SYNCs sent)
+        deadline = time.monotonic() + DRAIN_S
+        while min(master.tpdos.get(cob, 0) for cob in counts) < master.syncs:
+            got = master.next_frame(max(0.0, deadline - time.monotonic()), "the last TPDOs")
+            if got is None:
+                break
+            if got[0] in counts:
+                master.check_tpdo(got[0], got[1], master.syncs - 1)
     finally:
-        master.network.sync.stop()
+        master.stop_sync()

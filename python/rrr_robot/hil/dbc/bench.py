@@ -21,7 +21,7 @@ import numpy as np
 
 from ...core._arrays import FloatArray
 from ...core.outputs import atomic_path
-from ...errors import HilError
+from ...errors import HilError, OutputError
 from ...sim.cosim import CosimOptions, CosimResult, run_cosim
 from ..logs.specs import CONTROLLER_LOG, PLANT_LOG, read_log
 from ..nodes import (
@@ -35,7 +35,7 @@ from ..nodes import (
     start_controller,
     start_plant,
     wait_for_boot_up,
-    wait_node,
+    watch_nodes,
 )
 from ..results import BenchRun
 from .protocol import EXIT_SAFETY, frame_id, quantise_command, quantise_state
@@ -77,7 +77,7 @@ def _optional_atomic(path: Path | None) -> Iterator[Path | None]:
 
 
 def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: FloatArray,
-                workdir: Path | None = None, timeout: float = 300.0,
+                workdir: Path | None = None,
                 controller_values: Mapping[str, float | bool] = {}, *,
                 frame_log: str | None = None, realtime: RealTime | None = None,
                 progress: Progress | None = None, socketcan: str | None = None,
@@ -91,7 +91,10 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
     ``workdir``: plant.csv, controller.csv, the controller node's frame log ``frame_log`` (a
     file name; rrr_robot.hil.logs.frames) and, in real time, latency_controller.csv and
     latency_plant.csv. A run that completed while the safety policy fired (a node's exit
-    status EXIT_SAFETY) is a run: the summaries say so; any other non-zero status raises."""
+    status EXIT_SAFETY) is a run: the summaries say so; any other non-zero status raises
+    (nodes.watch_nodes: a node that stops answering is named and stopped within a bound in
+    bench periods, whatever the run's length; TamperedError for a controller that received a
+    JointState twice in a lockstep period)."""
     if can_fd and not socketcan:
         raise HilError("CAN FD needs the SocketCAN transport (--interface socketcan): the "
                        "socketcand protocol carries classical CAN frames only")
@@ -129,19 +132,15 @@ def run_c_bench(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: F
                                         extra=[*controller_node_args(controller_values),
                                                *rt_ctrl], socketcan=socketcan)
                 with ctrl:
-                    cs = wait_node(ctrl, timeout, LogProgress(ctrl_log, n, progress))
-                    if cs["exit"] not in (0, EXIT_SAFETY):  # the plant would wait for it
-                        # the node that died first is the one to name: a controller whose
-                        # plant was killed ends with an error of its own
-                        dead = plant if plant.died() else ctrl
-                        plant.close()
-                        raise dead.failure("the CAN bench failed", failure_folder(work))
-                    ps = plant.wait(timeout)
+                    cs, ps = watch_nodes([ctrl, plant], "the CAN bench failed",
+                                         failure_folder(work), ok=(0, EXIT_SAFETY),
+                                         poll=LogProgress(ctrl_log, n, progress))
             wall = time.perf_counter() - start
-            if ps["exit"] not in (0, EXIT_SAFETY):
-                raise plant.failure("the CAN bench failed", failure_folder(work))
             if frames is not None and cs.get("frame_log_error"):
-                raise HilError(f"the controller's frame log failed: {cs['frame_log_error']}")
+                raise OutputError(f"cannot write the controller's frame log "
+                                  f"{failure_folder(work) / str(frame_log)}: "
+                                  f"{cs['frame_log_error']}; free space, or write the results "
+                                  "elsewhere (--out)")
             p, c = read_log(plant_log, PLANT_LOG), read_log(ctrl_log, CONTROLLER_LOG)
         m = min(p.rows.shape[0], c.rows.shape[0])  # real time: the loops need not end together
         return BenchRun(t=p.col("t")[:m], q=p.group("q")[:m], qd=p.group("qd")[:m],

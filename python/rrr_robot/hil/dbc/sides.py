@@ -26,6 +26,7 @@ from ...writing.trajectory import Reference
 from ..channel import DEFAULT_CHANNEL
 from ..logs.specs import CONTROLLER_LOG, PLANT_LOG, NodeLog, read_log
 from ..nodes import (
+    EXIT_PEER_LOST,
     Progress,
     controller_node_args,
     export_reference,
@@ -33,6 +34,7 @@ from ..nodes import (
     open_bus,
     start_listening_controller,
     start_plant,
+    watch_nodes,
 )
 from ..results import BenchRun, write_controller_log
 from .bench import RealTime, run_c_bench
@@ -73,6 +75,10 @@ class SideRun:
     run: BenchRun
     nodes: dict[str, Mapping[str, Any]]
     plant: PlantRun | None = None
+
+
+#: The C node's exit statuses that make a run (its status is the run's): all but a signal's.
+_ANY_STATUS = range(256)
 
 
 def open_checked_bus(conn: Connection, host: str, port: int) -> Any:
@@ -139,14 +145,17 @@ def run_controller_side(ref: Reference, controller_values: Mapping[str, float | 
                 run = run_fmu_controller(bus, ref.t, ref.q, ref.qd, ref.qdd,
                                          dict(controller_values), progress=progress,
                                          alive=plant.running if plant is not None else None)
-        except BusLost as exc:  # name the plant node when it is the one that died
-            if plant is not None and plant.died():
-                raise plant.failure(f"the CAN bench stopped at period {exc.period} of "
-                                    f"{ref.t.size}", failure_folder(work)) from exc
+        except BusLost as exc:  # name the plant node when it is the one that died or froze
+            if plant is not None:
+                stopped = f"the CAN bench stopped at period {exc.period} of {ref.t.size}"
+                if plant.died():
+                    raise plant.failure(stopped, failure_folder(work)) from exc
+                watch_nodes([plant], stopped, failure_folder(work), ok=_ANY_STATUS,
+                            ended=(f"the controller FMU's side lost it ({exc})", EXIT_PEER_LOST))
             raise
-        summary = plant.wait() if plant is not None else dict(run.plant_summary)
-        if plant is not None and int(summary.get("exit", 0)) < 0:
-            raise plant.failure("the CAN bench failed", failure_folder(work))
+        summary = (watch_nodes([plant], "the CAN bench failed", failure_folder(work),
+                               ok=_ANY_STATUS, ended=("the controller FMU's side ended", 0))[0]
+                   if plant is not None else dict(run.plant_summary))
     finally:
         if plant is not None:
             plant.close()
@@ -190,10 +199,13 @@ def run_plant_side(ref: Reference, controller_values: Mapping[str, float | bool]
                                 timeout=timeout, start_timeout=120.0, progress=progress,
                                 periods=ref.t.shape[0])
             prun = plant.run(work / "plant.csv")
-        cs: dict[str, Any] = ctrl.wait() if ctrl is not None else {"exit": 0}
-        if ctrl is not None and int(cs["exit"]) < 0:  # killed: its log is cut short
-            raise ctrl.failure(f"the CAN bench stopped at period {prun.summary['periods']} of "
-                               f"{ref.t.size}", failure_folder(work))
+        cs: dict[str, Any] = {"exit": 0}
+        if ctrl is not None:  # killed or frozen: named (its log is cut short)
+            rc = int(prun.summary["exit"])
+            how = "lost it" if rc == EXIT_PEER_LOST else f"ended with status {rc}"
+            cs = watch_nodes([ctrl], f"the CAN bench stopped at period "
+                             f"{prun.summary['periods']} of {ref.t.size}", failure_folder(work),
+                             ok=_ANY_STATUS, ended=(f"the Python plant {how}", rc))[0]
     finally:
         if ctrl is not None:
             ctrl.close()
