@@ -1,18 +1,18 @@
 #!/usr/bin/env bash
-# Sets up everything and runs every test, each stage once: the C tests (core, FMUs, CAN bench)
-# under AddressSanitizer and UndefinedBehaviorSanitizer via CTest (with the FMUs' Windows
-# binaries run under wine, their aarch64 Linux binaries under qemu-user), ruff, the Python
-# package's import layers (lint-imports) and types (mypy), pytest (including the generated-code
-# checks, every block of README.md and docs/, the CAN bench over SocketCAN in a QEMU guest);
-# beside them, in the background: the README's default build (Release) with the CTest tests of
-# what that build changes (label release: the install tree, the optimised kernels, the
-# librrr symbol check, the documented aarch64 cross build), the manual (sphinx, warnings as
-# errors), every bench script's quick mode, and short libFuzzer runs on the CAN frame decoders,
-# the CANopen slave, forged FMU states (each FMU) and the FMU importer's scanner. Each
-# background stage logs to build-logs/<stage>.log, printed when it ends; the wall time of each
-# stage and the total are printed at the end. mingw-w64, wine, gcc-aarch64-linux-gnu,
-# qemu-user, chromium, clang and the SocketCAN guest's tools are installed with apt-get when
-# missing and root.
+# Sets up everything and runs every test, each stage once. In the foreground: pytest (including
+# the generated-code checks, every block of README.md and docs/, the CAN bench over SocketCAN in
+# a QEMU guest). Beside it, in the background at a lower priority, each in its own build folder:
+# the C tests (core, FMUs, CAN bench) under AddressSanitizer and UndefinedBehaviorSanitizer via
+# CTest; ruff, the Python package's import layers (lint-imports) and types (mypy); the README's
+# default build (Release) with the CTest tests of what that build changes or alone builds (label
+# release: the install tree, the optimised kernels, the librrr symbol check, the documented
+# aarch64 cross build, the FMUs' Windows binaries under wine and aarch64 binaries under
+# qemu-user); the manual (sphinx, warnings as errors); every bench script's quick mode; short
+# libFuzzer runs on the CAN frame decoders, the CANopen slave, forged FMU states (each FMU) and
+# the FMU importer's scanner. Each background stage logs to build-logs/<stage>.log, printed when
+# the foreground stage ends (a failure is named at once); the wall time of each stage and the
+# total are printed at the end. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium,
+# clang and the SocketCAN guest's tools are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -52,12 +52,18 @@ background() {  # NAME NICENESS FUNCTION: a stage in the background, its output 
   mkdir -p "$LOGS"
   echo "== $name: started in the background (log: build-logs/$fn.log) =="
   rm -f "$LOGS/$fn.seconds"
-  setsid nice -n "$niceness" bash -c \
-    "set -euo pipefail; $fn; echo \$SECONDS > $(printf %q "$LOGS/$fn.seconds")" \
-    > "$LOGS/$fn.log" 2>&1 &
+  # its log is printed when the foreground stage ends; a failure is named on stderr (fd 3) at once
+  setsid nice -n "$niceness" bash -c 'stage_main "$@"' _ "$name" "$fn" "$LOGS" \
+    3>&2 > "$LOGS/$fn.log" 2>&1 &
   BG_NAMES+=("$name:$fn")
   BG_PIDS+=("$!")
   BG_T0+=("$SECONDS")
+}
+stage_main() {  # NAME FUNCTION LOGS: the body of a background stage (its own bash)
+  set -euo pipefail
+  trap "rc=\$?; [ \"\$rc\" = 0 ] || echo $(printf %q "== $1 FAILED: build-logs/$2.log ==") >&3" EXIT
+  "$2"
+  echo "$SECONDS" > "$3/$2.seconds"
 }
 finish_background() {  # INDEX: wait for it, print its log, fail the test command if it failed
   local i=$1 name=${BG_NAMES[$1]%%:*} fn=${BG_NAMES[$1]#*:} rc=0
@@ -183,13 +189,37 @@ JOBS="$(nproc 2>/dev/null || echo 2)"
 PYTHON="$(command -v python)"
 export JOBS PYTHON
 
-# ---- the background stages: each in its own build folder, at a lower priority ----------------
-# The README's CMake build (default type: Release, tests on): its CTest runs only the tests of
-# what the Release build changes (label release); the ASan build below runs every other test.
+# ---- the background stages: each in its own build folder, at a lower priority than pytest ----
+# C tests under ASan + UBSan, every one once (all but label release_only). Without the FMUs'
+# Windows and aarch64 binaries: cross-compiled, they are never sanitized; their tests run in the
+# Release build. Warnings are errors in every build of the test command (RRR_WERROR; off in a
+# user's build).
+asan() {
+  cmake -S . -B build-asan -DRRR_SANITIZE=ON -DRRR_WERROR=ON -DCMAKE_BUILD_TYPE=Debug \
+    -DRRR_FMU_WINDOWS=OFF -DRRR_FMU_AARCH64=OFF -DPython3_EXECUTABLE="$PYTHON"
+  cmake --build build-asan -j "$JOBS"
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+    ctest --test-dir build-asan --output-on-failure -j "$JOBS" -LE release_only
+}
+# The README's CMake build (default type: Release, tests on): its CTest runs only what that
+# build changes or alone builds (label release: the optimised kernels, the symbol check, the
+# installed tree, the documented aarch64 cross build, the FMUs' Windows and aarch64 binaries)
 release_build() {
   cmake -S . -B build-release -DRRR_WERROR=ON -DPython3_EXECUTABLE="$PYTHON"
   cmake --build build-release -j "$JOBS"
   ctest --test-dir build-release --output-on-failure -j "$JOBS" -L release
+}
+lint() {
+  ruff check python tests bench tools c_src/rrr/gen
+  # the layers of the Python package (pyproject.toml [tool.importlinter]), checked on the
+  # rrr_robot that setup_env.sh has just installed from this tree
+  lint-imports
+  mypy python/rrr_robot
+}
+# The manual: a broken link or anchor, an unresolved reference or a page outside the navigation
+# fails it (docs/ -> build-docs/index.html; the README's block that builds it is this stage)
+manual() {
+  sphinx-build -q -W --keep-going -n -b html docs build-docs
 }
 # libFuzzer, short runs (c_src/hil/README.md and docs/limits.md have the long ones)
 fuzz() {
@@ -220,11 +250,6 @@ fuzz() {
   build-fuzz/c_src/fmi_import/fuzz_fmi_import -max_total_time="${RRR_FMI_FUZZ_SECONDS:-15}" \
     -max_len=65536 -print_final_stats=1 build-fuzz/corpus_fmi_import 2>&1 | tail -n 4
 }
-# The manual: a broken link or anchor, an unresolved reference or a page outside the navigation
-# fails it (docs/ -> build-docs/index.html; the README's block that builds it is this stage)
-manual() {
-  sphinx-build -q -W --keep-going -n -b html docs build-docs
-}
 # Every bench script's quick mode (they print their tables; no number is checked), after the
 # benchmark's C++ driver (one Pinocchio translation unit: about 2 min of CPU) is built
 benchmarks() {
@@ -235,30 +260,15 @@ benchmarks() {
     python "$script" --quick
   done
 }
-export -f release_build fuzz manual benchmarks
+export -f stage_main asan release_build lint manual fuzz benchmarks
+background "the C tests under ASan + UBSan (CTest, build-asan)" 5 asan
+background "ruff, lint-imports, mypy" 5 lint
 background "the README's Release build and its CTest (label release)" 10 release_build
-background "libFuzzer: build-fuzz and the short runs" 10 fuzz
 background "the manual (sphinx-build -W -n)" 10 manual
+background "libFuzzer: build-fuzz and the short runs" 10 fuzz
 background "every bench script's quick mode (bench/)" 15 benchmarks
 
-# ---- the foreground stages -------------------------------------------------------------------
-asan() {
-  # warnings are errors in every build of the test command (RRR_WERROR; off in a user's build)
-  cmake -S . -B build-asan -DRRR_SANITIZE=ON -DRRR_WERROR=ON -DCMAKE_BUILD_TYPE=Debug \
-    -DPython3_EXECUTABLE="$PYTHON"
-  cmake --build build-asan -j "$JOBS"
-  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
-    ctest --test-dir build-asan --output-on-failure -j "$JOBS" -LE release_only
-}
-stage "the C tests under ASan + UBSan (CTest, build-asan)" asan
-lint() {
-  ruff check python tests bench tools c_src/rrr/gen
-  # the layers of the Python package (pyproject.toml [tool.importlinter]), checked on the
-  # rrr_robot that setup_env.sh has just installed from this tree
-  lint-imports
-  mypy python/rrr_robot
-}
-stage "ruff, lint-imports, mypy" lint
+# ---- the foreground stage: pytest, the longest -----------------------------------------------
 stage "pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py)" \
   python -m pytest -q --durations=25 tests/python
 echo "== waiting for the background stages =="
