@@ -5,6 +5,7 @@ errors of the API and --scale): each is one line naming the option, file or node
 from __future__ import annotations
 
 import json
+import shlex
 import subprocess
 import sys
 import threading
@@ -222,7 +223,7 @@ def dying_nodes(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Any:
         for which, path in real.items():
             node = folder / f"rrr_hil_{which}"
             if which == dies:
-                node.write_text(_DYING.format(node=path))
+                node.write_text(_DYING.format(node=shlex.quote(str(path))))
                 node.chmod(0o755)
             else:
                 node.symlink_to(path)
