@@ -39,13 +39,23 @@ report() {
 trap report EXIT
 trap 'exit 130' INT
 trap 'exit 143' TERM
-stage() {  # NAME COMMAND...: one stage in the foreground
+stage() {  # NAME COMMAND...: one stage in the foreground (its failure ends the test command)
   local name=$1 t0=$SECONDS
   shift
   echo "== $name =="
   "$@"
   record "$name" $((SECONDS - t0))
   poll_background
+}
+FAILED=()
+last_stage() {  # NAME COMMAND...: the last foreground stage; the background stages are still
+  # waited for and printed when it fails
+  local name=$1 t0=$SECONDS rc=0
+  shift
+  echo "== $name =="
+  "$@" || rc=$?
+  record "$name" $((SECONDS - t0))
+  [ "$rc" = 0 ] || FAILED+=("$name (exit $rc)")
 }
 background() {  # NAME NICENESS FUNCTION: a stage in the background, its output in its log
   local name=$1 niceness=$2 fn=$3
@@ -75,10 +85,7 @@ finish_background() {  # INDEX: wait for it, print its log, fail the test comman
   cat "$LOGS/$fn.log"
   echo "== end of the log of $name =="
   record "$name (background)" "$secs"
-  if [ "$rc" != 0 ]; then
-    echo "the background stage '$name' failed (build-logs/$fn.log above)" >&2
-    exit 1
-  fi
+  [ "$rc" = 0 ] || FAILED+=("$name (exit $rc, build-logs/$fn.log)")
 }
 poll_background() {  # print the stages that have ended meanwhile
   local i
@@ -269,9 +276,13 @@ background "libFuzzer: build-fuzz and the short runs" 10 fuzz
 background "every bench script's quick mode (bench/)" 15 benchmarks
 
 # ---- the foreground stage: pytest, the longest -----------------------------------------------
-stage "pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py)" \
+last_stage "pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py)" \
   python -m pytest -q --durations=25 tests/python
 echo "== waiting for the background stages =="
 wait_background
+if [ "${#FAILED[@]}" != 0 ]; then
+  printf '== FAILED: %s ==\n' "${FAILED[@]}" >&2
+  exit 1
+fi
 echo "== all test stages passed (CTest under ASan + UBSan and of the Release build, ruff," \
      "lint-imports, mypy, pytest, the manual, the benchmarks' quick modes, libFuzzer) =="
