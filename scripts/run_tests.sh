@@ -22,6 +22,7 @@ export RRR_PIP_TARGET=".[test,bench,docs]"
 T_ALL=$SECONDS
 TIMES=""
 BG_NAMES=()
+BG_FNS=()
 BG_PIDS=()
 BG_T0=()
 LOGS="$ROOT/build-logs"
@@ -65,7 +66,8 @@ background() {  # NAME NICENESS FUNCTION: a stage in the background, its output 
   # its log is printed when the foreground stage ends; a failure is named on stderr (fd 3) at once
   setsid nice -n "$niceness" bash -c 'stage_main "$@"' _ "$name" "$fn" "$LOGS" \
     3>&2 > "$LOGS/$fn.log" 2>&1 &
-  BG_NAMES+=("$name:$fn")
+  BG_NAMES+=("$name")
+  BG_FNS+=("$fn")
   BG_PIDS+=("$!")
   BG_T0+=("$SECONDS")
 }
@@ -76,13 +78,13 @@ stage_main() {  # NAME FUNCTION LOGS: the body of a background stage (its own ba
   echo "$SECONDS" > "$3/$2.seconds"
 }
 finish_background() {  # INDEX: wait for it, print its log, fail the test command if it failed
-  local i=$1 name=${BG_NAMES[$1]%%:*} fn=${BG_NAMES[$1]#*:} rc=0
+  local i=$1 name=${BG_NAMES[$1]} fn=${BG_FNS[$1]} rc=0
   wait "${BG_PIDS[i]}" || rc=$?
   BG_PIDS[i]=""
   local secs=$((SECONDS - BG_T0[i]))  # its own count when it got to the end
   [ ! -s "$LOGS/$fn.seconds" ] || secs=$(cat "$LOGS/$fn.seconds")
   echo "== $name (background stage) took $secs s, exit $rc; its log: =="
-  cat "$LOGS/$fn.log"
+  cat "$LOGS/$fn.log" || true
   echo "== end of the log of $name =="
   record "$name (background)" "$secs"
   [ "$rc" = 0 ] || FAILED+=("$name (exit $rc, build-logs/$fn.log)")
