@@ -5,9 +5,11 @@ This machine's kernel may have no AF_CAN; Debian's kernel package has it (module
 can-dev, vcan). The guest boots that kernel with a busybox initramfs, makes ``vcan0``
 (classical CAN) and ``vcan1`` (CAN FD, MTU 72), mounts the host's file tree read-only over
 virtio-9p and runs each command in a chroot of it, so the host's own programs (the project's
-nodes, its virtual environment, can-utils) run there unchanged, at the same paths. One folder of
-the host, the scratch folder, is mounted writable at its own path: what a command writes there
-comes back to the host.
+nodes, its virtual environment, can-utils) run there unchanged, at the same paths. The guest has
+its own tmpfs over /tmp, /run, /var/tmp and /dev/shm; the host folders the commands need
+(``share``: by default this checkout, its virtual environment and the interpreter it links to)
+are bound back over it, read-only. One folder of the host, the scratch folder, is mounted
+writable at its own path: what a command writes there comes back to the host.
 
     with CanGuest(scratch) as guest:          # boots once (about 10 s)
         r = guest.run("candump -n 1 vcan0 & cansend vcan0 123#00; wait", timeout=30)
@@ -16,7 +18,7 @@ comes back to the host.
 The host talks to a small command server (the guest's init, a busybox shell) over a second
 serial port: the host writes a job's script into the scratch folder and names it on the serial
 line; the guest runs it (in a chroot, cwd and environment as given, killed after its timeout),
-keeps its stdout and stderr on its own tmpfs and copies them to the scratch folder when the job
+keeps its stdout and stderr in its own memory and copies them to the scratch folder when the job
 ends, syncs and answers with the exit status. Every process a job left running is killed when it
 ends. Everything is bounded in time: the boot, each job, and the guest's whole life (it powers
 itself off after ``max_seconds``; qemu dies with the Python process that started it).
@@ -64,16 +66,23 @@ MODULES = ("can", "can-raw", "can-dev", "vcan", "virtio", "virtio_ring",
            "9pnet", "9pnet_virtio", "9p")
 #: PATH of the jobs in the chroot (the host's programs).
 GUEST_PATH = "/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin"
+#: The folders where the guest's programs write their own files: a tmpfs of the guest over each,
+#: which hides the host's; the host folders the jobs need in them are bound back over it.
+GUEST_TMPFS = ("/tmp", "/run", "/var/tmp", "/dev/shm")
+#: The checkout this file belongs to.
+CHECKOUT = Path(os.path.abspath(__file__)).parents[2]
 
 INIT = r"""#!/bin/busybox sh
 # /init of the CAN test guest (tests/python/can_guest.py): modules, vcan0/vcan1, the host tree
-# read-only at /mnt, the scratch folder writable at its own path in it, then a command server
-# on ttyS1.
+# read-only at /mnt with the guest's own tmpfs over its scratch folders (@TMPFS@), the host
+# folders the jobs need bound back over those read-only, the scratch folder writable at its own
+# path, then a command server on ttyS1. The scratch folder is also at /scratch (outside the
+# chroot): its .guest/ names its own host path and the shared folders, one per line.
 /bin/busybox --install -s /bin
 export PATH=/bin
 mount -t proc none /proc; mount -t sysfs none /sys; mount -t devtmpfs none /dev
 arg() { tr ' ' '\n' < /proc/cmdline | sed -n "s/^rrr\.$1=//p"; }
-SCRATCH=$(arg scratch); MAXS=$(arg max); TTY=/dev/ttyS1
+MAXS=$(arg max); TTY=/dev/ttyS1
 fail() { echo "RRR_GUEST_FAIL $*" > $TTY; echo "RRR_GUEST_FAIL $*"; sync; poweroff -f; }
 MAXS=${MAXS:-900}
 # the guest's whole life is bounded: restarted after each job (which kills every process but init)
@@ -92,28 +101,40 @@ ip link add dev vcan1 type vcan && ip link set vcan1 mtu 72 && ip link set up vc
   fail "vcan1"
 mount -t 9p -o trans=virtio,version=9p2000.L,ro,msize=262144,cache=loose hostroot /mnt ||
   fail "9p mount of the host tree"
+# /host: the host tree as it is, before the guest's own mounts cover parts of it in /mnt
+mkdir -p /host /scratch /jobs; mount -o bind /mnt /host || fail "bind mount of the host tree"
 mount -t proc none /mnt/proc; mount -t sysfs none /mnt/sys; mount -o bind /dev /mnt/dev
-mkdir -p /dev/shm; mount -t tmpfs none /mnt/tmp; mount -t tmpfs none /mnt/dev/shm
-mount -t tmpfs none /mnt/run
-mount -t tmpfs none /mnt/var/tmp
-mkdir -p /mnt$SCRATCH
-mount -t 9p -o trans=virtio,version=9p2000.L,msize=262144 scratch /mnt$SCRATCH ||
+mkdir -p /dev/shm
+for d in @TMPFS@; do mount -t tmpfs none "/mnt$d" || fail "tmpfs on $d"; done
+mount -t 9p -o trans=virtio,version=9p2000.L,msize=262144 scratch /scratch ||
   fail "9p mount of the scratch folder"
-mkdir -p /mnt/tmp/.rrr_jobs
+# a shared folder: bound read-only at its own path; a symbolic link on the way to one: made again
+while IFS= read -r p; do
+  if [ -L "/host$p" ]; then
+    [ -e "/mnt$p" ] || [ -L "/mnt$p" ] || { mkdir -p "$(dirname "/mnt$p")" &&
+      ln -s "$(readlink "/host$p")" "/mnt$p"; } || fail "link $p"
+  else
+    mkdir -p "/mnt$p" && mount -o bind "/host$p" "/mnt$p" || fail "shared folder $p"
+  fi
+done < /scratch/.guest/shared
+IFS= read -r SCRATCH < /scratch/.guest/scratch
+mkdir -p "/mnt$SCRATCH" && mount -o bind /scratch "/mnt$SCRATCH" ||
+  fail "the scratch folder at $SCRATCH"
 stty -F $TTY raw -echo
 exec 3<>$TTY
 echo "RRR_GUEST_READY $(uname -r) $(cut -d' ' -f1 /proc/uptime)" >&3
 while read -r op id secs <&3; do
   case "$op" in
   run)
-    J=$SCRATCH/.jobs/$id; T=/mnt/tmp/.rrr_jobs/$id
+    J=/scratch/.jobs/$id; T=/jobs/$id
     t0=$(cut -d' ' -f1 /proc/uptime)
-    timeout -s KILL "$secs" chroot /mnt /bin/sh "$J/job.sh" > $T.out 2> $T.err < /dev/null
+    timeout -s KILL "$secs" chroot /mnt /bin/sh "$SCRATCH/.jobs/$id/job.sh" > $T.out 2> $T.err \
+      < /dev/null
     rc=$?
     t1=$(cut -d' ' -f1 /proc/uptime)
     kill -KILL -1 2>/dev/null; watchdog
-    cp $T.out /mnt$J/stdout; cp $T.err /mnt$J/stderr; rm -f $T.out $T.err
-    echo "$rc $t0 $t1" > /mnt$J/status
+    cp $T.out $J/stdout; cp $T.err $J/stderr; rm -f $T.out $T.err
+    echo "$rc $t0 $t1" > $J/status
     sync
     echo "RRR_GUEST_DONE $id $rc" >&3 ;;
   poweroff)
@@ -292,7 +313,8 @@ def module_order(folder: Path) -> list[str]:
 def ensure_initramfs(kernel: Path) -> Path:
     """The initramfs (busybox, the modules, /init) for ``kernel``, built once per content."""
     busybox = Path(shutil.which("busybox") or "/bin/busybox")
-    init = INIT.replace("@MODULES@", " ".join(module_order(kernel / "modules")))
+    init = INIT.replace("@MODULES@", " ".join(module_order(kernel / "modules"))).replace(
+        "@TMPFS@", " ".join(GUEST_TMPFS))
     digest = hashlib.sha256(init.encode() + busybox.read_bytes()
                             + (kernel / "release").read_bytes()).hexdigest()[:16]
     target = kernel / f"initramfs-{digest}.cpio"
@@ -325,6 +347,63 @@ def prepare() -> tuple[Path, Path]:
     return image if image.is_file() else kernel / "vmlinuz", ensure_initramfs(kernel)
 
 
+def _under_guest_tmpfs(path: Path) -> bool:
+    return any(path.is_relative_to(d) for d in GUEST_TMPFS)
+
+
+def _entries(path: Path) -> list[Path]:
+    """What the guest must recreate for ``path`` to resolve there as here: each symbolic link on
+    the way that lies under a folder of GUEST_TMPFS, then the folder it ends in if it lies under
+    one (symbolic links are followed; nothing is needed outside GUEST_TMPFS)."""
+    out: list[Path] = []
+    path = Path(os.path.abspath(path))
+    for _ in range(40):  # a bound on the links followed (a loop of links)
+        prefix = Path(path.anchor)
+        for k, part in enumerate(path.parts[1:], start=1):
+            prefix = prefix / part
+            if prefix.is_symlink():
+                if _under_guest_tmpfs(prefix):
+                    out.append(prefix)
+                target = Path(os.path.normpath(prefix.parent / os.readlink(prefix)))
+                path = target.joinpath(*path.parts[k + 1:])
+                break
+        else:
+            if path.is_dir() and _under_guest_tmpfs(path) and str(path) not in GUEST_TMPFS:
+                out.append(path)
+            return out
+    raise ValueError(f"{path}: too many levels of symbolic links")
+
+
+def default_shares(checkout: Path = CHECKOUT, python: Path = Path(sys.executable)) -> list[Path]:
+    """The host folders a job needs at their own paths: the checkout, the virtual environment
+    of ``python``, the interpreter that it links to (its prefix, wherever pyenv or the system
+    keeps it) and the folders of this interpreter's ``sys.path`` (site-packages, and folders
+    named by .pth files)."""
+    python = Path(os.path.abspath(python))
+    real = Path(os.path.realpath(python))
+    return [checkout, python.parent.parent, real.parent.parent, Path(sys.prefix),
+            Path(sys.base_prefix), *(Path(p) for p in sys.path if p and os.path.isdir(p))]
+
+
+def guest_mounts(folders: list[Path]) -> list[Path]:
+    """The paths the guest binds (folders) or links (symbolic links) for ``folders``, in the
+    order it makes them: no folder inside another one, links after the folders."""
+    entries = list(dict.fromkeys(e for f in folders for e in _entries(f)))
+    for e in entries:
+        if "\n" in str(e):
+            raise ValueError(f"{e!r}: a shared folder with a newline in its path")
+    dirs = sorted(e for e in entries if not e.is_symlink())
+    kept = [d for d in dirs if not any(d != o and d.is_relative_to(o) for o in dirs)]
+    links = [e for e in entries if e.is_symlink()
+             and not any(e.is_relative_to(d) for d in kept)]
+    return kept + links
+
+
+def _opt(path: Path) -> str:
+    """A path as the value of a QEMU option (a comma is written twice)."""
+    return str(path).replace(",", ",,")
+
+
 def _die_with_parent() -> None:  # runs in the child before exec
     with contextlib.suppress(OSError, AttributeError):
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
@@ -333,16 +412,19 @@ def _die_with_parent() -> None:  # runs in the child before exec
 class CanGuest:
     """The guest: ``start()`` (or ``with``), :meth:`run` any number of commands, ``close()``.
 
-    ``scratch``: the writable host folder (created; it must be a path without whitespace).
-    ``memory`` MiB, ``cpus`` emulated CPUs, ``boot_timeout`` and ``max_seconds`` (the guest's
-    whole life) in seconds.
+    ``scratch``: the writable host folder (created). ``share``: the host folders that jobs see
+    at their own paths even where the guest has its own tmpfs (GUEST_TMPFS: ``/tmp``, ...), read
+    only; by default :func:`default_shares` (this checkout, its virtual environment and its
+    interpreter). ``memory`` MiB, ``cpus`` emulated CPUs, ``boot_timeout`` and ``max_seconds``
+    (the guest's whole life) in seconds.
     """
 
-    def __init__(self, scratch: Path, *, memory: int = 1024, cpus: int = 1,
-                 boot_timeout: float = 180.0, max_seconds: float = 1200.0) -> None:
+    def __init__(self, scratch: Path, *, share: list[Path] | None = None, memory: int = 1024,
+                 cpus: int = 1, boot_timeout: float = 180.0, max_seconds: float = 1200.0) -> None:
         self.scratch = Path(scratch).resolve()
-        if re.search(r"\s", str(self.scratch)):
-            raise ValueError(f"scratch folder {self.scratch}: no whitespace allowed")
+        if "\n" in str(self.scratch):
+            raise ValueError(f"scratch folder {self.scratch!r}: a newline in its path")
+        self.shared = guest_mounts(default_shares() if share is None else share)
         self.memory, self.cpus = memory, cpus
         self.boot_timeout, self.max_seconds = boot_timeout, max_seconds
         self.kernel_release = ""
@@ -358,25 +440,29 @@ class CanGuest:
     def start(self) -> CanGuest:
         vmlinuz, initrd = prepare()
         self.scratch.mkdir(parents=True, exist_ok=True)
-        shutil.rmtree(self.scratch / ".jobs", ignore_errors=True)  # a previous guest's
+        for old in (".jobs", ".guest"):  # a previous guest's
+            shutil.rmtree(self.scratch / old, ignore_errors=True)
         (self.scratch / ".jobs").mkdir()
+        (self.scratch / ".guest").mkdir()
+        (self.scratch / ".guest" / "scratch").write_text(f"{self.scratch}\n")
+        (self.scratch / ".guest" / "shared").write_text("".join(f"{p}\n" for p in self.shared))
         self._tmp = tempfile.TemporaryDirectory(prefix="rrr-can-guest-")
         sock_path = Path(self._tmp.name) / "ctl.sock"
         self.console_log = self.scratch / "console.log"
         # mitigations=off: a throwaway test machine; the emulated CPU spends less time on them
         append = (f"console=ttyS0 panic=-1 quiet loglevel=3 mitigations=off "
-                  f"rrr.scratch={self.scratch} "
                   f"rrr.max={int(self.max_seconds)}")
         cmd = ["qemu-system-x86_64", "-accel", "tcg", "-cpu", "max", "-m", str(self.memory),
                "-smp", str(self.cpus), "-display", "none", "-monitor", "none", "-no-reboot",
                "-nodefaults",
                "-kernel", str(vmlinuz), "-initrd", str(initrd), "-append", append,
-               "-serial", f"file:{self.console_log}",
-               "-chardev", f"socket,id=ctl,path={sock_path},server=on,wait=off",
+               "-chardev", f"file,id=console,path={_opt(self.console_log)}",
+               "-serial", "chardev:console",
+               "-chardev", f"socket,id=ctl,path={_opt(sock_path)},server=on,wait=off",
                "-serial", "chardev:ctl",
                "-fsdev", "local,id=r,path=/,security_model=none,readonly=on,multidevs=remap",
                "-device", "virtio-9p-pci,fsdev=r,mount_tag=hostroot",
-               "-fsdev", f"local,id=s,path={self.scratch},security_model=none",
+               "-fsdev", f"local,id=s,path={_opt(self.scratch)},security_model=none",
                "-device", "virtio-9p-pci,fsdev=s,mount_tag=scratch"]
         t0 = time.monotonic()
         self._proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,

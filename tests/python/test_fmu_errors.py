@@ -182,17 +182,14 @@ def test_unknown_debug_log_category() -> None:
 @pytest.mark.parametrize(("f", "w"), [(1e8, 100.0), (1e4, 1e4), (0.08, 1e10)])
 def test_a_plant_too_stiff_is_refused_at_exit_initialization(f: float, w: float) -> None:
     """Legal friction values that cost 0.45 s per doStep (f[1,3] = 1e8) or 18 s and a Discard
-    (f >= 1e10): refused at once, naming both parameters and the stiffness estimate."""
-    import time
-
+    (f >= 1e10): refused at exitInitializationMode, before any doStep integrates, naming both
+    parameters and the stiffness estimate."""
     with Slave("plant").instantiate() as s:
         s.fmu.setupExperiment(startTime=0.0)
         s.set({"f[1,3]": f, "w[1,3]": w})
         s.fmu.enterInitializationMode()
-        start = time.perf_counter()
         with pytest.raises(FMICallException) as info:
             s.fmu.exitInitializationMode()
-        assert time.perf_counter() - start < 5.0  # a check, not an integration (~2 ms)
         assert info.value.status == FMI_ERROR
         assert any("f[1,3]" in m and "w[1,3]" in m and "too stiff" in m for m in s.errors()), \
             s.errors()

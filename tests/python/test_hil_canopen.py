@@ -25,6 +25,9 @@ MASTER_ID = 0x7F
 KT = (12.0, 11.0, 4.7)  # the default robot's k_t (N m / V) and u_max (V): 0x6076 = k_t u_max
 U_MAX = 10.0
 INC = 1 << 20  # 0x608F: increments per revolution
+#: The master's patience, s: every wait for the plant's answer is bounded by it, far above what
+#: a quiet machine needs (milliseconds), so that a busy machine only makes the test slower.
+PATIENCE = 30.0
 
 
 def _inc(x: float) -> int:
@@ -41,6 +44,10 @@ class Rig:
         self.nodes = [canopen.BaseNode402(i, EDS) for i in IDS]
         self.tpdos: queue.Queue[tuple[int, bytes]] = queue.Queue()
         for node in self.nodes:
+            # the canopen package's own waits (0.2 to 0.8 s) are a master's on a quiet bus
+            node.sdo.RESPONSE_TIMEOUT = PATIENCE
+            node.TIMEOUT_SWITCH_STATE_FINAL = node.TIMEOUT_SWITCH_STATE_SINGLE = PATIENCE
+            node.TIMEOUT_CHECK_TPDO = node.TIMEOUT_SWITCH_OP_MODE = PATIENCE
             self.network.add_node(node)
             for cob in (0x180 + node.id, 0x280 + node.id):
                 self.network.subscribe(cob, self._on_tpdo)
@@ -61,6 +68,14 @@ def rig(tmp_path: Path) -> Any:
     r.close()
 
 
+def _until(done: Any, what: str) -> None:
+    """Wait until ``done()`` is true (at most PATIENCE s)."""
+    deadline = time.monotonic() + PATIENCE
+    while not done():
+        assert time.monotonic() < deadline, f"still waiting for {what} after {PATIENCE} s"
+        time.sleep(0.01)
+
+
 def _stop_cycle(rig: Rig) -> None:
     rig.network.sync.stop()
     for node in rig.nodes:
@@ -77,10 +92,9 @@ def _boot_and_enable(rig: Rig) -> None:
         net.subscribe(0x700 + node.id,
                       lambda can_id, data, ts: booted.put(can_id) if bytes(data) == b"\0" else None)
     net.nmt.send_command(0x81)
-    assert sorted(booted.get(timeout=5) for _ in IDS) == [0x700 + i for i in IDS]
-    time.sleep(0.25)  # a heartbeat (0x1017: 100 ms) of each
-    for node in rig.nodes:
-        assert node.nmt.state == "PRE-OPERATIONAL"
+    assert sorted(booted.get(timeout=PATIENCE) for _ in IDS) == [0x700 + i for i in IDS]
+    for node in rig.nodes:  # a heartbeat (0x1017: 100 ms) of each
+        assert node.nmt.wait_for_heartbeat(timeout=PATIENCE) == "PRE-OPERATIONAL"
     for node in rig.nodes:
         assert node.sdo[0x1000].raw == 0x00020192
         assert node.sdo[0x1018][1].raw == 0 and node.sdo[0x1018][2].raw == 0x52525233
@@ -175,15 +189,17 @@ def test_three_drives_mastered_by_canopen(rig: Rig) -> None:
 
 
 def test_master_heartbeat_lost_then_reset_from_fault(rig: Rig) -> None:
+    """The master's heartbeat every 20 ms, the consumer's time 1 s (50 periods: a thread of
+    this process late on a busy machine is no lost master), then no heartbeat: EMCY 0x8130."""
     _boot_and_enable(rig)
     hb = rig.network.send_periodic(0x700 + MASTER_ID, b"\x05", 0.02)
     node = rig.nodes[1]
-    node.sdo[0x1016][1].raw = (MASTER_ID << 16) | 100  # 100 ms
+    node.sdo[0x1016][1].raw = (MASTER_ID << 16) | 1000  # 1 s
     node.emcy.reset()
-    time.sleep(0.3)
+    time.sleep(1.5)
     assert node.sdo[0x6041].raw & 0x6F == 0x27  # still enabled while the heartbeat comes
     hb.stop()
-    emcy = node.emcy.wait(0x8130, timeout=2)
+    emcy = node.emcy.wait(0x8130, timeout=PATIENCE)
     assert emcy is not None and emcy.register & 0x11 == 0x11
     assert node.sdo[0x6041].raw & 0x4F == 0x08  # FAULT
     assert node.sdo[0x1001].raw == 0x11 and node.sdo[0x603F].raw == 0x8130
@@ -198,8 +214,7 @@ def test_master_heartbeat_lost_then_reset_from_fault(rig: Rig) -> None:
     node.reset_from_fault()
     assert node.state == "OPERATION ENABLED"
     assert node.sdo[0x1001].raw == 0 and node.sdo[0x603F].raw == 0
-    time.sleep(0.05)
-    assert any(e.code == 0x0000 for e in node.emcy.log)  # the error-reset EMCY
+    _until(lambda: any(e.code == 0x0000 for e in node.emcy.log), "the error-reset EMCY")
     assert not node.emcy.active
     _stop_cycle(rig)
 
@@ -238,7 +253,7 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
         rig.bus.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))
 
     def abort_code() -> int:
-        data = answers.get(timeout=2)
+        data = answers.get(timeout=PATIENCE)
         assert data[0] == 0x80, data.hex()
         return int.from_bytes(data[4:8], "little")
 
@@ -251,7 +266,7 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
     send(0x601, bytes([0x40, 0x18, 0x10, 7, 0, 0, 0, 0]))  # no sub-index 7 of 0x1018
     assert abort_code() == 0x06090011
     send(0x601, bytes([0x2B, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 0x1017 as 4 bytes: n says 2
-    assert answers.get(timeout=2)[0] == 0x60  # n = 2: a 2-byte write, accepted
+    assert answers.get(timeout=PATIENCE)[0] == 0x60  # n = 2: a 2-byte write, accepted
     send(0x601, bytes([0x23, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 4 bytes into 2
     assert abort_code() == 0x06070012  # length too high
     send(0x601, bytes([0x2F, 0x17, 0x10, 0, 0x64, 0, 0, 0]))  # 1 byte into 2
@@ -262,12 +277,12 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
     send(0x000, bytes([0x02, 0x00, 0x00]))  # NMT stop with DLC 3: ignored
     send(0x000, bytes([0x07, 0x00]))  # unknown NMT command: ignored
     send(0x080, bytes([1, 2]))  # SYNC with 2 bytes: EMCY 0x8240, no fault
-    time.sleep(0.1)
+    _until(lambda: node.emcy.log, "EMCY 0x8240")
     assert [e.code for e in node.emcy.log] == [0x8240]
     rig.network.sync.start(0.005)
     node.rpdo[1].start(0.005)
     send(0x201, bytes([0x0F, 0x00, 0x10]))  # RPDO of 3 bytes: EMCY 0x8210, dropped
-    time.sleep(0.1)
+    _until(lambda: len(node.emcy.log) >= 2, "EMCY 0x8210")
     assert [e.code for e in node.emcy.log] == [0x8240, 0x8210]
     node.check_statusword()
     assert node.state == "OPERATION ENABLED"  # none of it is a fault
@@ -282,8 +297,9 @@ def test_hostile_frames_are_refused_and_counted(rig: Rig) -> None:
 
 def test_a_segmented_transfer_left_hanging_is_aborted_by_the_server(rig: Rig) -> None:
     """A master that starts a segmented upload (the device name 0x1008) and asks for no
-    segment: after the server's timeout (1 s, wall-clock time of the plant) the drive aborts
-    it with 0x05040000 (SDO protocol timed out), counted; the next transfer works."""
+    segment: after the server's timeout (1 s, wall-clock time of the plant; not before it, later
+    on a busy machine) the drive aborts it with 0x05040000 (SDO protocol timed out), counted;
+    the next transfer works."""
     import can
 
     _boot_and_enable(rig)
@@ -293,12 +309,13 @@ def test_a_segmented_transfer_left_hanging_is_aborted_by_the_server(rig: Rig) ->
     start = time.monotonic()
     rig.bus.send(can.Message(arbitration_id=0x602, data=bytes([0x40, 0x08, 0x10, 0, 0, 0, 0, 0]),
                              is_extended_id=False))
-    _, init = answers.get(timeout=2)
+    _, init = answers.get(timeout=PATIENCE)
     assert init[0] == 0x41  # segmented upload, size indicated
-    when, abort = answers.get(timeout=5)
+    when, abort = answers.get(timeout=PATIENCE)
     assert abort[0] == 0x80 and abort[1:4] == bytes([0x08, 0x10, 0x00]), abort.hex()
     assert int.from_bytes(abort[4:8], "little") == 0x05040000
-    assert 0.9 <= when - start <= 3.0  # the 1 s timeout, within this shared VM's delays
+    assert when - start >= 0.9  # not before the server's 1 s timeout
+    print(f"the abort came {when - start:.3f} s after the request")
     node = rig.nodes[1]
     assert node.sdo[0x1008].raw == "RRR simulated CiA 402 axis"  # the next transfer works
     assert node.state == "OPERATION ENABLED"  # an SDO timeout is no drive fault
@@ -316,10 +333,15 @@ def _cycle(rig: Rig, torques: list[int], cws: list[int]) -> dict[int, bytes]:
         node.rpdo[1]["Controlword"].raw = cw
         node.rpdo[1]["Target torque"].raw = t
         node.rpdo[1].transmit()
+    return _sync(rig)
+
+
+def _sync(rig: Rig) -> dict[int, bytes]:
+    """One SYNC, and the six TPDOs it makes the drives send."""
     rig.network.sync.transmit()
     got: dict[int, bytes] = {}
     while len(got) < 6:
-        cob, data = rig.tpdos.get(timeout=5)
+        cob, data = rig.tpdos.get(timeout=PATIENCE)
         got[cob] = data
     return got
 
@@ -350,22 +372,17 @@ def test_a_drive_fault_latches_0_V_until_the_402_fault_reset(fault: str, rig: Ri
             for other, tq in ((rig.nodes[0], t[0]), (rig.nodes[2], t[2])):
                 other.rpdo[1]["Controlword"].raw, other.rpdo[1]["Target torque"].raw = 0x0F, tq
                 other.rpdo[1].transmit()
-            rig.network.sync.transmit()
-            time.sleep(0.02)
+            _sync(rig)
     elif fault == "nmt_stop_in_operation":
         node.nmt.send_command(0x02)  # NMT stop of drive 2 alone
-        time.sleep(0.05)
         node.nmt.send_command(0x01)  # and start again: it stays in FAULT
     else:
         _cycle(rig, [200, 1500, 100], on)  # beyond +-1000 per mille of 0x6076
-    deadline = time.monotonic() + 2  # the EMCY may come before a wait() would start
-    while not any(e.code == FAULTS[fault] for e in node.emcy.log) and time.monotonic() < deadline:
-        time.sleep(0.01)
+    # the EMCY may come before a wait() would start: the log is polled
+    _until(lambda: any(e.code == FAULTS[fault] for e in node.emcy.log), f"EMCY {fault}")
     emcy = [e for e in node.emcy.log if e.code == FAULTS[fault]]
     assert len(emcy) == 1 and emcy[0].register & 0x01, (fault, node.emcy.log)
-    time.sleep(0.05)
-    while not rig.tpdos.empty():
-        rig.tpdos.get_nowait()
+    assert rig.tpdos.empty()  # every SYNC's TPDOs were taken in its period
     latched = [_sw(_cycle(rig, t, on), 2) for _ in range(3)]  # enable operation: no effect
     assert all(sw & 0x4F == 0x08 for sw in latched), [hex(s) for s in latched]  # FAULT
     assert node.sdo[0x603F].raw == FAULTS[fault] and node.sdo[0x1001].raw & 0x01
@@ -452,9 +469,7 @@ def test_quick_stop_option_and_max_torque_written_by_sdo(rig: Rig) -> None:
     n2.sdo[0x6072].raw = 250
     t = [210, 300, 100]
     got = _cycle(rig, t, [0x0F] * 3)
-    deadline = time.monotonic() + 2
-    while not n2.emcy.log and time.monotonic() < deadline:
-        time.sleep(0.01)
+    _until(lambda: n2.emcy.log, "EMCY 0x6320")
     assert [(e.code, e.register) for e in n2.emcy.log] == [(0x6320, 0x21)]
     t = [210, 200, 100]  # within the limit now: enable operation still does not clear it
     latched = [_sw(_cycle(rig, t, [0x0F] * 3), 2) for _ in range(3)]

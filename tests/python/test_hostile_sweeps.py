@@ -217,11 +217,9 @@ def test_a_folder_in_use_by_a_sweep_is_refused_at_once(
         capsys: pytest.CaptureFixture[str]) -> None:
     spec, out, _ = folder
     before = _listing(out)
-    with folder_lock(out, "sweep"):
-        start = time.monotonic()
+    with folder_lock(out, "sweep"):  # held by this process: a sweep that waited would hang
         assert main(["sweep", str(spec), "--out", str(out), "--engine", "native", "--resume",
                      "-q"]) == 2
-        assert time.monotonic() - start < 5
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"rrr: error: {out} is in use by another rrr sweep (process "
                    f"{__import__('os').getpid()}): wait for it to end or choose another --out"]
@@ -301,10 +299,8 @@ def test_a_peer_that_is_no_dask_scheduler_is_one_line(peer: str, tmp_path: Path,
     monkeypatch.setattr(execution, "HANDSHAKE_TIMEOUT", 1.0)
     address = request.getfixturevalue(peer)
     out = tmp_path / "out"
-    start = time.monotonic()
     assert main(["sweep", str(_spec(tmp_path, SPEC)), "--out", str(out), "--scheduler",
                  address, "-q"]) == 2
-    assert time.monotonic() - start < 10
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"rrr: error: the Dask scheduler at {address} does not speak Dask: no "
                    "handshake within 1 s (is it a Dask scheduler, e.g. not its dashboard's "
