@@ -9,7 +9,7 @@
 
 static void test_crc(void)
 {
-    /* docs/can.md#e2e-protection: payload 5a15393080f32c01 with DataID 0x42 (same bytes from crccheck in Python) */
+    /* docs/dbc.md#e2e-protection: payload 5a15393080f32c01 with DataID 0x42 (same bytes from crccheck in Python) */
     const uint8_t p[8] = {0x5a, 0x15, 0x39, 0x30, 0x80, 0xf3, 0x2c, 0x01};
     CHECK(rrr_hil_crc8_e2e(p + 1, 7, 0x42) == 0x5a);
     /* CRC-8/AUTOSAR check value: "12345678" followed by '9' as the "DataID" -> 0xDF */

@@ -34,7 +34,8 @@ from doc_blocks import (
 NOT_RUN_HERE = {
     ("README.md", "bash scripts/run_tests.sh"),
     # the manual's build: a stage of the test command (scripts/run_tests.sh), run once there
-    ("README.md", "pip install -q sphinx myst-parser furo      # or: pip install '.[docs]'"),
+    ("README.md", "pip install -q sphinx myst-parser furo breathe   # or '.[docs]'; and Doxygen "
+                  "(apt-get install doxygen)"),
     ("docs/aarch64.md",
      "cmake -S . -B build-aarch64 -DCMAKE_TOOLCHAIN_FILE=cmake/aarch64-linux-gnu.cmake"),
     ("docs/aarch64.md", "ctest --test-dir build -R aarch64 --output-on-failure"),

@@ -332,7 +332,7 @@ def test_c_bench_over_vcan_equals_socketcand(c_bench: dict[str, Any],
         assert guest_sum["transport"] == "socketcan" and host_sum["transport"] == "socketcand"
         assert guest_sum["exit"] == host_sum["exit"] == 0
         if node == "plant":  # its boot-up heartbeat: on the bus here, dropped by a
-            # socketcand server that has no client yet (docs/can.md, Heartbeats)
+            # socketcand server that has no client yet (docs/dbc.md, Heartbeats)
             assert (host_sum["tx_dropped"], guest_sum["tx_dropped"]) == (1, 0)
             for k in ("tx_frames", "frames_logged", "tx_dropped"):
                 host_sum[k] += 1 if k != "tx_dropped" else -1
@@ -357,7 +357,7 @@ def test_candump_log_equals_node_frame_logs(c_bench: dict[str, Any]) -> None:
     order), each node's frames on the bus are its frame log's Tx records and the other node's
     Rx records, but for the documented ends: the plant's boot-up heartbeat precedes the
     controller, the plant may end before the controller's last heartbeat reaches it, and the
-    controller stops reading after the last joint state (docs/can.md, Frame logs)."""
+    controller stops reading after the last joint state (docs/can-bench.md, Frame logs)."""
     work = c_bench["work"]
     assert "" == (work / "candump.err").read_text().strip()  # -d: it reports drops there
     bus = candump_messages(work / "candump.log")

@@ -35,7 +35,7 @@ typedef enum rrr_hil_exit {
     RRR_HIL_EXIT_SAFETY = 7, ///< the run completed (as for 0), but the safety policy fired: plant:
                              ///< a fault latched (even if reset later) or 0 V was forced for at
                              ///< least one period; controller: a PlantStatus frame reported a
-                             ///< latched fault or 0 V (docs/can-bench.md, "Exit status")
+                             ///< latched fault or 0 V (docs/can-bench.md, "Exit statuses")
     RRR_HIL_EXIT_TAMPERED = 8 ///< controller: a frame its bus profile never sends came, so the
                               ///< inputs were tampered with (or a node is broken): a second frame
                               ///< of one kind in one period (a duplicated TPDO, JointState), or
@@ -256,8 +256,8 @@ typedef struct rrr_hil_reference {
 #define RRR_HIL_REF_LINE_MAX 4096
 
 /**
- * @brief Read the reference table: the reference FMU's format (docs/can-bench.md "The reference
- *        table"; fmu/reference/resources/reference.csv): a header naming the columns, then one
+ * @brief Read the reference table: the reference FMU's format (docs/fmus.md "rrr_reference";
+ *        fmu/reference/resources/reference.csv): a header naming the columns, then one
  *        row of finite numbers per period (uniform step RRR_HIL_PERIOD_S, relative tolerance
  *        1e-6). The columns t, q_ref[1..3], qd_ref[1..3], qdd_ref[1..3] are found by name (in
  *        any order; the others, the tip's x_ref, xd_ref, xdd_ref, are read and not used).

@@ -63,7 +63,7 @@ static void usage(void)
             "  exit: 0 completed, 1 usage, 2 setup, 3 plant lost, 4 SIGINT/SIGTERM, 5 fault,\n"
             "  7 completed but the plant's safety policy fired (PlantStatus: a fault latched or\n"
             "  0 V forced), 8 tampered input: a frame the plant never sends (a second one of a\n"
-            "  kind in one period, a wrong length), named (docs/can.md, Exit statuses)\n");
+            "  kind in one period, a wrong length), named (docs/can-bench.md, Exit statuses)\n");
 }
 
 static int parse_args(int argc, char **argv, rrr_hil_ctrl_opts *o)

@@ -59,7 +59,7 @@ static void usage(void)
             RRR_HIL_RT_USAGE
             "  exit: 0 end of run (the controller's StopCmd), 1 usage, 2 setup, 3 controller lost,\n"
             "  4 SIGINT/SIGTERM, 5 FMU failed, 6 the controller stopped early, 7 end of run but the\n"
-            "  safety policy fired (a fault latched or 0 V forced; docs/can.md, Exit statuses)\n");
+            "  safety policy fired (a fault latched or 0 V forced; docs/can-bench.md, Exit statuses)\n");
 }
 
 static int parse_args(int argc, char **argv, rrr_hil_plant_opts *o)

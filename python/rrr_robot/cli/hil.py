@@ -228,14 +228,15 @@ def _run_side(args: argparse.Namespace, ref: Reference, ctrl_values: dict[str, f
 
 
 def _status(rc: int) -> int:
-    """The exit status of ``rrr hil`` (docs/can.md, "Exit statuses"), said when it is not 0."""
+    """The exit status of ``rrr hil``, said when it is not 0 (docs/can-bench.md, "Exit
+    statuses")."""
     from ..hil.dbc.protocol import EXIT_SAFETY
 
     if rc == EXIT_SAFETY:
         print(f"exit status {rc}: the run completed, but the safety policy fired (a fault "
               "latched or 0 V forced: see the plant's faults above)", file=sys.stderr)
     elif rc != 0:
-        print(f"exit status {rc}: a node ended early (docs/can.md, Exit statuses)",
+        print(f"exit status {rc}: a node ended early (docs/can-bench.md, Exit statuses)",
               file=sys.stderr)
     return rc
 

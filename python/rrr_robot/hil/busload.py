@@ -302,7 +302,7 @@ def schedule_name(load: BusLoad) -> str:
 def bus_loads(frames: Sequence[tuple[int, bytes, bool]], periods: int, schedule: BusLoad,
               realtime_schedule: BusLoad, period_s: float = PERIOD) -> dict[str, Any]:
     """The bus loads of a run on a classical bus of ``schedule.bitrate``, each named by what it
-    is (summary.json ``bus.load``; docs/can.md, "Bus load of the schedule"):
+    is (summary.json ``bus.load``; docs/can-bench.md, "Which load is which"):
 
     - ``measured_percent``: the frames the run's frame log holds (``frames``: identifier, data,
       extended), each with its stuff bits counted exactly, per period of ``period_s`` (in

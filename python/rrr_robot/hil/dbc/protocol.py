@@ -45,7 +45,7 @@ DATA_IDS = {"VoltageCmd": 0x10, "StopCmd": 0x11, "JointState1": 0x21, "JointStat
             "JointState3": 0x23, "PlantStatus": 0x30}
 #: Exit status of a bench run that completed while the safety policy fired (a fault latched, even
 #: if reset later, or 0 V forced for a period): the C nodes' RRR_HIL_EXIT_SAFETY, also the status
-#: of ``rrr hil bench|controller|plant`` (docs/can.md, "Exit statuses").
+#: of ``rrr hil bench|controller|plant`` (docs/can-bench.md, "Exit statuses").
 EXIT_SAFETY = 7
 #: Latched fault bits of PlantStatus.Faults.
 FAULT_BITS = {"timeout": 1, "crc": 2, "counter": 4, "range": 8, "format": 16, "sync": 32,

@@ -66,7 +66,8 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     periods, lockstep = bench.t.shape[0], info.mode == "lockstep"
     bus: dict[str, Any] = {"node_log": info.node_log, "view": info.view,
                            **fl.traffic(records, periods, realtime=not lockstep)}
-    # the loads of a 1 Mbit/s bus, each named (hil.busload.bus_loads; docs/can.md)
+    # the loads of a 1 Mbit/s bus, each named (hil.busload.bus_loads; docs/can-bench.md,
+    # "Which load is which")
     bus["load"] = bus_loads(
         fl.frames(records), periods,
         schedule_load(database(), lockstep=lockstep, dbc_name=str(DBC_PATH)),

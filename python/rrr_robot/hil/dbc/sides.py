@@ -122,7 +122,7 @@ def run_bench(ref: Reference, controller_values: Mapping[str, float | bool], wor
 
 def _status(plant: Mapping[str, Any], controller: Mapping[str, Any]) -> int:
     """The exit status of a run from its nodes': the plant's when it is not 0, else the
-    controller's (EXIT_SAFETY when the safety policy fired, docs/can.md "Exit statuses")."""
+    controller's (EXIT_SAFETY when the safety policy fired, docs/can-bench.md "Exit statuses")."""
     rc = int(plant.get("exit", 0))
     return rc if rc != 0 else int(controller.get("exit", 0))
 
