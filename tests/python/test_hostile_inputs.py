@@ -276,8 +276,8 @@ def test_a_frozen_node_is_named_and_the_run_ends_with_nothing_left(
     30 s run: the other node (or the Python side) ends within its 5 s limit on a silent peer, and
     the parent stops the frozen one and names it, whatever the run's length (before: it waited
     300 s, or 60 s plus 10 ms per period, for the controller alone, and left the plant unreaped;
-    the Python plant's side waited 120 s for the controller node). A generous behavioural
-    bound, not a latency: the run is cut short (exit 2, the frozen node named, nothing left);
+    the Python plant's side waited 120 s for the controller node). Behaviour, not a
+    latency: the run is cut short (exit 2, the frozen node named, nothing left);
     the time it took is printed, never asserted."""
     dying_nodes(frozen, "STOP")
     out = tmp_path / "out"
