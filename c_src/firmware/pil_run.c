@@ -91,13 +91,13 @@ int pil_run_model(const pil_run *run, rrr_model *m, const char **why)
         const pil_run_set s = pil_run_get_set(run, i);
         if (s.row >= RRR_N_PARAMS || !isfinite(s.value) ||
             rrr_param_set(m, s.row, s.value) != RRR_OK) {
-            *why = "run block: a model parameter assignment is out of range";
+            *why = "run block: a model parameter assignment is out of range (rrr_param_set)";
             return -1;
         }
     }
     const char *field = "";
     if (rrr_model_validate(m, &field) != RRR_OK) {
-        *why = "run block: the controller's model is invalid";
+        *why = "run block: the parameters give an invalid model (rrr_model_validate)";
         return -1;
     }
     return 0;
