@@ -47,7 +47,8 @@ from ..nodes import (
 from ..results import BenchRun
 from .firmware import RUN_BLOCK_ADDRESS, Target, write_run_block
 
-__all__ = ["INSTRUCTIONS_LOG", "PilRun", "qemu_command", "run_pil"]
+__all__ = ["INSTRUCTIONS_LOG", "PilRun", "open_slcan", "qemu_command", "qemu_executable",
+           "run_pil", "start_firmware"]
 
 #: The firmware's instruction counts (its timing UART): k, law, period (instructions).
 INSTRUCTIONS_LOG = "instructions.csv"
@@ -106,7 +107,17 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def _open_slcan(port: int, qemu: NodeProcess) -> Any:
+def start_firmware(target: Target, image: Path, run_block: Path, log: Path,
+                   instructions: Path) -> tuple[NodeProcess, int]:
+    """QEMU running ``image`` with ``run_block`` in its flash (qemu_command), as a node
+    process whose log is the controller log, and the TCP port of its SLCAN line."""
+    port = _free_port()
+    return NodeProcess(target.image.removesuffix(".elf"),
+                       qemu_command(target, image, run_block, port, log, instructions),
+                       listening=False, log_csv=log), port
+
+
+def open_slcan(port: int, qemu: NodeProcess) -> Any:
     """python-can's slcan bus on QEMU's SLCAN socket (it opens the channel at 1 Mbit/s), once
     QEMU accepts connections."""
     import can
@@ -179,6 +190,7 @@ def run_pil(target: Target, image: Path, t: FloatArray, q_ref: FloatArray, qd_re
     safety policy fired is a run; any other non-zero status raises (watch_nodes)."""
     import can
 
+    qemu_executable()  # before anything starts
     work = Path(work)
     n = int(t.shape[0])
     block = work / RUN_BLOCK
@@ -190,12 +202,9 @@ def run_pil(target: Target, image: Path, t: FloatArray, q_ref: FloatArray, qd_re
             quiet_bus_threads(), \
             start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=plant_log,
                         frame_log=frames) as plant:
-        port = _free_port()
-        qemu = NodeProcess(f"{target.image} (qemu-system-arm -M {target.machine})",
-                           qemu_command(target, image, block, port, ctrl_log, counts),
-                           listening=False, log_csv=ctrl_log)
+        qemu, port = start_firmware(target, image, block, ctrl_log, counts)
         with qemu:
-            slcan = _open_slcan(port, qemu)
+            slcan = open_slcan(port, qemu)
             try:
                 plant_bus = open_bus("socketcand", host="127.0.0.1", port=int(plant.port or 0))
                 try:
