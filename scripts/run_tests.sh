@@ -104,6 +104,9 @@ mypy python/rrr_robot
 echo "== the manual: sphinx-build with warnings as errors (docs/ -> build-docs/index.html) =="
 # a broken link or anchor, an unresolved reference or a page outside the navigation fails it
 sphinx-build -q -W --keep-going -n -b html docs build-docs
+# the controller firmware of rrr hil pil: its tools (apt-get when missing and root) and images;
+# tests/python/test_hil_pil.py below runs them (docs/microcontroller.md)
+bash scripts/test_pil.sh --build-only
 echo "== pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py) =="
 python -m pytest -q --durations=25 tests/python
 # the release folder (sdist, wheels, FMU bundle) built with zig and checked, then installed and

@@ -138,7 +138,7 @@ def open_slcan(port: int, qemu: NodeProcess) -> Any:
         # each frame is a small write: without TCP_NODELAY, Nagle's algorithm holds the next one
         # until QEMU's delayed ACK (40 ms on Linux), one stall per period. pyserial's socket://
         # port keeps its socket in _socket and has no option for it.
-        sock = getattr(bus.serialPortOrig, "_socket", None)
+        sock = getattr(getattr(bus, "serialPortOrig", None), "_socket", None)
         if isinstance(sock, socket.socket):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         return bus
