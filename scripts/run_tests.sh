@@ -7,7 +7,8 @@
 # generated-code checks, the CAN bench over SocketCAN in a QEMU guest), and short libFuzzer runs
 # on the CAN frame decoders, on forged FMU states (each FMU) and on the FMU importer's scanner. mingw-w64, wine,
 # gcc-aarch64-linux-gnu, qemu-user, chromium and clang are installed with apt-get when missing
-# and root.
+# and root (and, by scripts/test_pil.sh, the controller firmware's gcc-arm-none-eabi,
+# picolibc-arm-none-eabi and qemu-system-arm).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
