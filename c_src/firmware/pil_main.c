@@ -335,11 +335,12 @@ static void summary(int rc)
            (unsigned long)fw.c.run.k, fw.why);
 }
 
-/* After the run: wait until the host has closed the channel (it has then read every frame), or
- * for the timeout. */
+/* After the run: wait until the host has closed the channel (it has then read every frame), at
+ * most 1 s (the host's watch gives an ended run's other process 5 s). */
 static void wait_close(void)
 {
-    const uint32_t deadline = pil_ticks() + fw.timeout_ms * (PIL_BOARD_CLOCK_HZ / 1000u);
+    const uint32_t ms = fw.timeout_ms < 1000u ? fw.timeout_ms : 1000u;
+    const uint32_t deadline = pil_ticks() + ms * (PIL_BOARD_CLOCK_HZ / 1000u);
     while (fw.sl.open != 0) {
         pil_slcan_event ev;
         rrr_hil_frame f;
