@@ -334,3 +334,7 @@ def test_run_block_layout(tmp_path: Path) -> None:
     assert struct.unpack_from("<I", raw, n - 8) == (zlib.crc32(raw[:n - 8]),)
     with pytest.raises(ValueError, match="gains are missing"):
         write_run_block(tmp_path / "c.bin", t, q, q, q, {"kp[1]": 1.0})
+    with pytest.raises(ValueError, match=r"sampled at 0\.002 s"):
+        write_run_block(tmp_path / "c.bin", 2 * t, q, q, q, values)
+    with pytest.raises(ValueError, match="unknown model parameter"):
+        write_run_block(tmp_path / "c.bin", t, q, q, q, {**values, "nonsense": 1.0})

@@ -21,6 +21,7 @@ from ...core._arrays import FloatArray
 from ...core.outputs import atomic_path
 from ...core.param_names import param
 from ...errors import BadInputError, HilError
+from ..nodes import PERIOD
 
 __all__ = ["M4F", "M7", "RUN_BLOCK_ADDRESS", "RUN_BLOCK_CAPACITY", "TARGETS", "ElfSizes",
            "Target", "elf_sizes", "find_image", "max_periods", "write_run_block"]
@@ -132,7 +133,8 @@ def write_run_block(path: Path, t: FloatArray, q: FloatArray, qd: FloatArray, qd
     """Write the run block (c_src/firmware/pil_run.h) of a reference and the controller's start
     values (the controller FMU's names: kp[i], kd[i], feedforward and model parameters, as the
     controller node takes them) to ``path``, atomically; returns its size in bytes.
-    BadInputError for a reference longer than the block holds or an unknown name."""
+    BadInputError for a reference longer than the block holds, not sampled at the bench's
+    period, or an unknown name."""
     kp = [float(values.get(f"kp[{i}]", np.nan)) for i in (1, 2, 3)]
     kd = [float(values.get(f"kd[{i}]", np.nan)) for i in (1, 2, 3)]
     gains = {f"{g}[{i}]" for g in ("kp", "kd") for i in (1, 2, 3)}
@@ -141,6 +143,10 @@ def write_run_block(path: Path, t: FloatArray, q: FloatArray, qd: FloatArray, qd
     sets = [(param(name).row, float(v)) for name, v in values.items()
             if name not in gains and name != "feedforward"]
     n = int(np.asarray(t).shape[0])
+    steps = np.diff(np.asarray(t, dtype=float))
+    if steps.size and not np.allclose(steps, PERIOD, rtol=1e-9, atol=1e-12):
+        raise BadInputError(f"the firmware runs at the bench's {PERIOD:g} s: the reference is "
+                            f"sampled at {float(steps[0]):g} s")
     if not 1 <= n <= max_periods(len(sets)):
         raise BadInputError(f"the reference has {n} periods: the firmware's run block holds 1 "
                             f"to {max_periods(len(sets))} ({RUN_BLOCK_CAPACITY // 2**20} MB "
