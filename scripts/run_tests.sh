@@ -12,7 +12,9 @@
 # the FMU importer's scanner. Each background stage logs to build-logs/<stage>.log, printed when
 # the foreground stage ends (a failure is named at once); the wall time of each stage and the
 # total are printed at the end. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium,
-# clang and the SocketCAN guest's tools are installed with apt-get when missing and root.
+# clang, the SocketCAN guest's tools and (by scripts/test_pil.sh) the controller firmware's
+# gcc-arm-none-eabi, picolibc-arm-none-eabi and qemu-system-arm are installed with apt-get when
+# missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -196,6 +198,10 @@ stage "the virtual environment .venv and the package (scripts/setup_env.sh)" \
 JOBS="$(nproc 2>/dev/null || echo 2)"
 PYTHON="$(command -v python)"
 export JOBS PYTHON
+# the controller firmware of rrr hil pil: its tools (apt-get when missing and root) and images,
+# before the background stages (one dpkg at a time); tests/python/test_hil_pil.py runs them
+stage "the controller firmware (scripts/test_pil.sh --build-only; docs/microcontroller.md)" \
+  bash scripts/test_pil.sh --build-only
 
 # ---- the background stages: each in its own build folder, at a lower priority than pytest ----
 # C tests under ASan + UBSan, every one once (all but label release_only). Without the FMUs'

@@ -45,6 +45,7 @@ BUS = frozenset({
     "test_hil_python_plant", "test_hil_results", "test_hostile_inputs", "test_mcap",
     "test_socketcan_guest", "test_hil_canopen", "test_hil_canopen_master",
     "test_hil_canopen_realtime", "test_canopen_conformance", "test_node_launchers",
+    "test_hil_pil",
 })
 #: The modules that boot a QEMU guest.
 VM = frozenset({"test_socketcan_guest"})

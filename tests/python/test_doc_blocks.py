@@ -54,6 +54,12 @@ NOT_RUN_HERE = {
     ("docs/getting-started.md", "python3 -m venv venv && . venv/bin/activate"),
     ("docs/getting-started.md", "bash scripts/dist.sh"),
     ("docs/sweeps.md", "dask scheduler --host 0.0.0.0 --port 8786"),
+    # the firmware: scripts/test_pil.sh builds it in the test command and
+    # tests/python/test_hil_pil.py runs both images with rrr hil pil; a board and its probe
+    ("docs/microcontroller.md", "cmake -S c_src/firmware -B build-firmware"),
+    ("docs/microcontroller.md",
+     'openocd -f board/st_nucleo_f7.cfg -c "program build-firmware/rrr_pil_m7.elf verify reset '
+     'exit"'),
     # minutes of measurement (its --quick mode runs in the test command)
     ("docs/performance.md",
      "python bench/bench_sweep.py --engine fmpy --sizes 10,100 --runs 100 --repeats 3 --skip-big"),

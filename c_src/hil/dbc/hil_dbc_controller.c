@@ -26,110 +26,39 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "hil_codec.h"
 #include "hil_controller.h"
+#include "hil_dbc_ctrl.h"
 
 #define PROG "rrr_hil_controller"
 #define STALE_PERIODS 3u
 
-/* The DBC profile's state beside the node's. */
+/* The node's state beside the frame logic it shares with the firmware (hil_dbc_ctrl.h). */
 typedef struct dbc_ctrl {
     rrr_hil_ctrl *c;
-    uint8_t have[3];        /* joint j received for the counter in `pending` */
-    uint8_t pending;        /* alive counter of the state being assembled */
-    double pq[3], pqd[3];   /* state being assembled */
+    rrr_hil_dbc_ctrl bus;   /* the frames: the measured state, PlantStatus, the repeat rule */
     uint32_t state_age;     /* periods since the last complete state (real time) */
     uint32_t stale;         /* periods with a stale state (real time) */
-    uint32_t rx_bad[RRR_HIL_RX_COUNT];
-    uint32_t out_of_order;  /* joint frames of another counter than the one assembled */
-    rrr_hil_plant_status status; /* newest PlantStatus */
-    uint32_t status_faulty;  /* PlantStatus frames with a fault */
-    uint32_t status_zero;    /* PlantStatus frames with ZeroVoltage */
-    uint8_t hb_counter;
-    uint8_t last_cmd_counter; /* alive counter of the last VoltageCmd sent */
-    uint32_t cmds_sent;     /* VoltageCmd frames sent */
-    int lockstep;           /* one JointState per joint and period (the repeat rule) */
-    uint8_t done;           /* alive counter of the last complete state */
-    uint8_t done_valid;     /* 1 once a state was complete */
-    uint32_t repeated;      /* JointState frames repeated in one period (the first ends it) */
-    char tampered[96];      /* what ended the run as tampered input, "" if nothing */
 } dbc_ctrl;
 
 static int send_heartbeat(dbc_ctrl *d, uint8_t nmt)
 {
     rrr_hil_frame f;
-    const rrr_hil_heartbeat hb = {1u, nmt, d->hb_counter++};
-    if (rrr_hil_encode_heartbeat(&hb, &f) != 0) {
+    if (rrr_hil_dbc_ctrl_heartbeat(&d->bus, nmt, &f) != 0) {
         return rrr_hil_run_end(&d->c->run, RRR_HIL_EXIT_FAULT, "heartbeat cannot be encoded");
     }
     return rrr_hil_ctrl_send(d->c, &f, "send heartbeat");
 }
 
-/* Lockstep: the plant sends each JointState once per period, so one of a joint already received
- * for the state being assembled, or one of the state just completed, is a repeat (replayed or
- * forged): -1 with d->tampered set; 0 otherwise. */
-static int repeat(dbc_ctrl *d, const rrr_hil_joint_state *js)
-{
-    const int again = (js->counter == d->pending && d->have[js->joint]) ||
-                      (d->done_valid && js->counter == d->done);
-    if (!d->lockstep || !again) {
-        return 0;
-    }
-    ++d->repeated;
-    (void)snprintf(d->tampered, sizeof d->tampered,
-                   "joint %u: two JointState%u with alive counter %u in period %u",
-                   (unsigned)js->joint + 1u, (unsigned)js->joint + 1u, (unsigned)js->counter,
-                   (unsigned)d->c->run.k);
-    return -1;
-}
-
-/* Feed one frame; returns 1 when it completed the state with alive counter `counter`, -1 for a
- * repeated JointState in lockstep (repeat: d->tampered says which). */
+/* Feed one frame (rrr_hil_dbc_ctrl_rx); a complete state becomes the node's measured state. */
 static int handle(dbc_ctrl *d, const rrr_hil_frame *f)
 {
-    rrr_hil_msg m;
-    const rrr_hil_rx rx = rrr_hil_decode(f, &m);
-    ++d->rx_bad[rx];
-    if (rx != RRR_HIL_RX_OK) {
-        return 0;
-    }
-    if (m.kind == RRR_HIL_PLANT_STATUS) {
-        d->status = m.u.status;
-        if (m.u.status.faults != 0u) {
-            ++d->status_faulty;
-        }
-        if (m.u.status.zero_voltage != 0u) {
-            ++d->status_zero;
-        }
-        return 0;
-    }
-    if (m.kind != RRR_HIL_JOINT_STATE) {
-        return 0;
-    }
-    const rrr_hil_joint_state *js = &m.u.joint;
-    if (repeat(d, js) != 0) {
-        return -1;
-    }
-    if (js->counter != d->pending || (d->have[0] | d->have[1] | d->have[2]) == 0u) {
-        if (d->have[0] | d->have[1] | d->have[2]) {
-            ++d->out_of_order; /* an incomplete state was overtaken */
-        }
-        memset(d->have, 0, sizeof d->have);
-        d->pending = js->counter;
-    }
-    d->have[js->joint] = 1;
-    d->pq[js->joint] = js->q_rad;
-    d->pqd[js->joint] = js->qd_rad_s;
-    if (d->have[0] && d->have[1] && d->have[2]) {
-        memcpy(d->c->q, d->pq, sizeof d->c->q);
-        memcpy(d->c->qd, d->pqd, sizeof d->c->qd);
-        memset(d->have, 0, sizeof d->have);
-        d->done = d->pending;
-        d->done_valid = 1u;
+    const int h = rrr_hil_dbc_ctrl_rx(&d->bus, f, d->c->run.k);
+    if (h > 0) {
+        memcpy(d->c->q, d->bus.q, sizeof d->c->q);
+        memcpy(d->c->qd, d->bus.qd, sizeof d->c->qd);
         ++d->c->states;
-        return 1;
     }
-    return 0;
+    return h;
 }
 
 /* VoltageCmd(k): u_k from the reference row k and the current state; 0 V (enable 0) if rrr_ctc
@@ -137,9 +66,9 @@ static int handle(dbc_ctrl *d, const rrr_hil_frame *f)
 static void command(dbc_ctrl *d, const rrr_hil_ctrl_opts *o, size_t k, int enable,
                     rrr_hil_voltage_cmd *cmd)
 {
-    cmd->counter = (uint8_t)(k & 15u);
-    cmd->enable = (uint8_t)rrr_hil_ctrl_law(d->c, o, k, enable, cmd->u_V);
-    cmd->reset_fault = 0;
+    double u[3];
+    enable = rrr_hil_ctrl_law(d->c, o, k, enable, u);
+    *cmd = rrr_hil_dbc_ctrl_command((uint32_t)k, enable, u);
 }
 
 /* VoltageCmd(k) and, with_sync, Sync(k): 0, or an exit status with why set. */
@@ -156,8 +85,7 @@ static int send_period(dbc_ctrl *d, const rrr_hil_voltage_cmd *cmd, uint32_t k, 
     if (rc != 0) {
         return rc;
     }
-    d->last_cmd_counter = cmd->counter;
-    ++d->cmds_sent;
+    rrr_hil_dbc_ctrl_sent(&d->bus, cmd);
     const rrr_hil_sync s = {k};
     if (with_sync) {
         if (rrr_hil_encode_sync(&s, &f) != 0) {
@@ -184,8 +112,7 @@ static int finish(dbc_ctrl *d, int rc)
     } else if (rc == RRR_HIL_EXIT_FAULT) {
         reason = RRR_HIL_STOP_FAULT;
     }
-    const rrr_hil_stop_cmd stop = {
-        (uint8_t)(d->cmds_sent > 0u ? (d->last_cmd_counter + 1u) & 15u : 0u), (uint8_t)reason};
+    const rrr_hil_stop_cmd stop = rrr_hil_dbc_ctrl_stop(&d->bus, reason);
     rrr_hil_frame f;
     if (rrr_hil_encode_stop_cmd(&stop, &f) != 0) {
         return rc == RRR_HIL_EXIT_OK
@@ -196,8 +123,7 @@ static int finish(dbc_ctrl *d, int rc)
     if (io != RRR_HIL_IO_OK && rc == RRR_HIL_EXIT_OK) {
         rc = rrr_hil_ctrl_lost(d->c, "send StopCmd", io);
     }
-    const rrr_hil_heartbeat hb = {1u, RRR_HIL_NMT_STOPPED, d->hb_counter++};
-    if (rrr_hil_encode_heartbeat(&hb, &f) == 0) {
+    if (rrr_hil_dbc_ctrl_heartbeat(&d->bus, RRR_HIL_NMT_STOPPED, &f) == 0) {
         (void)rrr_hil_send(d->c->tr, &f); /* informational: the plant may be gone already */
     }
     return rc;
@@ -218,9 +144,9 @@ static int wait_frames(dbc_ctrl *d, const rrr_hil_ctrl_opts *o, int want, const 
         if (h < 0) {
             return rrr_hil_run_end(&d->c->run, RRR_HIL_EXIT_TAMPERED,
                                    "%s: a frame the plant never sends (tampered input?)",
-                                   d->tampered);
+                                   d->bus.tampered);
         }
-        if (h ? (want < 0 || d->pending == (uint8_t)want) : want < 0) {
+        if (h ? (want < 0 || d->bus.pending == (uint8_t)want) : want < 0) {
             return 0;
         }
     }
@@ -311,22 +237,18 @@ static int run_realtime(dbc_ctrl *d, const rrr_hil_ctrl_opts *o, FILE *latency_l
 static void summary(const dbc_ctrl *d, int rc)
 {
     const rrr_hil_ctrl *c = d->c;
+    const rrr_hil_dbc_ctrl *b = &d->bus;
     fprintf(stderr,
             PROG ": %u joint states received; rejected frames: %u bad CRC, %u wrong DLC, %u unknown "
                  "id; %u incomplete states overtaken; %u stale periods; plant status faults 0x%02X "
                  "(%u faulty status frames); rrr_ctc failures %u\n",
-            c->states, d->rx_bad[RRR_HIL_RX_BAD_CRC], d->rx_bad[RRR_HIL_RX_BAD_DLC],
-            d->rx_bad[RRR_HIL_RX_UNKNOWN_ID], d->out_of_order, d->stale,
-            (unsigned)d->status.faults, d->status_faulty, c->ctc_failed);
-    printf("RRR_HIL_SUMMARY {\"node\": \"controller\", \"exit\": %d, \"states\": %u, "
-           "\"rx_bad_crc\": %u, \"rx_bad_dlc\": %u, \"rx_unknown_id\": %u, \"out_of_order\": %u, "
-           "\"stale\": %u, \"plant_faults\": %u, \"plant_status_faulty\": %u, "
-           "\"plant_status_zero\": %u, \"ctc_failed\": %u, \"repeated\": %u, "
-           "\"tampered\": \"%s\", ",
-           rc, c->states, d->rx_bad[RRR_HIL_RX_BAD_CRC], d->rx_bad[RRR_HIL_RX_BAD_DLC],
-           d->rx_bad[RRR_HIL_RX_UNKNOWN_ID], d->out_of_order, d->stale,
-           (unsigned)d->status.faults, d->status_faulty, d->status_zero, c->ctc_failed,
-           d->repeated, d->tampered);
+            c->states, b->rx_bad[RRR_HIL_RX_BAD_CRC], b->rx_bad[RRR_HIL_RX_BAD_DLC],
+            b->rx_bad[RRR_HIL_RX_UNKNOWN_ID], b->out_of_order, d->stale,
+            (unsigned)b->status.faults, b->status_faulty, c->ctc_failed);
+    printf("RRR_HIL_SUMMARY {\"node\": \"controller\", \"exit\": %d, \"stale\": %u, "
+           "\"ctc_failed\": %u, ",
+           rc, d->stale, c->ctc_failed);
+    rrr_hil_dbc_ctrl_json(stdout, b);
     rrr_hil_link_json(stdout, c->tr);
     printf("}\n");
     fflush(stdout);
@@ -348,15 +270,15 @@ static int run(rrr_hil_ctrl *c, const rrr_hil_ctrl_opts *o, FILE *latency_log,
     static dbc_ctrl d;
     memset(&d, 0, sizeof d);
     d.c = c;
-    d.lockstep = !o->realtime;
+    rrr_hil_dbc_ctrl_init(&d.bus, !o->realtime);
     int rc = o->realtime ? run_realtime(&d, o, latency_log) : run_lockstep(&d, o);
     /* a completed run while the plant reported its safety policy firing (PlantStatus: a latched
      * fault, or 0 V forced) ends with its own status, as the plant does */
-    if (d.status_faulty != 0u || d.status_zero != 0u) {
+    if (d.bus.status_faulty != 0u || d.bus.status_zero != 0u) {
         rc = rrr_hil_run_safety(&c->run, rc,
                                 "the plant's safety policy fired: %u PlantStatus frames with a "
                                 "fault, %u with 0 V",
-                                d.status_faulty, d.status_zero);
+                                d.bus.status_faulty, d.bus.status_zero);
     }
     (void)rrr_hil_framelog_close(frames); /* reported in the summary */
     summary(&d, rc);

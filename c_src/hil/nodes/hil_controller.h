@@ -34,6 +34,12 @@ typedef struct rrr_hil_ctrl_opts {
                             ///< 0x2001, SYNC periods (0: the drives' own)
 } rrr_hil_ctrl_opts;
 
+/** A law with rrr_ctc's signature (eq 15). */
+typedef rrr_status (*rrr_hil_ctc_fn)(const rrr_model *m, const rrr_ctc_gains *gains,
+                                     const double q_ref[3], const double qd_ref[3],
+                                     const double qdd_ref[3], const double q[3],
+                                     const double qd[3], rrr_ctc_output *out);
+
 /** What every profile's controller loop shares. */
 typedef struct rrr_hil_ctrl {
     rrr_model model;       ///< the controller's model: the default robot with the --set parameters
@@ -44,6 +50,9 @@ typedef struct rrr_hil_ctrl {
     uint32_t ctc_failed;   ///< periods in which rrr_ctc failed (0 V commanded)
     FILE *log;             ///< --log (NULL: none)
     rrr_hil_run run;       ///< the period and why the run ends (the exit line)
+    rrr_hil_ctc_fn ctc;    ///< the law rrr_hil_ctrl_law evaluates: rrr_ctc when NULL (the
+                           ///< firmware, c_src/firmware, puts its timed or single-precision
+                           ///< law here)
 } rrr_hil_ctrl;
 
 /** What a bus profile provides to the controller node (one row of its profile table). */
@@ -67,8 +76,9 @@ typedef struct rrr_hil_ctrl_profile {
 #define RRR_HIL_CTRL_MAX_RX_IDS 32u
 
 /**
- * @brief u_k from the reference row @p k and the measured state (rrr_ctc, eq 15) with the
- *        --kp/--kd/--no-feedforward gains, and its row of the controller log (--log).
+ * @brief u_k from the reference row @p k and the measured state (rrr_ctc, eq 15, or c->ctc) with
+ *        the --kp/--kd/--no-feedforward gains, and its row of the controller log (--log).
+ *        In hil_controller_law.c, which needs no transport: the firmware compiles it too.
  * @param enable 0: 0 V (no law)
  * @param[out] u_V the voltages, V (0 when not enabled or when rrr_ctc failed)
  * @return the enable in effect: @p enable, or 0 when rrr_ctc failed (counted in ctc_failed)

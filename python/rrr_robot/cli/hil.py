@@ -271,6 +271,7 @@ def _results(args: argparse.Namespace, ref: Reference, run: BenchRun,
 
 
 _VIEW = {"bench": "the C controller node's (Tx: its frames, Rx: the plant's)",
+         "pil": "the C plant node's (Tx: its frames, Rx: the firmware's)",
          "plant": "the C controller node's (Tx: its frames, Rx: the Python plant's)",
          "controller": "the C plant node's (Tx: its frames, Rx: the FMU controller's)"}
 
@@ -310,6 +311,71 @@ def _report(s: Mapping[str, Any], out: Path) -> None:
                   f"us, p99.9 {r['p999_us']:.1f} us, max {r['max_us']:.1f} us; "
                   f"{r.get('rt_deadline_misses')} deadline misses; {r.get('rt_setup')}")
     print(f"results in {out}/ (summary.json, plant.csv, controller.csv, figures)")
+
+
+def _cmd_pil(args: argparse.Namespace) -> int:
+    """``rrr hil pil``: the controller firmware under QEMU against the C plant node."""
+    from dataclasses import replace
+
+    from ..core.outputs import ResultSet, check_folder
+    from ..hil.canopen.results import writing_controller
+    from ..hil.dbc.results import RunInfo
+    from ..hil.pil.firmware import M4F, M7, find_image
+    from ..hil.pil.loop import RUN_BLOCK, run_pil
+    from ..hil.pil.results import double_law_difference, write_pil_results
+    from ..hil.results import extend_reference
+    from ._progress import Bars, shown
+
+    out = check_folder(args.out)
+    if args.mcap:
+        from ..core.mcap_log import require_mcap
+
+        require_mcap()
+    can_log = _can_log_target(args, out)
+    target = M4F if args.float else M7
+    image = find_image(args.firmware, target)
+    wc = writing_controller(args.text, args.scenario)
+    if args.duration is not None:
+        wc = replace(wc, ref=extend_reference(wc.ref, args.duration))
+    with ResultSet(out, kind="hil") as rs:
+        with Bars(shown(quiet(args)), unit="period") as bars:
+            run = run_pil(target, image, wc.ref.t, wc.ref.q, wc.ref.qd, wc.ref.qdd,
+                          wc.controller_values, rs.staging, frame_log=NODE_FRAMES,
+                          progress=bars.callback(f"firmware {target.image} in QEMU"))
+        double = (double_law_difference(run, wc.ref, wc.controller_model, wc.gains)
+                  if target.law == "float" else None)
+        info = RunInfo(side="pil", mode="lockstep", scenario=args.scenario,
+                       node_log=NODE_FRAMES, view=_VIEW["pil"])
+        summary = write_pil_results(rs, info, wc.ref, run, wc.model, wc.controller_values,
+                                    target, image, (rs.staging / RUN_BLOCK).stat().st_size,
+                                    can_log=can_log, figures=not args.no_figures,
+                                    mcap=args.mcap, double_law=double)
+        _report(summary, rs.folder)
+        print("\n".join(_target_lines(summary)))
+    return _status(run.rc)
+
+
+def _target_lines(s: Mapping[str, Any]) -> list[str]:
+    """What ``rrr hil pil`` prints of summary.json's target (and of the float law)."""
+    t, b = s["target"], s["bench"]
+    law, period = (t["instructions_per_period"][k] for k in ("law", "period"))
+    share = t["share_of_1ms_period"]
+    lines = [f"  target: {t['core']}: flash {t['flash_bytes'] / 1024:.1f} kB, RAM "
+             f"{t['ram_bytes'] / 1024:.1f} kB (stack {t['stack_used_bytes']} bytes used, "
+             f"painted); instructions per period (QEMU -icount: instructions, not cycles): "
+             f"law median {law['median']:.0f}, max {law['max']:.0f}; the period's work median "
+             f"{period['median']:.0f}, max {period['max']:.0f}",
+             f"  at {share['clock_hz'] / 1e6:.0f} MHz and one instruction per cycle (an "
+             f"optimistic bound) the law takes at most {100 * share['law_max']:.2f} % of a 1 ms "
+             f"period, the period's work {100 * share['period_max']:.2f} %"]
+    d = s.get("difference_to_double_law")
+    if d is not None:
+        unq = s["unquantised_cosim"]
+        lines.append(f"  {t['law_arithmetic']} law against librrr's double law on the same "
+                     f"frames: max |du| {max(d['u_max_abs']):.3e} V; tip error max "
+                     f"{1e3 * b['tip_error_max']:.4f} mm against {1e3 * unq['tip_error_max']:.4f}"
+                     f" mm of the double closed loop without the bench's quantisation")
+    return lines
 
 
 def node_ids(text: str) -> tuple[int, int, int]:
@@ -599,6 +665,26 @@ def register_cli(subparsers: Any) -> None:
     add_reference_arguments(e)
     add_verbosity_arguments(e, bars=False)
     e.set_defaults(func=_cmd_hil)
+
+    pil = _action(actions, "pil", "the controller firmware on a Cortex-M (QEMU) vs the C plant",
+                  "Processor in the loop: run the controller firmware (c_src/firmware: eq 15 on "
+                  "a Cortex-M7 with double-precision FPU, or with --float on a Cortex-M4F in "
+                  "single precision) in qemu-system-arm, its SLCAN line bridged to the C plant "
+                  "node (lockstep, the firmware's Sync), and write " + _RESULTS + " summary.json "
+                  "adds the target: flash, RAM, stack, instructions per period "
+                  "(docs/microcontroller.md).",
+                  "rrr hil pil --duration 2 --out results/pil")
+    add_reference_arguments(pil)
+    g = pil.add_argument_group("firmware")
+    g.add_argument("--float", action="store_true",
+                   help="the Cortex-M4F image (QEMU mps2-an386): the law in single precision "
+                   "(default: the Cortex-M7 image, mps2-an500, in double)")
+    g.add_argument("--firmware", type=Path, default=Path("build-firmware"), metavar="DIR",
+                   help="the build folder of c_src/firmware (default: build-firmware, as "
+                   "'cmake -S c_src/firmware -B build-firmware' makes it)")
+    add_result_arguments(pil)
+    add_verbosity_arguments(pil)
+    pil.set_defaults(func=_cmd_pil)
 
     co = _action(actions, "canopen", "a CANopen master (canopen package) vs the plant's drives",
                  "Start the C plant node as three CiA 402 drives (its CANopen profile, over "

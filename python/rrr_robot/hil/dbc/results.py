@@ -45,12 +45,13 @@ class RunInfo:
 def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, model: Model,
                   controller_values: Mapping[str, float | bool],
                   nodes: Mapping[str, Mapping[str, Any]], *, can_log: Path | None,
-                  figures: bool = True, mcap: bool = False) -> dict[str, Any]:
+                  figures: bool = True, mcap: bool = False,
+                  extra: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Evaluate a run whose logs (plant.csv, the node's frame log, in real time the latency
     logs) are in the result set's staging folder: the unquantised co-simulation, the standard
     frame log (``can_log``: in the output folder, or elsewhere, written atomically), the
-    figures, with ``mcap`` the run as ``bench.mcap`` (hil.logs.mcap) and summary.json. Returns
-    the summary."""
+    figures, with ``mcap`` the run as ``bench.mcap`` (hil.logs.mcap) and summary.json (with the
+    sections of ``extra`` added: ``rrr hil pil``'s target). Returns the summary."""
     from ..busload import FD_DATA_BITRATE, bus_loads, fd_bus_loads, schedule_load
     from ..logs import frames as fl
     from .protocol import DBC_PATH, FAULT_BITS, database, frame_id
@@ -104,6 +105,7 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     summary = bench_summary(side=info.side, mode=info.mode, scenario=info.scenario, ref=ref_run,
                             bench=bench, unquantised=unq, plant=nodes["plant"],
                             controller=nodes["controller"], bus=bus, realtime=realtime)
+    summary.update(extra or {})
     if figures:
         from ..figures import write_bench_figures
 
