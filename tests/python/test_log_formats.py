@@ -103,7 +103,7 @@ def test_the_generated_header_is_the_spec() -> None:
         assert f'#define {macro}_HEADER "{spec.header}\\n"' in header
         assert f"#define {macro}_COLUMNS {len(spec.columns)}" in header
     # the C writers print the generated headers, not their own
-    for source in ("rrr_hil_controller.c", "hil_controller.c", "rrr_hil_plant.c", "hil_plant.c",
+    for source in ("rrr_hil_controller.c", "hil_controller_law.c", "rrr_hil_plant.c", "hil_plant.c",
                    "hil_node.c"):
         text = (ROOT / "c_src" / "hil" / "nodes" / source).read_text()
         assert "rrr_hil_logs.h" in text and "\"k,t," not in text and "\"k,latency" not in text

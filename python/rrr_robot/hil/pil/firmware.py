@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core._arrays import FloatArray
+from ...core.fmu_vars import names
 from ...core.outputs import atomic_path
 from ...core.param_names import param
 from ...errors import BadInputError, HilError
@@ -135,9 +136,10 @@ def write_run_block(path: Path, t: FloatArray, q: FloatArray, qd: FloatArray, qd
     controller node takes them) to ``path``, atomically; returns its size in bytes.
     BadInputError for a reference longer than the block holds, not sampled at the bench's
     period, or an unknown name."""
-    kp = [float(values.get(f"kp[{i}]", np.nan)) for i in (1, 2, 3)]
-    kd = [float(values.get(f"kd[{i}]", np.nan)) for i in (1, 2, 3)]
-    gains = {f"{g}[{i}]" for g in ("kp", "kd") for i in (1, 2, 3)}
+    kp_names, kd_names = names("controller", "kp"), names("controller", "kd")
+    kp = [float(values.get(name, np.nan)) for name in kp_names]
+    kd = [float(values.get(name, np.nan)) for name in kd_names]
+    gains = {*kp_names, *kd_names}
     if np.isnan(kp + kd).any():
         raise BadInputError(f"the controller's gains are missing: {sorted(gains - set(values))}")
     sets = [(param(name).row, float(v)) for name, v in values.items()
