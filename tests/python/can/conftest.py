@@ -25,10 +25,6 @@ def _uses_the_guest(item: pytest.Item) -> list[str]:
 pytest_ignore_collect = folder_markers(__file__, "slow", "bus", maybe=("vm",),
                                        of_item=_uses_the_guest)
 
-#: The transports of the bench suites: the C socketcand server on this machine (TCP on
-#: loopback) and SocketCAN (vcan0, vcan1) in the guest. A test parametrised by it runs the same
-#: checks over each (python-can's back2back_test.py shape).
-TRANSPORTS = [pytest.param("socketcan", marks=pytest.mark.vm), "socketcand"]
 
 
 @pytest.fixture(scope="session")
@@ -66,3 +62,13 @@ def guest(tmp_path_factory: pytest.TempPathFactory, tmp_checkout: Path) -> Itera
         yield g
     finally:
         g.close()
+
+
+@pytest.fixture(params=[pytest.param("socketcan", marks=pytest.mark.vm), "socketcand"])
+def transport(request: pytest.FixtureRequest) -> str:
+    """The transport of a bench case: SocketCAN (vcan0, vcan1) in the guest, or the C
+    socketcand server on this machine (TCP on loopback). A test that takes it runs the same
+    checks over each (python-can's back2back_test.py shape); over socketcan first, so that the
+    socketcand runs a case compares with are made here while the guest runs (the emulator
+    takes one CPU)."""
+    return str(request.param)

@@ -1,4 +1,4 @@
-"""The Python cases of test_socketcan_guest.py, run by ONE Python process inside the CAN test
+"""The Python cases of test_bench_transports.py over SocketCAN, run by ONE Python process in the CAN test
 guest (Python starts slowly under emulation: its imports take many seconds there).
 
     guest_python_sides.py OUT DURATION CHANNEL FD_CHANNEL [UPTIME_AT_START]

@@ -1,8 +1,9 @@
 """The conformance suite of the simulated CiA 402 drives (canopen_conformance.py, listed in
-docs/canopen-conformance.md), case by case over each transport: the C plant node's socketcand
-server here (the cases run in this process, one plant for all, each case from NMT reset node),
-and SocketCAN (vcan0) in the CAN test guest (can_guest.py: the same harness runs there as a
-script, once for all cases, and each case here asserts its result)."""
+docs/canopen-conformance.md), case by case over each transport (the ``transport`` fixture of
+can/conftest.py): the C plant node's socketcand server here (the cases run in this process, one
+plant for all, each case from NMT reset node), and SocketCAN (vcan0) in the session's CAN test
+guest (can_guest.py: the same harness runs there as a script, once for all cases, and each case
+here asserts its result)."""
 
 from __future__ import annotations
 
@@ -14,12 +15,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from can_guest import CanGuest, GuestUnavailable
+from can_guest import CanGuest
 from canopen_conformance import CASES, PLANT_ARGS, Case, Dut, run_case, table
 from rrr_robot.hil.nodes import open_bus, start_plant
+from support import REPO
 
 HERE = Path(__file__).resolve().parent
-PAGE = HERE.parents[1] / "docs" / "canopen-conformance.md"
+PAGE = REPO / "docs" / "canopen-conformance.md"
 #: An answer's timeout in the guest (s): Python runs emulated there, many times slower.
 GUEST_TIMEOUT = 10.0
 
@@ -35,20 +37,13 @@ def socketcand_dut() -> Iterator[Dut]:
 
 
 @pytest.fixture(scope="module")
-def guest_results(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
+def guest_results(guest: CanGuest) -> dict[str, Any]:
     """Every case in the CAN test guest over vcan0, by one run of canopen_conformance.py."""
-    scratch = tmp_path_factory.mktemp("conformance_guest")
-    try:
-        guest = CanGuest(scratch).start()
-    except GuestUnavailable as exc:  # not a skip: the test command provides all of it
-        pytest.fail(f"the SocketCAN guest cannot be booted here: {exc}")
-    out = scratch / "results.json"
-    try:
-        r = guest.run(f"{shlex.quote(sys.executable)} "
-                      f"{shlex.quote(str(HERE / 'canopen_conformance.py'))} --socketcan vcan0 "
-                      f"--timeout {GUEST_TIMEOUT:g} --out {out}", timeout=1000)
-    finally:
-        guest.close()
+    out = guest.scratch / "conformance" / "results.json"
+    out.parent.mkdir()
+    r = guest.run(f"{shlex.quote(sys.executable)} "
+                  f"{shlex.quote(str(HERE / 'canopen_conformance.py'))} --socketcan vcan0 "
+                  f"--timeout {GUEST_TIMEOUT:g} --out {shlex.quote(str(out))}", timeout=1000)
     print(f"conformance suite in the guest: exit {r.rc}, {r.seconds:.1f} s; "
           f"{r.stdout.strip()[-200:]}")
     assert out.exists(), r.stderr[-3000:]
@@ -56,10 +51,6 @@ def guest_results(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     return results
 
 
-TRANSPORTS = ["socketcand", pytest.param("socketcan", marks=pytest.mark.vm)]
-
-
-@pytest.mark.parametrize("transport", TRANSPORTS)
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_conformance(case: Case, transport: str, request: pytest.FixtureRequest) -> None:
     if transport == "socketcand":
