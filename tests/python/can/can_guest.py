@@ -73,7 +73,7 @@ GUEST_TMPFS = ("/tmp", "/run", "/var/tmp", "/dev/shm")
 CHECKOUT = Path(os.path.abspath(__file__)).parents[3]
 
 INIT = r"""#!/bin/busybox sh
-# /init of the CAN test guest (tests/python/can_guest.py): modules, vcan0/vcan1, the host tree
+# /init of the CAN test guest (tests/python/can/can_guest.py): modules, vcan0/vcan1, the host tree
 # read-only at /mnt with the guest's own tmpfs over its scratch folders (@TMPFS@), the host
 # folders the jobs need bound back over those read-only, the scratch folder writable at its own
 # path, then a command server on ttyS1. The scratch folder is also at /scratch (outside the

@@ -1,5 +1,5 @@
-"""The Python cases of test_bench_transports.py over SocketCAN, run by ONE Python process in the CAN test
-guest (Python starts slowly under emulation: its imports take many seconds there).
+"""The Python cases of test_bench_transports.py over SocketCAN, run by ONE Python process inside
+the CAN test guest (Python starts slowly under emulation: its imports take many seconds there).
 
     guest_python_sides.py OUT DURATION CHANNEL FD_CHANNEL [UPTIME_AT_START]
 

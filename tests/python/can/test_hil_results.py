@@ -9,6 +9,8 @@ frame log in a standard format.
   frame identifier, DLC, data, direction and time (within the microsecond ASC prints).
 - The frames per period are the lockstep schedule's: VoltageCmd, Sync (Tx), JointState1..3,
   PlantStatus (Rx), plus the heartbeats every 100 periods.
+- ``rrr hil bench --mcap``: bench.mcap, read by rosbags, holds the run's joint states, faults,
+  every frame of the controller's frame log and each frame's signals as cantools decodes them.
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +31,7 @@ from rrr_robot.hil.logs import frames as fl
 from rrr_robot.hil.logs.specs import CONTROLLER_LOG, PLANT_LOG, read_log
 from rrr_robot.hil.results import unquantised_cosim
 from rrr_robot.writing.job import WritingJob, controller_fmu_values, metrics, prepare
+from support.mcap_support import rosbags_messages, same
 
 
 @pytest.fixture(scope="module")
@@ -201,3 +206,53 @@ def test_realtime_bench_reports_latencies(tmp_path: Path) -> None:
     load = s["bus"]["load"]
     assert load["schedule"] == "real time"
     assert load["schedule_worst_case_percent"] == load["realtime_schedule_worst_case_percent"]
+
+
+# ---- rrr hil bench --mcap (jobs/test_mcap.py has the MCAP format's own tests) ----------------
+
+
+@pytest.fixture(scope="module")
+def bench_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``rrr hil bench --mcap``: the C controller and plant nodes in lockstep."""
+    out = tmp_path_factory.mktemp("mcap_hil") / "hil"
+    subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "bench", "--scenario", "ctc",
+                    "--no-figures", "--no-can-log", "--mcap", "--out", str(out), "-q"],
+                   check=True, capture_output=True)
+    return out
+
+
+def test_the_bench_mcap_holds_its_frames_decoded_signals_and_faults(bench_run) -> None:
+    from rrr_robot.hil.dbc.protocol import database
+    from rrr_robot.hil.logs.frames import read_node_log
+    from rrr_robot.hil.logs.specs import PLANT_LOG, read_log
+
+    got, _ = rosbags_messages(bench_run / "bench.mcap")
+    records = read_node_log(bench_run / "frames.rrrcan")
+    log = read_log(bench_run / "plant.csv", PLANT_LOG)
+    t_ns = np.rint(log.col("t") * 1e9).astype(np.int64)
+    assert same(np.array([m[1].position for m in got["/joint_states"]]), log.group("q"))
+    assert same(np.array([m[1].data for m in got["/bench/faults"]]), log.col("faults"))
+    frames = [m[1] for m in got["/can/frames"]]
+    assert len(frames) == records.size
+    assert [f.id for f in frames] == (records["id"] & 0x1FFFFFFF).tolist()
+    assert [f.dlc for f in frames] == records["dlc"].tolist()
+    assert [f.header.frame_id for f in frames] == ["tx" if d else "rx" for d in records["dir"]]
+    for f, r in zip(frames, records, strict=True):
+        assert bytes(f.data[:f.dlc]) == bytes(r["data"][:r["dlc"]])
+    stamps = np.array([m[0] for m in got["/can/frames"]])
+    assert np.all(np.isin(stamps, t_ns)) and np.all(np.diff(stamps) >= 0)
+    # the period of each frame, from its stamp, is the cycle the controller's Sync frame counts
+    sync = got["/can/decoded/Sync"]
+    cycle = np.array([m[1].data[0] for m in sync])
+    period = np.searchsorted(t_ns, np.array([m[0] for m in sync]))
+    assert [d.label for d in sync[0][1].layout.dim] == ["Cycle"]
+    assert np.array_equal(cycle, period)
+    # decoded values are cantools' of the frames' bytes
+    db = database()
+    state = got["/can/decoded/JointState1"]
+    raw = [r for r in records if (r["id"] & 0x1FFFFFFF) == 0x201]
+    msg = db.get_message_by_frame_id(0x201)
+    assert [d.label for d in state[0][1].layout.dim] == [s.name for s in msg.signals]
+    for k in (0, len(raw) // 2, len(raw) - 1):
+        want = msg.decode(bytes(raw[k]["data"][:raw[k]["dlc"]]), decode_choices=False)
+        assert state[k][1].data.tolist() == [float(want[s.name]) for s in msg.signals]

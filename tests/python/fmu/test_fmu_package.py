@@ -150,7 +150,7 @@ def test_model_structure() -> None:
     u = set(joint("u"))
     # q and qd are continuous states: an output that is a state depends on that state only (no
     # direct feedthrough from u); the tip on q (tip.z = d1 + a2 s2 + a3 s23: not on q1); qdd
-    # on u, qd, q2 and q3 (D, c, h ignore q1). tests/python/test_fmu_derivatives.py checks
+    # on u, qd, q2 and q3 (D, c, h ignore q1). tests/python/fmu/test_fmu_derivatives.py checks
     # every entry and kind against the numbers.
     for name in joint("q") + joint("qd"):
         assert plant[name] == {name}, name

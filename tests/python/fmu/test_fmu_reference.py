@@ -2,7 +2,7 @@
 interpolation (consistent q, qd, qdd; samples exact), the look-ahead, and refused tables.
 
 Each test copies the unzipped FMU and writes its own resources/reference.csv, then drives it
-through FMPy's FMU2Slave (tests/python/fmu_support.py keeps the FMU's log messages).
+through FMPy's FMU2Slave (tests/python/support/fmu_support.py keeps the FMU's log messages).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 ``rrr: error: ...`` (or argparse's ``rrr <command>: error: ...`` after its usage) and exit
 status 2, with no traceback, BEFORE anything is written or simulated: the output does not exist
 afterwards and the working folder is exactly as it was. Library errors become that line in
-rrr_robot.cli only; Ctrl-C gives ``rrr: interrupted`` and 130 (tests/python/test_outputs.py
+rrr_robot.cli only; Ctrl-C gives ``rrr: interrupted`` and 130 (tests/python/jobs/test_outputs.py
 interrupts real runs)."""
 
 from __future__ import annotations

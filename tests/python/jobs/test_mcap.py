@@ -10,6 +10,8 @@ readers we do not write with:
   mcap-ros2-support's decoder: the same messages;
 - any table (a few columns, extra column groups, NaN rows of a diverged run), several chunks,
   bad tables refused, a failed write leaving no file, no mcap package refused before a run.
+
+``rrr hil bench --mcap`` (the bench's nodes): can/test_hil_results.py.
 """
 
 from __future__ import annotations
@@ -26,13 +28,13 @@ import rrr_robot as rr
 from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 from mcap_ros2.decoder import DecoderFactory
-from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from rrr_robot.core import mcap_bulk, mcap_log
 from rrr_robot.core.mcap_log import SCHEMAS, write_mcap
 from rrr_robot.core.robot import read_robot_file
 from rrr_robot.core.tables import read_csv_table
 from rrr_robot.core.urdf import robot_urdf
+from support.mcap_support import rosbags_messages, same
 
 ROBOT = read_robot_file()
 
@@ -52,20 +54,8 @@ def messages(run) -> tuple[dict[str, list[tuple[int, Any, bytes]]], Any]:
     return rosbags_messages(run[0])
 
 
-def rosbags_messages(path: Path) -> tuple[dict[str, list[tuple[int, Any, bytes]]], Any]:
-    with AnyReader([path]) as reader:
-        got: dict[str, list[tuple[int, Any, bytes]]] = defaultdict(list)
-        for conn, stamp, raw in reader.messages():
-            got[conn.topic].append((stamp, reader.deserialize(raw, conn.msgtype), raw))
-        return got, reader.typestore
-
-
 def col3(table: dict[str, np.ndarray], name: str) -> np.ndarray:
     return np.stack([table[f"{name}[{i}]"] for i in (1, 2, 3)], axis=1)
-
-
-def same(a: np.ndarray, b: np.ndarray) -> bool:
-    return bool(np.array_equal(np.asarray(a), np.asarray(b), equal_nan=True))
 
 
 def test_rosbags_reads_every_message_equal_to_the_csv(run, messages) -> None:
@@ -278,53 +268,6 @@ def test_without_mcap_the_run_is_refused_before_it_starts(tmp_path, monkeypatch)
         run_writing(WritingJob(out=tmp_path / "out", scenarios=["ctc"], figures=False,
                                engine="native", mcap=True))
     assert not (tmp_path / "out" / "ctc.csv").exists()
-
-
-@pytest.fixture(scope="module")
-def bench_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """``rrr hil bench --mcap``: the C controller and plant nodes in lockstep."""
-    out = tmp_path_factory.mktemp("mcap_hil") / "hil"
-    subprocess.run([sys.executable, "-m", "rrr_robot", "hil", "bench", "--scenario", "ctc",
-                    "--no-figures", "--no-can-log", "--mcap", "--out", str(out), "-q"],
-                   check=True, capture_output=True)
-    return out
-
-
-def test_the_bench_mcap_holds_its_frames_decoded_signals_and_faults(bench_run) -> None:
-    from rrr_robot.hil.dbc.protocol import database
-    from rrr_robot.hil.logs.frames import read_node_log
-    from rrr_robot.hil.logs.specs import PLANT_LOG, read_log
-
-    got, _ = rosbags_messages(bench_run / "bench.mcap")
-    records = read_node_log(bench_run / "frames.rrrcan")
-    log = read_log(bench_run / "plant.csv", PLANT_LOG)
-    t_ns = np.rint(log.col("t") * 1e9).astype(np.int64)
-    assert same(np.array([m[1].position for m in got["/joint_states"]]), log.group("q"))
-    assert same(np.array([m[1].data for m in got["/bench/faults"]]), log.col("faults"))
-    frames = [m[1] for m in got["/can/frames"]]
-    assert len(frames) == records.size
-    assert [f.id for f in frames] == (records["id"] & 0x1FFFFFFF).tolist()
-    assert [f.dlc for f in frames] == records["dlc"].tolist()
-    assert [f.header.frame_id for f in frames] == ["tx" if d else "rx" for d in records["dir"]]
-    for f, r in zip(frames, records, strict=True):
-        assert bytes(f.data[:f.dlc]) == bytes(r["data"][:r["dlc"]])
-    stamps = np.array([m[0] for m in got["/can/frames"]])
-    assert np.all(np.isin(stamps, t_ns)) and np.all(np.diff(stamps) >= 0)
-    # the period of each frame, from its stamp, is the cycle the controller's Sync frame counts
-    sync = got["/can/decoded/Sync"]
-    cycle = np.array([m[1].data[0] for m in sync])
-    period = np.searchsorted(t_ns, np.array([m[0] for m in sync]))
-    assert [d.label for d in sync[0][1].layout.dim] == ["Cycle"]
-    assert np.array_equal(cycle, period)
-    # decoded values are cantools' of the frames' bytes
-    db = database()
-    state = got["/can/decoded/JointState1"]
-    raw = [r for r in records if (r["id"] & 0x1FFFFFFF) == 0x201]
-    msg = db.get_message_by_frame_id(0x201)
-    assert [d.label for d in state[0][1].layout.dim] == [s.name for s in msg.signals]
-    for k in (0, len(raw) // 2, len(raw) - 1):
-        want = msg.decode(bytes(raw[k]["data"][:raw[k]["dlc"]]), decode_choices=False)
-        assert state[k][1].data.tolist() == [float(want[s.name]) for s in msg.signals]
 
 
 def test_run_ssp_writes_the_mcap_of_its_table(tmp_path) -> None:

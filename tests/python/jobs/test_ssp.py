@@ -3,7 +3,7 @@
 One module fixture exports the archive of each built-in scenario (default text) and runs each in
 both tools once through the command line (libcosim's and the FMI Library's log lines go to the
 command's output, which is kept); rrr writing's figures for the same scenarios come from its
-native engine (bit-identical to its FMPy co-simulation, tests/python/test_native_engine.py).
+native engine (bit-identical to its FMPy co-simulation, tests/python/model/test_native_engine.py).
 """
 
 from __future__ import annotations

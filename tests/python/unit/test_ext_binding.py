@@ -211,7 +211,7 @@ def test_ik_nearest_seeds_each_row_with_the_last() -> None:
 def test_model_methods_use_the_extension() -> None:
     q, qd, qdd = (draw(k, 40) for k in ("q", "v", "v"))
     # a batch's scalar path is the extension's row loop (the default: librrr's vector kernels,
-    # within 1e-13 N m: tests/python/test_batch.py)
+    # within 1e-13 N m: tests/python/unit/test_batch.py)
     same_bits(MODEL.inverse_dynamics(q, qd, qdd, simd="scalar"), EXT.inverse_dynamics(q, qd, qdd))
     assert np.abs(MODEL.inverse_dynamics(q, qd, qdd) - EXT.inverse_dynamics(q, qd, qdd)).max() <= (
         1e-13)

@@ -2,7 +2,7 @@
 spec is refused with a message naming the file and the key; each run's values depend on the
 spec and the run's index only; a run's values go through the scenario file's own checks; a
 failing run is a row; the sensitivity ranking finds the input that matters; the results
-dataset reads back as written (tests/python/test_sweep_dask.py runs sweeps on Dask)."""
+dataset reads back as written (tests/python/jobs/test_sweep_dask.py runs sweeps on Dask)."""
 
 from __future__ import annotations
 

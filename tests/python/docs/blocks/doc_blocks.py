@@ -7,8 +7,8 @@ What a block's info string (the words after the opening fence) means:
   continues one on the next line), the other lines are what they print: each printed line must
   appear in the output, in order, where ``...`` stands for any text. A command may fail only if
   the next command is ``echo $?`` (which then prints its status). A console block whose first
-  line is ``# not run here: <reason>`` is not run (tests/python/test_doc_blocks.py lists every
-  such block: adding one means adding it there);
+  line is ``# not run here: <reason>`` is not run (test_doc_blocks.py, beside this file, lists
+  every such block: adding one means adding it there);
 - ``python``: run with this interpreter in a fresh process;
 - ``text output``: the lines that the runnable block before it prints, in that order, with
   ``...`` for any text (a plain ``text`` block is not run);
@@ -211,7 +211,7 @@ def closure(requirements: list[str]) -> set[str]:
     return seen
 
 
-_SITECUSTOMIZE = '''"""Written by tests/python/doc_blocks.py: imports of modules that
+_SITECUSTOMIZE = '''"""Written by tests/python/docs/blocks/doc_blocks.py: imports of modules that
 `pip install {target}` does not install (nor an extra named in RRR_DOC_EXTRAS) fail, as on a
 user's machine."""
 import os

@@ -1,7 +1,7 @@
-"""Every command and code block of README.md and docs/ runs as written (tests/python/doc_blocks.py
-says how each kind of block is run): a block fails the test when it fails, when its shown output
-is not what it prints, or when it is of no known kind; the blocks that cannot run here are
-listed below, each with its reason."""
+"""Every command and code block of README.md and docs/ runs as written (doc_blocks.py, beside
+this file, says how each kind of block is run): a block fails the test when it fails, when its
+shown output is not what it prints, or when it is of no known kind; the blocks that cannot run
+here are listed below, each with its reason."""
 
 from __future__ import annotations
 
@@ -87,7 +87,7 @@ def test_every_block_is_run_or_of_a_known_kind() -> None:
         if b.kind == "unknown":
             lang = b.lang or "(none)"
             problems.append(f"{b.where}: a block of language {lang}: neither run nor a known "
-                            "listing (tests/python/doc_blocks.py lists the kinds)")
+                            "listing (tests/python/docs/blocks/doc_blocks.py lists the kinds)")
         if b.kind == "output":
             before = next((x for x in reversed(blocks[:k]) if x.page == b.page
                            and x.kind in ("run", "output")), None)
