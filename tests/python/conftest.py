@@ -31,7 +31,7 @@ import pytest
 import rrr_robot as rr
 
 HERE = Path(__file__).resolve().parent
-# support/ and each folder's helpers import as top-level names whatever pytest's import mode
+# support/ (the helpers of several folders) imports from every folder, whatever the import mode
 if str(HERE) not in sys.path:
     sys.path.insert(0, str(HERE))
 

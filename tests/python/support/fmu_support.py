@@ -1,5 +1,5 @@
-"""Helpers of the FMU tests (tests/python/test_fmu_*.py): where the FMUs are, and FMPy slaves
-that keep the FMU's log messages.
+"""Helpers of the FMU tests (tests/python/fmu/, unit/test_version.py): where the FMUs are, and
+FMPy slaves that keep the FMU's log messages.
 
 The FMUs come from ``rrr_robot.fmu_path`` (the installed package, or ``$RRR_FMU_DIR`` pointing
 at a CMake build's ``fmus/`` folder). Without them the FMU tests fail.

@@ -72,14 +72,17 @@ def mark_items(items: list[pytest.Item], root: Path) -> None:
     itself, or a new folder without its conftest.py) fails the run, naming it."""
     unclassified: set[str] = set()
     for item in items:
-        spec = FOLDERS.get(Path(item.path).resolve().parent)
+        path = Path(item.path).resolve()
+        spec = FOLDERS.get(path.parent)
         if spec is None:
-            unclassified.add(str(Path(item.path).resolve().relative_to(root)))
+            unclassified.add(str(path.relative_to(root)) if path.is_relative_to(root) else
+                             str(path))
             continue
         marks = set(spec.always) | set(spec.of_item(item) if spec.of_item else ())
         for mark in sorted(marks):
             item.add_marker(getattr(pytest.mark, mark))
     if unclassified:
         raise pytest.UsageError(
-            f"{sorted(unclassified)}: a test module is saved in a folder of tests/python whose "
-            "conftest.py names its markers (CONTRIBUTING.md, 'Where a new test module goes')")
+            f"tests/python: {sorted(unclassified)} in no folder whose conftest.py names its "
+            "markers: move each into the folder of its area (CONTRIBUTING.md, 'Where a new test "
+            "module goes')")
