@@ -16,7 +16,7 @@ from another revision, at its defaults (``today``). Inputs: ``open loop`` (u = [
 from q0 = (0.1, 0.4, 1.0), 2 s) and ``writing`` (the voltages of the default writing task's ctc
 scenario, 5.91 s, recorded from a co-simulation with the FMU under test and replayed open loop:
 the configurations' end states drift apart, as open-loop replays do; the accuracy is checked in
-tests/c/test_plant.c and tests/python/test_plant_integrator.py).
+tests/c/test_plant.c and tests/python/fmu/test_plant_integrator.py).
 
 ``--part rollout``: ``rr.Plant.rollout`` (one C call along an input table) against a Python loop
 of ``rr.Plant.step`` and MuJoCo's ``rollout`` (RK4) at matched accuracy, interleaved. The robot:

@@ -155,7 +155,7 @@ tools() {
   if ! command -v pkg-config >/dev/null 2>&1 && apt_ok; then
     apt_install pkg-config
   fi
-  # chromium: tests/python/test_view.py opens the page of `rrr view` in headless Chromium
+  # chromium: tests/python/jobs/test_view.py opens the page of `rrr view` in headless Chromium
   if ! command -v chromium >/dev/null 2>&1 && apt_ok; then
     echo "== installing chromium (the browser view's test, headless) =="
     apt_install --no-install-recommends chromium
@@ -182,13 +182,13 @@ tools() {
       exit 1
     fi
   fi
-  # The SocketCAN tests (tests/python/test_socketcan_guest.py, docs/socketcan.md) boot a QEMU
+  # The SocketCAN tests (the vm cases of tests/python/can/, docs/socketcan.md) boot a QEMU
   # guest with Debian's kernel (AF_CAN, vcan): can_guest.py installs qemu-system-x86,
   # busybox-static, cpio and can-utils with apt-get when missing and root, and downloads the
   # kernel package into ~/.cache/rrr-can-guest (never installed); it names what is missing
   # otherwise.
-  echo "-- the SocketCAN test guest: tools, kernel, initramfs (tests/python/can_guest.py)"
-  python3 tests/python/can_guest.py prepare
+  echo "-- the SocketCAN test guest: tools, kernel, initramfs (tests/python/can/can_guest.py)"
+  python3 tests/python/can/can_guest.py prepare
 }
 stage "the tools (apt-get when missing), the SocketCAN guest's kernel and initramfs" tools
 
@@ -199,7 +199,7 @@ JOBS="$(nproc 2>/dev/null || echo 2)"
 PYTHON="$(command -v python)"
 export JOBS PYTHON
 # the controller firmware of rrr hil pil: its tools (apt-get when missing and root) and images,
-# before the background stages (one dpkg at a time); tests/python/test_hil_pil.py runs them
+# before the background stages (one dpkg at a time); tests/python/can/test_hil_pil.py runs them
 stage "the controller firmware (scripts/test_pil.sh --build-only; docs/microcontroller.md)" \
   bash scripts/test_pil.sh --build-only
 
@@ -290,7 +290,7 @@ background "the release folder: scripts/dist.sh, its checks, installed without a
   release_folder
 
 # ---- the foreground stage: pytest, the longest -----------------------------------------------
-last_stage "pytest (with every block of README.md and docs/: tests/python/test_doc_blocks.py)" \
+last_stage "pytest (every block of README.md and docs/: tests/python/docs/blocks/)" \
   python -m pytest -q --durations=25 tests/python
 echo "== waiting for the background stages =="
 wait_background

@@ -2,12 +2,12 @@
 # Processor in the loop (docs/microcontroller.md): the GNU Arm toolchain, picolibc and
 # qemu-system-arm (installed with apt-get when missing and root), the controller firmware of
 # c_src/firmware built with warnings as errors into build-firmware (the images `rrr hil pil`
-# runs by default), then its tests, tests/python/test_hil_pil.py (the firmware in QEMU against
+# runs by default), then its tests, tests/python/can/test_hil_pil.py (the firmware in QEMU against
 # the C plant node and against a fake plant; about a minute).
 #
 #   bash scripts/test_pil.sh               # tools, build, tests
 #   bash scripts/test_pil.sh --build-only  # tools and build (the test command's pytest stage
-#                                          # runs tests/python/test_hil_pil.py itself)
+#                                          # runs tests/python/can/test_hil_pil.py itself)
 #
 # Python: the active virtual environment, else .venv (scripts/setup_env.sh makes it).
 set -euo pipefail
@@ -46,5 +46,5 @@ PY=python
 if [ -z "${VIRTUAL_ENV:-}" ] && [ -x .venv/bin/python ]; then
   PY=.venv/bin/python
 fi
-echo "== processor in the loop: tests/python/test_hil_pil.py =="
-RRR_PIL_FIRMWARE_DIR="$ROOT/build-firmware" "$PY" -m pytest -q tests/python/test_hil_pil.py
+echo "== processor in the loop: tests/python/can/test_hil_pil.py =="
+RRR_PIL_FIRMWARE_DIR="$ROOT/build-firmware" "$PY" -m pytest -q tests/python/can/test_hil_pil.py

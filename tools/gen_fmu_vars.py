@@ -6,7 +6,7 @@ written from ``RRR_FMU_NAMES`` of fmu/CMakeLists.txt). Those model descriptions 
 from the C variable tables
 (fmu/*/config.h and model.c, fmu/common/rrr_model_vars.h) by fmu/common/fmu_xml.c, so the Python
 side's FMU variable names and value references come from the C tables and are spelled nowhere
-by hand (tests/python/test_fmu_vars.py proves regenerating gives the committed file).
+by hand (tests/python/unit/test_fmu_vars.py proves regenerating gives the committed file).
 
     python tools/gen_fmu_vars.py           # rewrite the committed module
     python tools/gen_fmu_vars.py --check   # exit 1 when it differs from what the FMUs give

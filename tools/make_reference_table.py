@@ -1,6 +1,6 @@
 """Write the table that the packaged reference FMU ships, fmu/reference/resources/reference.csv:
 the default writing task's start pose held at rest for 1 s (rrr_robot.ssp.table
-.placeholder_columns). tests/python/test_ssp.py checks that the committed file is what this
+.placeholder_columns). tests/python/jobs/test_ssp.py checks that the committed file is what this
 writes.
 
 Usage: python tools/make_reference_table.py [OUT]   (default: the committed file)

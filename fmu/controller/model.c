@@ -183,7 +183,7 @@ static fmu_status do_step(fmu_instance *inst, double h)
  * lead qdd: linear in joint i's q_ref, qd_ref, q, qd and qdd with factors of the fixed
  * parameters kp, kd and lead ("fixed"; the qdd factor is 0 when lead = 0); u = sat(u_n + u_c) on
  * both sets. Unsigned wrap-around: vr - first < n  <=>  first <= vr < first + n.
- * tests/python/test_fmu_derivatives.py checks every entry against the numbers. */
+ * tests/python/fmu/test_fmu_derivatives.py checks every entry against the numbers. */
 _Static_assert(vr_q_ref % RRR_NJ == 0 && vr_q % RRR_NJ == 0 && vr_qdd % RRR_NJ == 0 &&
                    vr_u % RRR_NJ == 0 && vr_u_n % RRR_NJ == 0 && vr_u_c % RRR_NJ == 0,
                "joint i of every vector at a value reference = i - 1 (mod 3)");

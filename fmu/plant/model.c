@@ -268,7 +268,7 @@ static fmu_status do_step(fmu_instance *inst, double h)
  * D(q)^-1 (k_t (sat(u) - u_f(qd)) - c - h) couples every input and velocity into every
  * acceleration, and D, c and h depend on q2 and q3 only; the tip depends on q, tip.z on q2 and
  * q3 only (z = d1 + a2 s2 + a3 s23). Unsigned wrap-around: vr - first < n  <=>  first <= vr <
- * first + n. tests/python/test_fmu_derivatives.py checks every entry against the numbers. */
+ * first + n. tests/python/fmu/test_fmu_derivatives.py checks every entry against the numbers. */
 static int depends(fmu_vr unknown, fmu_vr known)
 {
     const int is_u = known - vr_u < RRR_NJ;

@@ -3,9 +3,9 @@
 sources, before any pip install.
 
 Stages python/rrr_robot with the built _ext module and librrr.so into a temporary folder and runs
-the binding's tests (tests/python/test_ext_binding.py: every method's batches against its rows
+the binding's tests (tests/python/unit/test_ext_binding.py: every method's batches against its rows
 bit for bit, the refusals, batches without the GIL and from threads), the Model API tests and
-the plant step's (tests/python/test_plant_api.py) on it.
+the plant step's (tests/python/unit/test_plant_api.py) on it.
 In the sanitizer build CMake runs this under the preloaded ASan runtime, so ASan and UBSan check
 the module's C code and the librrr it links.
 
@@ -24,8 +24,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-TESTS = ["tests/python/test_ext_binding.py", "tests/python/test_model_api.py",
-         "tests/python/test_plant_api.py"]
+TESTS = ["tests/python/unit/test_ext_binding.py", "tests/python/unit/test_model_api.py",
+         "tests/python/unit/test_plant_api.py"]
 
 
 def main() -> int:

@@ -1,5 +1,5 @@
 # CTest: both bench nodes over the socketcand transport in lockstep, 300 periods holding a pose
-# (run under ASan/UBSan with the rest of the C tests). Python's tests/python/test_hil_bench.py
+# (run under ASan/UBSan with the rest of the C tests). Python's tests/python/can/test_hil_bench.py
 # compares a full writing task with the FMPy co-simulation.
 # -DPLANT=... -DCONTROLLER=... -DFMU_DIR=<unzipped plant FMU> -DWORK=<scratch dir>
 file(MAKE_DIRECTORY "${WORK}")

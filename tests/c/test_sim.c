@@ -2,7 +2,7 @@
  * equality bit for bit with the same loop written over the public API (rrr_ctc, rrr_plant_step,
  * rrr_fk: what the FMUs call), which it must match although it reuses each step's end-state
  * half of the right-hand side. Its equality with the FMUs driven by the co-simulation master is
- * checked from Python (tests/python/test_native_engine.py), where the master lives. */
+ * checked from Python (tests/python/model/test_native_engine.py), where the master lives. */
 #include <math.h>
 #include <string.h>
 

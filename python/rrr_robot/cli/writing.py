@@ -74,7 +74,7 @@ def _cmd_writing(args: argparse.Namespace) -> int:
 
 
 #: The writing area and the glyphs, for ``rrr writing --help`` (the default robot's [writing]
-#: values and WritingSpec's defaults; tests/python/test_text_layout.py checks them).
+#: values and WritingSpec's defaults; tests/python/jobs/test_text_layout.py checks them).
 WRITING_EPILOG = """\
 writing area (default robot; a robot file's [writing] plane_y, x_range, z_range change it):
   x from 0.35 to 0.65 m and z from 0.35 to 0.60 m (0.30 m x 0.25 m) in the vertical plane

@@ -4,7 +4,7 @@ the scalar path, bit for bit the one-state calls.
 :meth:`rrr_robot.core.model.Model.inverse_dynamics` uses them for batches (its ``simd``
 argument). The vector kernels' results differ from the
 scalar path's by rounding only: within 1e-13 N m (tests/c/test_batch.c,
-tests/python/test_batch.py); they exist in librrr built with GCC for x86-64 Linux."""
+tests/python/unit/test_batch.py); they exist in librrr built with GCC for x86-64 Linux."""
 
 from __future__ import annotations
 

@@ -4,7 +4,7 @@ name, a value reference or the joint numbers by hand.
 The three FMUs' model descriptions are generated from their C variable tables
 (``fmu/*/config.h`` and ``model.c``, ``fmu/common/rrr_model_vars.h``); ``tools/gen_fmu_vars.py``
 reads the packaged FMI 2.0 model descriptions into ``rrr_robot.core._fmu_table``, and
-``tests/python/test_fmu_vars.py`` proves that regenerating gives the committed table (FMI 3.0
+``tests/python/unit/test_fmu_vars.py`` proves that regenerating gives the committed table (FMI 3.0
 has the same variables, plus ``time``) and that no module of the package spells an FMU variable
 name or ``(1, 2, 3)``.
 

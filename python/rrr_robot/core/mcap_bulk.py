@@ -9,7 +9,7 @@ summary and its offsets, the Footer and its CRC) is written by the ``mcap`` pack
 classes, in the order ``Writer.finish`` writes them. Several blocks of streams, each on its own
 time base (the rows of a run, the frames of a CAN log), are merged in time order by one stable
 sort of their rows. The files are read back by rosbags and by mcap's readers in
-tests/python/test_mcap.py.
+tests/python/jobs/test_mcap.py.
 """
 
 from __future__ import annotations

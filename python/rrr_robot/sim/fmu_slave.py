@@ -470,7 +470,7 @@ def pooled_slave(path: Path, instance_name: str) -> Iterator[FmuSlave]:
     """An instantiated slave of ``path`` for one run: an idle one of an earlier run in this
     process (reset) or a new one. After a run that succeeded it goes back to the pool, reset;
     after a run that raised it is closed. The results equal those of a fresh instance bit for
-    bit (tests/python/test_fmu_reuse.py). With ``$RRR_FMU_REUSE=0``: a fresh instance, closed
+    bit (tests/python/fmu/test_fmu_reuse.py). With ``$RRR_FMU_REUSE=0``: a fresh instance, closed
     after the run."""
     global _pool_pid
     if os.environ.get("RRR_FMU_REUSE", "1") == "0":

@@ -5,7 +5,7 @@
  * Every other version is read from this file: CMake's project(VERSION) (CMakeLists.txt), the
  * Python package's metadata and ``rrr_robot.__version__`` (pyproject.toml, a regex), the FMUs'
  * ``version`` and ``generationTool`` (fmu/common/fmu_xml.c) and the manual's release
- * (docs/conf.py). tests/python/test_version.py checks that they agree.
+ * (docs/conf.py). tests/python/unit/test_version.py checks that they agree.
  */
 #ifndef RRR_VERSION_H
 #define RRR_VERSION_H

@@ -5,7 +5,7 @@ and :class:`~rrr_robot.hil.dbc.plant.PythonPlant`) and the latency log (``--late
 both nodes).
 
 The C nodes write the headers of c_src/hil/nodes/gen/rrr_hil_logs.h, GENERATED from this table by
-tools/gen_hil_logs.py (tests/python/test_generated_code.py proves that regenerating gives the
+tools/gen_hil_logs.py (tests/python/model/test_generated_code.py proves that regenerating gives the
 committed header); every Python reader goes through :func:`read_log`, which checks the header
 against the table, so a column added, removed or moved on one side is an error on the other,
 not a silently shifted signal. (The frame log is binary: rrr_robot.hil.logs.frames.)

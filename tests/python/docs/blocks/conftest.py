@@ -1,0 +1,6 @@
+"""docs/blocks/: every command and code block of README.md and docs/ runs as written
+(doc_blocks.py, beside it, says how). Marker ``slow``."""
+
+from support.markers import folder_markers
+
+pytest_ignore_collect = folder_markers(__file__, "slow")
