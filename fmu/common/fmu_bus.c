@@ -152,17 +152,6 @@ static void receive(fmu_instance *S, const uint8_t *value, size_t n)
     }
 }
 
-/* Process a pending Rx_Data value once its clock is active. */
-static void deliver(fmu_instance *S, fmu_bus_state *b)
-{
-    if (b->rx_clock && b->rx_len > 0u) {
-        const uint32_t n = b->rx_len;
-        b->rx_len = 0u;
-        receive(S, b->rx, n);
-        S->dirty = 1;
-    }
-}
-
 static int is_var(const fmu_instance *S, fmu_vr vr, unsigned k)
 {
     return vr == fmu_bus_vr(S->model, k);
@@ -185,8 +174,8 @@ static fmu_status get_binary(fmu_instance *S, const char *fn, fmu_vr vr, size_t 
         return FMU_OK;
     }
     if (is_var(S, vr, FMU_BUS_RX_DATA)) {
-        *size = b->rx_len;
-        *value = b->rx;
+        *size = 0u; /* walked when it was set: nothing is kept */
+        *value = b->tx;
         return FMU_OK;
     }
     return refuse(S, fn, vr, "a Binary variable (its Binary variables are the terminal's "
@@ -215,12 +204,21 @@ static fmu_status set_binary(fmu_instance *S, const char *fn, fmu_vr vr, size_t 
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR, "%s: values[i] is NULL for %zu bytes", fn, size);
         return FMU_ERROR;
     }
-    if (size > 0u) {
-        memcpy(b->rx, value, size);
-    }
-    b->rx_len = (uint32_t)size;
-    deliver(S, b);
+    (void)b;
+    receive(S, value, size); /* the importer sets a clocked input with its clock active */
+    S->dirty = 1;
     return FMU_OK;
+}
+
+/* Drop the operations the last active Tx clock released (they have been read). */
+static void drop_released(fmu_bus_state *b)
+{
+    if (b->tx_clock && b->tx_sent > 0u) {
+        memmove(b->tx, b->tx + b->tx_sent, b->tx_len - b->tx_sent);
+        b->tx_len -= b->tx_sent;
+    }
+    b->tx_sent = 0u;
+    b->tx_clock = 0u;
 }
 
 static fmu_status get_clock(fmu_instance *S, const char *fn, fmu_vr vr, int *active)
@@ -231,6 +229,7 @@ static fmu_status get_clock(fmu_instance *S, const char *fn, fmu_vr vr, int *act
          * Tx_Data (and resets it: the next read is active only for newer operations) */
         *active = b->tx_len > b->tx_sent;
         if (*active) {
+            drop_released(b); /* a second tick in one instant releases only what is new */
             b->tx_sent = b->tx_len;
             b->tx_clock = 1u;
             b->sent = 1u;
@@ -252,12 +251,12 @@ static fmu_status set_clock(fmu_instance *S, const char *fn, fmu_vr vr, int acti
     fmu_bus_state *b = fmu_bus_of(S);
     if (is_var(S, vr, FMU_BUS_RX_CLOCK)) {
         b->rx_clock = active ? 1u : 0u;
-        deliver(S, b);
         return FMU_OK;
     }
     if (is_var(S, vr, FMU_BUS_TX_CLOCK) && S->model->bus->tx_clock == FMU_BUS_TX_COUNTDOWN) {
         if (active && !b->tx_clock) {
             configure(S, b); /* the first tick carries the Configuration at least */
+            drop_released(b);
             b->tx_sent = b->tx_len;
             b->sent = b->tx_sent > 0u;
         }
@@ -294,20 +293,17 @@ static fmu_status get_interval(fmu_instance *S, const char *fn, fmu_vr vr, doubl
 
 static void enter_event_mode(fmu_instance *S)
 {
+    /* the Configuration with the baud rate at the first event, before anything else: a bus
+     * simulation carries no frame until every node has configured the same baud rate */
+    configure(S, fmu_bus_of(S));
     S->model->bus->event(S);
 }
 
 /* Drop what the last active Tx clock released; the clocks go inactive. */
 static void end_iteration(fmu_bus_state *b)
 {
-    if (b->tx_clock && b->tx_sent > 0u) {
-        memmove(b->tx, b->tx + b->tx_sent, b->tx_len - b->tx_sent);
-        b->tx_len -= b->tx_sent;
-    }
-    b->tx_sent = 0u;
-    b->tx_clock = 0u;
+    drop_released(b);
     b->rx_clock = 0u;
-    b->rx_len = 0u; /* a value whose clock never ticked is not received */
 }
 
 static int update(fmu_instance *S)
@@ -343,14 +339,13 @@ static fmu_status check_state(fmu_instance *S, const void *data, const char *fn)
 {
     fmu_bus_state b;
     memcpy(&b, (const char *)data + S->model->bus->state_offset, sizeof b);
-    if (b.tx_len > FMU_BUS_TX_MAX || b.tx_sent > b.tx_len || b.rx_len > FMU_BUS_RX_MAX ||
-        b.tx_clock > 1u || b.rx_clock > 1u || b.sent > 1u || b.configured > 1u) {
+    if (b.tx_len > FMU_BUS_TX_MAX || b.tx_sent > b.tx_len || b.tx_clock > 1u ||
+        b.rx_clock > 1u || b.sent > 1u || b.configured > 1u) {
         fmu_log(S, FMU_ERROR, FMU_LOG_ERROR,
                 "%s: the FMU state holds an invalid bus terminal (Tx %u of %u bytes released, "
-                "Rx %u bytes, clocks %u %u, flags %u %u): lengths within maxSize, flags 0 or 1",
-                fn, (unsigned)b.tx_sent, (unsigned)b.tx_len, (unsigned)b.rx_len,
-                (unsigned)b.tx_clock, (unsigned)b.rx_clock, (unsigned)b.sent,
-                (unsigned)b.configured);
+                "clocks %u %u, flags %u %u): lengths within maxSize, flags 0 or 1",
+                fn, (unsigned)b.tx_sent, (unsigned)b.tx_len, (unsigned)b.tx_clock,
+                (unsigned)b.rx_clock, (unsigned)b.sent, (unsigned)b.configured);
         return FMU_ERROR;
     }
     /* the queued operations are ours: each one well-formed */

@@ -20,7 +20,7 @@
  *    (fmi3GetIntervalDecimal announces the next communication point) and carries what was queued
  *    by then. Tx_Data is what the last active clock released, until the next
  *    fmi3UpdateDiscreteStates or fmi3EnterStepMode;
- *  - Rx: each Rx_Data value set while Rx_Clock is active is walked by `length`: a well-formed
+ *  - Rx: each Rx_Data value is walked by `length` when it is set: a well-formed
  *    CAN Transmit goes to the model's `frame` hook; Confirm, Arbitration Lost and Bus Error go to
  *    its `notification` hook when BusNotifications is true and are ignored silently otherwise; a
  *    malformed operation (unknown OP Code, a length that does not match its arguments, below the
@@ -40,8 +40,9 @@
 #include "fmu_lsbus.h"
 #include "fmu_model.h"
 
-/** Bytes of Tx_Data (its maxSize) and of Rx_Data (its maxSize). */
-#define FMU_BUS_TX_MAX 4096u
+/** Bytes of Tx_Data (its maxSize: a period's frames take about 150) and of Rx_Data (its
+ *  maxSize). A received value is walked when it is set, so only Tx needs room in the state. */
+#define FMU_BUS_TX_MAX 1024u
 #define FMU_BUS_RX_MAX 2048u
 
 /** The terminal's variables, value reference n_vars + each. */
@@ -63,7 +64,6 @@ typedef enum fmu_bus_tx_clock {
 typedef struct fmu_bus_state {
     uint32_t tx_len;          ///< bytes queued in tx
     uint32_t tx_sent;         ///< bytes of tx released by the last active Tx_Clock (Tx_Data)
-    uint32_t rx_len;          ///< bytes of an Rx_Data value waiting for its clock
     uint8_t tx_clock;         ///< Tx_Clock active in this event iteration
     uint8_t rx_clock;         ///< Rx_Clock active in this event iteration
     uint8_t sent;             ///< Tx released since the last fmi3UpdateDiscreteStates
@@ -80,7 +80,6 @@ typedef struct fmu_bus_state {
     uint32_t tx_overflow;     ///< operations dropped: Tx_Data full (FMU_BUS_TX_MAX)
     uint32_t peer_baudrate;   ///< the last Configuration CAN baud rate received (0: none)
     uint8_t tx[FMU_BUS_TX_MAX];
-    uint8_t rx[FMU_BUS_RX_MAX];
 } fmu_bus_state;
 
 struct fmu_bus_glue;

@@ -45,7 +45,8 @@ class RunInfo:
 def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, model: Model,
                   controller_values: Mapping[str, float | bool],
                   nodes: Mapping[str, Mapping[str, Any]], *, can_log: Path | None,
-                  figures: bool = True, mcap: bool = False) -> dict[str, Any]:
+                  figures: bool = True, mcap: bool = False,
+                  extra: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Evaluate a run whose logs (plant.csv, the node's frame log, in real time the latency
     logs) are in the result set's staging folder: the unquantised co-simulation, the standard
     frame log (``can_log``: in the output folder, or elsewhere, written atomically), the
@@ -108,4 +109,6 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
 
         write_bench_figures(work, ref_run, bench, unq, latencies or None, stats,
                             scenario=info.scenario)
+    if extra:  # the sections of the run's kind (rrr ls-bus: the container and its bus)
+        summary = {**summary, **extra}
     return write_summary(rs, summary)

@@ -1,0 +1,186 @@
+"""``rrr ls-bus`` as a library call: the CAN bench's two nodes as FMI-LS-BUS network FMUs in
+an fmucontainer, run by FMPy, turned into the files of ``rrr hil bench`` (plant.csv,
+controller.csv, the controller's frame log) and what the bus did to the frames.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...core import fmu_vars as fv
+from ...core._arrays import FloatArray
+from ...errors import HilError
+from ...writing.trajectory import Reference
+from ..dbc.protocol import EXIT_SAFETY
+from ..logs.specs import PLANT_LOG, write_log
+from ..nodes import PERIOD, Progress, export_reference
+from ..results import BenchRun, write_controller_log
+from . import datalog as dl
+from .container import CONTAINER, NODES, ContainerSpec, build_container, outputs
+
+__all__ = ["LsbusRun", "frame_delays", "run_lsbus"]
+
+#: The node's frame log the results read (hil.dbc.results: its bus traffic), and the pcap.
+NODE_LOG = "frames.rrrcan"
+PCAP = "frames.pcap"
+
+
+@dataclass(frozen=True)
+class LsbusRun:
+    """A container run: the bench run, the nodes' counters (summary keys of the C nodes), what
+    the bus did to each node's frames, the container and the tools."""
+
+    run: BenchRun
+    nodes: dict[str, Mapping[str, Any]]
+    ls_bus: dict[str, Any]
+    rc: int
+
+
+def _status(r: np.ndarray, role: str) -> dict[str, Any]:
+    """The node's counters at the end of the run (status.* outputs), as integers."""
+    prefix = f"{role}.status."
+    return {name[len(prefix):]: int(r[name][-1]) for name in r.dtype.names or ()
+            if name.startswith(prefix)}
+
+
+def _cols(r: np.ndarray, role: str, names: list[str]) -> FloatArray:
+    return np.stack([np.asarray(r[f"{role}.{n}"], dtype=float) for n in names], axis=1)
+
+
+def frame_delays(log: list[dl.Transmission], sent_by: str, received_by: str,
+                 ) -> dict[str, Any]:
+    """What the link did to the CAN frames of sender ``sent_by``: each matched, in order, with
+    the first equal frame (identifier and data) that ``received_by`` delivers at or after its
+    sending; frames sent, delivered, lost (never delivered), and the delays (s) of the
+    delivered ones: mean, max, and how many came in a later period than they were sent."""
+    sent = [(tr.time, op.can_id, op.data) for tr in log if tr.sender == sent_by
+            for op in tr.ops if op.opcode == dl.CAN_TRANSMIT]
+    got = [(tr.time, op.can_id, op.data) for tr in log if tr.sender == received_by
+           for op in tr.ops if op.opcode == dl.CAN_TRANSMIT]
+    delays: list[float] = []
+    late = 0
+    j = 0
+    for t, can_id, data in sent:
+        k = j
+        while k < len(got) and not (got[k][1] == can_id and got[k][2] == data and got[k][0] >= t):
+            k += 1
+        if k == len(got):
+            continue
+        delays.append(got[k][0] - t)
+        late += int(np.floor(got[k][0] / PERIOD + 1e-6)) > int(np.floor(t / PERIOD + 1e-6))
+        j = k + 1
+    d = np.asarray(delays)
+    return {"sent": len(sent), "delivered": len(delays), "lost": len(sent) - len(delays),
+            "delayed_to_a_later_period": late,
+            "delay_mean_s": float(d.mean()) if d.size else None,
+            "delay_max_s": float(d.max()) if d.size else None}
+
+
+def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
+              controller_values: Mapping[str, float | bool], work: Path, *,
+              bus_sim: bool = False, bitrate: int = 1_000_000, step: float | None = None,
+              progress: Progress | None = None) -> LsbusRun:
+    """Build the container in ``work/container`` (fmucontainer), run it with FMPy over the
+    reference's duration, and write plant.csv, controller.csv, the controller's frame log
+    (frames.rrrcan), the pcap of every frame (frames.pcap) and reference.csv into ``work``.
+    ``bus_sim``: through the bus simulation FMU at ``bitrate`` bit/s, the controller's
+    real-time schedule (no Sync), container steps of ``step`` s (default 10 us: a frame's end
+    is seen at the next step); else the direct link, the lockstep schedule, steps of one
+    period (the C bench's arithmetic)."""
+    import fmpy
+
+    n = ref.t.shape[0]
+    duration = float(ref.t[-1] - ref.t[0])
+    ref_csv = export_reference(ref.t, ref.q, ref.qd, ref.qdd, work / "reference.csv",
+                               (ref.x, ref.xd, ref.xdd))
+    plant = {**{name: float(v) for name, v in zip(fv.names("plant", "q0"), ref.q[0], strict=True)},
+             **{name: float(v) for name, v in zip(fv.names("plant", "qd0"), ref.qd[0],
+                                                  strict=True)},
+             **plant_values}
+    ctrl = {**controller_values, "sync": not bus_sim}
+    spec = ContainerSpec(reference_csv=ref_csv, plant_values=plant, controller_values=ctrl,
+                         bus_sim=bus_sim, bitrate=bitrate,
+                         step=(step if step is not None else (1e-5 if bus_sim else PERIOD)))
+    cdir = work / "container"
+    container = build_container(spec, cdir)
+    names = [f"{role}.{v}" for role in NODES for v in outputs(role)]
+
+    def finished(t: float, _recorder: Any) -> bool:
+        if progress is not None:
+            progress(min(n, int(round(t / PERIOD)) + 1), n)
+        return True
+
+    start = time.perf_counter()
+    with contextlib.chdir(cdir):  # the container writes its data log into the working folder
+        try:
+            r = fmpy.simulate_fmu(str(container), start_time=0.0, stop_time=duration,
+                                  step_size=PERIOD, output_interval=PERIOD, output=names,
+                                  validate=False, step_finished=finished)
+        except Exception as exc:  # FMPy raises Exception for a failed FMI call
+            raise HilError(f"FMPy could not run the container {container}: "
+                           f"{' '.join(str(exc).split())}") from exc
+    wall = time.perf_counter() - start
+    if r.shape[0] != n:
+        raise HilError(f"the container run has {r.shape[0]} rows, the reference {n} periods")
+    log = dl.read_datalog(cdir / f"{Path(CONTAINER).stem}-datalog.csv")
+    rx = "bus.Node1" if bus_sim else "plant.CAN"
+    dl.write_node_log(log, "controller.CAN", rx, work / NODE_LOG)
+    frames_in_pcap = dl.write_pcap(log, work / PCAP,
+                                   ("controller.CAN", "plant.CAN") if bus_sim else None)
+
+    t = np.asarray(r["time"], dtype=float)
+    q, qd = _cols(r, "plant", fv.names("plant", "q")), _cols(r, "plant", fv.names("plant", "qd"))
+    u_plant = _cols(r, "plant", fv.names("plant", "u"))
+    p_status, c_status = _status(r, "plant"), _status(r, "controller")
+    rows = np.zeros((n, len(PLANT_LOG.columns)))
+    rows[:, PLANT_LOG.index("k")] = np.arange(n)
+    rows[:, PLANT_LOG.index("t")] = t
+    for group, values in (("q", q), ("qd", qd), ("u", u_plant),
+                          ("qdd", _cols(r, "plant", fv.names("plant", "qdd"))),
+                          ("tip", _cols(r, "plant", fv.names("plant", "tip")))):
+        rows[:, PLANT_LOG.indices(fv.names("plant", group))] = values
+    rows[:, PLANT_LOG.index("zero")] = np.asarray(r["plant.zero"], dtype=float)
+    rows[:, PLANT_LOG.index("faults")] = np.asarray(r["plant.status.faults"], dtype=float)
+    write_log(work / "plant.csv", PLANT_LOG, rows)
+    safety = any(p_status.get(k, 0) for k in ("faults", "fault_events", "zero_periods"))
+    p_status["exit"] = EXIT_SAFETY if safety else 0
+    faulty = c_status.get("plant_status_faulty", 0) or c_status.get("plant_status_zero", 0)
+    c_status["exit"] = EXIT_SAFETY if faulty else 0
+    run = BenchRun(t=t, q=q, qd=qd, u=_cols(r, "controller", fv.names("controller", "u")),
+                   plant_summary=p_status, controller_summary=c_status,
+                   u_n=_cols(r, "controller", fv.names("controller", "u_n")),
+                   u_c=_cols(r, "controller", fv.names("controller", "u_c")), wall_time=wall)
+    write_controller_log(run, work / "controller.csv")
+    import fmu_manipulation_toolbox
+
+    periods = np.asarray(r["controller.period"], dtype=float)
+    ls_bus: dict[str, Any] = {
+        "container": CONTAINER, "built_by": "fmu_manipulation_toolbox "
+        f"{getattr(fmu_manipulation_toolbox, '__version__', '?')} (fmucontainer)",
+        "run_by": f"FMPy {fmpy.__version__} (simulate_fmu)",
+        "link": "bus simulation (rrr_can_bus_simulation)" if bus_sim else "direct",
+        "bitrate": bitrate, "container_step_s": spec.step, "wall_time_s": wall,
+        "schedule": "real time (VoltageCmd only)" if bus_sim else "lockstep (VoltageCmd, Sync)",
+        "periods_without_new_command": int(np.sum(periods != np.arange(n))),
+        "pcap": PCAP, "pcap_frames": frames_in_pcap,
+    }
+    if bus_sim:  # the data log holds what the bus delivered to each node
+        ls_bus["controller_to_plant"] = frame_delays(log, "controller.CAN", "bus.Node2")
+        ls_bus["plant_to_controller"] = frame_delays(log, "plant.CAN", "bus.Node1")
+    else:  # the direct link hands a value over within the event: the receivers' counts
+        for key, (tx, rx) in {"controller_to_plant": (c_status, p_status),
+                              "plant_to_controller": (p_status, c_status)}.items():
+            sent, got = tx.get("frames_sent", 0), rx.get("frames_received", 0)
+            ls_bus[key] = {"sent": sent, "delivered": got, "lost": sent - got,
+                           "delayed_to_a_later_period": 0,
+                           "delay": "none: delivered in the event it was sent in"}
+    rc = p_status["exit"] or c_status["exit"]
+    return LsbusRun(run=run, nodes={"plant": p_status, "controller": c_status}, ls_bus=ls_bus,
+                    rc=int(rc))
