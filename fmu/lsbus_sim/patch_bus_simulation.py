@@ -91,7 +91,9 @@ XML = [
     ("""    <Output valueReference="5" dependencies="7" />""",
      """    <Output valueReference="5" dependencies="7" />
     <Output valueReference="3" />
-    <Output valueReference="7" />""", 1),
+    <Output valueReference="7" />
+    <InitialUnknown valueReference="3" />
+    <InitialUnknown valueReference="7" />""", 1),
 ]
 
 

@@ -45,6 +45,7 @@ BUS = frozenset({
     "test_hil_python_plant", "test_hil_results", "test_hostile_inputs", "test_mcap",
     "test_socketcan_guest", "test_hil_canopen", "test_hil_canopen_master",
     "test_hil_canopen_realtime", "test_canopen_conformance", "test_node_launchers",
+    "test_lsbus",
 })
 #: The modules that boot a QEMU guest.
 VM = frozenset({"test_socketcan_guest"})
@@ -54,7 +55,7 @@ SLOW = frozenset({
     "test_dynamics_reference", "test_figures", "test_fmu_derivatives", "test_fmu_error_routing",
     "test_fmu_errors", "test_fmu_libcosim", "test_fmu_reuse", "test_fmu_loop", "test_fmu_package",
     "test_fmu_reference", "test_fmu_start_values", "test_fmu_state",
-    "test_fmu_variants",
+    "test_fmu_variants", "test_lsbus_fmus",
     "test_friction_methods", "test_generated_code", "test_hostile_archives",
     "test_hostile_sweeps", "test_identify_pipeline", "test_identify_threads",
     "test_native_engine", "test_native_signals", "test_plan_cache", "test_notebook", "test_outputs",

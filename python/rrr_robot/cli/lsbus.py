@@ -72,11 +72,12 @@ def _report(s: Mapping[str, Any], out: Path) -> None:
         delay = (f", delay mean {1e3 * d['delay_mean_s']:.3f} ms, max "
                  f"{1e3 * d['delay_max_s']:.3f} ms" if d.get("delay_mean_s") is not None else "")
         print(f"  {key.replace('_', ' ')}: {d['sent']} frames sent, {d['delivered']} delivered, "
-              f"{d['lost']} lost, {d['delayed_to_a_later_period']} in a later period{delay}")
+              f"{d['lost']} lost, {d['in_flight_at_end']} in flight at the end, "
+              f"{d['delayed_to_a_later_period']} in a later period{delay}")
     f = s["faults"]
     print(f"  plant: faults latched {f.get('faults')}, fault events {f.get('fault_events')}, "
           f"missed commands {s['missed_commands']}, periods at 0 V {f.get('zero_periods')}; "
-          f"periods without a new command {ls['periods_without_new_command']}")
+          f"periods without a command {ls['periods_without_a_command']}")
     print("\n".join(_bus_lines(s["bus"])))
     print(f"results in {out}/ (summary.json, plant.csv, controller.csv, {ls['pcap']}, "
           "container/, figures)")

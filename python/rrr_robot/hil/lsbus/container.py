@@ -147,11 +147,19 @@ def build_container(spec: ContainerSpec, work: Path) -> Path:
                    for role in NODES for name in outputs(role)],
     }
     (work / "container.json").write_text(json.dumps(description, indent=1) + "\n")
+    # fmucontainer logs each port it leaves open (the bus simulation's BusErrorProbability,
+    # which keeps its start value 0, as an ERROR line) and each output it does not expose: the
+    # build's own errors raise, so its log goes to DEBUG here
+    tool_log = logging.getLogger("fmu_manipulation_toolbox")
+    level = tool_log.level
+    tool_log.setLevel(logging.CRITICAL if not log.isEnabledFor(logging.DEBUG) else level)
     try:
         assembly = Assembly("container.json", fmu_directory=work)
         assembly.make_fmu(fmi_version=3, datalog=True)
     except (FMUContainerError, AssemblyError, OSError, KeyError) as exc:
         raise HilError(f"fmucontainer could not build the container in {work}: {exc}") from exc
+    finally:
+        tool_log.setLevel(level)
     path = work / CONTAINER
     if not path.is_file():
         raise HilError(f"fmucontainer wrote no {path}")

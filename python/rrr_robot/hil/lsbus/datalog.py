@@ -2,9 +2,11 @@
 container step and event iteration, each Binary value as hex) read back as the bus operations
 every network FMU sent, and written as the bench's frame log and as a pcap.
 
-A Tx_Data value is a new transmission in a row whose Tx_Clock column is ``1``; in the rows of the
-initialization event the container leaves the clock column empty, and a value that differs from
-the previous row's is a transmission there. Every value is walked by the operations' ``length``
+A Tx_Data value is a new transmission in a row whose Tx_Clock column is ``1`` and whose value
+differs from the column's previous transmission (the container logs a row per step, and a clock
+stays ``1`` in the rows until the next event); the value of the first row is one too (the
+initialization event's, released before the container logs its first row, which shows its clock
+reset). Every value the network FMUs send differs from their previous one (alive counters). Every value is walked by the operations' ``length``
 (FMI-LS-BUS 1.0: several concatenated per value, little-endian ``u32 opCode, u32 length``);
 ``datalog2pcap`` of fmu_manipulation_toolbox decodes the first operation of each value only
 (and skips the initialization rows), :func:`write_pcap` writes every CAN Transmit.
@@ -88,18 +90,21 @@ def read_datalog(path: Path) -> list[Transmission]:
             if "time" not in fields or not data_cols:
                 raise HilError(f"{path}: not a data log of an LS-BUS container (no time and "
                                "*.Tx_Data columns)")
-            previous = dict.fromkeys(data_cols, "")
             out: list[Transmission] = []
+            first = True
+            last = dict.fromkeys(data_cols, "")
             for row in reader:
                 for col in data_cols:
                     value = row.get(col) or ""
-                    clock = row.get(col[: -len("Data")] + "Clock") or ""
-                    fresh = clock == "1" or (clock == "" and value != previous[col])
-                    previous[col] = value
+                    clock = row.get(col[: -len("Data")] + "Clock") == "1"
+                    fresh = first or (clock and value != last[col])
+                    if fresh:
+                        last[col] = value
                     if fresh and value:
                         sender = col[: -len(".Tx_Data")]
                         out.append(Transmission(float(row["time"]), sender,
                                                 operations(bytes.fromhex(value))))
+                first = False
             return out
     except (OSError, UnicodeError, ValueError, csv.Error) as exc:
         raise HilError(f"cannot read the data log {path}: {exc}") from exc

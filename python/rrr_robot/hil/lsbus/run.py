@@ -6,6 +6,8 @@ controller.csv, the controller's frame log) and what the bus did to the frames.
 from __future__ import annotations
 
 import contextlib
+import logging
+import shutil
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -26,6 +28,8 @@ from . import datalog as dl
 from .container import CONTAINER, NODES, ContainerSpec, build_container, outputs
 
 __all__ = ["LsbusRun", "frame_delays", "run_lsbus"]
+
+log = logging.getLogger(__name__)
 
 #: The node's frame log the results read (hil.dbc.results: its bus traffic), and the pcap.
 NODE_LOG = "frames.rrrcan"
@@ -58,26 +62,30 @@ def frame_delays(log: list[dl.Transmission], sent_by: str, received_by: str,
                  ) -> dict[str, Any]:
     """What the link did to the CAN frames of sender ``sent_by``: each matched, in order, with
     the first equal frame (identifier and data) that ``received_by`` delivers at or after its
-    sending; frames sent, delivered, lost (never delivered), and the delays (s) of the
-    delivered ones: mean, max, and how many came in a later period than they were sent."""
+    sending; frames sent, delivered, lost (never delivered; those sent in the run's last period
+    are counted as still in flight instead), and the delays (s) of the delivered ones: mean,
+    max, and how many came in a later period than they were sent."""
     sent = [(tr.time, op.can_id, op.data) for tr in log if tr.sender == sent_by
             for op in tr.ops if op.opcode == dl.CAN_TRANSMIT]
     got = [(tr.time, op.can_id, op.data) for tr in log if tr.sender == received_by
            for op in tr.ops if op.opcode == dl.CAN_TRANSMIT]
     delays: list[float] = []
-    late = 0
+    late = in_flight = 0
+    end = max((tr.time for tr in log), default=0.0)
     j = 0
     for t, can_id, data in sent:
         k = j
         while k < len(got) and not (got[k][1] == can_id and got[k][2] == data and got[k][0] >= t):
             k += 1
         if k == len(got):
+            in_flight += t > end - PERIOD + 1e-9
             continue
         delays.append(got[k][0] - t)
         late += int(np.floor(got[k][0] / PERIOD + 1e-6)) > int(np.floor(t / PERIOD + 1e-6))
         j = k + 1
     d = np.asarray(delays)
-    return {"sent": len(sent), "delivered": len(delays), "lost": len(sent) - len(delays),
+    return {"sent": len(sent), "delivered": len(delays),
+            "lost": len(sent) - len(delays) - in_flight, "in_flight_at_end": in_flight,
             "delayed_to_a_later_period": late,
             "delay_mean_s": float(d.mean()) if d.size else None,
             "delay_max_s": float(d.max()) if d.size else None}
@@ -89,7 +97,8 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
               progress: Progress | None = None) -> LsbusRun:
     """Build the container in ``work/container`` (fmucontainer), run it with FMPy over the
     reference's duration, and write plant.csv, controller.csv, the controller's frame log
-    (frames.rrrcan), the pcap of every frame (frames.pcap) and reference.csv into ``work``.
+    (frames.rrrcan), the pcap of every frame (frames.pcap), reference.csv, the container, its
+    description (container.json) and its data log into ``work``.
     ``bus_sim``: through the bus simulation FMU at ``bitrate`` bit/s, the controller's
     real-time schedule (no Sync), container steps of ``step`` s (default 10 us: a frame's end
     is seen at the next step); else the direct link, the lockstep schedule, steps of one
@@ -117,22 +126,30 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
             progress(min(n, int(round(t / PERIOD)) + 1), n)
         return True
 
+    def fmu_log(*args: Any) -> None:  # the container's and the FMUs' messages: DEBUG lines
+        message = args[-1]
+        log.debug("%s", message.decode(errors="replace") if isinstance(message, bytes)
+                  else message)
+
     start = time.perf_counter()
     with contextlib.chdir(cdir):  # the container writes its data log into the working folder
         try:
             r = fmpy.simulate_fmu(str(container), start_time=0.0, stop_time=duration,
                                   step_size=PERIOD, output_interval=PERIOD, output=names,
-                                  validate=False, step_finished=finished)
+                                  validate=False, step_finished=finished, logger=fmu_log)
         except Exception as exc:  # FMPy raises Exception for a failed FMI call
             raise HilError(f"FMPy could not run the container {container}: "
                            f"{' '.join(str(exc).split())}") from exc
     wall = time.perf_counter() - start
     if r.shape[0] != n:
         raise HilError(f"the container run has {r.shape[0]} rows, the reference {n} periods")
-    log = dl.read_datalog(cdir / f"{Path(CONTAINER).stem}-datalog.csv")
+    datalog = f"{Path(CONTAINER).stem}-datalog.csv"
+    for name in (CONTAINER, datalog, "container.json"):  # results: plain files of the output
+        shutil.copyfile(cdir / name, work / name)
+    sent = dl.read_datalog(work / datalog)
     rx = "bus.Node1" if bus_sim else "plant.CAN"
-    dl.write_node_log(log, "controller.CAN", rx, work / NODE_LOG)
-    frames_in_pcap = dl.write_pcap(log, work / PCAP,
+    dl.write_node_log(sent, "controller.CAN", rx, work / NODE_LOG)
+    frames_in_pcap = dl.write_pcap(sent, work / PCAP,
                                    ("controller.CAN", "plant.CAN") if bus_sim else None)
 
     t = np.asarray(r["time"], dtype=float)
@@ -158,27 +175,28 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
                    u_n=_cols(r, "controller", fv.names("controller", "u_n")),
                    u_c=_cols(r, "controller", fv.names("controller", "u_c")), wall_time=wall)
     write_controller_log(run, work / "controller.csv")
-    import fmu_manipulation_toolbox
+    from importlib.metadata import version
 
     periods = np.asarray(r["controller.period"], dtype=float)
     ls_bus: dict[str, Any] = {
-        "container": CONTAINER, "built_by": "fmu_manipulation_toolbox "
-        f"{getattr(fmu_manipulation_toolbox, '__version__', '?')} (fmucontainer)",
+        "container": CONTAINER, "data_log": datalog, "description": "container.json",
+        "built_by": f"fmu_manipulation_toolbox {version('fmu-manipulation-toolbox')} "
+        "(fmucontainer)",
         "run_by": f"FMPy {fmpy.__version__} (simulate_fmu)",
         "link": "bus simulation (rrr_can_bus_simulation)" if bus_sim else "direct",
         "bitrate": bitrate, "container_step_s": spec.step, "wall_time_s": wall,
         "schedule": "real time (VoltageCmd only)" if bus_sim else "lockstep (VoltageCmd, Sync)",
-        "periods_without_new_command": int(np.sum(periods != np.arange(n))),
+        "periods_without_a_command": n - int(np.isin(np.arange(n), periods).sum()),
         "pcap": PCAP, "pcap_frames": frames_in_pcap,
     }
     if bus_sim:  # the data log holds what the bus delivered to each node
-        ls_bus["controller_to_plant"] = frame_delays(log, "controller.CAN", "bus.Node2")
-        ls_bus["plant_to_controller"] = frame_delays(log, "plant.CAN", "bus.Node1")
+        ls_bus["controller_to_plant"] = frame_delays(sent, "controller.CAN", "bus.Node2")
+        ls_bus["plant_to_controller"] = frame_delays(sent, "plant.CAN", "bus.Node1")
     else:  # the direct link hands a value over within the event: the receivers' counts
         for key, (tx, rx) in {"controller_to_plant": (c_status, p_status),
                               "plant_to_controller": (p_status, c_status)}.items():
             sent, got = tx.get("frames_sent", 0), rx.get("frames_received", 0)
-            ls_bus[key] = {"sent": sent, "delivered": got, "lost": sent - got,
+            ls_bus[key] = {"sent": sent, "delivered": got, "lost": sent - got, "in_flight_at_end": 0,
                            "delayed_to_a_later_period": 0,
                            "delay": "none: delivered in the event it was sent in"}
     rc = p_status["exit"] or c_status["exit"]
