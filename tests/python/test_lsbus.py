@@ -90,7 +90,7 @@ def _pcap_frames(path: Path) -> list[tuple[float, int, bytes]]:
 def test_the_pcap_decodes_with_the_dbc(direct: Path) -> None:
     db = database()
     frames = _pcap_frames(direct / "frames.pcap")
-    periods = int(round(float(DURATION) / 1e-3)) + 1
+    periods = round(float(DURATION) / 1e-3) + 1
     counts: dict[str, int] = {}
     for _t, can_id, data in frames:
         msg = db.get_message_by_frame_id(can_id)

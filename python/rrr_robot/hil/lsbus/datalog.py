@@ -6,8 +6,9 @@ A Tx_Data value is a new transmission in a row whose Tx_Clock column is ``1`` an
 differs from the column's previous transmission (the container logs a row per step, and a clock
 stays ``1`` in the rows until the next event); the value of the first row is one too (the
 initialization event's, released before the container logs its first row, which shows its clock
-reset). Every value the network FMUs send differs from their previous one (alive counters). Every value is walked by the operations' ``length``
-(FMI-LS-BUS 1.0: several concatenated per value, little-endian ``u32 opCode, u32 length``);
+reset). Every value the network FMUs send differs from their previous one (alive counters).
+Every value is walked by the operations' ``length`` (FMI-LS-BUS 1.0: several concatenated per
+value, little-endian ``u32 opCode, u32 length``);
 ``datalog2pcap`` of fmu_manipulation_toolbox decodes the first operation of each value only
 (and skips the initialization rows), :func:`write_pcap` writes every CAN Transmit.
 """

@@ -123,7 +123,7 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
 
     def finished(t: float, _recorder: Any) -> bool:
         if progress is not None:
-            progress(min(n, int(round(t / PERIOD)) + 1), n)
+            progress(min(n, round(t / PERIOD) + 1), n)
         return True
 
     def fmu_log(*args: Any) -> None:  # the container's and the FMUs' messages: DEBUG lines
@@ -193,11 +193,11 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
         ls_bus["controller_to_plant"] = frame_delays(sent, "controller.CAN", "bus.Node2")
         ls_bus["plant_to_controller"] = frame_delays(sent, "plant.CAN", "bus.Node1")
     else:  # the direct link hands a value over within the event: the receivers' counts
-        for key, (tx, rx) in {"controller_to_plant": (c_status, p_status),
-                              "plant_to_controller": (p_status, c_status)}.items():
-            sent, got = tx.get("frames_sent", 0), rx.get("frames_received", 0)
-            ls_bus[key] = {"sent": sent, "delivered": got, "lost": sent - got, "in_flight_at_end": 0,
-                           "delayed_to_a_later_period": 0,
+        for key, (sender, receiver) in {"controller_to_plant": (c_status, p_status),
+                                        "plant_to_controller": (p_status, c_status)}.items():
+            n_sent, n_got = sender.get("frames_sent", 0), receiver.get("frames_received", 0)
+            ls_bus[key] = {"sent": n_sent, "delivered": n_got, "lost": n_sent - n_got,
+                           "in_flight_at_end": 0, "delayed_to_a_later_period": 0,
                            "delay": "none: delivered in the event it was sent in"}
     rc = p_status["exit"] or c_status["exit"]
     return LsbusRun(run=run, nodes={"plant": p_status, "controller": c_status}, ls_bus=ls_bus,
