@@ -9,10 +9,13 @@
  * Error to the Error state, Fatal to the Fatal state). Errors are logged by default, as in the
  * FMI 2 build; fmi3SetDebugLogging switches categories off and on.
  *
- * Not provided (capability flags false or absent in the XML): scheduled execution, event mode
- * in Co-Simulation, intermediate update, clocks, configuration mode, directional and adjoint
- * derivatives, output derivatives, per-element dependencies, fmi3EvaluateDiscreteStates, and
- * variables of any type other than Float64 and Boolean. Each refuses with fmi3Error and says so.
+ * Not provided (capability flags false or absent in the XML): scheduled execution, intermediate
+ * update, configuration mode, directional and adjoint derivatives where the model has none,
+ * output derivatives, per-element dependencies, fmi3EvaluateDiscreteStates, and variables of any
+ * type other than Float64, Boolean and, for a model with a CAN terminal, its Binary and Clock
+ * variables. Event mode in Co-Simulation and the clocks (fmi3GetClock, fmi3SetClock,
+ * fmi3GetIntervalDecimal) belong to a model with a CAN terminal (fmu_bus.h: the LS-BUS network
+ * FMUs), instantiated with eventModeUsed; for the others each refuses with fmi3Error and says so.
  */
 #include "fmu_adapter.h" /* first: see fmu_model.h */
 #include "fmi3Functions.h"

@@ -80,7 +80,7 @@ def _report(s: Mapping[str, Any], out: Path) -> None:
           f"periods without a command {ls['periods_without_a_command']}")
     print("\n".join(_bus_lines(s["bus"])))
     print(f"results in {out}/ (summary.json, plant.csv, controller.csv, {ls['pcap']}, "
-          "container/, figures)")
+          f"{ls['container']} with container.json and its FMUs, {ls['data_log']}, figures)")
 
 
 def register_cli(subparsers: Any) -> None:
@@ -97,7 +97,8 @@ def register_cli(subparsers: Any) -> None:
         "in a container built by fmucontainer (fmu_manipulation_toolbox) and run by FMPy; write "
         "summary.json (with the section ls_bus: the frames each way, delivered, lost, delayed), "
         "plant.csv, controller.csv, the frame logs (frames.rrrcan, frames.blf, frames.pcap), the "
-        "container with its data log (container/) and the figures into --out "
+        "container (rrr_bench_can.fmu) with its data log, its description container.json and "
+        "the FMUs it names, and the figures into --out "
         "(docs/ls-bus.md).")
     add_reference_arguments(p)
     g = p.add_argument_group("bus")

@@ -98,7 +98,7 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
     """Build the container in ``work/container`` (fmucontainer), run it with FMPy over the
     reference's duration, and write plant.csv, controller.csv, the controller's frame log
     (frames.rrrcan), the pcap of every frame (frames.pcap), reference.csv, the container, its
-    description (container.json) and its data log into ``work``.
+    description (container.json) with the FMUs it names, and its data log into ``work``.
     ``bus_sim``: through the bus simulation FMU at ``bitrate`` bit/s, the controller's
     real-time schedule (no Sync), container steps of ``step`` s (default 10 us: a frame's end
     is seen at the next step); else the direct link, the lockstep schedule, steps of one
@@ -117,7 +117,7 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
     spec = ContainerSpec(reference_csv=ref_csv, plant_values=plant, controller_values=ctrl,
                          bus_sim=bus_sim, bitrate=bitrate,
                          step=(step if step is not None else (1e-5 if bus_sim else PERIOD)))
-    cdir = work / "container"
+    cdir = (work / "container").resolve()  # absolute: the run changes into it
     container = build_container(spec, cdir)
     names = [f"{role}.{v}" for role in NODES for v in outputs(role)]
 
@@ -144,7 +144,10 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
     if r.shape[0] != n:
         raise HilError(f"the container run has {r.shape[0]} rows, the reference {n} periods")
     datalog = f"{Path(CONTAINER).stem}-datalog.csv"
-    for name in (CONTAINER, datalog, "container.json"):  # results: plain files of the output
+    # results (plain files of the output): the container, its data log, and what fmucontainer
+    # builds it from again (container.json and the node copies it names)
+    nodes = ["controller.fmu", "plant.fmu", *(["bus.fmu"] if bus_sim else [])]
+    for name in (CONTAINER, datalog, "container.json", *nodes):
         shutil.copyfile(cdir / name, work / name)
     sent = dl.read_datalog(work / datalog)
     rx = "bus.Node1" if bus_sim else "plant.CAN"
