@@ -65,7 +65,7 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
 #define MASK_fmi3SetBoolean (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_STEP_MODE)
 #define MASK_fmi3SetOther MASK_fmi3SetBoolean
 #define MASK_fmi3GetBinary MASK_GETTERS
-#define MASK_fmi3SetBinary (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE)
+#define MASK_fmi3SetBinary MASK_fmi3SetOther
 #define MASK_fmi3GetClock FMU_EVENT_MODE
 #define MASK_fmi3SetClock FMU_EVENT_MODE
 #define MASK_fmi3GetIntervalDecimal (FMU_INIT_MODE | FMU_EVENT_MODE)
