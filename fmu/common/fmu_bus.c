@@ -256,11 +256,12 @@ static fmu_status set_clock(fmu_instance *S, const char *fn, fmu_vr vr, int acti
     if (is_var(S, vr, FMU_BUS_TX_CLOCK) && S->model->bus->tx_clock == FMU_BUS_TX_COUNTDOWN) {
         if (active && !b->tx_clock) {
             configure(S, b); /* the first tick carries the Configuration at least */
-            drop_released(b);
             b->tx_sent = b->tx_len;
+            b->tx_clock = 1u;
             b->sent = b->tx_sent > 0u;
+        } else if (!active) {
+            drop_released(b); /* what the tick released has been sent */
         }
-        b->tx_clock = active ? 1u : 0u;
         return FMU_OK;
     }
     if (is_var(S, vr, FMU_BUS_TX_CLOCK)) {

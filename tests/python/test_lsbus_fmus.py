@@ -131,3 +131,73 @@ def test_the_terminal_variables(name: str, tx_clock: str) -> None:
     assert tx_clock in xml
     mime = 'mimeType="application/org.fmi-standard.fmi-ls-bus.can; version=&quot;1.0.0&quot;"'
     assert xml.count(mime) == 2  # Tx_Data and Rx_Data
+
+
+def test_the_countdown_nodes_in_a_minimal_importer(tmp_path: Path) -> None:
+    """The countdown variants where an importer delivers countdown-clocked values (fmucontainer
+    2.0 does not): FMPy's FMU3Slave, the two nodes linked directly, each period one event in
+    which both Tx clocks tick (fmi3GetIntervalDecimal announces them) and each node receives
+    the other's Tx_Data. The controller commands at its tick from the newest state, one period
+    old: every period after the first is commanded, no fault."""
+    import csv
+
+    from fmpy import extract, read_model_description
+    from fmpy.fmi3 import FMU3Slave
+
+    period, periods = 1e-3, 100
+    nodes = {}
+    for role in ("controller", "plant"):
+        path = lsbus_fmu_path(f"{role}_can_countdown")
+        md = read_model_description(str(path))
+        fmu = FMU3Slave(guid=md.instantiationToken,
+                        unzipDirectory=extract(str(path), tmp_path / role),
+                        modelIdentifier=md.coSimulation.modelIdentifier, instanceName=role)
+        fmu.instantiate(eventModeUsed=True)
+        vr = {v.name: v.valueReference for v in md.modelVariables}
+        nodes[role] = (fmu, vr)
+    plant, pvr = nodes["plant"]
+    with zipfile.ZipFile(lsbus_fmu_path("controller_can_countdown")) as z:
+        first = next(csv.DictReader(z.read("resources/reference.csv").decode().splitlines()))
+    for name, col in (("q0[1]", "q_ref[1]"), ("q0[2]", "q_ref[2]"), ("q0[3]", "q_ref[3]")):
+        plant.setFloat64([pvr[name]], [float(first[col])])
+    for fmu, _ in nodes.values():
+        fmu.enterInitializationMode(startTime=0.0)
+        fmu.exitInitializationMode()
+    import ctypes
+
+    from fmpy.fmi3 import fmi3Float64, fmi3IntervalQualifier
+
+    for k in range(periods + 1):
+        if k > 0:
+            for fmu, _ in nodes.values():
+                fmu.enterEventMode()
+        released = {}
+        for role, (fmu, vr) in nodes.items():
+            fmu.setClock([vr["CAN.Tx_Clock"]], [True])
+            released[role] = fmu.getBinary([vr["CAN.Tx_Data"]])[0] or b""
+        for role, other in (("controller", "plant"), ("plant", "controller")):
+            fmu, vr = nodes[role]
+            if released[other]:
+                fmu.setClock([vr["CAN.Rx_Clock"]], [True])
+                fmu.setBinary([vr["CAN.Rx_Data"]], [released[other]])
+        for fmu, vr in nodes.values():
+            fmu.updateDiscreteStates()
+            intervals = (fmi3Float64 * 1)()
+            qualifiers = (fmi3IntervalQualifier * 1)()
+            fmu.getIntervalDecimal((ctypes.c_uint32 * 1)(vr["CAN.Tx_Clock"]), intervals,
+                                   qualifiers)
+            assert abs(intervals[0] - period) < 1e-12  # the next communication point
+        if k == periods:
+            break
+        for fmu, _ in nodes.values():
+            fmu.enterStepMode()
+            fmu.doStep(k * period, period)
+    cvr = nodes["controller"][1]
+    ctrl = nodes["controller"][0]
+    assert ctrl.getFloat64([cvr["status.commands"]])[0] >= periods - 1
+    assert plant.getFloat64([pvr["status.faults"]])[0] == 0.0
+    assert plant.getFloat64([pvr["status.cmd_missed"]])[0] <= 2.0
+    assert plant.getFloat64([pvr["status.peer_baudrate"]])[0] == 1e6  # the Configuration came
+    for fmu, _ in nodes.values():
+        fmu.terminate()
+        fmu.freeInstance()
