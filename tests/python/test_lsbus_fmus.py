@@ -201,3 +201,20 @@ def test_the_countdown_nodes_in_a_minimal_importer(tmp_path: Path) -> None:
     for fmu, _ in nodes.values():
         fmu.terminate()
         fmu.freeInstance()
+
+
+@pytest.mark.parametrize("name", ["controller_can", "controller_can_countdown", "plant_can",
+                                  "plant_can_countdown"])
+def test_a_node_alone_simulates_in_fmpy(name: str) -> None:
+    """FMPy's simulate_fmu (no event mode, no clocks): a node runs alone without a bus; the
+    plant's supervisor then sees no command and applies 0 V after three periods."""
+    import fmpy
+
+    r = fmpy.simulate_fmu(str(lsbus_fmu_path(name)), stop_time=0.01, step_size=1e-3,
+                          output_interval=1e-3)
+    for col in r.dtype.names:
+        assert all(abs(float(x)) < 1e12 for x in r[col]), col
+    if name.startswith("plant"):
+        assert r["status.timeout"][-1] == 1.0 and r["zero"][-1] == 1.0
+    else:
+        assert r["status.commands"][-1] == 0.0 and r["period"][-1] == -1.0
