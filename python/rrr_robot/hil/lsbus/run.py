@@ -21,9 +21,9 @@ from ...core._arrays import FloatArray
 from ...errors import HilError
 from ...writing.trajectory import Reference
 from ..dbc.protocol import EXIT_SAFETY
-from ..logs.specs import PLANT_LOG, write_log
+from ..logs.specs import CONTROLLER_LOG, PLANT_LOG, write_log
 from ..nodes import PERIOD, Progress, export_reference
-from ..results import BenchRun, write_controller_log
+from ..results import BenchRun
 from . import datalog as dl
 from .container import CONTAINER, NODES, ContainerSpec, build_container, outputs
 
@@ -155,13 +155,15 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
     frames_in_pcap = dl.write_pcap(sent, work / PCAP,
                                    ("controller.CAN", "plant.CAN") if bus_sim else None)
 
-    t = np.asarray(r["time"], dtype=float)
+    # the times the C nodes log: the controller k * period, the plant its steps summed
+    t = np.arange(n) * PERIOD
+    t_plant = np.cumsum(np.r_[0.0, np.full(n - 1, PERIOD)])
     q, qd = _cols(r, "plant", fv.names("plant", "q")), _cols(r, "plant", fv.names("plant", "qd"))
     u_plant = _cols(r, "plant", fv.names("plant", "u"))
     p_status, c_status = _status(r, "plant"), _status(r, "controller")
     rows = np.zeros((n, len(PLANT_LOG.columns)))
     rows[:, PLANT_LOG.index("k")] = np.arange(n)
-    rows[:, PLANT_LOG.index("t")] = t
+    rows[:, PLANT_LOG.index("t")] = t_plant
     for group, values in (("q", q), ("qd", qd), ("u", u_plant),
                           ("qdd", _cols(r, "plant", fv.names("plant", "qdd"))),
                           ("tip", _cols(r, "plant", fv.names("plant", "tip")))):
@@ -173,11 +175,19 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
     p_status["exit"] = EXIT_SAFETY if safety else 0
     faulty = c_status.get("plant_status_faulty", 0) or c_status.get("plant_status_zero", 0)
     c_status["exit"] = EXIT_SAFETY if faulty else 0
-    run = BenchRun(t=t, q=q, qd=qd, u=_cols(r, "controller", fv.names("controller", "u")),
+    run = BenchRun(t=t_plant, q=q, qd=qd, u=_cols(r, "controller", fv.names("controller", "u")),
                    plant_summary=p_status, controller_summary=c_status,
                    u_n=_cols(r, "controller", fv.names("controller", "u_n")),
                    u_c=_cols(r, "controller", fv.names("controller", "u_c")), wall_time=wall)
-    write_controller_log(run, work / "controller.csv")
+    # the controller's log: the state it received (quantised by JointState), as the C node's
+    rows = np.zeros((n, len(CONTROLLER_LOG.columns)))
+    rows[:, CONTROLLER_LOG.index("k")] = np.arange(n)
+    rows[:, CONTROLLER_LOG.index("t")] = t
+    rows[:, CONTROLLER_LOG.index("enable")] = np.asarray(r["controller.enable"], dtype=float)
+    for group in ("q", "qd", "u", "u_n", "u_c"):
+        names = fv.names("controller", group)
+        rows[:, CONTROLLER_LOG.indices(fv.joint_names(group))] = _cols(r, "controller", names)
+    write_log(work / "controller.csv", CONTROLLER_LOG, rows)
     from importlib.metadata import version
 
     periods = np.asarray(r["controller.period"], dtype=float)
