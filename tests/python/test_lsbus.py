@@ -127,14 +127,20 @@ def test_the_bus_simulation_states_what_it_did_to_the_frames(
         d = ls[key]
         assert d["sent"] > 0 and d["delivered"] + d["lost"] + d["in_flight_at_end"] == d["sent"]
         assert d["delay_mean_s"] > 0.0 and d["delay_max_s"] >= d["delay_mean_s"]
+    load = s["bus"]["load"]
+    assert load["bitrate"] == ls["bitrate"]  # the loads of the simulated bus
     if ls["bitrate"] == 1_000_000:
         # a period's frames fit: each arrives within the period it was sent in or the next
         assert rc == 0 and s["faults"]["faults"] == 0
         assert ls["plant_to_controller"]["delay_max_s"] < 1e-3
+        assert load["measured_percent"] < 100.0
     else:
-        # they do not fit into 1 ms at 250 kbit/s: the queue grows, states arrive ever later
+        # they do not fit into 1 ms at 250 kbit/s: the queue grows, states arrive ever later,
+        # the bus drops frames, the plant times out: a completed run, status 7 (safety policy)
         d = ls["plant_to_controller"]
         assert d["delayed_to_a_later_period"] > 0 and d["delay_max_s"] > 2e-3
+        assert d["lost"] > 0 and load["measured_percent"] > 100.0
+        assert rc == 7 and s["faults"]["faults"] > 0 and s["plant_exit"] == 7
 
 
 def test_bitrate_needs_the_bus_simulation(tmp_path: Path, capsys: pytest.CaptureFixture[str],

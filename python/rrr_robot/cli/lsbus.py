@@ -16,6 +16,7 @@ from .hil import (
     NODE_FRAMES,
     _bus_lines,
     _can_log_target,
+    _status,
     _writing_setup,
     add_reference_arguments,
     add_result_arguments,
@@ -53,12 +54,12 @@ def _cmd_lsbus(args: argparse.Namespace) -> int:
                 + ("the bus simulation's deliveries to it" if args.bus_sim else "the plant's")
                 + "), from the container's data log")
         info = RunInfo(side="ls-bus", mode="bus-sim" if args.bus_sim else "lockstep",
-                       scenario=args.scenario, node_log=NODE_FRAMES, view=view)
+                       scenario=args.scenario, node_log=NODE_FRAMES, view=view, bitrate=rate)
         summary = write_results(rs, info, ref, lr.run, model, ctrl_values, lr.nodes,
                                 can_log=can_log, figures=not args.no_figures, mcap=args.mcap,
                                 extra={"ls_bus": lr.ls_bus})
     _report(summary, out)
-    return lr.rc
+    return _status(lr.rc)
 
 
 def _report(s: Mapping[str, Any], out: Path) -> None:
