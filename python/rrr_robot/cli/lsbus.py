@@ -58,11 +58,11 @@ def _cmd_lsbus(args: argparse.Namespace) -> int:
         summary = write_results(rs, info, ref, lr.run, model, ctrl_values, lr.nodes,
                                 can_log=can_log, figures=not args.no_figures, mcap=args.mcap,
                                 extra={"ls_bus": lr.ls_bus})
-    _report(summary, out)
+    _report(summary, out, figures=not args.no_figures)
     return _status(lr.rc)
 
 
-def _report(s: Mapping[str, Any], out: Path) -> None:
+def _report(s: Mapping[str, Any], out: Path, *, figures: bool) -> None:
     b, ls = s["bench"], s["ls_bus"]
     print(f"LS-BUS container ({ls['link']}, {ls['bitrate']} bit/s; built by {ls['built_by']}, "
           f"run by {ls['run_by']}): {s['reference']['periods']} periods; tip error max "
@@ -81,7 +81,8 @@ def _report(s: Mapping[str, Any], out: Path) -> None:
           f"periods without a command {ls['periods_without_a_command']}")
     print("\n".join(_bus_lines(s["bus"])))
     print(f"results in {out}/ (summary.json, plant.csv, controller.csv, {ls['pcap']}, "
-          f"{ls['container']} with container.json and its FMUs, {ls['data_log']}, figures)")
+          f"{ls['container']} with container.json and its FMUs, {ls['data_log']}"
+          + (", figures)" if figures else ")"))
 
 
 def register_cli(subparsers: Any) -> None:
