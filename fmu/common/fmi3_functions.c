@@ -9,13 +9,17 @@
  * Error to the Error state, Fatal to the Fatal state). Errors are logged by default, as in the
  * FMI 2 build; fmi3SetDebugLogging switches categories off and on.
  *
- * Not provided (capability flags false or absent in the XML): scheduled execution, event mode
- * in Co-Simulation, intermediate update, clocks, configuration mode, directional and adjoint
- * derivatives, output derivatives, per-element dependencies, fmi3EvaluateDiscreteStates, and
- * variables of any type other than Float64 and Boolean. Each refuses with fmi3Error and says so.
+ * Not provided (capability flags false or absent in the XML): scheduled execution, intermediate
+ * update, configuration mode, directional and adjoint derivatives where the model has none,
+ * output derivatives, per-element dependencies, fmi3EvaluateDiscreteStates, and variables of any
+ * type other than Float64, Boolean and, for a model with a CAN terminal, its Binary and Clock
+ * variables. Event mode in Co-Simulation and the clocks (fmi3GetClock, fmi3SetClock,
+ * fmi3GetIntervalDecimal) belong to a model with a CAN terminal (fmu_bus.h: the LS-BUS network
+ * FMUs), instantiated with eventModeUsed; for the others each refuses with fmi3Error and says so.
  */
 #include "fmu_adapter.h" /* first: see fmu_model.h */
 #include "fmi3Functions.h"
+#include "fmu_bus.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -47,7 +51,10 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
 #define MASK_fmi3FreeInstance MASK_ANY_INSTANCE
 #define MASK_fmi3EnterInitializationMode FMU_INSTANTIATED
 #define MASK_fmi3ExitInitializationMode FMU_INIT_MODE
-#define MASK_fmi3EnterEventMode FMU_CONT_TIME_MODE
+/* Co-Simulation with event mode (a model with a CAN terminal, eventModeUsed): Event Mode after
+ * initialization and whenever the importer enters it from Step Mode (fmu_bus.h) */
+#define CS_EVENTS(mask) (S->event_mode_used ? (unsigned)(mask) : 0u)
+#define MASK_fmi3EnterEventMode (FMU_CONT_TIME_MODE | CS_EVENTS(FMU_STEP_MODE))
 #define MASK_fmi3Terminate (FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE | FMU_STEP_FAILED)
 #define MASK_fmi3Reset MASK_ANY_INSTANCE
 #define MASK_fmi3GetFloat64 MASK_GETTERS
@@ -57,6 +64,11 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
     (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_CONT_TIME_MODE | FMU_STEP_MODE)
 #define MASK_fmi3SetBoolean (FMU_INSTANTIATED | FMU_INIT_MODE | FMU_EVENT_MODE | FMU_STEP_MODE)
 #define MASK_fmi3SetOther MASK_fmi3SetBoolean
+#define MASK_fmi3GetBinary MASK_GETTERS
+#define MASK_fmi3SetBinary MASK_fmi3SetOther
+#define MASK_fmi3GetClock FMU_EVENT_MODE
+#define MASK_fmi3SetClock FMU_EVENT_MODE
+#define MASK_fmi3GetIntervalDecimal (FMU_INIT_MODE | FMU_EVENT_MODE)
 #define MASK_fmi3GetNumberOfVariableDependencies MASK_ANY_INSTANCE
 #define MASK_fmi3GetVariableDependencies MASK_ANY_INSTANCE
 #define MASK_fmi3GetFMUState MASK_ANY_INSTANCE
@@ -89,7 +101,7 @@ _Static_assert(sizeof(fmi3ValueReference) == sizeof(fmu_vr), "value references a
 #define MASK_fmi3GetNumberOfContinuousStates ME_ONLY(MASK_ANY_INSTANCE)
 
 /* co-simulation functions */
-#define MASK_fmi3EnterStepMode 0u
+#define MASK_fmi3EnterStepMode CS_EVENTS(FMU_EVENT_MODE)
 #define MASK_fmi3GetOutputDerivatives                                                         \
     CS_ONLY(FMU_STEP_MODE | FMU_STEP_FAILED | FMU_TERMINATED | FMU_ERROR_STATE)
 #define MASK_fmi3DoStep FMU_STEP_MODE
@@ -180,7 +192,7 @@ fmi3Instance fmi3InstantiateCoSimulation(
     (void)requiredIntermediateVariables;
     (void)intermediateUpdate;
     const fmu_host host = make_host(instanceEnvironment, logMessage, resourcePath);
-    if (eventModeUsed) {
+    if (eventModeUsed && FMU_MODEL.bus == NULL) {
         refuse_early(&host, instanceName,
                      "fmi3InstantiateCoSimulation: eventModeUsed must be false (hasEventMode="
                      "false: the model has no events)");
@@ -192,8 +204,12 @@ fmi3Instance fmi3InstantiateCoSimulation(
                      "intermediate update)");
         return NULL;
     }
-    return fmu_create("fmi3InstantiateCoSimulation", &host, 3, FMU_CO_SIMULATION, instanceName,
-                      instantiationToken, loggingOn);
+    fmu_instance *S = fmu_create("fmi3InstantiateCoSimulation", &host, 3, FMU_CO_SIMULATION,
+                                 instanceName, instantiationToken, loggingOn);
+    if (S != NULL) {
+        S->event_mode_used = eventModeUsed ? 1 : 0;
+    }
+    return S;
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(
@@ -265,6 +281,9 @@ fmi3Status fmi3EnterEventMode(fmi3Instance instance)
     BEGIN_FUNCTION(EnterEventMode)
     TRACE("fmi3EnterEventMode()");
     S->state = FMU_EVENT_MODE;
+    if (S->model->bus != NULL && S->interface == FMU_CO_SIMULATION) {
+        S->model->bus->glue->enter_event_mode(S); /* what the node sends at this time */
+    }
     END_FUNCTION()
 }
 
@@ -381,10 +400,6 @@ NO_VARIABLES_OF_TYPE(GetOther, fmi3GetUInt32, "UInt32", (fmi3UInt32 values[], si
 NO_VARIABLES_OF_TYPE(GetOther, fmi3GetInt64, "Int64", (fmi3Int64 values[], size_t nValues), ARRAY_U)
 NO_VARIABLES_OF_TYPE(GetOther, fmi3GetUInt64, "UInt64", (fmi3UInt64 values[], size_t nValues), ARRAY_U)
 NO_VARIABLES_OF_TYPE(GetOther, fmi3GetString, "String", (fmi3String values[], size_t nValues), ARRAY_U)
-NO_VARIABLES_OF_TYPE(GetOther, fmi3GetBinary, "Binary",
-                     (size_t valueSizes[], fmi3Binary values[], size_t nValues),
-                     ARRAY_U(void) valueSizes;)
-NO_VARIABLES_OF_TYPE(Clocks, fmi3GetClock, "Clock", (fmi3Clock values[]), (void)values;)
 NO_VARIABLES_OF_TYPE(SetOther, fmi3SetFloat32, "Float32", (const fmi3Float32 values[], size_t nValues), ARRAY_U)
 NO_VARIABLES_OF_TYPE(SetOther, fmi3SetInt8, "Int8", (const fmi3Int8 values[], size_t nValues), ARRAY_U)
 NO_VARIABLES_OF_TYPE(SetOther, fmi3SetUInt8, "UInt8", (const fmi3UInt8 values[], size_t nValues), ARRAY_U)
@@ -395,10 +410,117 @@ NO_VARIABLES_OF_TYPE(SetOther, fmi3SetUInt32, "UInt32", (const fmi3UInt32 values
 NO_VARIABLES_OF_TYPE(SetOther, fmi3SetInt64, "Int64", (const fmi3Int64 values[], size_t nValues), ARRAY_U)
 NO_VARIABLES_OF_TYPE(SetOther, fmi3SetUInt64, "UInt64", (const fmi3UInt64 values[], size_t nValues), ARRAY_U)
 NO_VARIABLES_OF_TYPE(SetOther, fmi3SetString, "String", (const fmi3String values[], size_t nValues), ARRAY_U)
-NO_VARIABLES_OF_TYPE(SetOther, fmi3SetBinary, "Binary",
-                     (const size_t valueSizes[], const fmi3Binary values[], size_t nValues),
-                     ARRAY_U(void) valueSizes;)
-NO_VARIABLES_OF_TYPE(Clocks, fmi3SetClock, "Clock", (const fmi3Clock values[]), (void)values;)
+
+/* ---- the CAN terminal (fmu_bus.h): Binary and Clock variables ---------------------------------- */
+
+/* A model without a terminal has no Binary or Clock variables: an empty call is accepted. */
+#define NEEDS_BUS(TYPE)                                                                       \
+    do {                                                                                      \
+        if (S->model->bus == NULL) {                                                          \
+            if (nValueReferences > 0) {                                                       \
+                ASSERT_NOT_NULL(valueReferences);                                             \
+                REFUSE("%s: %s has no " TYPE " variables (vr %u requested)", fn_,             \
+                       S->model->identifier, (unsigned)valueReferences[0]);                   \
+            }                                                                                 \
+            goto END;                                                                         \
+        }                                                                                     \
+        if (nValueReferences > 0) {                                                           \
+            ASSERT_NOT_NULL(valueReferences);                                                 \
+        }                                                                                     \
+    } while (0)
+
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                         size_t nValueReferences, size_t valueSizes[], fmi3Binary values[],
+                         size_t nValues)
+{
+    BEGIN_FUNCTION(GetBinary)
+    TRACE("fmi3GetBinary(nValueReferences=%zu)", nValueReferences);
+    NEEDS_BUS("Binary");
+    ASSERT_SCALARS(nValueReferences, nValues);
+    if (nValueReferences > 0) {
+        ASSERT_NOT_NULL(valueSizes);
+        ASSERT_NOT_NULL(values);
+    }
+    for (size_t i = 0; i < nValueReferences; ++i) {
+        const uint8_t *v = NULL;
+        size_t n = 0;
+        CHECKED(S->model->bus->glue->get_binary(S, fn_, valueReferences[i], &n, &v));
+        valueSizes[i] = n;
+        values[i] = v;
+    }
+    END_FUNCTION()
+}
+
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                         size_t nValueReferences, const size_t valueSizes[],
+                         const fmi3Binary values[], size_t nValues)
+{
+    BEGIN_FUNCTION(SetBinary)
+    TRACE("fmi3SetBinary(nValueReferences=%zu)", nValueReferences);
+    NEEDS_BUS("Binary");
+    ASSERT_SCALARS(nValueReferences, nValues);
+    if (nValueReferences > 0) {
+        ASSERT_NOT_NULL(valueSizes);
+        ASSERT_NOT_NULL(values);
+    }
+    for (size_t i = 0; i < nValueReferences; ++i) {
+        CHECKED(S->model->bus->glue->set_binary(S, fn_, valueReferences[i], valueSizes[i],
+                                                values[i]));
+    }
+    END_FUNCTION()
+}
+
+fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, fmi3Clock values[])
+{
+    BEGIN_FUNCTION(GetClock)
+    TRACE("fmi3GetClock(nValueReferences=%zu)", nValueReferences);
+    NEEDS_BUS("Clock");
+    if (nValueReferences > 0) {
+        ASSERT_NOT_NULL(values);
+    }
+    for (size_t i = 0; i < nValueReferences; ++i) {
+        int active = 0;
+        CHECKED(S->model->bus->glue->get_clock(S, fn_, valueReferences[i], &active));
+        values[i] = active != 0;
+    }
+    END_FUNCTION()
+}
+
+fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, const fmi3Clock values[])
+{
+    BEGIN_FUNCTION(SetClock)
+    TRACE("fmi3SetClock(nValueReferences=%zu)", nValueReferences);
+    NEEDS_BUS("Clock");
+    if (nValueReferences > 0) {
+        ASSERT_NOT_NULL(values);
+    }
+    for (size_t i = 0; i < nValueReferences; ++i) {
+        CHECKED(S->model->bus->glue->set_clock(S, fn_, valueReferences[i], values[i] ? 1 : 0));
+    }
+    END_FUNCTION()
+}
+
+fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                                  size_t nValueReferences, fmi3Float64 intervals[],
+                                  fmi3IntervalQualifier qualifiers[])
+{
+    BEGIN_FUNCTION(GetIntervalDecimal)
+    TRACE("fmi3GetIntervalDecimal(nValueReferences=%zu)", nValueReferences);
+    NEEDS_BUS("Clock");
+    if (nValueReferences > 0) {
+        ASSERT_NOT_NULL(intervals);
+        ASSERT_NOT_NULL(qualifiers);
+    }
+    for (size_t i = 0; i < nValueReferences; ++i) {
+        int changed = 0;
+        CHECKED(S->model->bus->glue->get_interval(S, fn_, valueReferences[i], &intervals[i],
+                                                  &changed));
+        qualifiers[i] = changed ? fmi3IntervalChanged : fmi3IntervalUnchanged;
+    }
+    END_FUNCTION()
+}
 
 /* ---- dependencies, derivatives, configuration, clocks: not provided --------------------------- */
 
@@ -497,8 +619,6 @@ fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance)
         END_FUNCTION()                                                                        \
     }
 
-NO_CLOCKS(GetIntervalDecimal, (fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[]),
-          (void)intervals; (void)qualifiers;)
 NO_CLOCKS(GetIntervalFraction,
           (fmi3UInt64 counters[], fmi3UInt64 resolutions[], fmi3IntervalQualifier qualifiers[]),
           (void)counters; (void)resolutions; (void)qualifiers;)
@@ -533,8 +653,12 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
     ASSERT_NOT_NULL(valuesOfContinuousStatesChanged);
     ASSERT_NOT_NULL(nextEventTimeDefined);
     ASSERT_NOT_NULL(nextEventTime);
-    /* no discrete states, no time events, no state events */
+    /* no discrete states, no time events, no state events; a CAN terminal ends an event
+     * iteration and asks for another after it sent (fmu_bus.h) */
     *discreteStatesNeedUpdate = false;
+    if (S->model->bus != NULL && S->interface == FMU_CO_SIMULATION) {
+        *discreteStatesNeedUpdate = S->model->bus->glue->update(S) != 0;
+    }
     *terminateSimulation = false;
     *nominalsOfContinuousStatesChanged = false;
     *valuesOfContinuousStatesChanged = false;
@@ -716,7 +840,9 @@ fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nConti
 fmi3Status fmi3EnterStepMode(fmi3Instance instance)
 {
     BEGIN_FUNCTION(EnterStepMode)
-    NOT_PROVIDED(EnterStepMode, "no event mode in Co-Simulation: initialization ends in StepMode");
+    TRACE("fmi3EnterStepMode()");
+    S->model->bus->glue->enter_step_mode(S); /* the mask admits bus models only */
+    S->state = FMU_STEP_MODE;
     END_FUNCTION()
 }
 
@@ -751,7 +877,8 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     ASSERT_NOT_NULL(lastSuccessfulTime);
     CHECKED(fmu_check_step(S, fn_, currentCommunicationPoint, communicationStepSize));
     status = fmu_do_step(S, currentCommunicationPoint, communicationStepSize);
-    *eventHandlingNeeded = false;
+    *eventHandlingNeeded = S->event_mode_used && status <= FMU_WARNING &&
+                           S->model->bus->glue->event_needed(S);
     *terminateSimulation = false;
     *earlyReturn = false;
     *lastSuccessfulTime = S->time;

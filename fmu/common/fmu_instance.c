@@ -5,6 +5,7 @@
  * nothing here checks call sequences.
  */
 #include "fmu_internal.h"
+#include "fmu_bus.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -773,10 +774,14 @@ fmu_status fmu_exit_initialization(fmu_instance *S)
 {
     fmu_status st = S->model->initialize(S);
     if (st <= FMU_WARNING) {
-        S->state = S->interface == FMU_MODEL_EXCHANGE ? FMU_EVENT_MODE : FMU_STEP_MODE;
+        S->state = S->interface == FMU_MODEL_EXCHANGE || S->event_mode_used ? FMU_EVENT_MODE
+                                                                             : FMU_STEP_MODE;
         S->dirty = 1;
         const fmu_status su = fmu_update(S);
         st = su > st ? su : st;
+        if (st <= FMU_WARNING && S->event_mode_used) {
+            S->model->bus->glue->enter_event_mode(S); /* what the node sends at the start */
+        }
     }
     if (st >= FMU_FATAL) {
         S->state = FMU_FATAL_STATE;
@@ -843,8 +848,9 @@ static uint64_t payload_checksum(const unsigned char *block, size_t size)
 static unsigned snapshot_states(const fmu_instance *S)
 {
     const unsigned shared = FMU_INSTANTIATED | FMU_INIT_MODE | FMU_TERMINATED | FMU_ERROR_STATE;
+    const unsigned cs = FMU_STEP_MODE | FMU_STEP_FAILED | (S->event_mode_used ? FMU_EVENT_MODE : 0u);
     return shared | (S->interface == FMU_MODEL_EXCHANGE ? (FMU_EVENT_MODE | FMU_CONT_TIME_MODE)
-                                                         : (FMU_STEP_MODE | FMU_STEP_FAILED));
+                                                         : cs);
 }
 
 /* Every field of a snapshot whose header and checksum are right, against the model: the
@@ -903,6 +909,9 @@ static int snapshot_validate(fmu_instance *S, const char *fn, const snapshot_fie
                 return 1;
             }
         }
+    }
+    if (m->bus != NULL && m->bus->glue->check_state(S, data, fn) != FMU_OK) {
+        return 1;
     }
     if (m->check_state != NULL &&
         m->check_state(S, data, (fmu_state)f->state, fn) != FMU_OK) {

@@ -113,6 +113,7 @@ typedef struct fmu_continuous_state {
 } fmu_continuous_state;
 
 typedef struct fmu_instance fmu_instance;
+struct fmu_bus; /* fmu_bus.h: a CAN network terminal (FMI-LS-BUS), FMI 3.0 Co-Simulation only */
 
 /**
  * @brief How an unknown depends on a known (the ModelStructure's dependenciesKind, FMI 2.0 and
@@ -198,6 +199,9 @@ typedef struct fmu_model {
      *  field at fault under function name fn and returns FMU_ERROR, or FMU_OK. */
     fmu_status (*check_state)(fmu_instance *inst, const void *data, fmu_state state,
                               const char *fn);
+    /** Optional (NULL: none): the model's CAN network terminal of FMI-LS-BUS 1.0 (fmu_bus.h).
+     *  A model with one is built for FMI 3.0 Co-Simulation only, with event mode. */
+    const struct fmu_bus *bus;
 } fmu_model;
 
 /** @brief 1 when an instance in machine state s has passed initialization (its parameters were
@@ -235,6 +239,8 @@ struct fmu_instance {
     const fmu_model *model;           ///< &FMU_MODEL
     fmu_host host;                    ///< importer callbacks (see fmu_host)
     int fmi_version;                  ///< 2 or 3: the adapter this instance was created by
+    int event_mode_used;              ///< FMI 3.0 Co-Simulation with event mode (a model with a
+                                      ///< bus terminal: eventModeUsed at instantiation)
     fmu_interface interface;          ///< Co-Simulation or Model Exchange
     char *name;                       ///< instance name (owned, allocated with host.alloc)
     fmu_state state;                  ///< exactly one bit

@@ -1,6 +1,7 @@
 /* Variable tables: lookup, settable-ness, sanity checks, the token (GUID), units and names.
  * Independent of the FMI version. */
 #include "fmu_internal.h"
+#include "fmu_bus.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -257,6 +258,22 @@ int fmu_model_check(const fmu_model *m, const char **msg, size_t *row)
             return 1;
         }
     }
+    const struct fmu_bus *b = m->bus;
+    if (b != NULL) {
+        const fmu_variable *nv = fmu_find_var(m, b->vr_notifications);
+        const fmu_variable *bv = fmu_find_var(m, b->vr_baudrate);
+        *row = m->n_vars;
+        if (!text_ok(b->terminal) || !text_ok(b->description) || !(b->period > 0.0) ||
+            b->frame == NULL || b->event == NULL || b->glue == NULL || m->n_states != 0 ||
+            b->state_offset + sizeof(fmu_bus_state) > m->data_size || nv == NULL ||
+            nv->type != FMU_BOOLEAN || nv->causality != FMU_PARAMETER || bv == NULL ||
+            bv->type != FMU_REAL || bv->causality != FMU_PARAMETER) {
+            *msg = "a bus terminal needs a name, a period > 0, the frame and event hooks, its "
+                   "state inside the model data, a Boolean BusNotifications and a Real baud-rate "
+                   "parameter, and no continuous states (Co-Simulation only)";
+            return 1;
+        }
+    }
     return 0;
 }
 
@@ -291,6 +308,12 @@ void fmu_model_token(const fmu_model *m, const void *data, char out[])
             n = 0;
         }
         const size_t len = (size_t)n < sizeof line ? (size_t)n : sizeof line - 1;
+        h1 = fmu_fnv1a(h1, line, len);
+        h2 = fmu_fnv1a(h2, line, len);
+    }
+    if (m->bus != NULL) { /* the terminal: its name and the kind of its Tx clock */
+        n = snprintf(line, sizeof line, "bus|%s|%d\n", m->bus->terminal, (int)m->bus->tx_clock);
+        const size_t len = n > 0 && (size_t)n < sizeof line ? (size_t)n : 0u;
         h1 = fmu_fnv1a(h1, line, len);
         h2 = fmu_fnv1a(h2, line, len);
     }

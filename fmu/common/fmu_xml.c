@@ -11,6 +11,7 @@
  * so a system wired for one version works with the other unchanged.
  */
 #include "fmu_internal.h"
+#include "fmu_bus.h"
 #include "fmu_xml.h"
 
 #include <stdio.h>
@@ -339,6 +340,51 @@ static void write_xml2(const fmu_model *m, const void *data, const char *token, 
 
 /* ---- FMI 3.0 -------------------------------------------------------------------------------- */
 
+/* The MIME type of the terminal's Binary variables, as XML text. */
+#define LSBUS_MIME "application/org.fmi-standard.fmi-ls-bus.can; version=&quot;1.0.0&quot;"
+
+/* The four variables of the CAN terminal (fmu_bus.h), after the table's rows. */
+static void write_bus_variables3(const fmu_model *m, FILE *f)
+{
+    const fmu_bus *b = m->bus;
+    const unsigned tx = (unsigned)fmu_bus_vr(m, FMU_BUS_TX_DATA);
+    const unsigned rx = (unsigned)fmu_bus_vr(m, FMU_BUS_RX_DATA);
+    const unsigned txc = (unsigned)fmu_bus_vr(m, FMU_BUS_TX_CLOCK);
+    const unsigned rxc = (unsigned)fmu_bus_vr(m, FMU_BUS_RX_CLOCK);
+    fprintf(f,
+            "    <Binary name=\"%s.Tx_Data\" valueReference=\"%u\" causality=\"output\" "
+            "variability=\"discrete\" initial=\"calculated\" clocks=\"%u\"\n"
+            "      description=\"the bus operations this node sends (FMI-LS-BUS 1.0 CAN)\"\n"
+            "      mimeType=\"" LSBUS_MIME "\" maxSize=\"%u\"/>\n",
+            b->terminal, tx, txc, FMU_BUS_TX_MAX);
+    fprintf(f,
+            "    <Binary name=\"%s.Rx_Data\" valueReference=\"%u\" causality=\"input\" "
+            "variability=\"discrete\" clocks=\"%u\"\n"
+            "      description=\"the bus operations this node receives (FMI-LS-BUS 1.0 CAN)\"\n"
+            "      mimeType=\"" LSBUS_MIME "\" maxSize=\"%u\">\n"
+            "      <Start value=\"\"/>\n    </Binary>\n",
+            b->terminal, rx, rxc, FMU_BUS_RX_MAX);
+    if (b->tx_clock == FMU_BUS_TX_TRIGGERED) {
+        fprintf(f,
+                "    <Clock name=\"%s.Tx_Clock\" valueReference=\"%u\" causality=\"output\" "
+                "variability=\"discrete\" intervalVariability=\"triggered\"\n"
+                "      description=\"active when Tx_Data holds operations to send\"/>\n",
+                b->terminal, txc);
+    } else {
+        fprintf(f,
+                "    <Clock name=\"%s.Tx_Clock\" valueReference=\"%u\" causality=\"input\" "
+                "variability=\"discrete\" intervalVariability=\"countdown\"\n"
+                "      description=\"the node's communication points: fmi3GetIntervalDecimal "
+                "announces the next one\"/>\n",
+                b->terminal, txc);
+    }
+    fprintf(f,
+            "    <Clock name=\"%s.Rx_Clock\" valueReference=\"%u\" causality=\"input\" "
+            "variability=\"discrete\" intervalVariability=\"triggered\"\n"
+            "      description=\"active when Rx_Data holds received operations\"/>\n",
+            b->terminal, rxc);
+}
+
 static void write_variables3(const fmu_model *m, const void *data, FILE *f)
 {
     fprintf(f, "  <ModelVariables>\n");
@@ -356,6 +402,9 @@ static void write_variables3(const fmu_model *m, const void *data, FILE *f)
         write_value_attributes(m, v, data, 3, f);
         fprintf(f, "/>\n");
     }
+    if (m->bus != NULL) {
+        write_bus_variables3(m, f);
+    }
     fprintf(f, "  </ModelVariables>\n");
 }
 
@@ -367,6 +416,14 @@ static void write_structure3(const fmu_model *m, FILE *f)
             fprintf(f, "    <Output valueReference=\"%u\"", (unsigned)m->vars[i].vr);
             write_dependencies(m, &m->vars[i], 3, 0, f);
             fprintf(f, "/>\n");
+        }
+    }
+    if (m->bus != NULL) {
+        fprintf(f, "    <Output valueReference=\"%u\"/>\n",
+                (unsigned)fmu_bus_vr(m, FMU_BUS_TX_DATA));
+        if (m->bus->tx_clock == FMU_BUS_TX_TRIGGERED) {
+            fprintf(f, "    <Output valueReference=\"%u\"/>\n",
+                    (unsigned)fmu_bus_vr(m, FMU_BUS_TX_CLOCK));
         }
     }
     for (size_t i = 0; i < m->n_states; ++i) {
@@ -384,6 +441,11 @@ static void write_structure3(const fmu_model *m, FILE *f)
             fprintf(f, "/>\n");
         }
     }
+    if (m->bus != NULL && m->bus->tx_clock == FMU_BUS_TX_TRIGGERED) {
+        /* an output clock is an initial unknown (Tx_Data, clocked, is not) */
+        fprintf(f, "    <InitialUnknown valueReference=\"%u\"/>\n",
+                (unsigned)fmu_bus_vr(m, FMU_BUS_TX_CLOCK));
+    }
     fprintf(f, "  </ModelStructure>\n");
 }
 
@@ -400,6 +462,16 @@ static void write_xml3(const fmu_model *m, const void *data, const char *token, 
             "  generationTool=\"" GENERATOR "\"\n"
             "  variableNamingConvention=\"structured\">\n",
             m->identifier, token, m->description);
+    if (m->bus != NULL) { /* a network FMU: Co-Simulation with event mode only */
+        fprintf(f,
+                "  <CoSimulation\n"
+                "    modelIdentifier=\"%s\"\n"
+                "    canHandleVariableCommunicationStepSize=\"true\"\n"
+                "    canGetAndSetFMUState=\"true\"\n"
+                "    canSerializeFMUState=\"true\"\n"
+                "    hasEventMode=\"true\"/>\n",
+                m->identifier);
+    } else {
     fprintf(f,
             "  <ModelExchange\n"
             "    modelIdentifier=\"%s\"\n"
@@ -417,6 +489,7 @@ static void write_xml3(const fmu_model *m, const void *data, const char *token, 
             "    providesAdjointDerivatives=\"%s\"\n"
             "    hasEventMode=\"false\"/>\n",
             m->identifier, flag, flag, m->identifier, flag, flag);
+    }
     write_units(m, f);
     write_log_categories(f);
     write_default_experiment(m, f);
@@ -468,6 +541,57 @@ int fmu_write_build_description(const fmu_model *m, fmu_sources src, FILE *f)
     return ferror(f) ? 1 : 0;
 }
 
+/* ---- FMI-LS-BUS: terminalsAndIcons.xml and the layered standard's manifest ------------------- */
+
+int fmu_write_terminals(const fmu_model *m, FILE *f)
+{
+    const fmu_bus *b = m->bus;
+    if (b == NULL) {
+        fprintf(stderr, "%s has no bus terminal\n", m->identifier);
+        return 1;
+    }
+    static const char *const members[FMU_BUS_VAR_COUNT] = {"Tx_Data", "Rx_Data", "Tx_Clock",
+                                                           "Rx_Clock"};
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    fprintf(f, "<!-- Generated from the bus terminal of %s by fmu/common/fmu_xml.c; do not edit. "
+               "-->\n",
+            m->identifier);
+    fprintf(f, "<fmiTerminalsAndIcons fmiVersion=\"3.0\">\n  <Terminals>\n");
+    fprintf(f,
+            "    <Terminal terminalKind=\"org.fmi-ls-bus.network-terminal\" "
+            "matchingRule=\"org.fmi-ls-bus.transceiver\" name=\"%s\"\n"
+            "      description=\"%s\">\n",
+            b->terminal, b->description);
+    for (unsigned k = 0; k < FMU_BUS_VAR_COUNT; ++k) {
+        fprintf(f,
+                "      <TerminalMemberVariable variableKind=\"signal\" variableName=\"%s.%s\" "
+                "memberName=\"%s\"/>\n",
+                b->terminal, members[k], members[k]);
+    }
+    fprintf(f, "    </Terminal>\n  </Terminals>\n</fmiTerminalsAndIcons>\n");
+    return ferror(f) ? 1 : 0;
+}
+
+int fmu_write_lsbus_manifest(const fmu_model *m, FILE *f)
+{
+    if (m->bus == NULL) {
+        fprintf(stderr, "%s has no bus terminal\n", m->identifier);
+        return 1;
+    }
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    fprintf(f, "<!-- Generated for %s by fmu/common/fmu_xml.c; do not edit. -->\n",
+            m->identifier);
+    fprintf(f, "<fmiLayeredStandardManifest\n"
+               "  xmlns:fmi-ls=\"http://fmi-standard.org/fmi-ls-manifest\"\n"
+               "  fmi-ls:fmi-ls-name=\"org.fmi-standard.fmi-ls-bus\"\n"
+               "  fmi-ls:fmi-ls-version=\"1.0.0\"\n"
+               "  fmi-ls:fmi-ls-description=\"Layered Standard for the simulation of bus "
+               "communication on a Physical Signal Abstraction or Network Abstraction based "
+               "level.\"\n"
+               "  isBusSimulationFMU=\"false\"/>\n");
+    return ferror(f) ? 1 : 0;
+}
+
 /* ---- documentation/index.html ---------------------------------------------------------------- */
 
 static void write_doc_variables(const fmu_model *m, const void *data, FILE *f)
@@ -495,6 +619,25 @@ static void write_doc_variables(const fmu_model *m, const void *data, FILE *f)
                     fmu_find_var(m, m->states[xd].state)->name);
         }
         fprintf(f, "</td></tr>\n");
+    }
+    if (m->bus != NULL) {
+        static const char *const rows[FMU_BUS_VAR_COUNT][3] = {
+            {"Tx_Data", "output", "Binary: the bus operations sent (CAN Transmit, Configuration, "
+                                  "Format Error)"},
+            {"Rx_Data", "input", "Binary: the bus operations received, walked by length"},
+            {"Tx_Clock", "", "Clock of Tx_Data"},
+            {"Rx_Clock", "input", "Clock of Rx_Data (triggered)"}};
+        for (unsigned k = 0; k < FMU_BUS_VAR_COUNT; ++k) {
+            const char *caus = rows[k][1];
+            if (k == FMU_BUS_TX_CLOCK) {
+                caus = m->bus->tx_clock == FMU_BUS_TX_TRIGGERED ? "output (triggered)"
+                                                                 : "input (countdown)";
+            }
+            fprintf(f, "<tr><td><code>%s.%s</code></td><td>%u</td><td>%s</td><td>discrete</td>"
+                       "<td>%s</td><td></td><td></td><td>%s</td></tr>\n",
+                    m->bus->terminal, rows[k][0], (unsigned)fmu_bus_vr(m, k), caus,
+                    k < 2 ? "Binary" : "Clock", rows[k][2]);
+        }
     }
     fprintf(f, "</table>\n");
 }
@@ -549,6 +692,27 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
                "<code>%s</code>).</p>\n",
             token);
     fprintf(f, "<h2>What it computes</h2>\n%s\n", equations_html);
+    if (m->bus != NULL) {
+        fprintf(f, "<h2>Interfaces</h2>\n<ul>\n"
+                   "<li><b>Co-Simulation</b> with event mode (FMI 3.0 only): a network FMU of "
+                   "FMI-LS-BUS 1.0 (network abstraction) with one CAN terminal <code>%s</code> "
+                   "(<code>terminalsAndIcons/terminalsAndIcons.xml</code>, manifest in "
+                   "<code>extra/org.fmi-standard.fmi-ls-bus/</code>). Tx_Clock is %s; Rx_Clock "
+                   "is a triggered input clock. The communication period is %g s.</li>\n"
+                   "<li>Received operations are walked by their length: a malformed one (unknown "
+                   "OP Code, a length that does not match its arguments, cut off) is answered "
+                   "with a Format Error; Confirm, Arbitration Lost and Bus Error are ignored "
+                   "unless <code>BusNotifications</code> is true.</li>\n"
+                   "<li>Every function checks the FMI 3.0 state machine; FMU state get/set and "
+                   "serialization hold the queued bus operations.</li>\n"
+                   "<li>Binaries in <code>binaries/</code>: %s.</li>\n</ul>\n",
+                m->bus->terminal,
+                m->bus->tx_clock == FMU_BUS_TX_TRIGGERED
+                    ? "a triggered output clock, active when operations are queued"
+                    : "a countdown input clock: fmi3GetIntervalDecimal announces the next "
+                      "communication point",
+                m->bus->period, platform_dirs);
+    } else {
     fprintf(f, "<h2>Interfaces</h2>\n<ul>\n"
                "<li><b>Co-Simulation</b>: variable communication steps; inputs are held over a "
                "step. FMU state get/set and serialization are supported.</li>\n"
@@ -574,6 +738,7 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
                   "closed-form model (no finite differences); a clamped voltage has derivative "
                   "0. The ModelStructure lists the dependencies and their kinds exactly.</li>\n",
             platform_dirs, a64_note);
+    }
     fprintf(f, "<h2>Variables</h2>\n<p>Value references are the same in the FMI 2.0 and FMI 3.0 "
                "builds; FMI 3.0 uses the same scalar variables (no arrays).</p>\n");
     write_doc_variables(m, data, f);

@@ -39,4 +39,13 @@ int fmu_write_build_description(const fmu_model *m, fmu_sources src, FILE *f);
 int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_html,
                   const char *conventions_html, const char *platforms, FILE *f);
 
+/** @brief Write terminalsAndIcons/terminalsAndIcons.xml of a model with a CAN terminal
+ *         (fmu_bus.h): one network terminal (org.fmi-ls-bus.network-terminal, matching rule
+ *         org.fmi-ls-bus.transceiver) with its four member variables. 1 without a terminal. */
+int fmu_write_terminals(const fmu_model *m, FILE *f);
+
+/** @brief Write extra/org.fmi-standard.fmi-ls-bus/fmi-ls-manifest.xml (FMI-LS-BUS 1.0.0, a
+ *         network FMU: isBusSimulationFMU="false"). 1 without a terminal. */
+int fmu_write_lsbus_manifest(const fmu_model *m, FILE *f);
+
 #endif /* FMU_XML_H */

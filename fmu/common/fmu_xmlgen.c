@@ -5,6 +5,7 @@
  * Usage: <model>_xmlgen --fmi 2|3 [--xml OUT] [--build-description OUT]
  *                       [--doc OUT --equations FRAGMENT.html --conventions FRAGMENT.html
  *                        --platforms A,B,...]
+ *                       [--terminals OUT] [--ls-bus-manifest OUT]   (a model with a CAN terminal)
  *                       [SOURCE...]
  * SOURCE... are the compile units shipped in the FMU's sources/ (names only); --platforms names
  * the binaries/ folders the build packs into the archive (the documentation lists them).
@@ -36,7 +37,7 @@ static char *slurp(const char *path)
     return buf;
 }
 
-typedef enum { OUT_XML, OUT_BUILD, OUT_DOC } out_kind;
+typedef enum { OUT_XML, OUT_BUILD, OUT_DOC, OUT_TERMINALS, OUT_LS_MANIFEST } out_kind;
 
 static int write_one(out_kind kind, const char *path, int fmi, fmu_sources src, const char *eq,
                      const char *conv, const char *platforms)
@@ -57,6 +58,12 @@ static int write_one(out_kind kind, const char *path, int fmi, fmu_sources src, 
     case OUT_DOC:
         rc = fmu_write_doc(&FMU_MODEL, fmi, eq, conv, platforms, f);
         break;
+    case OUT_TERMINALS:
+        rc = fmu_write_terminals(&FMU_MODEL, f);
+        break;
+    case OUT_LS_MANIFEST:
+        rc = fmu_write_lsbus_manifest(&FMU_MODEL, f);
+        break;
     }
     if (fclose(f) != 0) {
         perror(path);
@@ -69,7 +76,7 @@ int main(int argc, char **argv)
 {
     int fmi = 0;
     const char *xml = NULL, *build = NULL, *doc = NULL, *eq_path = NULL, *conv_path = NULL;
-    const char *platforms = NULL;
+    const char *platforms = NULL, *terminals = NULL, *ls_manifest = NULL;
     const char **files = calloc((size_t)argc, sizeof *files);
     size_t n_files = 0;
     if (files == NULL) {
@@ -89,6 +96,10 @@ int main(int argc, char **argv)
             eq_path = argv[++i];
         } else if (strcmp(argv[i], "--conventions") == 0 && has_value) {
             conv_path = argv[++i];
+        } else if (strcmp(argv[i], "--terminals") == 0 && has_value) {
+            terminals = argv[++i];
+        } else if (strcmp(argv[i], "--ls-bus-manifest") == 0 && has_value) {
+            ls_manifest = argv[++i];
         } else if (strcmp(argv[i], "--platforms") == 0 && has_value) {
             platforms = argv[++i];
         } else if (argv[i][0] == '-') {
@@ -117,6 +128,12 @@ int main(int argc, char **argv)
     }
     if (build != NULL) {
         rc |= write_one(OUT_BUILD, build, fmi, src, NULL, NULL, NULL);
+    }
+    if (terminals != NULL) {
+        rc |= write_one(OUT_TERMINALS, terminals, fmi, src, NULL, NULL, NULL);
+    }
+    if (ls_manifest != NULL) {
+        rc |= write_one(OUT_LS_MANIFEST, ls_manifest, fmi, src, NULL, NULL, NULL);
     }
     if (doc != NULL) {
         char *eq = slurp(eq_path);

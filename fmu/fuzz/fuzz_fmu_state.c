@@ -40,6 +40,10 @@
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
+#ifndef FUZZ_RESOURCES_DIR
+#define FUZZ_RESOURCES_DIR FUZZ_MODEL_DIR "/resources"
+#endif
+
 #define HEADER 32u      /* the state's header (fmu_instance.c): magic .. checksum */
 #define CHECKSUM_AT 24u
 #define RECORD 11u
@@ -166,9 +170,10 @@ static void setup(void)
     }
     done = 1;
     token_of_model();
-    /* the model's resources/ in the source tree (the reference FMU's table) */
-    snprintf(uri, sizeof uri, "file://%s/resources", FUZZ_MODEL_DIR);
-    snprintf(path, sizeof path, "%s/resources/", FUZZ_MODEL_DIR);
+    /* the model's resources/ in the source tree (the reference FMU's table; the LS-BUS
+     * controller's comes from the reference FMU's folder: FUZZ_RESOURCES_DIR) */
+    snprintf(uri, sizeof uri, "file://%s", FUZZ_RESOURCES_DIR);
+    snprintf(path, sizeof path, "%s/", FUZZ_RESOURCES_DIR);
     for (int v3 = 0; v3 < 2; ++v3) {
         for (int me = 0; me < 2; ++me) {
             slot *s = &slots[v3][me];

@@ -1,5 +1,5 @@
 """The ``rrr`` parser and entry point (also ``python -m rrr_robot``): ``rrr fmus`` here, the
-other command groups in their modules (writing, identify, hil, urdf, ssp, sweep)."""
+other command groups in their modules (writing, identify, hil, lsbus, urdf, ssp, sweep)."""
 
 from __future__ import annotations
 
@@ -27,6 +27,7 @@ COMMAND_MODULES: tuple[tuple[str, tuple[str, ...]], ...] = (
     (".writing", ("writing",)),
     (".identify", ("identify", "identify-experiment")),
     (".hil", ("hil",)),
+    (".lsbus", ("ls-bus",)),
     (".urdf", ("urdf",)),
     (".view", ("view",)),
     (".ssp", ("ssp", "run-ssp")),

@@ -12,6 +12,9 @@ One folder per CAN profile, each registered in :data:`PROFILES`:
   three CiA 402 drives: EDS, PDO units, schedule), ``master`` (the canopen package's master),
   ``c_master`` (the C controller node as master), ``realtime``, ``results``.
 
+``lsbus/`` (``rrr ls-bus``) runs the DBC profile's two nodes as FMI-LS-BUS network FMUs in an
+fmucontainer under FMPy, and writes its results with ``dbc.results``.
+
 Shared by both: ``logs/`` (``frames``: the nodes' frame logs as ASC/BLF; ``specs``: the nodes'
 CSV logs, column by column; ``mcap``: a run as MCAP), ``nodes`` (the C nodes as processes,
 python-can buses, the bench's period), ``results`` (a run against its reference, summary.json),

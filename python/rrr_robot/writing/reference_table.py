@@ -1,6 +1,7 @@
 """The reference table: one format for the reference FMU (``resources/reference.csv`` inside
 ``rrr_reference.fmu``, fmu/reference/model.c) and the CAN bench's controller node
-(``rrr_hil_controller --reference``, c_src/hil/nodes/hil_node.c), described once in docs/fmus.md
+(``rrr_hil_controller --reference``, c_src/hil/nodes/hil_reference.c, which the LS-BUS
+controller FMU reads too), described once in docs/fmus.md
 (rrr_reference, "The table").
 
 A CSV of 19 columns, one row per sample, every value with 17 significant digits: ``t`` (s), the

@@ -33,13 +33,15 @@ __all__ = ["RunInfo", "write_results"]
 @dataclass(frozen=True)
 class RunInfo:
     """What a run was: its side (bench, controller, plant), mode (lockstep, realtime),
-    scenario, the node's frame log in the staging folder and whose view that log is."""
+    scenario, the node's frame log in the staging folder, whose view that log is and the bit
+    rate of the bus its loads are given for."""
 
     side: str
     mode: str
     scenario: str
     node_log: str
     view: str
+    bitrate: int = 1_000_000
 
 
 def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, model: Model,
@@ -67,12 +69,12 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
     periods, lockstep = bench.t.shape[0], info.mode == "lockstep"
     bus: dict[str, Any] = {"node_log": info.node_log, "view": info.view,
                            **fl.traffic(records, periods, realtime=not lockstep)}
-    # the loads of a 1 Mbit/s bus, each named (hil.busload.bus_loads; docs/can-bench.md,
-    # "Which load is which")
+    # the loads of the run's bus (1 Mbit/s but rrr ls-bus --bitrate), each named
+    # (hil.busload.bus_loads; docs/can-bench.md, "Which load is which")
     bus["load"] = bus_loads(
         fl.frames(records), periods,
-        schedule_load(database(), lockstep=lockstep, dbc_name=str(DBC_PATH)),
-        schedule_load(database(), dbc_name=str(DBC_PATH)))
+        schedule_load(database(), info.bitrate, lockstep=lockstep, dbc_name=str(DBC_PATH)),
+        schedule_load(database(), info.bitrate, dbc_name=str(DBC_PATH)))
     if any(n.get("transport") == "socketcan-fd" for n in nodes.values()):
         # CAN FD frames on the bus (--fd): their load at 1 Mbit/s nominal, 5 Mbit/s data
         bus["load_fd"] = fd_bus_loads(
@@ -111,4 +113,6 @@ def write_results(rs: ResultSet, info: RunInfo, ref: Reference, run: BenchRun, m
 
         write_bench_figures(work, ref_run, bench, unq, latencies or None, stats,
                             scenario=info.scenario)
+    if extra:  # the sections of the run's kind (rrr ls-bus: the container and its bus)
+        summary = {**summary, **extra}
     return write_summary(rs, summary)
