@@ -95,6 +95,20 @@ def _drop_pending(app: Any, docname: str, source: list[str]) -> None:
         source[0] = text
 
 
+def _profile_pages(app: Any, docname: str, source: list[str]) -> None:
+    """The CAN profiles' pages (docs/<name>.md) in the Reference toctree of index.md, where its
+    line ``RRR_HIL_PROFILES`` stands: the list of c_src/hil/CMakeLists.txt, as the installed
+    package reads it (rrr_robot.hil.PROFILES), so that each profile has its page in the manual
+    (a listed profile without one is a warning of the build) and no second list names them."""
+    if docname != "index":
+        return
+    from rrr_robot.hil import PROFILES, PROFILES_FILE
+
+    if not PROFILES:
+        raise RuntimeError(f"no CAN profiles: {PROFILES_FILE} is missing (pip install . first)")
+    source[0] = re.sub(r"^RRR_HIL_PROFILES$", "\n".join(PROFILES), source[0], flags=re.M)
+
+
 def _doxygen(app: Any) -> None:
     """Doxygen's XML of the public headers into the build folder, for breathe; each warning of
     Doxygen (an undocumented declaration, a broken comment) becomes a warning of the build, and
@@ -130,5 +144,6 @@ def _doxygen(app: Any) -> None:
 
 def setup(app: Any) -> dict[str, Any]:
     app.connect("source-read", _drop_pending)
+    app.connect("source-read", _profile_pages)
     app.connect("builder-inited", _doxygen)
     return {"parallel_read_safe": True}

@@ -121,13 +121,13 @@ def scan(path: Path) -> list[str]:
 
 
 def expected_files(wheel: Path) -> list[str]:
-    """The compiled parts every wheel holds: the extension, the libraries, the nodes, the FMUs
-    of fmus/fmu_names.txt in both FMI versions."""
+    """The compiled parts every wheel holds: the extension, the libraries, the nodes and their
+    list of profiles, the FMUs of fmus/fmu_names.txt in both FMI versions."""
     with zipfile.ZipFile(wheel) as z:
         fmus = z.read("rrr_robot/fmus/fmu_names.txt").decode().split()
     files = ["rrr_robot/core/_ext.abi3.so", "rrr_robot/librrr.so",
              "rrr_robot/librrr_hil_supervisor.so", "rrr_robot/bin/rrr_hil_plant",
-             "rrr_robot/bin/rrr_hil_controller"]
+             "rrr_robot/bin/rrr_hil_controller", "rrr_robot/bin/hil_profiles.txt"]
     for name in fmus:
         files += [f"rrr_robot/fmus/rrr_{name}.fmu", f"rrr_robot/fmus/fmi3/rrr_{name}.fmu"]
     return files

@@ -691,7 +691,13 @@ int fmu_write_doc(const fmu_model *m, int fmi_version, const char *equations_htm
                "</code>, like this FMU's <code>modelDescription.xml</code> (instantiation token "
                "<code>%s</code>).</p>\n",
             token);
-    fprintf(f, "<h2>What it computes</h2>\n%s\n", equations_html);
+    if (equations_html != NULL) {
+        fprintf(f, "<h2>What it computes</h2>\n%s\n", equations_html);
+    } else {
+        fprintf(f, "<h2>What it computes</h2>\n<p>See the section <code>%s</code> of the rrr_robot "
+                   "manual's page on the FMUs (<code>docs/fmus.md</code>).</p>\n",
+                m->identifier);
+    }
     if (m->bus != NULL) {
         fprintf(f, "<h2>Interfaces</h2>\n<ul>\n"
                    "<li><b>Co-Simulation</b> with event mode (FMI 3.0 only): a network FMU of "

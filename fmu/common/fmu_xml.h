@@ -30,7 +30,8 @@ int fmu_write_xml(const fmu_model *m, int fmi_version, fmu_sources src, FILE *f)
 int fmu_write_build_description(const fmu_model *m, fmu_sources src, FILE *f);
 
 /**
- * @brief Write documentation/index.html: what the FMU computes (equations_html, a fragment), every
+ * @brief Write documentation/index.html: what the FMU computes (equations_html, a fragment; NULL:
+ *        a pointer to the FMU's section of the manual), every
  *        variable with unit, causality, variability, default and description, the interfaces and
  *        states, the conventions (conventions_html, a fragment) and how to build from sources;
  *        platforms: the binaries/ folders of this build's archive, comma-separated (the build

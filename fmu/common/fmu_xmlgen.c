@@ -3,12 +3,13 @@
  * executable, from its variable table.
  *
  * Usage: <model>_xmlgen --fmi 2|3 [--xml OUT] [--build-description OUT]
- *                       [--doc OUT --equations FRAGMENT.html --conventions FRAGMENT.html
+ *                       [--doc OUT [--equations FRAGMENT.html] --conventions FRAGMENT.html
  *                        --platforms A,B,...]
  *                       [--terminals OUT] [--ls-bus-manifest OUT]   (a model with a CAN terminal)
  *                       [SOURCE...]
  * SOURCE... are the compile units shipped in the FMU's sources/ (names only); --platforms names
- * the binaries/ folders the build packs into the archive (the documentation lists them).
+ * the binaries/ folders the build packs into the archive (the documentation lists them); without
+ * --equations (a model folder without equations.html) the documentation points to the manual.
  */
 #include "fmu_xml.h"
 
@@ -111,11 +112,10 @@ int main(int argc, char **argv)
         }
     }
     if ((fmi != 2 && fmi != 3) ||
-        (doc != NULL && (eq_path == NULL || conv_path == NULL || platforms == NULL ||
-                         platforms[0] == '\0'))) {
+        (doc != NULL && (conv_path == NULL || platforms == NULL || platforms[0] == '\0'))) {
         fprintf(stderr,
                 "usage: %s --fmi 2|3 [--xml OUT] [--build-description OUT] [--doc OUT "
-                "--equations FRAGMENT --conventions FRAGMENT --platforms A,B,...] "
+                "[--equations FRAGMENT] --conventions FRAGMENT --platforms A,B,...] "
                 "[SOURCE...]\n",
                 argv[0]);
         free(files);
@@ -136,9 +136,11 @@ int main(int argc, char **argv)
         rc |= write_one(OUT_LS_MANIFEST, ls_manifest, fmi, src, NULL, NULL, NULL);
     }
     if (doc != NULL) {
-        char *eq = slurp(eq_path);
+        char *eq = eq_path != NULL ? slurp(eq_path) : NULL;
         char *conv = slurp(conv_path);
-        rc |= (eq == NULL || conv == NULL) ? 1 : write_one(OUT_DOC, doc, fmi, src, eq, conv, platforms);
+        rc |= ((eq_path != NULL && eq == NULL) || conv == NULL)
+                  ? 1
+                  : write_one(OUT_DOC, doc, fmi, src, eq, conv, platforms);
         free(eq);
         free(conv);
     }

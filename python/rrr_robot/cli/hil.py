@@ -488,41 +488,13 @@ def _canopen_realtime(args: argparse.Namespace) -> Any:
 
 
 def _cmd_busload(args: argparse.Namespace) -> int:
-    import cantools
+    """``rrr hil busload``: the schedule of the profile's package (``busload``), whichever."""
+    from ..hil.busload import BusloadOptions, format_report, profile_load
 
-    from ..hil.busload import check_bitrates, format_report, schedule_load
-    from ..hil.dbc.protocol import DBC_PATH, database
-
-    rate = args.bitrate if args.bitrate is not None else 1_000_000
-    check_bitrates(rate, args.fd)  # before the DBC is read
-    if args.profile == "canopen":
-        from ..errors import BadInputError
-        from ..hil.canopen.drives import canopen_load
-
-        if args.dbc is not None or args.lockstep:
-            raise BadInputError("--profile canopen: the schedule is the EDS's (SYNC always "
-                                "included): --dbc and --lockstep do not apply")
-        period = args.sync_period_ms if args.sync_period_ms is not None else 1.0
-        print(format_report(canopen_load(rate, args.fd, period_ms=period)))
-        return 0
-    if args.sync_period_ms is not None:
-        from ..errors import BadInputError
-
-        raise BadInputError("--sync-period-ms applies to --profile canopen only (the DBC's "
-                            "periods are its GenMsgCycleTime)")
-    if args.dbc is not None:
-        try:
-            db = cantools.database.load_file(str(args.dbc))
-        except (cantools.database.errors.Error, ValueError, KeyError) as exc:
-            from ..errors import BadInputError
-
-            raise BadInputError(f"--dbc {args.dbc}: not a DBC cantools reads: "
-                           f"{' '.join(str(exc).split())}") from exc
-    else:
-        db = database()
-    load = schedule_load(db, rate, args.fd, lockstep=args.lockstep,
-                         dbc_name=str(args.dbc or DBC_PATH))
-    print(format_report(load))
+    options = BusloadOptions(args.bitrate if args.bitrate is not None else 1_000_000, args.fd,
+                             lockstep=args.lockstep, dbc=args.dbc,
+                             sync_period_ms=args.sync_period_ms)
+    print(format_report(profile_load(args.profile, options)))
     return 0
 
 

@@ -1,7 +1,9 @@
 """The CAN bench (hardware in the loop) from Python, with python-can, cantools and canopen; the
 command line (``rrr hil``) is :mod:`rrr_robot.cli.hil`.
 
-One folder per CAN profile, each registered in :data:`PROFILES`:
+One folder per CAN profile, the profiles of the C nodes (:data:`PROFILES`, read from
+``RRR_HIL_PROFILES``); each package's ``busload`` gives its schedule to ``rrr hil busload``
+(:func:`rrr_robot.hil.busload.profile_load`):
 
 - ``dbc/``: the DBC profile (``rrr hil bench|controller|plant``): ``protocol`` (the DBC, its
   E2E-protected frames, their codec and quantisation), ``bench`` (both C nodes; the quantised
@@ -24,12 +26,24 @@ bus name). The errors are in :mod:`rrr_robot.errors` (``HilError`` and its subcl
 
 from __future__ import annotations
 
-__all__ = ["PROFILES"]
+from ..core._package import PACKAGE_DIR
+
+__all__ = ["PROFILES", "PROFILES_FILE"]
+
+#: The list of the CAN profiles, one name a line, the default first: ``RRR_HIL_PROFILES`` of
+#: c_src/hil/CMakeLists.txt, which the build writes and installs beside the C nodes.
+PROFILES_FILE = PACKAGE_DIR / "bin" / "hil_profiles.txt"
+
+
+def _profiles() -> dict[str, str]:
+    try:
+        names = PROFILES_FILE.read_text(encoding="utf-8").split()
+    except FileNotFoundError:  # a package folder that was not built: rrr hil busload says so
+        return {}
+    return {name: f"{__name__}.{name}" for name in names}
+
 
 #: The CAN profiles (``rrr hil busload --profile``), by name: the package of each, imported when
-#: used. A new profile is a package beside these, a row here, its ``rrr hil`` action
-#: and a page of the manual.
-PROFILES: dict[str, str] = {
-    "dbc": "rrr_robot.hil.dbc",
-    "canopen": "rrr_robot.hil.canopen",
-}
+#: used. A new profile is its folder in c_src/hil and its word in ``RRR_HIL_PROFILES``, its
+#: package here, its page of the manual and its test (CONTRIBUTING.md).
+PROFILES: dict[str, str] = _profiles()

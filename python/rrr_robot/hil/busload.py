@@ -23,10 +23,15 @@ computed, then stuffed): what a frame log really puts on a bus (:func:`measured_
 Periods come from the DBC's ``GenMsgCycleTime`` (ms); a frame with the attribute
 ``RrrLockstepOnly`` = 1 (Sync) is sent in lockstep only, and one without a cycle time (StopCmd)
 once per run: neither is part of the real-time schedule.
+
+Each CAN profile gives its own schedule: ``busload(options)`` in its package (``dbc``,
+``canopen``), a :class:`BusLoad` from :class:`BusloadOptions`; :func:`profile_load` calls it
+(``rrr hil busload --profile NAME``).
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +45,7 @@ __all__ = [
     "MAX_DATA_BITRATE",
     "MAX_NOMINAL_BITRATE",
     "BusLoad",
+    "BusloadOptions",
     "FrameLoad",
     "bus_loads",
     "can_crc15",
@@ -51,6 +57,7 @@ __all__ = [
     "format_report",
     "measured_fd_load",
     "measured_load",
+    "profile_load",
     "schedule_load",
     "schedule_name",
     "stuffed_length",
@@ -212,6 +219,37 @@ def check_bitrates(bitrate: int, data_bitrate: int | None) -> None:
     if data_bitrate is not None and not bitrate <= data_bitrate <= MAX_DATA_BITRATE:
         raise BadInputError(f"--fd: a data bit rate from the nominal {bitrate} to "
                             f"{MAX_DATA_BITRATE} bit/s, not {data_bitrate}")
+
+
+@dataclass(frozen=True)
+class BusloadOptions:
+    """What ``rrr hil busload`` asks of a profile's schedule: the bus, and the options that
+    apply to some profiles only (each profile refuses, in one line, those that do not apply)."""
+
+    bitrate: int = MAX_NOMINAL_BITRATE
+    data_bitrate: int | None = None   # CAN FD with bit-rate switch; None: classical CAN
+    lockstep: bool = False            # the lockstep-only frames (DBC: Sync)
+    dbc: Path | None = None           # another DBC than the bench's
+    sync_period_ms: float | None = None  # CANopen: the SYNC period
+
+
+def profile_load(profile: str, options: BusloadOptions) -> BusLoad:
+    """The load of a CAN profile's schedule: ``busload(options)`` of its package
+    (``rrr_robot.hil.<profile>``); BadInputError for a profile that is not in
+    :data:`rrr_robot.hil.PROFILES` or whose package defines no ``busload``."""
+    from . import PROFILES, PROFILES_FILE
+
+    check_bitrates(options.bitrate, options.data_bitrate)  # before the profile's files are read
+    if profile not in PROFILES:
+        known = ", ".join(PROFILES) or f"none ({PROFILES_FILE} is missing: pip install .)"
+        raise BadInputError(f"--profile {profile}: not a CAN profile of this installation: "
+                            f"{known}")
+    schedule = getattr(importlib.import_module(PROFILES[profile]), "busload", None)
+    if schedule is None:
+        raise BadInputError(f"--profile {profile}: the profile has no bus-load schedule "
+                            f"({PROFILES[profile]} defines no busload)")
+    load: BusLoad = schedule(options)
+    return load
 
 
 def _attribute(message: Any, name: str) -> Any:
