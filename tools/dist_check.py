@@ -182,7 +182,23 @@ def bundle(fmus: Path, ssp: Path, data: Path, out: Path) -> list[str]:
                         if n.startswith("documentation/") and not n.endswith("/"):
                             files[f"documentation/rrr_{name}/{n[len('documentation/'):]}"] = (
                                 z.read(n))
+    # the FMI-LS-BUS network FMUs (FMI 3.0 only; docs/ls-bus.md), as the build lists them
+    lsbus = (fmus / "lsbus_fmu_names.txt").read_text().split()
+    for name in lsbus:
+        rel = f"fmi3/rrr_{name}.fmu"
+        body = (fmus / rel).read_bytes()
+        files[rel] = body
+        with zipfile.ZipFile(io.BytesIO(body)) as z:
+            have = {PurePosixPath(n).parts[1] for n in z.namelist()
+                    if n.startswith("binaries/") and len(PurePosixPath(n).parts) > 2}
+            if have != FMU_PLATFORMS["fmi3"]:
+                problems.append(f"{rel}: binaries for {sorted(have)}, expected "
+                                f"{sorted(FMU_PLATFORMS['fmi3'])}")
+            for n in z.namelist():
+                if n.startswith("documentation/") and not n.endswith("/"):
+                    files[f"documentation/rrr_{name}/{n[len('documentation/'):]}"] = z.read(n)
     files["fmu_names.txt"] = (fmus / "fmu_names.txt").read_bytes()
+    files["lsbus_fmu_names.txt"] = (fmus / "lsbus_fmu_names.txt").read_bytes()
     files[ssp.name] = ssp.read_bytes()
     for f in ("rrr_cia402.eds", "rrr_bench.dbc"):
         files[f] = (data / f).read_bytes()
@@ -193,8 +209,8 @@ def bundle(fmus: Path, ssp: Path, data: Path, out: Path) -> list[str]:
         for n, b in sorted(files.items()):
             z.writestr(str(top / n), b)
     tmp.replace(out)
-    print(f"{out}: {len(files)} files ({len(names)} FMUs x 3 archives, the SSP archive, the EDS, "
-          "the DBC, the documentation, SHA256SUMS)")
+    print(f"{out}: {len(files)} files ({len(names)} FMUs x 3 archives, {len(lsbus)} FMI-LS-BUS "
+          "network FMUs, the SSP archive, the EDS, the DBC, the documentation, SHA256SUMS)")
     return problems
 
 
