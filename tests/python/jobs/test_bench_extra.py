@@ -22,7 +22,8 @@ SOURCES = [*sorted((ROOT / "bench").glob("*.py")), ROOT / "c_src/rrr/gen/derive_
            *sorted((ROOT / "python/rrr_robot").rglob("*.py"))]
 #: imported by the package only when a user asks for them, none by a bench script
 OPTIONAL = {"imageio_ffmpeg": "rrr writing --animate mp4 (the mp4 extra)",
-            "pandas": "the tests read sweep results with it; the package does not"}
+            "pandas": "the tests read sweep results with it; the package does not",
+            "fmu_manipulation_toolbox": "rrr ls-bus (the lsbus extra)"}
 #: the package, the generator and the bench scripts' own helper modules (bench/_*.py)
 LOCAL = {"rrr_robot", "derive_dynamics", *(p.stem for p in (ROOT / "bench").glob("*.py"))}
 #: modules whose distribution metadata does not list them (cmeel wheels install into their own

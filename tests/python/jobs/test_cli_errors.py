@@ -96,6 +96,8 @@ CASES: dict[str, tuple[list[str], str]] = {
     # rrr hil
     "hil-unknown-side": (["hil", "both"], "invalid choice: 'both'"),
     "hil-no-action": (["hil"], "ACTION"),
+    "ls-bus-zero-bitrate": (["ls-bus", "--bitrate", "0"], "--bitrate"),
+    "ls-bus-nan-duration": (["ls-bus", "--duration", "nan"], "--duration"),
     "hil-unknown-scenario": (["hil", "bench", "--scenario", "nonsense"], "unknown scenario"),
     "hil-binary-scenario": (["hil", "export-reference", "--scenario", "binary.toml"],
                             "binary.toml"),
