@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up everything and runs every test, each stage once. In the foreground: pytest (including
-# the generated-code checks, every block of README.md and docs/, the CAN bench over SocketCAN in
-# a QEMU guest). Beside it, in the background at a lower priority, each in its own build folder:
+# the generated-code checks, every block of README.md and docs/), and beside it a second pytest
+# session with the CAN bench's cases over SocketCAN in a QEMU guest (marker vm). Beside them, in
+# the background at a lower priority, each in its own build folder:
 # the C tests (core, FMUs, CAN bench) under AddressSanitizer and UndefinedBehaviorSanitizer via
 # CTest; ruff, the Python package's import layers (lint-imports) and types (mypy); the README's
 # default build (Release) with the CTest tests of what that build changes or alone builds (label
@@ -289,7 +290,15 @@ benchmarks() {
 release_folder() {
   bash scripts/test_dist.sh
 }
-export -f stage_main asan release_build lint manual fuzz benchmarks release_folder
+# The SocketCAN cases (marker vm, tests/python/can/): one pytest session of their own, beside
+# the others, since most of their time is the QEMU guest's emulated CPU (a third of pytest's when
+# they ran in one session); its own temporary folder, so that neither session cleans the other's
+pytest_guest() {
+  python -m pytest -q -p no:cacheprovider --durations=10 -m vm \
+    --basetemp "$(mktemp -d)/pytest-vm" tests/python
+}
+export -f stage_main asan release_build lint manual fuzz benchmarks release_folder pytest_guest
+background "pytest, the SocketCAN cases in the QEMU guest (-m vm)" 0 pytest_guest
 background "the C tests under ASan + UBSan (CTest, build-asan)" 5 asan
 background "ruff, lint-imports, mypy" 5 lint
 background "the README's Release build and its CTest (label release)" 10 release_build
@@ -300,8 +309,8 @@ background "the release folder: scripts/dist.sh, its checks, installed without a
   release_folder
 
 # ---- the foreground stage: pytest, the longest -----------------------------------------------
-last_stage "pytest (every block of README.md and docs/: tests/python/docs/blocks/)" \
-  python -m pytest -q --durations=25 tests/python
+last_stage "pytest, every other test (-m 'not vm'; every block of README.md and docs/)" \
+  python -m pytest -q --durations=25 -m "not vm" tests/python
 echo "== waiting for the background stages =="
 wait_background
 if [ "${#FAILED[@]}" != 0 ]; then
