@@ -149,13 +149,18 @@ class _LineFormatter(logging.Formatter):
 def _logging(verbose: bool, quiet: bool) -> Iterator[None]:
     """The log lines of a command on stderr: WARNING and above with ``-q``, INFO by default,
     DEBUG with ``-v`` (which wins over ``-q`` for the log; ``-q`` still hides the bars); written
-    so that they never break a progress bar (:class:`_progress.LogHandler`). Undone at the end,
-    so that ``main`` can run again in the same process."""
+    so that they never break a progress bar (:class:`_progress.LogHandler`). The INFO lines are
+    the package's own: the libraries' (canopen's NMT state changes, python-can's, Dask's) show
+    from WARNING, or with ``-v``. Undone at the end, so that ``main`` can run again in the same
+    process."""
     from ._progress import LogHandler
 
     root = logging.getLogger()
     handler = LogHandler()
     handler.setFormatter(_LineFormatter(tracebacks=verbose))
+    if not verbose:
+        handler.addFilter(lambda r: r.levelno >= logging.WARNING
+                          or r.name.partition(".")[0] == "rrr_robot")
     level = logging.DEBUG if verbose else logging.WARNING if quiet else logging.INFO
     handler.setLevel(level)  # also for the libraries whose loggers set their own level (Dask)
     previous = root.level
