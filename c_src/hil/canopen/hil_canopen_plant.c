@@ -23,7 +23,6 @@ typedef struct co_plant {
     rrr_hil_plant *p;
     rrr_co_node co[3];
     int synced;           /* the first SYNC in operational was seen (it does not step) */
-    int was_operational;  /* a drive has been in NMT operational (the run has begun) */
     uint32_t co_faults;   /* faults latched by the drives over the run */
     const char *rt_setup; /* --realtime: what rrr_hil_rt_init applied (NULL: lockstep) */
 } co_plant;
@@ -74,9 +73,6 @@ static int setup(rrr_hil_plant *p, const rrr_hil_plant_opts *o)
     return 0;
 }
 
-/* Silence after the run that ends it (ms): see run_canopen. */
-#define RRR_CO_STOPPED_IDLE_MS 1000
-
 static int co_any_operational(const co_plant *c)
 {
     for (int i = 0; i < 3; ++i) {
@@ -117,10 +113,6 @@ static int run_canopen(co_plant *c, const rrr_hil_plant_opts *o)
 {
     rrr_hil_plant *p = c->p;
     const int idle_ms = rrr_hil_link_idle_ms(&o->link);
-    /* after the run (a drive was operational, none is: the master's NMT stop) a short silence
-     * ends it cleanly, since SocketCAN has no hang-up; before and during the run only idle_ms
-     * of silence counts, so that a slow master is not taken for a lost one */
-    const int stopped_ms = idle_ms < RRR_CO_STOPPED_IDLE_MS ? idle_ms : RRR_CO_STOPPED_IDLE_MS;
     for (int i = 0; i < 3; ++i) { /* power on: boot-up messages (a socketcand server drops them
                                    * before its client's first frame: a master resets the nodes) */
         rrr_co_out out = {0};
@@ -135,7 +127,6 @@ static int run_canopen(co_plant *c, const rrr_hil_plant_opts *o)
         rrr_hil_frame f;
         const rrr_hil_io io = rrr_hil_recv(p->tr, &f, 10000);
         const int64_t t = now_us();
-        c->was_operational |= co_any_operational(c); /* as of the frames before this one */
         for (int i = 0; i < 3; ++i) { /* heartbeat producer and consumer, in wall-clock time */
             rrr_co_out out = {0};
             const uint32_t faults = c->co[i].latch.fault_events;
@@ -145,16 +136,12 @@ static int run_canopen(co_plant *c, const rrr_hil_plant_opts *o)
         }
         last_us = t;
         if (io == RRR_HIL_IO_TIMEOUT) {
-            const int64_t silent_ms = rrr_hil_now_ms() - p->last_rx_ms;
-            const int operational = co_any_operational(c);
-            if (p->started && operational && silent_ms >= idle_ms) {
-                return rrr_hil_plant_silence_lost(p, idle_ms, "");
-            }
-            if (p->started && !operational &&
-                silent_ms >= (c->was_operational ? stopped_ms : idle_ms)) {
-                return rrr_hil_run_end(&p->run, RRR_HIL_EXIT_OK,
-                                       "the master fell silent with no drive "
-                                       "in NMT operational");
+            if (p->started && rrr_hil_now_ms() - p->last_rx_ms >= idle_ms) {
+                return co_any_operational(c)
+                           ? rrr_hil_plant_silence_lost(p, idle_ms, "")
+                           : rrr_hil_run_end(&p->run, RRR_HIL_EXIT_OK,
+                                             "the master fell silent with no drive "
+                                             "in NMT operational");
             }
             continue;
         }

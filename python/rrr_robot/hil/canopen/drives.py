@@ -55,10 +55,7 @@ EXPECTED_MAPPING = {"RPDO1": [(0x6040, 16), (0x6071, 16)],
 #: standard frame log written from it.
 NODE_FRAMES = "frames.rrrcan"
 CAN_LOG = "frames.blf"
-#: Over SocketCAN there is no hang-up: after the master's NMT stop (no drive in NMT operational
-#: any more) the plant ends when it has heard nothing this long (ms; the C plant's
-#: RRR_CO_STOPPED_IDLE_MS, at most its idle timeout); before and during the run only its idle
-#: timeout (:func:`plant_idle_ms`) counts, so that a slow master is not taken for a lost one.
+#: Over SocketCAN there is no hang-up: the plant ends when the master is silent this long (ms).
 IDLE_MS_SOCKETCAN = 1000
 #: Over socketcand the plant (the server) ends a session whose master was silent for its idle
 #: timeout: at least this much longer than the master's own longest silent wait (--timeout: a
@@ -214,11 +211,10 @@ def start_drives(q_ref: FloatArray, qd_ref: FloatArray, work: Path,
                  socketcan: str | None, fifo: int | None = None, *,
                  timeout: float = 5.0) -> NodeProcess:
     """``rrr_hil_plant --profile canopen`` at (q_ref[0], qd_ref[0]), logging ``work``/plant.csv
-    and NODE_FRAMES; on the SocketCAN interface ``socketcan`` or as socketcand server, with the idle
-    timeout :func:`plant_idle_ms` of the master's ``timeout`` (over SocketCAN the plant ends
-    IDLE_MS_SOCKETCAN after the master's NMT stop).
+    and NODE_FRAMES; on the SocketCAN interface ``socketcan`` (idle timeout IDLE_MS_SOCKETCAN),
+    or as socketcand server (idle timeout :func:`plant_idle_ms` of the master's ``timeout``).
     ``fifo`` (real time): ``--realtime --mlock`` and SCHED_FIFO ``fifo`` (0: none)."""
-    idle = ["--idle-timeout-ms", str(plant_idle_ms(timeout))]
+    idle = ["--idle-timeout-ms", str(IDLE_MS_SOCKETCAN if socketcan else plant_idle_ms(timeout))]
     rt = [] if fifo is None else ["--realtime", "--mlock", *(["--fifo", str(fifo)] if fifo
                                                              else [])]
     return start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=work / "plant.csv",
