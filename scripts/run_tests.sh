@@ -76,9 +76,10 @@ background() {  # NAME NICENESS FUNCTION: a stage in the background, its output 
 }
 stage_main() {  # NAME FUNCTION LOGS: the body of a background stage (its own bash)
   set -euo pipefail
-  trap "rc=\$?; [ \"\$rc\" = 0 ] || echo $(printf %q "== $1 FAILED: build-logs/$2.log ==") >&3" EXIT
+  # its own wall time, passed or failed; a failure is named on stderr at once
+  trap "rc=\$?; echo \$SECONDS > $(printf %q "$3/$2.seconds");
+        [ \"\$rc\" = 0 ] || echo $(printf %q "== $1 FAILED: build-logs/$2.log ==") >&3" EXIT
   "$2"
-  echo "$SECONDS" > "$3/$2.seconds"
 }
 finish_background() {  # INDEX: wait for it, print its log, fail the test command if it failed
   local i=$1 name=${BG_NAMES[$1]} fn=${BG_FNS[$1]} rc=0
