@@ -261,11 +261,12 @@ fuzz() {
   echo "-- the FMI-LS-BUS network FMUs: forged FMU states, hostile Rx_Data values (5 s each)"
   # fmu/CMakeLists.txt builds both targets for each node (docs/ls-bus.md); CTest drives the same
   # targets without libFuzzer: lsbus_rx_smoke_* and fmu_state_fuzz_*_can
-  for model in controller_can plant_can; do
+  for rx in build-fuzz/fmu/fuzz_lsbus_rx_*; do  # the network FMUs' models, as the build made them
+    model=${rx##*/fuzz_lsbus_rx_}
     mkdir -p "build-fuzz/corpus_$model" "build-fuzz/corpus_lsbus_rx_$model"
     "build-fuzz/fmu/fuzz_fmu_state_$model" -max_total_time="${RRR_LSBUS_FUZZ_SECONDS:-5}" \
       -max_len=89 -print_final_stats=1 "build-fuzz/corpus_$model" 2>&1 | tail -n 4
-    "build-fuzz/fmu/fuzz_lsbus_rx_$model" -max_total_time="${RRR_LSBUS_FUZZ_SECONDS:-5}" \
+    "$rx" -max_total_time="${RRR_LSBUS_FUZZ_SECONDS:-5}" \
       -max_len=4096 -print_final_stats=1 "build-fuzz/corpus_lsbus_rx_$model" 2>&1 | tail -n 4
   done
   echo "-- libFuzzer on the FMU importer's modelDescription scanner (c_src/fmi_import)"
