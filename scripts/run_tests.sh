@@ -29,36 +29,49 @@ BG_FNS=()
 BG_PIDS=()
 BG_T0=()
 LOGS="$ROOT/build-logs"
-record() {  # NAME SECONDS
-  TIMES+="$(printf '%6d s  %s' "$2" "$1")"$'\n'
+record() {  # NAME WALL_SECONDS CPU_SECONDS
+  TIMES+="$(printf '%6d s %6s s  %s' "$2" "$3" "$1")"$'\n'
+}
+children_cpu() {  # VAR: VAR = the CPU seconds (user + system) of this shell's finished children
+  local f
+  f=$(mktemp)
+  times > "$f"  # in this shell: a subshell would count its own children (none)
+  printf -v "$1" '%s' "$(awk 'NR == 2 { s = 0; for (i = 1; i <= 2; i++) { split($i, a, /[ms]/);
+                                s += a[1] * 60 + a[2] }; printf "%d", s + 0.5 }' "$f")"
+  rm -f "$f"
 }
 report() {
-  local rc=$? pid
+  local rc=$? pid cpu
+  children_cpu cpu
   for pid in "${BG_PIDS[@]}"; do
     [ -n "$pid" ] && kill -- "-$pid" 2>/dev/null || true
   done
-  printf '== wall time of each stage ==\n%s%6d s  total (exit %d)\n' "$TIMES" \
-    $((SECONDS - T_ALL)) "$rc"
+  printf '== wall time and CPU time (user + system) of each stage ==\n  wall      CPU\n'
+  printf '%s%6d s %6s s  total (exit %d)\n' "$TIMES" $((SECONDS - T_ALL)) "$cpu" "$rc"
 }
 trap report EXIT
 trap 'exit 130' INT
 trap 'exit 143' TERM
 stage() {  # NAME COMMAND...: one stage in the foreground (its failure ends the test command)
-  local name=$1 t0=$SECONDS
+  local name=$1 t0=$SECONDS c0 c1
+  children_cpu c0
   shift
   echo "== $name =="
   "$@"
-  record "$name" $((SECONDS - t0))
+  children_cpu c1
+  record "$name" $((SECONDS - t0)) $((c1 - c0))
   poll_background
 }
 FAILED=()
 last_stage() {  # NAME COMMAND...: the last foreground stage; the background stages are still
   # waited for and printed when it fails
-  local name=$1 t0=$SECONDS rc=0
+  local name=$1 t0=$SECONDS rc=0 c0 c1
+  children_cpu c0
   shift
   echo "== $name =="
   "$@" || rc=$?
-  record "$name" $((SECONDS - t0))
+  children_cpu c1
+  record "$name" $((SECONDS - t0)) $((c1 - c0))
   [ "$rc" = 0 ] || FAILED+=("$name (exit $rc)")
 }
 background() {  # NAME NICENESS FUNCTION: a stage in the background, its output in its log
@@ -76,8 +89,8 @@ background() {  # NAME NICENESS FUNCTION: a stage in the background, its output 
 }
 stage_main() {  # NAME FUNCTION LOGS: the body of a background stage (its own bash)
   set -euo pipefail
-  # its own wall time, passed or failed; a failure is named on stderr at once
-  trap "rc=\$?; echo \$SECONDS > $(printf %q "$3/$2.seconds");
+  # its own wall time and CPU time, passed or failed; a failure is named on stderr at once
+  trap "rc=\$?; children_cpu cpu; echo \$SECONDS \$cpu > $(printf %q "$3/$2.seconds");
         [ \"\$rc\" = 0 ] || echo $(printf %q "== $1 FAILED: build-logs/$2.log ==") >&3" EXIT
   "$2"
 }
@@ -85,12 +98,12 @@ finish_background() {  # INDEX: wait for it, print its log, fail the test comman
   local i=$1 name=${BG_NAMES[$1]} fn=${BG_FNS[$1]} rc=0
   wait "${BG_PIDS[i]}" || rc=$?
   BG_PIDS[i]=""
-  local secs=$((SECONDS - BG_T0[i]))  # its own count when it got to the end
-  [ ! -s "$LOGS/$fn.seconds" ] || secs=$(cat "$LOGS/$fn.seconds")
+  local secs=$((SECONDS - BG_T0[i])) cpu="?"  # its own count when it got to the end
+  [ ! -s "$LOGS/$fn.seconds" ] || read -r secs cpu < "$LOGS/$fn.seconds"
   echo "== $name (background stage) took $secs s, exit $rc; its log: =="
   cat "$LOGS/$fn.log" || true
   echo "== end of the log of $name =="
-  record "$name (background)" "$secs"
+  record "$name (background)" "$secs" "$cpu"
   [ "$rc" = 0 ] || FAILED+=("$name (exit $rc, build-logs/$fn.log)")
 }
 poll_background() {  # print the stages that have ended meanwhile
@@ -299,7 +312,8 @@ pytest_guest() {
   python -m pytest -q -p no:cacheprovider --durations=10 -m vm \
     --basetemp "$(mktemp -d)/pytest-vm" tests/python
 }
-export -f stage_main asan release_build lint manual fuzz benchmarks release_folder pytest_guest
+export -f stage_main children_cpu asan release_build lint manual fuzz benchmarks release_folder \
+  pytest_guest
 background "pytest, the SocketCAN cases in the QEMU guest (-m vm)" 0 pytest_guest
 background "the C tests under ASan + UBSan (CTest, build-asan)" 5 asan
 background "ruff, lint-imports, mypy" 5 lint
