@@ -120,6 +120,7 @@ static int run_canopen(co_plant *c, const rrr_hil_plant_opts *o)
         co_send(c, &out);
     }
     int64_t last_us = now_us();
+    int was_operational = 0; /* some drive has been in NMT operational */
     for (;;) {
         if (rrr_hil_stop_requested()) {
             return rrr_hil_run_interrupted(&p->run);
@@ -136,7 +137,14 @@ static int run_canopen(co_plant *c, const rrr_hil_plant_opts *o)
         }
         last_us = t;
         if (io == RRR_HIL_IO_TIMEOUT) {
-            if (p->started && rrr_hil_now_ms() - p->last_rx_ms >= idle_ms) {
+            const int64_t silent_ms = rrr_hil_now_ms() - p->last_rx_ms;
+            if (p->started && o->end_after_stop_ms > 0 && was_operational &&
+                !co_any_operational(c) && silent_ms >= o->end_after_stop_ms) {
+                return rrr_hil_run_end(&p->run, RRR_HIL_EXIT_OK,
+                                       "the master stopped the drives and fell silent "
+                                       "(--end-after-stop-ms)");
+            }
+            if (p->started && silent_ms >= idle_ms) {
                 return co_any_operational(c)
                            ? rrr_hil_plant_silence_lost(p, idle_ms, "")
                            : rrr_hil_run_end(&p->run, RRR_HIL_EXIT_OK,
@@ -164,6 +172,7 @@ static int run_canopen(co_plant *c, const rrr_hil_plant_opts *o)
             co_send(c, &out);
             c->co_faults += c->co[i].latch.fault_events - faults;
         }
+        was_operational |= co_any_operational(c);
         if (is_sync && sync_applied && co_sync(c) != 0) {
             return RRR_HIL_EXIT_FAULT;
         }
@@ -256,5 +265,7 @@ const rrr_hil_plant_profile rrr_hil_canopen_plant = {
     "  --profile canopen: the axes as three CiA 402 drives (CST) with node ids\n"
     "  --node-ids (default 1,2,3), stepped by the master's SYNC (docs/canopen.md);\n"
     "  with --realtime: SCHED_FIFO, mlockall, the CPU (--fifo, --mlock, --cpu) applied,\n"
-    "  still stepped by each SYNC; the master's heartbeat consumer in wall-clock time\n",
+    "  still stepped by each SYNC; the master's heartbeat consumer in wall-clock time;\n"
+    "  --end-after-stop-ms N: end (exit 0) N ms after the master's last frame once it has\n"
+    "  taken every drive out of NMT operational (a bus with no hang-up: SocketCAN)\n",
     check, setup, rx_ids, run};

@@ -273,6 +273,11 @@ static int check(const rrr_hil_plant_opts *o)
         fprintf(stderr, PROG ": --realtime needs --duration S\n");
         return -1;
     }
+    if (o->end_after_stop_ms > 0) {
+        fprintf(stderr, PROG ": --end-after-stop-ms is for --profile canopen (a DBC controller "
+                             "ends the run with its StopCmd)\n");
+        return -1;
+    }
     return 0;
 }
 

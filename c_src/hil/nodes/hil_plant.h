@@ -33,6 +33,7 @@ typedef struct rrr_hil_plant_opts {
     rrr_hil_rt_opts rt;     ///< the real-time options
     int profile;            ///< --profile: index in the node's profile table (0: the first, dbc)
     uint8_t node_ids[3];    ///< --node-ids a,b,c (default 1,2,3)
+    int end_after_stop_ms;  ///< --end-after-stop-ms N (canopen): 0 none
 } rrr_hil_plant_opts;
 
 /** What every profile's plant loop shares. */

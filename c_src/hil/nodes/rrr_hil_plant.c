@@ -50,7 +50,7 @@ static void usage(void)
     }
     fprintf(stderr,
             "]\n"
-            "       [--node-ids a,b,c]\n"
+            "       [--node-ids a,b,c] [--end-after-stop-ms N]\n"
             "  DIR: the unzipped plant FMU (modelDescription.xml, binaries/linux64/rrr_plant.so)\n");
     for (size_t i = 0; i < N_PROFILES; ++i) {
         fputs(PROFILES[i]->usage, stderr);
@@ -137,6 +137,14 @@ static int parse_args(int argc, char **argv, rrr_hil_plant_opts *o)
             if (r < 0) {
                 return -1;
             }
+        } else if (strcmp(a, "--end-after-stop-ms") == 0) {
+            const long x = strtol(v, &end, 10);
+            if (*end != '\0' || x < 1 || x > 3600000) {
+                fprintf(stderr, PROG ": --end-after-stop-ms: expected milliseconds 1..3600000, "
+                                     "got '%s'\n", v);
+                return -1;
+            }
+            o->end_after_stop_ms = (int)x;
         } else if (strcmp(a, "--max-missed") == 0 || strcmp(a, "--max-delta-counter") == 0) {
             const long x = strtol(v, &end, 10);
             if (*end != '\0' || x < 0 || x > 99) {

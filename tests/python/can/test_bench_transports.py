@@ -1213,8 +1213,9 @@ def test_canopen_nmt_and_heartbeat_loss_on_vcan(guest: CanGuest, bench_inputs: d
     (heartbeats in operational, 0x05), node 2 set by an expedited SDO download to monitor a
     master heartbeat (0x1016 sub 1 = node 0x7F, 100 ms) that comes and then stops: node 2 sends
     EMCY 0x8130 with the error register 0x11 once, the others do not; NMT stop (heartbeats
-    0x04); the plant then ends on the silence (10 s of it: far above the gaps between two
-    cansend processes under emulation on a busy machine). One master heartbeat only: a cansend
+    0x04); the plant then ends 1 s into the silence that follows (--end-after-stop-ms), while
+    10 s of silence with a drive operational would be a lost master (far above the gaps between
+    two cansend processes under emulation on a busy machine). One master heartbeat only: a cansend
     process takes longer than 100 ms to start under emulation, so a train of them would be lost
     between each two (measured: ten sent 20 ms apart, ten losses)."""
     work = guest.scratch / "canopen_nmt"
@@ -1222,7 +1223,7 @@ def test_canopen_nmt_and_heartbeat_loss_on_vcan(guest: CanGuest, bench_inputs: d
     w = shlex.quote(str(work))
     plant = shlex.join([str(node_executable("plant")), *bench_inputs["plant_args"],
                         "--profile", "canopen", "--socketcan", "vcan0",
-                        "--idle-timeout-ms", "10000"])
+                        "--idle-timeout-ms", "10000", "--end-after-stop-ms", "1000"])
     script = RECORDER + f"""
 record_start vcan0
 {plant} > {w}/plant.out 2> {w}/plant.err &

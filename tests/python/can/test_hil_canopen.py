@@ -219,6 +219,28 @@ def test_master_heartbeat_lost_then_reset_from_fault(rig: Rig) -> None:
     _stop_cycle(rig)
 
 
+def test_end_after_stop_ends_a_silent_bus_only_once_the_drives_are_stopped(
+        tmp_path: Path) -> None:
+    """--end-after-stop-ms (a bus with no hang-up): a silent master whose drives are still
+    operational is waited for (here past 5 x N), one that stopped them ends the run, exit 0."""
+    rig = Rig(tmp_path, ("--idle-timeout-ms", "600000", "--end-after-stop-ms", "200"))
+    try:
+        _boot_and_enable(rig)
+        _period(rig, [0, 0, 0])
+        time.sleep(1.0)  # silent, the drives operational: the plant goes on
+        assert rig.plant.running(), "the plant ended while its drives were operational"
+        _period(rig, [0, 0, 0])  # it still answers
+        for node in rig.nodes:
+            node.sdo[0x6040].raw = 0x00
+        rig.network.nmt.state = "STOPPED"  # then silent, connected: no hang-up
+        summary = rig.plant.wait(PATIENCE)
+    finally:
+        rig.close()
+    assert summary["exit"] == 0, rig.plant.stderr
+    assert "the master stopped the drives and fell silent" in rig.plant.stderr
+    assert all(d["nmt"] == 0x04 for d in summary["drives"])  # stopped
+
+
 @pytest.mark.parametrize(("args", "message"), [
     (["--profile", "cia402"], "--profile: expected 'dbc' or 'canopen', got 'cia402'"),
     (["--profile", "canopen", "--node-ids", "1,1,2"], "--node-ids: expected three distinct"),
@@ -228,6 +250,11 @@ def test_master_heartbeat_lost_then_reset_from_fault(rig: Rig) -> None:
      "with --realtime it takes --fifo, --mlock and --cpu only (no --duration"),
     (["--profile", "canopen", "--realtime", "--latency-log", "x.csv"],
      "no --latency-log: the SYNC times are in the frame log"),
+    (["--profile", "canopen", "--end-after-stop-ms", "0"],
+     "--end-after-stop-ms: expected milliseconds 1..3600000, got '0'"),
+    (["--profile", "canopen", "--end-after-stop-ms", "1s"],
+     "--end-after-stop-ms: expected milliseconds 1..3600000, got '1s'"),
+    (["--end-after-stop-ms", "1000"], "--end-after-stop-ms is for --profile canopen"),
 ])
 def test_bad_canopen_options_are_refused(args: list[str], message: str) -> None:
     result = subprocess.run([str(node_executable("plant")), "--fmu", "unused",

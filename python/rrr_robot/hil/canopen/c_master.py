@@ -35,7 +35,7 @@ from ..results import BenchRun
 from .drives import (
     DEFAULT_NODE_IDS,
     EXPECTED_MAPPING,
-    IDLE_MS_SOCKETCAN,
+    STOP_END_MS_SOCKETCAN,
     DriveInfo,
     start_drives,
     torque_per_mille,
@@ -93,10 +93,10 @@ def run_c_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray, qdd_ref: 
             ctrl = stack.enter_context(start_controller(
                 ref_csv, connect=f"127.0.0.1:{plant.port}", log_csv=ctrl_log, extra=extra,
                 socketcan=channel if sc else None))
-            # over SocketCAN the plant ends IDLE_MS_SOCKETCAN after the master's NMT stop
+            # over SocketCAN the plant ends STOP_END_MS_SOCKETCAN after the master's NMT stop
             cs, ps = watch_nodes([ctrl, plant], "the CANopen bench (C master) failed",
                                  failure_folder(work), poll=LogProgress(ctrl_log, n, progress),
-                                 grace=GRACE_PERIODS * PERIOD + IDLE_MS_SOCKETCAN * 1e-3)
+                                 grace=GRACE_PERIODS * PERIOD + STOP_END_MS_SOCKETCAN * 1e-3)
         c = read_log(ctrl_log, CONTROLLER_LOG)
     u = c.group("u")
     drives = [DriveInfo(int(i), int(r), int(inc), EXPECTED_MAPPING)

@@ -55,20 +55,21 @@ EXPECTED_MAPPING = {"RPDO1": [(0x6040, 16), (0x6071, 16)],
 #: standard frame log written from it.
 NODE_FRAMES = "frames.rrrcan"
 CAN_LOG = "frames.blf"
-#: Over SocketCAN there is no hang-up: the plant ends when the master is silent this long (ms).
-IDLE_MS_SOCKETCAN = 1000
-#: Over socketcand the plant (the server) ends a session whose master was silent for its idle
-#: timeout: at least this much longer than the master's own longest silent wait (--timeout: a
-#: boot-up, an SDO answer, a SYNC's TPDOs), so that the master's timeout, which names the drive,
-#: always comes first (python-can's socketcand client cannot read the server's "< error idle
-#: timeout >"), and never below the nodes' default (5 s).
+#: Over SocketCAN there is no hang-up: the plant ends this long (ms) after the master's last
+#: frame once the master has taken every drive out of NMT operational (--end-after-stop-ms).
+STOP_END_MS_SOCKETCAN = 1000
+#: The plant takes a master silent for its idle timeout for lost (over socketcand the server also
+#: ends the session): at least this much longer than the master's own longest silent wait
+#: (--timeout: a boot-up, an SDO answer, a SYNC's TPDOs), so that the master's timeout, which
+#: names the drive, always comes first (python-can's socketcand client cannot read the server's
+#: "< error idle timeout >"), and never below the nodes' default (5 s).
 IDLE_MARGIN_MS = 2000
 IDLE_MS_DEFAULT = 5000
 IDLE_MS_MAX = 3_600_000
 
 
 def plant_idle_ms(timeout: float) -> int:
-    """The plant's --idle-timeout-ms over socketcand for a master that waits ``timeout`` s."""
+    """The plant's --idle-timeout-ms for a master that waits ``timeout`` s."""
     return min(IDLE_MS_MAX, max(IDLE_MS_DEFAULT, round(timeout * 1000) + IDLE_MARGIN_MS))
 
 
@@ -211,10 +212,12 @@ def start_drives(q_ref: FloatArray, qd_ref: FloatArray, work: Path,
                  socketcan: str | None, fifo: int | None = None, *,
                  timeout: float = 5.0) -> NodeProcess:
     """``rrr_hil_plant --profile canopen`` at (q_ref[0], qd_ref[0]), logging ``work``/plant.csv
-    and NODE_FRAMES; on the SocketCAN interface ``socketcan`` (idle timeout IDLE_MS_SOCKETCAN),
-    or as socketcand server (idle timeout :func:`plant_idle_ms` of the master's ``timeout``).
+    and NODE_FRAMES; on the SocketCAN interface ``socketcan`` (it ends STOP_END_MS_SOCKETCAN
+    after the master's NMT stop) or as socketcand server; the idle timeout :func:`plant_idle_ms`
+    of the master's ``timeout`` either way.
     ``fifo`` (real time): ``--realtime --mlock`` and SCHED_FIFO ``fifo`` (0: none)."""
-    idle = ["--idle-timeout-ms", str(IDLE_MS_SOCKETCAN if socketcan else plant_idle_ms(timeout))]
+    idle = ["--idle-timeout-ms", str(plant_idle_ms(timeout)),
+            *(["--end-after-stop-ms", str(STOP_END_MS_SOCKETCAN)] if socketcan else [])]
     rt = [] if fifo is None else ["--realtime", "--mlock", *(["--fifo", str(fifo)] if fifo
                                                              else [])]
     return start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=work / "plant.csv",

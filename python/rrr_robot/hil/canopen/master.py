@@ -382,7 +382,7 @@ def run_canopen_master(t: FloatArray, q_ref: FloatArray, qd_ref: FloatArray,
     SYNC k), target torque = k_t u_k in per mille. ``interface``: ``socketcand`` (the plant
     is the server on loopback TCP) or ``socketcan`` (both on the SocketCAN interface
     ``channel``, python-can's socketcan interface under ``canopen.Network``; the plant ends
-    IDLE_MS_SOCKETCAN after the master's NMT stop). HilError when a drive does not boot or
+    STOP_END_MS_SOCKETCAN after the master's NMT stop). HilError when a drive does not boot or
     enable, on an SDO abort, a lost plant or a timeout (``timeout`` s per wait).
 
     ``realtime`` (:mod:`.realtime`): python-can's periodic SYNC sender every period instead of
