@@ -29,8 +29,10 @@ BG_FNS=()
 BG_PIDS=()
 BG_T0=()
 LOGS="$ROOT/build-logs"
+CPU_SUM=0
 record() {  # NAME WALL_SECONDS CPU_SECONDS
   TIMES+="$(printf '%6d s %6s s  %s' "$2" "$3" "$1")"$'\n'
+  [[ ! "$3" =~ ^[0-9]+$ ]] || CPU_SUM=$((CPU_SUM + $3))
 }
 children_cpu() {  # VAR: VAR = the CPU seconds (user + system) of this shell's finished children
   local f
@@ -41,19 +43,18 @@ children_cpu() {  # VAR: VAR = the CPU seconds (user + system) of this shell's f
   rm -f "$f"
 }
 report() {
-  local rc=$? pid cpu
-  children_cpu cpu
+  local rc=$? pid
   for pid in "${BG_PIDS[@]}"; do
     [ -n "$pid" ] && kill -- "-$pid" 2>/dev/null || true
   done
   printf '== wall time and CPU time (user + system) of each stage ==\n  wall      CPU\n'
-  printf '%s%6d s %6s s  total (exit %d)\n' "$TIMES" $((SECONDS - T_ALL)) "$cpu" "$rc"
+  printf '%s%6d s %6s s  total (exit %d)\n' "$TIMES" $((SECONDS - T_ALL)) "$CPU_SUM" "$rc"
 }
 trap report EXIT
 trap 'exit 130' INT
 trap 'exit 143' TERM
 stage() {  # NAME COMMAND...: one stage in the foreground (its failure ends the test command)
-  local name=$1 t0=$SECONDS c0 c1
+  local name=$1 t0=$SECONDS c0 c1  # before the background stages start: this shell counts
   children_cpu c0
   shift
   echo "== $name =="
@@ -65,13 +66,14 @@ stage() {  # NAME COMMAND...: one stage in the foreground (its failure ends the 
 FAILED=()
 last_stage() {  # NAME COMMAND...: the last foreground stage; the background stages are still
   # waited for and printed when it fails
-  local name=$1 t0=$SECONDS rc=0 c0 c1
-  children_cpu c0
+  local name=$1 t0=$SECONDS rc=0 cpu="?"
   shift
   echo "== $name =="
-  "$@" || rc=$?
-  children_cpu c1
-  record "$name" $((SECONDS - t0)) $((c1 - c0))
+  # in a subshell of its own: this shell's count would also take in the background stages
+  # that end meanwhile
+  ( trap 'children_cpu c; echo "$c" > "$LOGS/last_stage.cpu"' EXIT; "$@" ) || rc=$?
+  [ ! -s "$LOGS/last_stage.cpu" ] || read -r cpu < "$LOGS/last_stage.cpu"
+  record "$name" $((SECONDS - t0)) "$cpu"
   [ "$rc" = 0 ] || FAILED+=("$name (exit $rc)")
 }
 background() {  # NAME NICENESS FUNCTION: a stage in the background, its output in its log
@@ -295,9 +297,12 @@ fuzz() {
 benchmarks() {
   python bench/run_bench.py --build-only --werror --build-dir build-bench
   python bench/run_bench.py --quick --skip-build --build-dir build-bench
+  local script t0
   for script in bench/bench_*.py; do
     echo "-- python $script --quick"
+    t0=$SECONDS
     python "$script" --quick
+    echo "-- $script: $((SECONDS - t0)) s"
   done
 }
 # The release folder (sdist, wheels, FMU bundle) built with zig and checked, then installed and
