@@ -330,8 +330,10 @@ background "the release folder: scripts/dist.sh, its checks, installed without a
   release_folder
 
 # ---- the foreground stage: pytest, the longest -----------------------------------------------
+# in two workers (pytest-xdist), a test file each at a time: most of pytest's time is spent waiting
+# for the processes a test starts (nodes, rrr commands, timeouts), which the other worker fills
 last_stage "pytest, every other test (-m 'not vm'; every block of README.md and docs/)" \
-  python -m pytest -q --durations=25 -m "not vm" tests/python
+  python -m pytest -q --durations=25 -n "$JOBS" --dist loadfile -m "not vm" tests/python
 echo "== waiting for the background stages =="
 wait_background
 if [ "${#FAILED[@]}" != 0 ]; then

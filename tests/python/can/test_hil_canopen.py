@@ -534,7 +534,7 @@ def _bus_yml() -> dict[str, Any]:
     """The ros2_canopen bus description of docs/canopen.md (its one yaml block that names the
     CiA 402 driver)."""
     import yaml
-    from doc_blocks import ROOT, blocks_of
+    from support.doc_blocks import ROOT, blocks_of
 
     blocks = [b for b in blocks_of(ROOT / "docs" / "canopen.md")
               if b.lang == "yaml" and "Cia402Driver" in b.text]

@@ -36,6 +36,7 @@ from rrr_robot.errors import OutputError
 from rrr_robot.sim.cosim import CosimResult
 from rrr_robot.writing import job as job_module
 from rrr_robot.writing.job import WritingJob, run_writing, scenario_summary
+from support import default_signals
 
 
 def snapshot(folder: Path) -> dict[str, bytes]:
@@ -527,14 +528,6 @@ def test_scenario_summary() -> None:
 
 
 # ---- rrr writing interrupted for real ---------------------------------------------------------
-
-
-def default_signals() -> None:
-    """In the child: Ctrl-C and SIGTERM as in a terminal, even when pytest itself was started
-    with SIGINT ignored (a background job of a non-interactive shell), which the child would
-    inherit (and Python respect)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def start_writing(out: Path) -> subprocess.Popen[str]:

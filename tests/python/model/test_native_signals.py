@@ -30,6 +30,7 @@ from rrr_robot.core.robot import read_robot_file
 from rrr_robot.core.stiffness import STIFFNESS_MAX, Stiffness, stiffness
 from rrr_robot.errors import RobotFileError
 from rrr_robot.sim.cosim import CosimOptions
+from support import default_signals
 
 DEFAULT_ROBOT = Path(rr.__file__).parent / "data" / "default_robot.toml"
 J = (1, 2, 3)
@@ -197,7 +198,8 @@ def test_a_signal_ends_a_long_native_run_in_its_loop(tmp_path: Path, sig: signal
                              "--robot", str(robot), "--scenario", "ctc", "--no-figures",
                              "--text", LONG_TEXT, "--out", str(out)],
                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=term.slave,
-                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"},
+                            preexec_fn=default_signals)
     term.start()
     try:
         _, first = term.wait_for(STARTED, 600)

@@ -1,5 +1,5 @@
 """docs/blocks/: every command and code block of README.md and docs/ runs as written
-(doc_blocks.py, beside it, says how). Marker ``slow``."""
+(support/doc_blocks.py says how). Marker ``slow``."""
 
 from support.markers import folder_markers
 

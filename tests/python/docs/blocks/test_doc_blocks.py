@@ -1,5 +1,5 @@
-"""Every command and code block of README.md and docs/ runs as written (doc_blocks.py, beside
-this file, says how each kind of block is run): a block fails the test when it fails, when its
+"""Every command and code block of README.md and docs/ runs as written (support/doc_blocks.py
+says how each kind of block is run): a block fails the test when it fails, when its
 shown output is not what it prints, or when it is of no known kind; the blocks that cannot run
 here are listed below, each with its reason."""
 
@@ -15,7 +15,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
-from doc_blocks import (
+from support.doc_blocks import (
     ROOT,
     Block,
     Workdir,
@@ -94,7 +94,7 @@ def test_every_block_is_run_or_of_a_known_kind() -> None:
         if b.kind == "unknown":
             lang = b.lang or "(none)"
             problems.append(f"{b.where}: a block of language {lang}: neither run nor a known "
-                            "listing (tests/python/docs/blocks/doc_blocks.py lists the kinds)")
+                            "listing (tests/python/support/doc_blocks.py lists the kinds)")
         if b.kind == "output":
             before = next((x for x in reversed(blocks[:k]) if x.page == b.page
                            and x.kind in ("run", "output")), None)

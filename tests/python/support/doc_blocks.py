@@ -7,7 +7,7 @@ What a block's info string (the words after the opening fence) means:
   continues one on the next line), the other lines are what they print: each printed line must
   appear in the output, in order, where ``...`` stands for any text. A command may fail only if
   the next command is ``echo $?`` (which then prints its status). A console block whose first
-  line is ``# not run here: <reason>`` is not run (test_doc_blocks.py, beside this file, lists
+  line is ``# not run here: <reason>`` is not run (tests/python/docs/blocks/test_doc_blocks.py lists
   every such block: adding one means adding it there);
 - ``python``: run with this interpreter in a fresh process;
 - ``text output``: the lines that the runnable block before it prints, in that order, with
@@ -49,6 +49,7 @@ from pathlib import Path
 
 from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
+
 from support import REPO
 
 ROOT = REPO
@@ -211,7 +212,7 @@ def closure(requirements: list[str]) -> set[str]:
     return seen
 
 
-_SITECUSTOMIZE = '''"""Written by tests/python/docs/blocks/doc_blocks.py: imports of modules that
+_SITECUSTOMIZE = '''"""Written by tests/python/support/doc_blocks.py: imports of modules that
 `pip install {target}` does not install (nor an extra named in RRR_DOC_EXTRAS) fail, as on a
 user's machine."""
 import os
