@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Sets up everything and runs every test, each stage once. In the foreground: pytest (including
-# the generated-code checks, every block of README.md and docs/), and beside it a second pytest
-# session with the CAN bench's cases over SocketCAN in a QEMU guest (marker vm). Beside them, in
-# the background at a lower priority, each in its own build folder:
-# the C tests (core, FMUs, CAN bench) under AddressSanitizer and UndefinedBehaviorSanitizer via
+# Sets up everything and runs every test, each stage once. In the foreground: pytest in two
+# workers (including the generated-code checks, every block of README.md and docs/), and beside
+# it a second pytest session with the CAN bench's cases over SocketCAN in a QEMU guest (marker
+# vm). Beside them, in the background at a lower priority, each in its own build folder: the
+# release folder (scripts/test_dist.sh: the sdist, the wheels and the FMU bundle built with zig,
+# checked, installed without a compiler; it starts first, beside the install of .venv); the C tests (core, FMUs, CAN bench) under AddressSanitizer and UndefinedBehaviorSanitizer via
 # CTest; ruff, the Python package's import layers (lint-imports) and types (mypy); the README's
 # default build (Release) with the CTest tests of what that build changes or alone builds (label
 # release: the install tree, the optimised kernels, the librrr symbol check, the documented
@@ -11,8 +12,8 @@
 # qemu-user); the manual (sphinx, warnings as errors); every bench script's quick mode; short
 # libFuzzer runs on the CAN frame decoders, the CANopen slave, forged FMU states (each FMU) and
 # the FMU importer's scanner. Each background stage logs to build-logs/<stage>.log, printed when
-# the foreground stage ends (a failure is named at once); the wall time of each stage and the
-# total are printed at the end. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium,
+# the foreground stage ends (a failure is named at once); the wall time and CPU time of each stage
+# and the total are printed at the end, and how busy the machine was meanwhile. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium,
 # clang, the SocketCAN guest's tools and (by scripts/test_pil.sh) the controller firmware's
 # gcc-arm-none-eabi, picolibc-arm-none-eabi and qemu-system-arm are installed with apt-get when
 # missing and root.
@@ -23,6 +24,10 @@ export RRR_PIP_TARGET=".[test,bench,docs]"
 
 # ---- stage bookkeeping: wall times, background stages in process groups of their own ---------
 T_ALL=$SECONDS
+busy_jiffies() {  # the machine's busy CPU time so far, in clock ticks (every process, not ours only)
+  awk '/^cpu / { print $2 + $3 + $4 + $7 + $8 + $9 }' /proc/stat 2>/dev/null || echo 0
+}
+BUSY0=$(busy_jiffies)
 TIMES=""
 BG_NAMES=()
 BG_FNS=()
@@ -49,6 +54,10 @@ report() {
   done
   printf '== wall time and CPU time (user + system) of each stage ==\n  wall      CPU\n'
   printf '%s%6d s %6s s  total (exit %d)\n' "$TIMES" $((SECONDS - T_ALL)) "$CPU_SUM" "$rc"
+  local hz
+  hz=$(getconf CLK_TCK 2>/dev/null || echo 100)
+  printf 'the machine meanwhile (every process): %d s of CPU busy of %d s on %d cores\n' \
+    $((($(busy_jiffies) - BUSY0) / hz)) $((SECONDS - T_ALL)) "$(nproc 2>/dev/null || echo 1)"
 }
 trap report EXIT
 trap 'exit 130' INT
@@ -209,18 +218,29 @@ tools() {
 }
 stage "the tools (apt-get when missing), the SocketCAN guest's kernel and initramfs" tools
 
-# shellcheck disable=SC1091
-stage "the virtual environment .venv and the package (scripts/setup_env.sh)" \
-  . scripts/setup_env.sh
-JOBS="$(nproc 2>/dev/null || echo 2)"
-PYTHON="$(command -v python)"
-export JOBS PYTHON
 # the controller firmware of rrr hil pil: its tools (apt-get when missing and root) and images,
 # before the background stages (one dpkg at a time); tests/python/can/test_hil_pil.py runs them
 stage "the controller firmware (scripts/test_pil.sh --build-only; docs/microcontroller.md)" \
   bash scripts/test_pil.sh --build-only
 
 # ---- the background stages: each in its own build folder, at a lower priority than pytest ----
+export -f stage_main children_cpu
+# The release folder (sdist, wheels, FMU bundle) built with zig and checked, then installed and
+# run as a user would, without a compiler (docs/getting-started.md, "From the release folder")
+release_folder() {
+  bash scripts/test_dist.sh
+}
+# the longest of them, and it needs neither .venv nor the package: it starts first, beside pip
+background "the release folder: scripts/dist.sh, its checks, installed without a compiler" 10 \
+  release_folder
+
+# shellcheck disable=SC1091
+stage "the virtual environment .venv and the package (scripts/setup_env.sh)" \
+  . scripts/setup_env.sh
+JOBS="$(nproc 2>/dev/null || echo 2)"
+PYTHON="$(command -v python)"
+export JOBS PYTHON
+
 # C tests under ASan + UBSan, every one once (all but label release_only). Without the FMUs'
 # Windows and aarch64 binaries: cross-compiled, they are never sanitized; their tests run in the
 # Release build. Warnings are errors in every build of the test command (RRR_WERROR; off in a
@@ -305,11 +325,6 @@ benchmarks() {
     echo "-- $script: $((SECONDS - t0)) s"
   done
 }
-# The release folder (sdist, wheels, FMU bundle) built with zig and checked, then installed and
-# run as a user would, without a compiler (docs/getting-started.md, "From the release folder")
-release_folder() {
-  bash scripts/test_dist.sh
-}
 # The SocketCAN cases (marker vm, tests/python/can/): one pytest session of their own, beside
 # the others, since most of their time is the QEMU guest's emulated CPU (a third of pytest's when
 # they ran in one session); its own temporary folder, so that neither session cleans the other's
@@ -317,8 +332,7 @@ pytest_guest() {
   python -m pytest -q -p no:cacheprovider --durations=10 -m vm \
     --basetemp "$(mktemp -d)/pytest-vm" tests/python
 }
-export -f stage_main children_cpu asan release_build lint manual fuzz benchmarks release_folder \
-  pytest_guest
+export -f asan release_build lint manual fuzz benchmarks pytest_guest
 background "pytest, the SocketCAN cases in the QEMU guest (-m vm)" 0 pytest_guest
 background "the C tests under ASan + UBSan (CTest, build-asan)" 5 asan
 background "ruff, lint-imports, mypy" 5 lint
@@ -326,8 +340,6 @@ background "the README's Release build and its CTest (label release)" 10 release
 background "the manual (sphinx-build -W -n)" 10 manual
 background "libFuzzer: build-fuzz and the short runs" 10 fuzz
 background "every bench script's quick mode (bench/)" 15 benchmarks
-background "the release folder: scripts/dist.sh, its checks, installed without a compiler" 10 \
-  release_folder
 
 # ---- the foreground stage: pytest, the longest -----------------------------------------------
 # in two workers (pytest-xdist), a test file each at a time: most of pytest's time is spent waiting
