@@ -224,12 +224,12 @@ stage "the controller firmware (scripts/test_pil.sh --build-only; docs/microcont
   bash scripts/test_pil.sh --build-only
 
 # ---- the background stages: each in its own build folder, at a lower priority than pytest ----
-export -f stage_main children_cpu
 # The release folder (sdist, wheels, FMU bundle) built with zig and checked, then installed and
 # run as a user would, without a compiler (docs/getting-started.md, "From the release folder")
 release_folder() {
   bash scripts/test_dist.sh
 }
+export -f stage_main children_cpu release_folder
 # the longest of them, and it needs neither .venv nor the package: it starts first, beside pip
 background "the release folder: scripts/dist.sh, its checks, installed without a compiler" 10 \
   release_folder
