@@ -74,7 +74,7 @@ def inject_bad_crc(channel: str, injected: dict[str, Any], listening: threading.
         listening.set()
 
 
-#: Period after whose Sync the bad frame goes on the bus (of the 1001 of a 1 s run).
+#: Period after whose Sync the bad frame goes on the bus (of the 501 of a 0.5 s run).
 INJECT_AT = 200
 #: The CANopen masters run against the C plant node (``rrr_hil_plant --profile canopen``) over
 #: SocketCAN: kind -> the rrr command (``--channel``, ``--out`` and the duration are added).

@@ -1,6 +1,6 @@
 """The CAN bench against the FMPy co-simulation of the writing task (scenario ctc), over the
-socketcand transport (both C nodes on the whole task, over each transport, and their difference
-to the unquantised task: test_bench_transports.py).
+socketcand transport (both C nodes on the task's first 3000 periods, over each transport, and
+their difference to the unquantised task: test_bench_transports.py).
 
 - python-can's built-in socketcand interface drives the C plant node with the controller FMU
   (FMPy): the C bench's numbers (the FMPy loop with the DBC's quantisation) again.
