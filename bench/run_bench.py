@@ -374,7 +374,7 @@ def dynamics_count() -> GenCount:
     with tempfile.TemporaryDirectory() as tmp:
         log("derive_dynamics.py (SymPy, a few seconds)")
         out = subprocess.run(
-            [sys.executable, str(GEN_SCRIPT), "--output-dir", tmp],
+            [sys.executable, str(GEN_SCRIPT), "--output-dir", tmp, "--firmware-dir", tmp],
             check=True, capture_output=True, text=True,
         ).stdout
         same = all(
