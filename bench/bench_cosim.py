@@ -24,7 +24,8 @@ bit before anything is timed.
 ``--part ssp``: the writing task as an SSP archive in libcosim and FMPy against rrr writing: the
 maximum and RMS tip error of each built-in scenario with the one-step compensation (reference
 look-ahead and controller lead), with the reference look-ahead only, and with none; then one run
-in libcosim's real-time mode and the real-time factor it achieved.
+in libcosim's real-time mode and the real-time factor it achieved. Each run's figures (those of
+``rrr writing``, about 5 CPU-s a run) are drawn only with ``--out``, where they are kept.
 
 Every table gives min / median / max over the repeats, a ratio taken within each repeat. A
 measurement, not a test: it asserts nothing.
@@ -275,7 +276,8 @@ def ssp_part(args: argparse.Namespace) -> None:
                                ("look-ahead only", ref_only), ("none", none)):
                 cells = []
                 for tool in ("libcosim", "fmpy"):
-                    s = run_ssp(SspRun(ssp=ssp, tool=tool, out=root / f"{ssp.stem}-{tool}"))
+                    s = run_ssp(SspRun(ssp=ssp, tool=tool, out=root / f"{ssp.stem}-{tool}",
+                                       figures=args.out is not None))
                     m = s["scenarios"][scn]
                     cells.append(f"{1e3 * m['tip_error_max']:.3f} / "
                                  f"{1e3 * m['tip_error_rms']:.3f} "
@@ -306,8 +308,8 @@ def main() -> int:
                     help="speed: calls per row of 'where the time goes' (default 5000)")
     ap.add_argument("--fmi", type=int, choices=(2, 3), default=2,
                     help="reuse: the FMUs' FMI version (default 2)")
-    ap.add_argument("--out", type=Path, help="ssp: folder for the archives and results "
-                    "(default: a temporary one)")
+    ap.add_argument("--out", type=Path, help="ssp: folder for the archives, results and "
+                    "figures (default: a temporary one, no figures)")
     ap.add_argument("--no-real-time", action="store_true", help="ssp: skip the real-time run")
     ap.add_argument("--real-time-only", action="store_true", help="ssp: only the real-time run")
     ap.add_argument("--scenario", action="append", choices=list(BUILTIN), metavar="S",

@@ -87,7 +87,7 @@ def build(build_dir: Path, cmake: str, werror: bool = False) -> None:
     ]
     log("configure: " + " ".join(configure))
     subprocess.run(configure, check=True, stdout=subprocess.DEVNULL)
-    log("build (one Pinocchio translation unit: about 1.5-3 min on 2 cores)")
+    log("build (about 20 CPU-s: Pinocchio's algorithms come compiled in libpinocchio_default)")
     _, seconds = timed(lambda: subprocess.run([cmake, "--build", str(build_dir), "-j", "2"],
                                               check=True, stdout=subprocess.DEVNULL))
     log(f"built in {seconds:.0f} s")
@@ -374,7 +374,7 @@ def dynamics_count() -> GenCount:
     with tempfile.TemporaryDirectory() as tmp:
         log("derive_dynamics.py (SymPy, a few seconds)")
         out = subprocess.run(
-            [sys.executable, str(GEN_SCRIPT), "--output-dir", tmp],
+            [sys.executable, str(GEN_SCRIPT), "--output-dir", tmp, "--firmware-dir", tmp],
             check=True, capture_output=True, text=True,
         ).stdout
         same = all(
