@@ -68,16 +68,18 @@ SDIST="$STAGE/rrr_robot-$VERSION.tar.gz"
 mkdir -p "$RUN/sdist"
 tar -xzf "$SDIST" -C "$RUN/sdist"
 
-# wheel ARCH SOURCE: the abi3 wheel for ARCH (x86_64, aarch64), built from SOURCE with zig
+# wheel ARCH SOURCE [-C SETTING]...: the abi3 wheel for ARCH (x86_64, aarch64), built from SOURCE
+# with zig
 wheel() {
   local arch="$1" src="$2" t0=$SECONDS
+  shift 2
   echo "== the $arch wheel, from $src (zig cc -target $arch-linux-gnu.$GLIBC) =="
   nice -n 10 "$PY" -m pip wheel --quiet --no-deps --no-build-isolation --wheel-dir "$RUN/$arch" \
     -C cmake.define.CMAKE_TOOLCHAIN_FILE="$ROOT/cmake/zig.cmake" \
     -C cmake.define.RRR_ZIG_TARGET="$arch-linux-gnu.$GLIBC" \
     -C build.verbose=false -C build-dir="$RUN/build-$arch" \
     -C "wheel.tags=cp311-abi3-manylinux_${GLIBC_TAG}_$arch" \
-    -C "wheel.tags=cp311-abi3-manylinux2014_$arch" \
+    -C "wheel.tags=cp311-abi3-manylinux2014_$arch" "$@" \
     "$src"
   mv "$RUN/$arch"/*.whl "$STAGE/"
   echo "   $((SECONDS - t0)) s"
@@ -85,7 +87,9 @@ wheel() {
 CMAKE_BUILD_PARALLEL_LEVEL="${CMAKE_BUILD_PARALLEL_LEVEL:-2}"
 export CMAKE_BUILD_PARALLEL_LEVEL
 wheel x86_64 "$ROOT"
-wheel aarch64 "$RUN/sdist/rrr_robot-$VERSION"
+# the aarch64 wheel's FMUs carry what an aarch64 Linux host loads, not Windows binaries (the x86-64
+# wheel's and the bundle's have every platform)
+wheel aarch64 "$RUN/sdist/rrr_robot-$VERSION" -C cmake.define.RRR_FMU_WINDOWS=OFF
 WHL_X86="$(ls "$STAGE"/rrr_robot-"$VERSION"-*x86_64*.whl)"
 WHL_A64="$(ls "$STAGE"/rrr_robot-"$VERSION"-*aarch64*.whl)"
 
@@ -93,7 +97,7 @@ echo "== the FMU bundle (from the x86-64 build: every FMU with its Linux x86-64 
      "Windows binaries) and the SSP archive of the writing task =="
 # rrr ssp runs the x86-64 wheel, installed with its dependencies into the tools venv
 "$PY" -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$WHL_X86"
-"$PY" -m pip install --quiet --disable-pip-version-check "$WHL_X86"
+"$PY" -m pip install --quiet --disable-pip-version-check --no-compile "$WHL_X86"
 "$ROOT/$VENV/bin/rrr" ssp --scenario ctc --out "$RUN/rrr_writing_ctc.ssp" -q
 "$PY" tools/dist_check.py bundle --fmus "$RUN/build-x86_64/fmus" --ssp "$RUN/rrr_writing_ctc.ssp" \
   --data python/rrr_robot/data --out "$STAGE/rrr_robot-fmus-$VERSION.zip"
