@@ -281,7 +281,7 @@ fuzz() {
     fuzz_hil_canopen -j "$JOBS"
   echo "-- libFuzzer on the CAN frame decoders"
   mkdir -p build-fuzz/corpus
-  build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-30}" -max_len=96 \
+  build-fuzz/c_src/hil/fuzz_hil_decode -max_total_time="${RRR_FUZZ_SECONDS:-15}" -max_len=96 \
     -print_final_stats=1 build-fuzz/corpus c_src/hil/fuzz/seeds 2>&1 | tail -n 12
   echo "-- libFuzzer on the CANopen slave: frame and time sequences through one node"
   mkdir -p build-fuzz/corpus_canopen
@@ -290,18 +290,18 @@ fuzz() {
   echo "-- libFuzzer on forged FMU states with valid checksums (each FMU, FMI 2 and 3)"
   for model in $(cat build-fuzz/fmus/fmu_names.txt); do  # the FMUs, as fmu/CMakeLists.txt lists them
     mkdir -p "build-fuzz/corpus_$model"
-    "build-fuzz/fmu/fuzz_fmu_state_$model" -max_total_time="${RRR_FMU_FUZZ_SECONDS:-15}" \
+    "build-fuzz/fmu/fuzz_fmu_state_$model" -max_total_time="${RRR_FMU_FUZZ_SECONDS:-8}" \
       -max_len=89 -print_final_stats=1 "build-fuzz/corpus_$model" 2>&1 | tail -n 4
   done
-  echo "-- the FMI-LS-BUS network FMUs: forged FMU states, hostile Rx_Data values (5 s each)"
+  echo "-- the FMI-LS-BUS network FMUs: forged FMU states, hostile Rx_Data values (3 s each)"
   # fmu/CMakeLists.txt builds both targets for each node (docs/ls-bus.md); CTest drives the same
   # targets without libFuzzer: lsbus_rx_smoke_* and fmu_state_fuzz_*_can
   for rx in build-fuzz/fmu/fuzz_lsbus_rx_*; do  # the network FMUs' models, as the build made them
     model=${rx##*/fuzz_lsbus_rx_}
     mkdir -p "build-fuzz/corpus_$model" "build-fuzz/corpus_lsbus_rx_$model"
-    "build-fuzz/fmu/fuzz_fmu_state_$model" -max_total_time="${RRR_LSBUS_FUZZ_SECONDS:-5}" \
+    "build-fuzz/fmu/fuzz_fmu_state_$model" -max_total_time="${RRR_LSBUS_FUZZ_SECONDS:-3}" \
       -max_len=89 -print_final_stats=1 "build-fuzz/corpus_$model" 2>&1 | tail -n 4
-    "$rx" -max_total_time="${RRR_LSBUS_FUZZ_SECONDS:-5}" \
+    "$rx" -max_total_time="${RRR_LSBUS_FUZZ_SECONDS:-3}" \
       -max_len=4096 -print_final_stats=1 "build-fuzz/corpus_lsbus_rx_$model" 2>&1 | tail -n 4
   done
   echo "-- libFuzzer on the FMU importer's modelDescription scanner (c_src/fmi_import)"
@@ -309,7 +309,7 @@ fuzz() {
   for xml in fmu/*/modelDescription.xml; do
     cp "$xml" "build-fuzz/corpus_fmi_import/$(basename "$(dirname "$xml")").xml"
   done
-  build-fuzz/c_src/fmi_import/fuzz_fmi_import -max_total_time="${RRR_FMI_FUZZ_SECONDS:-15}" \
+  build-fuzz/c_src/fmi_import/fuzz_fmi_import -max_total_time="${RRR_FMI_FUZZ_SECONDS:-10}" \
     -max_len=65536 -print_final_stats=1 build-fuzz/corpus_fmi_import 2>&1 | tail -n 4
 }
 # Every bench script's quick mode (they print their tables; no number is checked), after the
