@@ -12,9 +12,9 @@ import sys
 import tomllib
 from pathlib import Path
 
-from packaging.requirements import Requirement
 from packaging.utils import canonicalize_name
 from support import REPO
+from support.doc_blocks import closure
 
 ROOT = REPO
 #: the bench scripts, the generator run_bench.py runs, and the package they import
@@ -40,23 +40,6 @@ def imported(path: Path) -> set[str]:
         elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
             names.add(node.module.split(".")[0])
     return names
-
-
-def closure(requirements: list[str]) -> set[str]:
-    """The distributions these requirements pull in (installed ones; their extras ignored)."""
-    seen: set[str] = set()
-    todo = [Requirement(r) for r in requirements]
-    while todo:
-        req = todo.pop()
-        name = canonicalize_name(req.name)
-        if name in seen or (req.marker is not None and not req.marker.evaluate({"extra": ""})):
-            continue
-        seen.add(name)
-        try:
-            todo += [Requirement(r) for r in (md.requires(req.name) or [])]
-        except md.PackageNotFoundError:
-            pass
-    return seen
 
 
 def test_the_bench_extra_covers_what_the_bench_scripts_import() -> None:
