@@ -62,28 +62,30 @@ report() {
 trap report EXIT
 trap 'exit 130' INT
 trap 'exit 143' TERM
-stage() {  # NAME COMMAND...: one stage in the foreground (its failure ends the test command)
-  local name=$1 t0=$SECONDS c0 c1  # before the background stages start: this shell counts
-  children_cpu c0
+measured() {  # NAME COMMAND...: run it, record its wall and CPU time; its exit status
+  local name=$1 t0=$SECONDS rc=0 cpu="?"
   shift
-  echo "== $name =="
-  "$@"
-  children_cpu c1
-  record "$name" $((SECONDS - t0)) $((c1 - c0))
+  mkdir -p "$LOGS"
+  rm -f "$LOGS/foreground.cpu"
+  # in a subshell of its own: this shell's count would also take in the background stages
+  # that end meanwhile
+  ( trap 'children_cpu c; echo "$c" > "$LOGS/foreground.cpu"' EXIT; "$@" ) || rc=$?
+  [ ! -s "$LOGS/foreground.cpu" ] || read -r cpu < "$LOGS/foreground.cpu"
+  record "$name" $((SECONDS - t0)) "$cpu"
+  return "$rc"
+}
+stage() {  # NAME COMMAND...: one stage in the foreground (its failure ends the test command)
+  echo "== $1 =="
+  measured "$@"
   poll_background
 }
 FAILED=()
 last_stage() {  # NAME COMMAND...: the last foreground stage; the background stages are still
   # waited for and printed when it fails
-  local name=$1 t0=$SECONDS rc=0 cpu="?"
-  shift
-  echo "== $name =="
-  # in a subshell of its own: this shell's count would also take in the background stages
-  # that end meanwhile
-  ( trap 'children_cpu c; echo "$c" > "$LOGS/last_stage.cpu"' EXIT; "$@" ) || rc=$?
-  [ ! -s "$LOGS/last_stage.cpu" ] || read -r cpu < "$LOGS/last_stage.cpu"
-  record "$name" $((SECONDS - t0)) "$cpu"
-  [ "$rc" = 0 ] || FAILED+=("$name (exit $rc)")
+  local rc=0
+  echo "== $1 =="
+  measured "$@" || rc=$?
+  [ "$rc" = 0 ] || FAILED+=("$1 (exit $rc)")
 }
 background() {  # NAME NICENESS FUNCTION: a stage in the background, its output in its log
   local name=$1 niceness=$2 fn=$3
@@ -234,9 +236,10 @@ export -f stage_main children_cpu release_folder
 background "the release folder: scripts/dist.sh, its checks, installed without a compiler" 10 \
   release_folder
 
-# shellcheck disable=SC1091
 stage "the virtual environment .venv and the package (scripts/setup_env.sh)" \
-  . scripts/setup_env.sh
+  bash scripts/setup_env.sh
+# shellcheck disable=SC1091
+RRR_SKIP_INSTALL=1 . scripts/setup_env.sh  # its .venv, in this shell (installed just above)
 JOBS="$(nproc 2>/dev/null || echo 2)"
 PYTHON="$(command -v python)"
 export JOBS PYTHON
