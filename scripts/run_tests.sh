@@ -1,22 +1,22 @@
 #!/usr/bin/env bash
-# Sets up everything and runs every test, each stage once. In the foreground: pytest in two
-# workers (including the generated-code checks, every block of README.md and docs/), and beside
-# it a second pytest session with the CAN bench's cases over SocketCAN in a QEMU guest (marker
-# vm). Beside them, in the background at a lower priority, each in its own build folder: the
-# release folder (scripts/test_dist.sh: the sdist, the wheels and the FMU bundle built with zig,
-# checked, installed without a compiler; it starts first, beside the install of .venv); the C tests (core, FMUs, CAN bench) under AddressSanitizer and UndefinedBehaviorSanitizer via
-# CTest; ruff, the Python package's import layers (lint-imports) and types (mypy); the README's
-# default build (Release) with the CTest tests of what that build changes or alone builds (label
-# release: the install tree, the optimised kernels, the librrr symbol check, the documented
-# aarch64 cross build, the FMUs' Windows binaries under wine and aarch64 binaries under
-# qemu-user); the manual (sphinx, warnings as errors); every bench script's quick mode; short
-# libFuzzer runs on the CAN frame decoders, the CANopen slave, forged FMU states (each FMU) and
-# the FMU importer's scanner. Each background stage logs to build-logs/<stage>.log, printed when
-# the foreground stage ends (a failure is named at once); the wall time and CPU time of each stage
-# and the total are printed at the end, and how busy the machine was meanwhile. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium,
-# clang, the SocketCAN guest's tools and (by scripts/test_pil.sh) the controller firmware's
-# gcc-arm-none-eabi, picolibc-arm-none-eabi and qemu-system-arm are installed with apt-get when
-# missing and root.
+# Sets up everything and runs every test, each stage once. In the foreground: pytest in two workers
+# (including the generated-code checks, every block of README.md and docs/), and beside it a second
+# pytest session with the CAN bench's cases over SocketCAN in a QEMU guest (marker vm). Beside them,
+# in the background at a lower priority, each in its own build folder: the release folder
+# (scripts/test_dist.sh: the sdist, the wheels and the FMU bundle built with zig, checked, installed
+# without a compiler; it starts first, beside the install of .venv); the C tests (core, FMUs, CAN
+# bench) under AddressSanitizer and UndefinedBehaviorSanitizer via CTest; ruff, the Python package's
+# import layers (lint-imports) and types (mypy); the README's default build (Release) with the CTest
+# tests of what that build changes or alone builds (label release: the install tree, the optimised
+# kernels, the librrr symbol check, the documented aarch64 cross build, the FMUs' Windows binaries
+# under wine and aarch64 binaries under qemu-user); the manual (sphinx, warnings as errors); every
+# bench script's quick mode; short libFuzzer runs on the CAN frame decoders, the CANopen slave,
+# forged FMU states (each FMU) and the FMU importer's scanner. Each background stage logs to
+# build-logs/<stage>.log, printed when the foreground stage ends (a failure is named at once); the
+# wall time and CPU time of each stage and the total are printed at the end, and how busy the
+# machine was meanwhile. mingw-w64, wine, gcc-aarch64-linux-gnu, qemu-user, chromium, clang, the
+# SocketCAN guest's tools and (by scripts/test_pil.sh) the controller firmware's gcc-arm-none-eabi,
+# picolibc-arm-none-eabi and qemu-system-arm are installed with apt-get when missing and root.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$ROOT"
@@ -24,7 +24,7 @@ export RRR_PIP_TARGET=".[test,bench,docs]"
 
 # ---- stage bookkeeping: wall times, background stages in process groups of their own ---------
 T_ALL=$SECONDS
-busy_jiffies() {  # the machine's busy CPU time so far, in clock ticks (every process, not ours only)
+busy_jiffies() {  # the machine's busy CPU time so far, in clock ticks (every process)
   awk '/^cpu / { print $2 + $3 + $4 + $7 + $8 + $9 }' /proc/stat 2>/dev/null || echo 0
 }
 BUSY0=$(busy_jiffies)
@@ -291,7 +291,7 @@ fuzz() {
   build-fuzz/c_src/hil/fuzz_hil_canopen -max_total_time="${RRR_CANOPEN_FUZZ_SECONDS:-15}" \
     -max_len=600 -print_final_stats=1 build-fuzz/corpus_canopen 2>&1 | tail -n 4
   echo "-- libFuzzer on forged FMU states with valid checksums (each FMU, FMI 2 and 3)"
-  for model in $(cat build-fuzz/fmus/fmu_names.txt); do  # the FMUs, as fmu/CMakeLists.txt lists them
+  for model in $(cat build-fuzz/fmus/fmu_names.txt); do  # as fmu/CMakeLists.txt lists them
     mkdir -p "build-fuzz/corpus_$model"
     "build-fuzz/fmu/fuzz_fmu_state_$model" -max_total_time="${RRR_FMU_FUZZ_SECONDS:-8}" \
       -max_len=89 -print_final_stats=1 "build-fuzz/corpus_$model" 2>&1 | tail -n 4
