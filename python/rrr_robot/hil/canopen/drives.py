@@ -216,10 +216,10 @@ def start_drives(q_ref: FloatArray, qd_ref: FloatArray, work: Path,
     after the master's NMT stop) or as socketcand server; the idle timeout :func:`plant_idle_ms`
     of the master's ``timeout`` either way.
     ``fifo`` (real time): ``--realtime --mlock`` and SCHED_FIFO ``fifo`` (0: none)."""
-    idle = ["--idle-timeout-ms", str(plant_idle_ms(timeout)),
-            *(["--end-after-stop-ms", str(STOP_END_MS_SOCKETCAN)] if socketcan else [])]
+    ending = ["--idle-timeout-ms", str(plant_idle_ms(timeout)),
+              *(["--end-after-stop-ms", str(STOP_END_MS_SOCKETCAN)] if socketcan else [])]
     rt = [] if fifo is None else ["--realtime", "--mlock", *(["--fifo", str(fifo)] if fifo
                                                              else [])]
     return start_plant(q0=q_ref[0], qd0=qd_ref[0], log_csv=work / "plant.csv",
                        frame_log=work / NODE_FRAMES, socketcan=socketcan,
-                       extra=["--profile", "canopen", *idle, *rt])
+                       extra=["--profile", "canopen", *ending, *rt])
