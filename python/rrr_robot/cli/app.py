@@ -15,7 +15,7 @@ from types import FrameType
 from typing import Any
 
 from .. import __version__
-from ..errors import RrrError
+from ..errors import RrrError, one_line
 from ._args import HelpFormatter, add_verbosity_arguments, command_parser, quiet
 
 log = logging.getLogger("rrr_robot")
@@ -119,12 +119,6 @@ def _on_sigterm(signum: int, frame: FrameType | None) -> None:
     raise _Terminated
 
 
-def _one_line(exc: BaseException) -> str:
-    """An exception's message on one line (a message of an FMU or a parser may span lines)."""
-    text = " ".join(str(exc).split())
-    return text or type(exc).__name__
-
-
 class _LineFormatter(logging.Formatter):
     """``LEVEL logger: message`` on one line. Without ``-v`` a record's traceback is left out,
     whether it comes as the record's exception or inside the message (python-can's socketcand
@@ -142,7 +136,7 @@ class _LineFormatter(logging.Formatter):
         line = self.formatMessage(record).split("\n", 1)[0]
         line = line.partition("Traceback (most recent call last)")[0].rstrip(" :")
         exc = record.exc_info[1] if record.exc_info else None
-        return f"{line} ({_one_line(exc)})" if exc is not None else line
+        return f"{line} ({one_line(exc)})" if exc is not None else line
 
 
 @contextlib.contextmanager
@@ -199,7 +193,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print("rrr: terminated", file=sys.stderr)
         return 143
     except (RrrError, OSError, UnicodeError) as exc:
-        print(f"rrr: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"rrr: error: {one_line(exc)}", file=sys.stderr)
         return int(getattr(exc, "exit_status", 2))
     finally:
         if previous is not None:

@@ -42,7 +42,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import IO
 
-from ..errors import ArchiveError
+from ..errors import ArchiveError, one_line
 
 __all__ = [
     "CHUNK",
@@ -164,7 +164,7 @@ class CheckedZip:
         except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, ValueError, EOFError) as exc:
             fh.close()
             raise _fail(self.where, f"not an {what} (a zip archive): "
-                        f"{' '.join(str(exc).split()) or type(exc).__name__}") from exc
+                        f"{one_line(exc)}") from exc
         except BaseException:
             fh.close()
             raise
@@ -281,7 +281,7 @@ class CheckedZip:
                     yield block
         except (zipfile.BadZipFile, EOFError, zlib.error, OSError, ValueError) as exc:
             raise _fail(self.where, f"entry {name!r} is damaged or does not match its header: "
-                        f"{' '.join(str(exc).split()) or type(exc).__name__}") from exc
+                        f"{one_line(exc)}") from exc
         if left:
             raise _fail(self.where, f"entry {name!r} holds {info.file_size - left} bytes, its "
                         f"header says {info.file_size}")

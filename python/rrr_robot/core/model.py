@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import BadInputError, ModelError
+from ..errors import BadInputError, ModelError, one_line
 from . import _lib
 from ._arrays import FloatArray
 from ._lib import _ext
@@ -397,7 +397,7 @@ def finite_array(value: ArrayLike, name: str, shape: tuple[int, ...]) -> FloatAr
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError, OverflowError) as exc:
         raise BadInputError(f"{name} must be finite numbers of shape {shape}: "
-                            f"{' '.join(str(exc).split())}") from None
+                            f"{one_line(exc)}") from None
     if arr.shape != shape:
         raise BadInputError(f"{name} must have shape {shape}, got {arr.shape}")
     if not np.all(np.isfinite(arr)):

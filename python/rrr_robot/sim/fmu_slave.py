@@ -33,16 +33,11 @@ from fmpy.fmi1 import FMICallException
 
 from ..core._arrays import FloatArray
 from ..core.archives import extract_to_temp
-from ..errors import ArchiveError, BadInputError, CosimError
+from ..errors import ArchiveError, BadInputError, CosimError, one_line
 from . import _fmi_log
 
 log = logging.getLogger(__name__)
 _STATUS = ["OK", "WARNING", "DISCARD", "ERROR", "FATAL", "PENDING"]
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return text if len(text) <= 500 else text[:497] + "..."
 
 
 @dataclass
@@ -244,7 +239,7 @@ class FmuSlave:
                                                  prefix="rrr-fmu-"))
         except ArchiveError as exc:
             raise CosimError(f"{self._who}: cannot read the FMU {self.path}: "
-                             f"{_one_line(exc)}") from exc
+                             f"{one_line(exc, 500)}") from exc
         try:
             md = self._model_description()
             calls = _CALLS[md.fmiVersion]
@@ -254,7 +249,7 @@ class FmuSlave:
                 self._api: _Fmi2 | _Fmi3 = calls(md, self._unzipdir, instance_name)
             except Exception as exc:  # the binary is missing or does not load
                 raise CosimError(f"{self._who}: cannot load the binary of {self.path}: "
-                                 f"{_one_line(exc)}") from exc
+                                 f"{one_line(exc, 500)}") from exc
         except BaseException:
             shutil.rmtree(self._unzipdir, ignore_errors=True)
             raise
@@ -274,7 +269,7 @@ class FmuSlave:
             md = read_model_description(self._unzipdir)
         except Exception as exc:  # OSError, FMPy's validation errors (bare exceptions)
             raise CosimError(f"{self._who}: cannot read the FMU {self.path}: "
-                             f"{_one_line(exc)}") from exc
+                             f"{one_line(exc, 500)}") from exc
         if md.coSimulation is None:
             raise CosimError(f"{self.path} has no Co-Simulation interface")
         if md.fmiVersion not in _CALLS:

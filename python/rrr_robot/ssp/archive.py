@@ -30,7 +30,7 @@ import numpy as np
 
 from ..core._arrays import FloatArray
 from ..core.archives import CheckedZip, scratch_folder
-from ..errors import BadInputError
+from ..errors import BadInputError, one_line
 from ..writing.trajectory import MAX_REFERENCE_SAMPLES
 from .bindings import check_bindings
 from .export import COMPONENTS
@@ -149,7 +149,7 @@ def _variables(fmu: CheckedZip, source: str, where: str, comp: str,
             md = read_model_description(str(xml), validate=False)
         except Exception as exc:  # FMPy raises bare exceptions for a broken FMU
             raise BadInputError(f"{where}: component {comp}: {source} is not a readable FMU: "
-                                f"{' '.join(str(exc).split())}") from exc
+                                f"{one_line(exc)}") from exc
     if md.fmiVersion != "2.0" or md.coSimulation is None:
         raise BadInputError(f"{where}: component {comp}: {source} must be an FMI 2.0 "
                             "Co-Simulation FMU")
@@ -168,7 +168,7 @@ def _table(fmu: CheckedZip, source: str, where: str) -> dict[str, FloatArray]:
             table = read_csv_table(path)
         except (ValueError, UnicodeError) as exc:
             raise BadInputError(f"{where}: resources/{TABLE_FILE} of {source} is malformed: "
-                                f"{' '.join(str(exc).split())}") from exc
+                                f"{one_line(exc)}") from exc
     if tuple(table) != TABLE_COLUMNS or table["t"].size < 2 or \
             not all(np.all(np.isfinite(c)) for c in table.values()):
         raise BadInputError(f"{where}: resources/{TABLE_FILE} of {source} must have the columns "

@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from .. import __version__
-from ..errors import BadInputError, RrrError
+from ..errors import BadInputError, RrrError, one_line
 from .runs import SweepPlan, run_batch
 from .sampling import RunInput
 
@@ -142,7 +142,7 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
                             ) from None
     except (OSError, ValueError) as exc:
         raise BadInputError(f"cannot connect to {where}: "
-                            f"{' '.join(str(exc).split()) or type(exc).__name__}") from None
+                            f"{one_line(exc)}") from None
     try:
         with sock:
             if "://" in address and not address.startswith("tcp://"):
@@ -159,7 +159,7 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
                             ) from None
     except OSError as exc:
         raise BadInputError(f"{where} does not speak Dask: "
-                            f"{' '.join(str(exc).split()) or type(exc).__name__} before its "
+                            f"{one_line(exc)} before its "
                             "handshake") from None
     if b"compression" not in body or b"python" not in body:
         raise BadInputError(f"{where} does not speak Dask: its first message is no Dask "
@@ -189,7 +189,7 @@ def dask_client(workers: int | None = None, scheduler: str | None = None) -> Ite
                 client = stack.enter_context(Client(scheduler, timeout=CONNECT_TIMEOUT))
             except (OSError, TimeoutError, ValueError) as exc:
                 raise BadInputError(f"cannot connect to the Dask scheduler at {scheduler}: "
-                                    f"{' '.join(str(exc).split()) or type(exc).__name__}"
+                                    f"{one_line(exc)}"
                                     ) from None
             where = f"the Dask scheduler at {scheduler}"
         _check_workers(client, where)
@@ -236,7 +236,7 @@ def execute(client: Any, plan: SweepPlan, work: Sequence[Sequence[RunInput]],
                 try:
                     rows = future.result()
                 except Exception as exc:  # the task is lost, not a run's failure
-                    reason = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+                    reason = f"{type(exc).__name__}: {one_line(exc)}"
                     log.error("batch of runs %d-%d lost: %s", batch[0].run, batch[-1].run,
                               reason)
                     lost.append(([inp.run for inp in batch], reason))

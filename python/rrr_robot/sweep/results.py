@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core.outputs import atomic_path, is_temporary
-from ..errors import BadInputError
+from ..errors import BadInputError, one_line
 from .runs import METRICS, STATUSES
 from .spec import Vary
 
@@ -165,7 +165,7 @@ def read_results(folder: Path, arrow_schema: Any, seeds: Sequence[int] | None = 
             t = pq.read_table(part)
         except (OSError, pa.ArrowException) as exc:
             raise BadInputError(f"{part}: not a Parquet file of this sweep: "
-                                f"{' '.join(str(exc).split())}") from exc
+                                f"{one_line(exc)}") from exc
         _check_part(part, t, arrow_schema, seeds)
         tables.append(t.cast(arrow_schema))
     if not tables:

@@ -44,6 +44,7 @@ import numpy as np
 from ..core import fmu_vars as fv
 from ..core.model import Model
 from ..core.robot import RobotFile, read_robot_file
+from ..errors import one_line
 from ..writing.job import metrics, run_engine, scenario_options, scenario_summary, writing_spec
 from ..writing.scenarios import scenario_from_dict
 from ..writing.trajectory import Reference, make_reference
@@ -137,7 +138,7 @@ def _scenario_tables(plan: SweepPlan, values: Sequence[tuple[str, Any]]) -> dict
 
 
 def _one_line(exc: BaseException) -> str:
-    text = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+    text = f"{type(exc).__name__}: {one_line(exc)}"
     return text if len(text) <= _MAX_ERROR else text[:_MAX_ERROR - 3] + "..."
 
 

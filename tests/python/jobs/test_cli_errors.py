@@ -19,6 +19,7 @@ import pytest
 import rrr_robot as rr
 from rrr_robot.cli import app, main
 from rrr_robot.core.model import DEFAULT_ROBOT_TOML
+from rrr_robot.errors import HilError
 
 OUT = "out"  # the output folder (or file) of every case: must not exist afterwards
 
@@ -307,6 +308,12 @@ def raiser(exc: BaseException) -> Callable[[], None]:
     (rr.CosimError("controller: fmi2DoStep returned ERROR\nat t = 1 s:\n  reason"), 2,
      "rrr: error: controller: fmi2DoStep returned ERROR at t = 1 s: reason"),
     (rr.BadInputError("bad"), 2, "rrr: error: bad"),
+    # python-can's socketcand bus writes its traceback into its CanError's message: cut off
+    (HilError("SYNC 88: the plant node was killed by SIGKILL (Failed to receive: [Errno 104] "
+                 "Connection reset by peer  Traceback (most recent call last):\n  File \"x.py\""
+                 ", line 285, in _recv_internal\nConnectionResetError: [Errno 104])"), 2,
+     "rrr: error: SYNC 88: the plant node was killed by SIGKILL (Failed to receive: [Errno 104] "
+     "Connection reset by peer"),
     (PermissionError(13, "Permission denied", "out"), 2,
      "rrr: error: [Errno 13] Permission denied: 'out'"),
     (UnicodeDecodeError("utf-8", b"\xff", 0, 1, "invalid start byte"), 2,

@@ -22,7 +22,7 @@ import numpy as np
 from ...core._arrays import FloatArray
 from ...core.control import CtcGains
 from ...core.model import Model
-from ...errors import BadInputError, EmcyError, HilError, TamperedError
+from ...errors import BadInputError, EmcyError, HilError, TamperedError, one_line
 from ..nodes import NodeProcess, Progress, open_bus, quiet_bus_threads
 from ..results import BenchRun
 from .drives import (
@@ -234,11 +234,11 @@ class _Master:
 
     def _bus_failed(self, k: int, exc: Exception) -> HilError:
         if self.plant is None:
-            return HilError(f"SYNC {k}: the bus failed ({' '.join(str(exc).split())})")
+            return HilError(f"SYNC {k}: the bus failed ({one_line(exc)})")
         self.plant.died(1.0)  # a plant that was killed: give it the time to be reaped
         lost = ("the plant node " + self.plant.how_it_ended() if not self.plant.running()
                 else "the bus failed")
-        return HilError(f"SYNC {k}: {lost} ({' '.join(str(exc).split())})")
+        return HilError(f"SYNC {k}: {lost} ({one_line(exc)})")
 
     def send_rpdos(self, torques: Sequence[int], k: int) -> None:
         """RPDO1 of each drive: controlword 0x0F (enable operation), the target torque."""

@@ -18,7 +18,7 @@ def busload(options: BusloadOptions) -> BusLoad:
     ``options``; BadInputError for ``sync_period_ms`` or a DBC that cantools cannot read."""
     import cantools
 
-    from ...errors import BadInputError
+    from ...errors import BadInputError, one_line
     from ..busload import schedule_load
     from .protocol import DBC_PATH, database
 
@@ -30,7 +30,7 @@ def busload(options: BusloadOptions) -> BusLoad:
             db = cantools.database.load_file(str(options.dbc))
         except (cantools.database.errors.Error, ValueError, KeyError) as exc:
             raise BadInputError(f"--dbc {options.dbc}: not a DBC cantools reads: "
-                                f"{' '.join(str(exc).split())}") from exc
+                                f"{one_line(exc)}") from exc
     else:
         db = database()
     return schedule_load(db, options.bitrate, options.data_bitrate, lockstep=options.lockstep,

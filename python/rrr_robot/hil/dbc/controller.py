@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ...core._arrays import FloatArray
-from ...errors import BusLost, FrameError, HilError
+from ...errors import BusLost, FrameError, HilError, one_line
 from ...sim.cosim import CTRL_IN, CTRL_OUT
 from ...sim.fmu_slave import FmuSlave
 from ...sim.fmus import fmu_path
@@ -131,4 +131,4 @@ def _drive(bus: Any, ctrl: FmuSlave, c_in: Any, c_out: Any, ref: FloatArray,
         raise BusLost(f"period {k} of {n}: {exc}", k) from exc
     except (can.CanError, OSError) as exc:
         raise BusLost(f"period {k} of {n}: the CAN bus failed "
-                      f"({' '.join(str(exc).split()) or type(exc).__name__})", k) from exc
+                      f"({one_line(exc)})", k) from exc

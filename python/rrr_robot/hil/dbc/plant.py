@@ -31,7 +31,7 @@ import numpy as np
 
 from ...core import fmu_vars as fv
 from ...core._arrays import FloatArray
-from ...errors import BusLost, FrameError
+from ...errors import BusLost, FrameError, one_line
 from ...sim.cosim import PLANT_IN, initial_state_values
 from ...sim.fmu_slave import FmuSlave
 from ...sim.fmus import fmu_path
@@ -196,7 +196,7 @@ class PythonPlant:
             try:
                 msg = self.bus.recv(timeout=min(0.2, max(0.0, deadline - time.monotonic())))
             except (OSError, can.CanError) as exc:
-                raise BusLost(f"receive: {str(exc).splitlines()[0]}", self.k) from exc
+                raise BusLost(f"receive: {one_line(exc)}", self.k) from exc
             if msg is None:
                 continue
             if self.rx_filter is not None:

@@ -26,7 +26,7 @@ import numpy as np
 from ...core import fmu_vars as fv
 from ...core._arrays import FloatArray
 from ...core.outputs import atomic_open
-from ...errors import HilError
+from ...errors import HilError, one_line
 
 __all__ = [
     "CONTROLLER_LOG",
@@ -177,7 +177,7 @@ def parse_log(text: str, path: str | os.PathLike[str],
             np.zeros((0, width))
     except ValueError as exc:
         raise HilError(f"the node log {path} is not a table of numbers: "
-                       f"{' '.join(str(exc).split())}") from exc
+                       f"{one_line(exc)}") from exc
     if spec is not None and rows.size and rows.shape[1] != width:
         raise HilError(f"the node log {path} has {rows.shape[1]} columns, expected {width} "
                        f"(the {spec.name} log)")

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...core import fmu_vars as fv
 from ...core._arrays import FloatArray
-from ...errors import HilError
+from ...errors import HilError, one_line
 from ...writing.trajectory import Reference
 from ..dbc.protocol import EXIT_SAFETY
 from ..logs.specs import CONTROLLER_LOG, PLANT_LOG, write_log
@@ -139,7 +139,7 @@ def run_lsbus(ref: Reference, plant_values: Mapping[str, float | bool],
                                   validate=False, step_finished=finished, logger=fmu_log)
         except Exception as exc:  # FMPy raises Exception for a failed FMI call
             raise HilError(f"FMPy could not run the container {container}: "
-                           f"{' '.join(str(exc).split())}") from exc
+                           f"{one_line(exc)}") from exc
     wall = time.perf_counter() - start
     if r.shape[0] != n:
         raise HilError(f"the container run has {r.shape[0]} rows, the reference {n} periods")
