@@ -531,9 +531,14 @@ def test_scenario_summary() -> None:
 
 
 def start_writing(out: Path) -> subprocess.Popen[str]:
+    """``rrr writing`` into ``out``; its temporary folders (the FMUs it extracts) beside ``out``,
+    where pytest removes them: a run killed by SIGKILL cannot remove them itself."""
+    tmp = out.parent / "tmp"
+    tmp.mkdir(exist_ok=True)
     return subprocess.Popen(
         [sys.executable, "-m", "rrr_robot", "writing", "--out", str(out), "--quiet"],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals)
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=default_signals,
+        env={**os.environ, "TMPDIR": str(tmp)})
 
 
 def wait_for_first_csv(out: Path, proc: subprocess.Popen[str]) -> None:
