@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
@@ -105,6 +104,8 @@ def design_excitation(prior: Model, q0: FloatArray, limits: ExcitationLimits = E
                       period: float = 10.0, harmonics: int = 5, samples: int = 100,
                       maxiter: int = 60, seed: int = 0) -> tuple[FourierTrajectory, float]:
     """Optimise the coefficients for cond(W); returns the trajectory and cond(W)."""
+    from scipy.optimize import minimize  # slow to import: when an excitation is designed
+
     n = harmonics
     rng = np.random.default_rng(seed)
     x0 = rng.uniform(-1, 1, 6 * n) / np.tile(np.repeat(np.arange(1, n + 1), 1), 6)

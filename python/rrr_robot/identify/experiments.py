@@ -21,7 +21,6 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from ..core import fmu_vars as fv
 from ..core._arrays import FloatArray
@@ -215,6 +214,8 @@ def friction_reference(design: SweepDesign = SweepDesign(), step: float = DEFAUL
     tags.append(np.zeros(qd_parts[-1].shape[0], dtype=int))
     qd = np.concatenate(qd_parts)
     t = np.arange(qd.shape[0], dtype=np.float64) * step
+    from scipy.integrate import cumulative_trapezoid  # slow to import: when a sweep is made
+
     q = np.asarray(design.pose) + cumulative_trapezoid(qd, t, axis=0, initial=0.0)
     return t, q, qd, np.concatenate(tags)
 

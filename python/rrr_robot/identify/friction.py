@@ -33,7 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.optimize import least_squares
 
 from ..core._arrays import FloatArray
 from ..core.model import Model
@@ -162,6 +161,8 @@ def _projected(log_w: FloatArray, points: CurvePoints) -> FloatArray:
 @one_blas_thread
 def fit_nls(points: CurvePoints, w_starts: FloatArray | None = None) -> FrictionFit:
     """f, w and b by variable-projection nonlinear least squares from several starts."""
+    from scipy.optimize import least_squares  # slow to import: when a curve is fitted
+
     if points.v.size < 8:
         raise BadInputError(f"{points.v.size} friction curve points cannot determine the 7 "
                             "coefficients f, w, b robustly; sweep at least 8 speeds")

@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import butter, filtfilt, savgol_filter
 
 from ..core._arrays import FloatArray
 from ..errors import BadInputError
@@ -35,6 +34,8 @@ class Filtered:
 
 
 def _butter(t: FloatArray, q: FloatArray, u: FloatArray, cutoff: float) -> Filtered:
+    from scipy.signal import butter, filtfilt  # imported when a log is filtered: it is slow
+
     dt = float(t[1] - t[0])
     nyq = 0.5 / dt
     if not 0 < cutoff < nyq:
@@ -48,6 +49,8 @@ def _butter(t: FloatArray, q: FloatArray, u: FloatArray, cutoff: float) -> Filte
 
 
 def _savgol(t: FloatArray, q: FloatArray, u: FloatArray, cutoff: float) -> Filtered:
+    from scipy.signal import savgol_filter
+
     dt = float(t[1] - t[0])
     # a quartic Savitzky-Golay filter has its -3 dB point near f = (order + 1) / (3.2 N dt)
     window = int(np.clip(round(5.0 / (3.2 * cutoff * dt)), 7, q.shape[0] - 1)) | 1

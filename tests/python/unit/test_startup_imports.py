@@ -87,3 +87,19 @@ def test_python_m_rrr_robot_help(tmp_path):
     out = subprocess.run([sys.executable, "-m", "rrr_robot", "--help"], cwd=tmp_path,
                          capture_output=True, text=True, timeout=120)
     assert out.returncode == 0 and "writing" in out.stdout
+
+
+@pytest.mark.parametrize("argv", [
+    ["identify", "--log", "missing.csv", "--out", "robot.toml"],
+    ["identify-experiment", "--robot", "missing.toml", "--out", "logs"],
+])
+def test_an_identification_input_error_comes_before_the_solvers(argv, tmp_path):
+    """A missing input of ``rrr identify`` (-experiment) is reported before SciPy's signal
+    filters, optimisers and integrators are imported (the slow part of its start): they load
+    when a log is filtered, a curve fitted or an experiment designed."""
+    code = ("import sys\nfrom rrr_robot.cli import main\n"
+            f"assert main({argv!r}) == 2\n"
+            "slow = ('scipy.signal', 'scipy.optimize', 'scipy.integrate')\n"
+            "assert not [m for m in slow if m in sys.modules], [m for m in slow if m in "
+            "sys.modules]")
+    assert "numpy" in _loaded_after(code, tmp_path)  # the library was imported, the solvers not
