@@ -20,18 +20,17 @@ __all__ = [
     "SweepSpecError",
     "TamperedError",
     "UnreachableError",
-    "one_line",
 ]
 
 _TRACEBACK = "Traceback (most recent call last)"
 
 
 def one_line(exc: BaseException, limit: int = 0) -> str:
-    """An exception's message on one line, for an error line of the CLI or a row of results:
-    white space collapsed (an FMU's or a parser's message may span lines), an embedded
-    traceback cut off (python-can's socketcand bus writes one into its CanError's message when
-    its peer goes away), the exception's type name when nothing is left; at most ``limit``
-    characters when ``limit`` > 0."""
+    """An exception's message on one line, for an error line of the CLI or a row of results
+    (the package's own helper, not in ``__all__``): white space collapsed (an FMU's or a
+    parser's message may span lines), an embedded traceback cut off (python-can's socketcand
+    bus writes one into its CanError's message when its peer goes away), the exception's type
+    name when nothing is left; at most ``limit`` characters when ``limit`` > 0."""
     text = " ".join(str(exc).partition(_TRACEBACK)[0].split()).rstrip(" :")
     text = text or type(exc).__name__
     return text if limit <= 0 or len(text) <= limit else text[:limit - 3] + "..."
