@@ -236,11 +236,8 @@ export -f stage_main children_cpu release_folder
 background "the release folder: scripts/dist.sh, its checks, installed without a compiler" 10 \
   release_folder
 
-# The package in .venv without the FMUs' Windows DLLs (11 mingw-w64 compiles): no pytest test
-# loads them; the Release build's CTest runs them under wine, and the release folder's wheel
-# carries them (test_dist.sh checks that rrr fmus lists win64)
 stage "the virtual environment .venv and the package (scripts/setup_env.sh)" \
-  env CMAKE_ARGS="-DRRR_FMU_WINDOWS=OFF" bash scripts/setup_env.sh
+  bash scripts/setup_env.sh
 # shellcheck disable=SC1091
 RRR_SKIP_INSTALL=1 . scripts/setup_env.sh  # its .venv, in this shell (installed just above)
 JOBS="$(nproc 2>/dev/null || echo 2)"
