@@ -22,16 +22,20 @@ __all__ = [
     "UnreachableError",
 ]
 
-_TRACEBACK = "Traceback (most recent call last)"
+
+def without_traceback(text: str) -> str:
+    """``text`` up to a traceback written into it (python-can's socketcand bus writes one into
+    its CanError's message, and into its log line, when its peer goes away)."""
+    return text.partition("Traceback (most recent call last)")[0].rstrip(" :")
 
 
 def one_line(exc: BaseException, limit: int = 0) -> str:
     """An exception's message on one line, for an error line of the CLI or a row of results
     (the package's own helper, not in ``__all__``): white space collapsed (an FMU's or a
-    parser's message may span lines), an embedded traceback cut off (python-can's socketcand
-    bus writes one into its CanError's message when its peer goes away), the exception's type
-    name when nothing is left; at most ``limit`` characters when ``limit`` > 0."""
-    text = " ".join(str(exc).partition(_TRACEBACK)[0].split()).rstrip(" :")
+    parser's message may span lines), an embedded traceback cut off (``without_traceback``),
+    the exception's type name when nothing is left; at most ``limit`` characters when ``limit``
+    > 0."""
+    text = " ".join(without_traceback(str(exc)).split()).rstrip(" :")
     text = text or type(exc).__name__
     return text if limit <= 0 or len(text) <= limit else text[:limit - 3] + "..."
 

@@ -15,7 +15,7 @@ from types import FrameType
 from typing import Any
 
 from .. import __version__
-from ..errors import RrrError, one_line
+from ..errors import RrrError, one_line, without_traceback
 from ._args import HelpFormatter, add_verbosity_arguments, command_parser, quiet
 
 log = logging.getLogger("rrr_robot")
@@ -133,8 +133,7 @@ class _LineFormatter(logging.Formatter):
         if self._tracebacks:
             return super().format(record)
         record.message = record.getMessage()
-        line = self.formatMessage(record).split("\n", 1)[0]
-        line = line.partition("Traceback (most recent call last)")[0].rstrip(" :")
+        line = without_traceback(self.formatMessage(record).split("\n", 1)[0])
         exc = record.exc_info[1] if record.exc_info else None
         return f"{line} ({one_line(exc)})" if exc is not None else line
 
