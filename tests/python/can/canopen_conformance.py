@@ -82,7 +82,9 @@ class Dut:
         return time.monotonic()
 
     def _recv(self, until: float) -> Frame | None:
-        msg = self.bus.recv(max(0.0, until - time.monotonic()))
+        return self._keep(self.bus.recv(max(0.0, until - time.monotonic())))
+
+    def _keep(self, msg: can.Message | None) -> Frame | None:
         if msg is None or msg.is_error_frame:
             return None
         f = Frame(msg.arbitration_id, bytes(msg.data), time.monotonic())
@@ -90,7 +92,12 @@ class Dut:
         return f
 
     def mark(self) -> int:
-        """A position in ``log``: the frames received from now on are ``since(mark)``."""
+        """A position in ``log``: the frames received from now on are ``since(mark)``. The
+        frames already waiting in the bus's queue go into ``log`` first: they came before now
+        (on a busy machine a case may not read the bus for several heartbeat periods, and a
+        heartbeat sent before the last command would count as one after it)."""
+        while (msg := self.bus.recv(0.0)) is not None:
+            self._keep(msg)
         return len(self.log)
 
     def since(self, mark: int, cob: int | None = None) -> list[Frame]:
